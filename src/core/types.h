@@ -1,0 +1,45 @@
+// Plain value types shared by every part of vkmesh (I/O, CPU reference, GPU pipeline, CLI).
+#pragma once
+
+#include <Eigen/Core>
+
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace vkmesh {
+
+// Every error vkmesh reports to a user: the message names the file, value or Vulkan call at fault.
+class Error : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
+// Pinhole camera. fy may be negative (ICL-NUIM's TUM-compatible release uses fy = -480 with its poses).
+struct Intrinsics {
+    float fx = 0, fy = 0, cx = 0, cy = 0;
+    int width = 0, height = 0;
+};
+
+// Camera-to-world rigid transform (the convention of TUM, ICL-NUIM, Redwood and 7-Scenes files).
+using Pose = Eigen::Matrix4d;
+
+// A depth image in metres, row-major, 0 where the sensor gave no measurement.
+struct DepthImage {
+    int width = 0, height = 0;
+    std::vector<float> meters;
+    float at(int x, int y) const { return meters[static_cast<size_t>(y) * width + x]; }
+};
+
+// Parameters of the TSDF volume, identical for the GPU pipeline and the CPU reference.
+struct VolumeParams {
+    float voxelSize = 0.03f;       // metres between two TSDF samples (cube side)
+    float truncVoxels = 4.0f;      // truncation distance in voxels: trunc = truncVoxels * voxelSize
+    float maxWeight = 255.0f;      // cap of the running-average weight
+    float minDepth = 0.1f;         // depth samples outside [minDepth, maxDepth] are ignored
+    float maxDepth = 5.0f;
+    float truncation() const { return truncVoxels * voxelSize; }
+};
+
+}  // namespace vkmesh
