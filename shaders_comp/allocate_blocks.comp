@@ -1,0 +1,97 @@
+#version 460
+// Stage 1 of a frame (paper §V.A): every valid pixel walks the blocks that its truncation band crosses
+// (a 3D DDA in block units from depth d - trunc to d + trunc along the pixel's ray), inserts their keys
+// into the spatial hash, and appends each block touched for the first time this frame to the touched
+// list. Blocks get pool memory in the next stage (assign_blocks): here a key is only claimed.
+#extension GL_GOOGLE_include_directive : require
+#include "common.glsl"
+
+layout(local_size_x = WG_PIXELS_X, local_size_y = WG_PIXELS_Y) in;
+
+uint requests = 0u, found = 0u, inserted = 0u, full = 0u, outOfRange = 0u;
+
+// Claims `cell`'s key without waiting on anyone: one compare-and-swap per probed slot. A slot that
+// already holds the key needs no atomic (keys are never removed during this dispatch, so a plain read
+// equal to the key is final). Returns the slot, or NO_BLOCK if none was free within the probe bound.
+uint insertKey(ivec3 cell) {
+    uint64_t key = packBlockKey(cell);
+    uint slot = hashSlot(cell);
+    for (uint probe = 0u; probe < HASH_MAX_PROBES; ++probe) {
+        if (hashKeys[slot] == key) { ++found; return slot; }
+        uint64_t prev = atomicCompSwap(hashKeys[slot], KEY_EMPTY, key);
+        if (prev == KEY_EMPTY) { ++inserted; return slot; }
+        if (prev == key) { ++found; return slot; }
+        slot = (slot + 1u) & (params.hashCapacity - 1u);
+    }
+    ++full;
+    return NO_BLOCK;
+}
+
+void touchBlock(ivec3 cell) {
+    ++requests;
+    if (!blockCoordInRange(cell)) { ++outOfRange; return; }
+    uint slot = insertKey(cell);
+    if (slot == NO_BLOCK) return;
+    // The first invocation to stamp the slot with this frame's number lists it, so each block appears
+    // once in the touched list however many pixels see it.
+    if (hashStamps[slot] != frame.frameNumber &&
+        atomicExchange(hashStamps[slot], frame.frameNumber) != frame.frameNumber) {
+        uint at = atomicAdd(counters.touchedCount, 1u);
+        if (at < params.touchedCapacity) touched[at] = slot;
+    }
+}
+
+void main() {
+    uvec2 size = frameImageSize();
+    uvec2 pixel = gl_GlobalInvocationID.xy;
+    uint valid = 0u, truncated = 0u;
+    if (all(lessThan(pixel, size))) {
+        float d = depth[pixel.y * size.x + pixel.x];
+        if (d >= frame.minDepth && d <= frame.maxDepth) {
+            valid = 1u;
+            // Camera-frame ray through the pixel, scaled so that its z is 1.
+            precise vec3 ray = vec3((float(pixel.x) - frame.intrinsics.z) / frame.intrinsics.x,
+                                    (float(pixel.y) - frame.intrinsics.w) / frame.intrinsics.y, 1.0);
+            float nearZ = max(d - params.truncation, frame.minDepth * 0.5);
+            float farZ = d + params.truncation;
+            float blockSize = params.voxelSize * float(BLOCK_SIDE);
+            precise vec3 a = transformPoint(frame.cameraToWorld, ray * nearZ) / blockSize;
+            precise vec3 b = transformPoint(frame.cameraToWorld, ray * farZ) / blockSize;
+
+            // Amanatides & Woo traversal from a to b, parameter t in [0, 1].
+            precise vec3 dir = b - a;
+            ivec3 cell = ivec3(floor(a));
+            ivec3 last = ivec3(floor(b));
+            ivec3 stepDir = ivec3(sign(dir));
+            precise vec3 tMax, tDelta;
+            for (int k = 0; k < 3; ++k) {
+                if (dir[k] > 0.0) {
+                    tMax[k] = (floor(a[k]) + 1.0 - a[k]) / dir[k];
+                    tDelta[k] = 1.0 / dir[k];
+                } else if (dir[k] < 0.0) {
+                    tMax[k] = (a[k] - floor(a[k])) / -dir[k];
+                    tDelta[k] = 1.0 / -dir[k];
+                } else {
+                    tMax[k] = 1e30;
+                    tDelta[k] = 1e30;
+                }
+            }
+            truncated = 1u;
+            for (uint s = 0u; s < RAY_MAX_BLOCKS; ++s) {
+                touchBlock(cell);
+                if (cell == last) { truncated = 0u; break; }
+                int axis = (tMax.x <= tMax.y && tMax.x <= tMax.z) ? 0 : (tMax.y <= tMax.z ? 1 : 2);
+                if (tMax[axis] > 1.0) { truncated = 0u; break; }
+                cell[axis] += stepDir[axis];
+                tMax[axis] += tDelta[axis];
+            }
+        }
+    }
+    ADD_COUNTER(validPixels, valid);
+    ADD_COUNTER(blockRequests, requests);
+    ADD_COUNTER(blocksFound, found);
+    ADD_COUNTER(blocksInserted, inserted);
+    ADD_COUNTER(hashFull, full);
+    ADD_COUNTER(outOfRange, outOfRange);
+    ADD_COUNTER(rayTruncated, truncated);
+}

@@ -1,0 +1,100 @@
+// Declarations shared by every vkmesh compute stage: the data structure's buffers (one descriptor set
+// for all stages, binding numbers from shared_layout.h), the frame's push constants, and the hash and
+// grid helpers. Rules that hold in every stage (see ../shared/docs/lavapipe.md):
+//   - no invocation waits for another; every loop has a static bound far below 65,535 iterations;
+//   - what one invocation publishes with an atomic, others read in the NEXT dispatch;
+//   - float expressions that the CPU reference must reproduce bit for bit are `precise`.
+#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
+#extension GL_EXT_shader_atomic_int64 : require
+#extension GL_KHR_shader_subgroup_basic : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
+#extension GL_KHR_shader_subgroup_ballot : require
+
+#include "shared_layout.h"
+
+layout(std140, set = 0, binding = BINDING_PARAMS) uniform ParamsBuffer { VolumeParamsGpu params; };
+layout(std430, set = 0, binding = BINDING_COUNTERS) coherent buffer CountersBuffer { Counters counters; };
+layout(std430, set = 0, binding = BINDING_HASH_KEYS) coherent buffer HashKeys { uint64_t hashKeys[]; };
+layout(std430, set = 0, binding = BINDING_HASH_VALUES) coherent buffer HashValues { uint hashValues[]; };
+layout(std430, set = 0, binding = BINDING_HASH_STAMPS) coherent buffer HashStamps { uint hashStamps[]; };
+layout(std430, set = 0, binding = BINDING_BLOCK_COORDS) buffer BlockCoords { ivec4 blockCoords[]; };
+layout(std430, set = 0, binding = BINDING_VOXEL_SDF) buffer VoxelSdf { float voxelSdf[]; };
+layout(std430, set = 0, binding = BINDING_VOXEL_WEIGHT) buffer VoxelWeight { float voxelWeight[]; };
+layout(std430, set = 0, binding = BINDING_FREE_LIST) buffer FreeList { uint freeList[]; };
+layout(std430, set = 0, binding = BINDING_TOUCHED) buffer Touched { uint touched[]; };
+layout(std430, set = 0, binding = BINDING_DEPTH) readonly buffer Depth { float depth[]; };
+layout(std430, set = 0, binding = BINDING_MC_TABLES) readonly buffer McTables { uint mcTables[]; };
+layout(std430, set = 0, binding = BINDING_BLOCK_LIST) buffer BlockList { uint blockList[]; };
+layout(std430, set = 0, binding = BINDING_MESH_VERTICES) buffer MeshVertices { vec4 meshVertices[]; };
+
+layout(push_constant) uniform Push { FramePush frame; };
+
+// ---- block keys ------------------------------------------------------------------------------------
+bool blockCoordInRange(ivec3 c) {
+    return all(greaterThanEqual(c, ivec3(-int(KEY_BIAS)))) && all(lessThan(c, ivec3(int(KEY_BIAS))));
+}
+
+uint64_t packBlockKey(ivec3 c) {
+    uvec3 u = uvec3(c + ivec3(int(KEY_BIAS))) & uvec3(KEY_AXIS_MASK);
+    return uint64_t(u.x) | (uint64_t(u.y) << KEY_BITS) | (uint64_t(u.z) << (2u * KEY_BITS));
+}
+
+ivec3 unpackBlockKey(uint64_t key) {
+    uvec3 u = uvec3(uint(key & uint64_t(KEY_AXIS_MASK)), uint((key >> KEY_BITS) & uint64_t(KEY_AXIS_MASK)),
+                    uint((key >> (2u * KEY_BITS)) & uint64_t(KEY_AXIS_MASK)));
+    return ivec3(u) - ivec3(int(KEY_BIAS));
+}
+
+// The spatial hash of Teschner et al. (the one voxel hashing uses); the same code is in src/cpu.
+uint hashSlot(ivec3 c) {
+    uint h = (uint(c.x) * 73856093u) ^ (uint(c.y) * 19349669u) ^ (uint(c.z) * 83492791u);
+    return h & (params.hashCapacity - 1u);
+}
+
+// Read-only lookup, valid in any dispatch after the one that inserted the key. Returns the hash slot
+// or NO_BLOCK when the key is absent.
+uint findSlot(ivec3 c) {
+    if (!blockCoordInRange(c)) return NO_BLOCK;
+    uint64_t key = packBlockKey(c);
+    uint slot = hashSlot(c);
+    for (uint probe = 0u; probe < HASH_MAX_PROBES; ++probe) {
+        uint64_t k = hashKeys[slot];
+        if (k == key) return slot;
+        if (k == KEY_EMPTY) return NO_BLOCK;
+        slot = (slot + 1u) & (params.hashCapacity - 1u);
+    }
+    return NO_BLOCK;
+}
+
+// Block index of a block coordinate, or NO_BLOCK when it is not allocated.
+uint findBlock(ivec3 c) {
+    uint slot = findSlot(c);
+    return slot == NO_BLOCK ? NO_BLOCK : hashValues[slot];
+}
+
+// ---- grid positions --------------------------------------------------------------------------------
+// Index of corner (x, y, z) of a block in the voxel arrays: x fastest.
+uint voxelIndex(uint block, uvec3 local) {
+    return block * VOXELS_PER_BLOCK + (local.z * BLOCK_SIDE + local.y) * BLOCK_SIDE + local.x;
+}
+
+// x' = R x + t with R, t given as 3 rows of [R | t]; written out so that the order of the operations
+// (and so the rounding) is the one src/cpu/reference.cpp uses.
+vec3 transformPoint(vec4 rows[3], vec3 p) {
+    precise vec3 q;
+    q.x = rows[0].x * p.x + rows[0].y * p.y + rows[0].z * p.z + rows[0].w;
+    q.y = rows[1].x * p.x + rows[1].y * p.y + rows[1].z * p.z + rows[1].w;
+    q.z = rows[2].x * p.x + rows[2].y * p.y + rows[2].z * p.z + rows[2].w;
+    return q;
+}
+
+uvec2 frameImageSize() { return uvec2(frame.imageSize & 0xFFFFu, frame.imageSize >> 16); }
+
+// Aggregates a per-invocation count over the subgroup and adds it with one atomic. Must be called in
+// uniform control flow (every invocation of the workgroup reaches it).
+#define ADD_COUNTER(field, value)                                   \
+    {                                                               \
+        uint subgroupTotal_ = subgroupAdd(value);                   \
+        if (subgroupElect() && subgroupTotal_ != 0u)                \
+            atomicAdd(counters.field, subgroupTotal_);              \
+    }

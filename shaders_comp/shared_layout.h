@@ -1,0 +1,138 @@
+// The one place where buffer layouts, binding numbers, push constants and workgroup sizes are defined.
+// Included by the C++ host (namespace vkmesh::gpu, sizes static_assert-ed in src/gpu/layout.h) and by
+// every compute shader (through common.glsl), so the two sides cannot drift apart.
+#ifndef VKMESH_SHARED_LAYOUT_H
+#define VKMESH_SHARED_LAYOUT_H
+
+#ifdef __cplusplus
+#include <cstdint>
+namespace vkmesh::gpu {
+using uint = uint32_t;
+#define VKM_CONST inline constexpr uint32_t
+#define VKM_VEC4(name) alignas(16) float name[4]
+#define VKM_ROWS3(name) alignas(16) float name[3][4]
+#else
+#define VKM_CONST const uint
+#define VKM_VEC4(name) vec4 name
+#define VKM_ROWS3(name) vec4 name[3]
+#endif
+
+// ---- geometry of the grid ----------------------------------------------------------------------
+VKM_CONST BLOCK_SIDE = 8u;                 // cubes (and TSDF corners) per block edge
+VKM_CONST VOXELS_PER_BLOCK = 512u;         // BLOCK_SIDE^3
+
+// ---- block keys in the spatial hash ----------------------------------------------------------
+// A block coordinate (x, y, z) is packed into 63 bits, 21 bits per axis, biased by 2^20, so a key is
+// one 64-bit word that a single atomicCompSwap can claim. Bit 63 is never set in a key, so the all-ones
+// words below can never collide with one.
+VKM_CONST KEY_BITS = 21u;
+VKM_CONST KEY_BIAS = 1048576u;             // 2^20: coordinates in [-2^20, 2^20) are representable
+VKM_CONST KEY_AXIS_MASK = 2097151u;        // 2^21 - 1
+#ifdef __cplusplus
+inline constexpr uint64_t KEY_EMPTY = ~uint64_t(0);
+#else
+const uint64_t KEY_EMPTY = ~uint64_t(0u);
+#endif
+
+// Values stored beside each key: a block index into the pool, or NO_BLOCK while the key holds no block
+// (just inserted this frame, or the pool was exhausted when it was inserted; the assign stage retries).
+VKM_CONST NO_BLOCK = 0xFFFFFFFFu;
+// Entries of the touched list after the assign stage: the block index, with FRESH_BLOCK set when the
+// block was handed out this frame (its TSDF memory still holds a previous owner's data).
+VKM_CONST FRESH_BLOCK = 0x80000000u;
+VKM_CONST INDEX_MASK = 0x7FFFFFFFu;
+
+// Longest probe sequence of an insertion or lookup. A table kept under half full needs a handful.
+VKM_CONST HASH_MAX_PROBES = 64u;
+// Longest block walk along one pixel's truncation band (3D DDA); a band of 2*trunc crosses a few blocks.
+VKM_CONST RAY_MAX_BLOCKS = 32u;
+
+// ---- workgroup sizes -----------------------------------------------------------------------
+VKM_CONST WG_PIXELS_X = 16u;               // allocate_blocks: one invocation per pixel
+VKM_CONST WG_PIXELS_Y = 8u;
+VKM_CONST WG_LIST = 64u;                   // one invocation per list entry (assign, collect)
+VKM_CONST WG_BLOCK = 128u;                 // fuse / mesh: one workgroup per block, 4 voxels per invocation
+VKM_CONST VOXELS_PER_INVOCATION = 4u;      // VOXELS_PER_BLOCK / WG_BLOCK
+
+// ---- descriptor bindings (set 0, shared by all compute stages) --------------------------------
+VKM_CONST BINDING_PARAMS = 0u;         // uniform VolumeParamsGpu
+VKM_CONST BINDING_COUNTERS = 1u;       // Counters (also the indirect-dispatch arguments)
+VKM_CONST BINDING_HASH_KEYS = 2u;      // uint64 key per slot
+VKM_CONST BINDING_HASH_VALUES = 3u;    // uint block index per slot
+VKM_CONST BINDING_HASH_STAMPS = 4u;    // uint: frame number that last touched the slot
+VKM_CONST BINDING_BLOCK_COORDS = 5u;   // ivec4 per block: block coordinate, w = hash slot
+VKM_CONST BINDING_VOXEL_SDF = 6u;      // float per TSDF corner, block-major
+VKM_CONST BINDING_VOXEL_WEIGHT = 7u;   // float per TSDF corner
+VKM_CONST BINDING_FREE_LIST = 8u;      // uint stack of free block indices
+VKM_CONST BINDING_TOUCHED = 9u;        // uint list of the frame's blocks (hash slot, then block index)
+VKM_CONST BINDING_DEPTH = 10u;         // float depth image in metres
+VKM_CONST BINDING_MC_TABLES = 11u;     // uint marching-cubes tables, see McTableLayout
+VKM_CONST BINDING_BLOCK_LIST = 12u;    // uint list of all live blocks (for whole-volume passes)
+VKM_CONST BINDING_MESH_VERTICES = 13u; // vec4 per vertex of the baseline mesh (3 per triangle)
+VKM_CONST BINDING_COUNT = 14u;
+
+// Marching-cubes tables as uint words: [0,256): edgeMask | triangleCount << 16;
+// [256, 256 + 256*4): 16 edge ids per type, 4 bytes per word (15 used, 0xFF padded).
+VKM_CONST MC_TRIANGLE_WORDS_OFFSET = 256u;
+VKM_CONST MC_TABLE_WORDS = 1280u;
+
+// ---- buffer layouts ------------------------------------------------------------------------------
+// Constant for the life of a volume.
+struct VolumeParamsGpu {
+    float voxelSize;        // metres
+    float truncation;       // metres
+    float maxWeight;
+    float minMeshWeight;    // a cube is meshed only if all 8 corners have at least this weight
+    uint hashCapacity;      // slots, a power of two
+    uint blockCapacity;     // blocks in the pool
+    uint touchedCapacity;   // entries of the touched list
+    uint meshVertexCapacity;// vec4 entries of the baseline mesh buffer
+};
+
+// Counters the GPU keeps; the host reads this struct back after every frame (it is small).
+// The first three groups are indirect-dispatch arguments (x, y, z) and must stay 16-byte aligned.
+struct Counters {
+    uint assignDispatch[4];     // over the touched list, WG_LIST per group
+    uint blockDispatch[4];      // one workgroup per touched block
+    uint listDispatch[4];       // over the live block list, one workgroup per block
+    // --- per frame: reset at the start of every frame ---
+    uint validPixels;           // pixels with a depth inside [minDepth, maxDepth]
+    uint blockRequests;         // blocks visited by all pixels' band walks (hash insert attempts)
+    uint blocksFound;           //  ... of which the key was already in the table
+    uint blocksInserted;        //  ... of which this invocation inserted the key
+    uint hashFull;              //  ... of which found no slot within HASH_MAX_PROBES
+    uint outOfRange;            // block coordinates beyond the key range (never inserted)
+    uint rayTruncated;          // band walks cut at RAY_MAX_BLOCKS
+    uint touchedCount;          // distinct blocks touched this frame (may exceed touchedCapacity)
+    uint allocRequests;         // touched keys holding no block that asked the pool for one
+    uint poolExhausted;         //  ... that got none (their key stays; retried when seen again)
+    uint fusedBlocks;           // touched blocks that the fuse stage updated
+    uint updatedVoxels;         // TSDF corners updated this frame
+    // --- persistent across frames ---
+    uint freeTop;               // blocks on the free list
+    uint blocksInUse;           // blocks handed out of the pool
+    uint liveBlockCount;        // entries written by collect_blocks (whole-volume passes)
+    uint meshVertices;          // baseline mesh: vertices wanted (3 per triangle)
+    uint meshVerticesDropped;   // ... that did not fit in the mesh buffer
+    uint pad[3];
+};
+VKM_CONST COUNTERS_PER_FRAME_OFFSET = 48u;   // byte offset of validPixels
+VKM_CONST COUNTERS_PER_FRAME_SIZE = 48u;     // 12 per-frame uints
+
+// Push constants of every compute stage: the current frame's camera. Rigid transforms are stored as
+// the 3 rows of [R | t] (x' = row.x*x + row.y*y + row.z*z + row.w), the order the CPU reference uses too.
+// 128 bytes: the most lavapipe (and the Vulkan minimum) guarantees.
+struct FramePush {
+    VKM_ROWS3(worldToCamera);
+    VKM_ROWS3(cameraToWorld);
+    VKM_VEC4(intrinsics);       // fx, fy, cx, cy
+    uint imageSize;             // width | height << 16
+    uint frameNumber;           // starts at 1; hash stamps start at 0
+    float minDepth;             // depth samples outside [minDepth, maxDepth] are ignored
+    float maxDepth;
+};
+
+#ifdef __cplusplus
+}  // namespace vkmesh::gpu
+#endif
+#endif

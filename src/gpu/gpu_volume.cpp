@@ -1,0 +1,271 @@
+#include "gpu/gpu_volume.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <numeric>
+
+#include "core/camera.h"
+#include "core/marching_cubes.h"
+#include "vk/check.h"
+
+namespace vkmesh::gpu {
+namespace {
+
+constexpr VkBufferUsageFlags kStorage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
+
+uint32_t nextPowerOfTwo(uint32_t v) {
+    uint32_t p = 1;
+    while (p < v && p < (1u << 31)) p <<= 1;
+    return p;
+}
+
+std::vector<VkDescriptorType> descriptorTypes() {
+    std::vector<VkDescriptorType> types(BINDING_COUNT, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER);
+    types[BINDING_PARAMS] = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER;
+    return types;
+}
+
+// The marching-cubes tables in the word layout the shaders read (see MC_TRIANGLE_WORDS_OFFSET).
+std::vector<uint32_t> packMarchingCubesTables() {
+    const MarchingCubesTables& t = marchingCubesTables();
+    std::vector<uint32_t> words(MC_TABLE_WORDS, 0);
+    for (uint32_t type = 0; type < 256; ++type) {
+        words[type] = t.edgeMask[type] | (uint32_t(t.triangleCount[type]) << 16);
+        for (uint32_t i = 0; i < 16; ++i) {
+            uint32_t edge = i < 15 && t.triangleEdges[type][i] >= 0 ? uint32_t(t.triangleEdges[type][i]) : 0xFFu;
+            words[MC_TRIANGLE_WORDS_OFFSET + type * 4 + i / 4] |= edge << ((i % 4) * 8);
+        }
+    }
+    return words;
+}
+
+void validateConfig(const GpuVolumeConfig& c) {
+    const VolumeParams& p = c.params;
+    if (!(p.voxelSize >= 0.001f && p.voxelSize <= 1.0f))
+        throw Error("voxel size " + std::to_string(p.voxelSize) + " m is outside the supported range [0.001, 1] m");
+    if (!(p.truncVoxels >= 1.0f && p.truncVoxels <= 64.0f))
+        throw Error("truncation of " + std::to_string(p.truncVoxels) + " voxels is outside [1, 64]");
+    if (!(p.maxWeight >= 1.0f)) throw Error("max weight " + std::to_string(p.maxWeight) + " must be >= 1");
+    if (!(p.minDepth > 0.0f && p.maxDepth > p.minDepth))
+        throw Error("depth range [" + std::to_string(p.minDepth) + ", " + std::to_string(p.maxDepth) + "] m is empty");
+    if (c.blockCapacity == 0 || c.blockCapacity > (1u << 30)) throw Error("block capacity must be in [1, 2^30]");
+    if (c.imageWidth <= 0 || c.imageHeight <= 0 || c.imageWidth > 65535 || c.imageHeight > 65535)
+        throw Error("image size " + std::to_string(c.imageWidth) + "x" + std::to_string(c.imageHeight) + " is not supported");
+}
+
+GpuVolumeConfig resolved(GpuVolumeConfig c) {
+    validateConfig(c);
+    if (c.hashCapacity == 0) c.hashCapacity = nextPowerOfTwo(std::max(2u * c.blockCapacity, 1024u));
+    if ((c.hashCapacity & (c.hashCapacity - 1)) != 0)
+        throw Error("hash capacity " + std::to_string(c.hashCapacity) + " must be a power of two");
+    if (c.touchedCapacity == 0) c.touchedCapacity = c.blockCapacity;
+    c.meshVertexCapacity = std::max(c.meshVertexCapacity, 1024u);
+    return c;
+}
+
+}  // namespace
+
+vk::Buffer GpuVolume::makeBuffer(VkDeviceSize size, VkBufferUsageFlags extraUsage, const std::string& name, uint32_t binding) {
+    vk::Buffer buffer(context_, size, kStorage | extraUsage, vk::MemoryUse::Device, name);
+    layout_.bind(binding, buffer);
+    return buffer;
+}
+
+GpuVolume::GpuVolume(const vk::Context& context, const GpuVolumeConfig& config)
+    : context_(context),
+      config_(resolved(config)),
+      layout_(context, descriptorTypes(), sizeof(FramePush)),
+      allocate_(context, layout_),
+      fuse_(context, layout_),
+      baselineMesh_(context, layout_),
+      recorder_(context),
+      timer_(context) {
+    const GpuVolumeConfig& c = config_;
+    const VkDeviceSize voxels = VkDeviceSize(c.blockCapacity) * VOXELS_PER_BLOCK;
+    params_ = vk::Buffer(context, sizeof(VolumeParamsGpu), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, vk::MemoryUse::Device, "volume params");
+    layout_.bind(BINDING_PARAMS, params_);
+    counters_ = makeBuffer(sizeof(Counters), VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT, "counters", BINDING_COUNTERS);
+    hashKeys_ = makeBuffer(VkDeviceSize(c.hashCapacity) * 8, 0, "hash keys", BINDING_HASH_KEYS);
+    hashValues_ = makeBuffer(VkDeviceSize(c.hashCapacity) * 4, 0, "hash values", BINDING_HASH_VALUES);
+    hashStamps_ = makeBuffer(VkDeviceSize(c.hashCapacity) * 4, 0, "hash stamps", BINDING_HASH_STAMPS);
+    blockCoords_ = makeBuffer(VkDeviceSize(c.blockCapacity) * 16, 0, "block coords", BINDING_BLOCK_COORDS);
+    voxelSdf_ = makeBuffer(voxels * 4, 0, "voxel sdf", BINDING_VOXEL_SDF);
+    voxelWeight_ = makeBuffer(voxels * 4, 0, "voxel weight", BINDING_VOXEL_WEIGHT);
+    freeList_ = makeBuffer(VkDeviceSize(c.blockCapacity) * 4, 0, "free list", BINDING_FREE_LIST);
+    touched_ = makeBuffer(VkDeviceSize(c.touchedCapacity) * 4, 0, "touched list", BINDING_TOUCHED);
+    depth_ = makeBuffer(VkDeviceSize(c.imageWidth) * c.imageHeight * 4, 0, "depth image", BINDING_DEPTH);
+    mcTables_ = makeBuffer(MC_TABLE_WORDS * 4, 0, "marching cubes tables", BINDING_MC_TABLES);
+    blockList_ = makeBuffer(VkDeviceSize(c.blockCapacity) * 4, 0, "block list", BINDING_BLOCK_LIST);
+    meshVertices_ = makeBuffer(VkDeviceSize(c.meshVertexCapacity) * 16, 0, "baseline mesh vertices", BINDING_MESH_VERTICES);
+    depthStaging_ = vk::Buffer(context, depth_.size(), VK_BUFFER_USAGE_TRANSFER_SRC_BIT, vk::MemoryUse::Upload, "depth staging");
+    countersReadback_ = vk::Buffer(context, sizeof(Counters), VK_BUFFER_USAGE_TRANSFER_DST_BIT, vk::MemoryUse::Readback, "counters readback");
+
+    VolumeParamsGpu gp{};
+    gp.voxelSize = c.params.voxelSize;
+    gp.truncation = c.params.truncation();
+    gp.maxWeight = c.params.maxWeight;
+    gp.minMeshWeight = c.minMeshWeight;
+    gp.hashCapacity = c.hashCapacity;
+    gp.blockCapacity = c.blockCapacity;
+    gp.touchedCapacity = c.touchedCapacity;
+    gp.meshVertexCapacity = c.meshVertexCapacity;
+    vk::uploadToBuffer(context, params_, &gp, sizeof(gp));
+    auto tables = packMarchingCubesTables();
+    vk::uploadToBuffer(context, mcTables_, tables.data(), tables.size() * 4);
+    // The free list is a stack popped from its top: block 0 is handed out first.
+    std::vector<uint32_t> free(c.blockCapacity);
+    for (uint32_t i = 0; i < c.blockCapacity; ++i) free[i] = c.blockCapacity - 1 - i;
+    vk::uploadToBuffer(context, freeList_, free.data(), free.size() * 4);
+    Counters initial{};
+    initial.freeTop = c.blockCapacity;
+    vk::uploadToBuffer(context, counters_, &initial, sizeof(initial));
+
+    VkCommandBuffer cmd = recorder_.begin();
+    vkCmdFillBuffer(cmd, hashKeys_.handle(), 0, VK_WHOLE_SIZE, 0xFFFFFFFFu);   // KEY_EMPTY
+    vkCmdFillBuffer(cmd, hashValues_.handle(), 0, VK_WHOLE_SIZE, NO_BLOCK);
+    vkCmdFillBuffer(cmd, hashStamps_.handle(), 0, VK_WHOLE_SIZE, 0);
+    vk::memoryBarrier(cmd);
+    recorder_.submitAndWait();
+}
+
+void GpuVolume::recordCountersReadback(VkCommandBuffer cmd) {
+    VkBufferCopy region{0, 0, sizeof(Counters)};
+    vkCmdCopyBuffer(cmd, counters_.handle(), countersReadback_.handle(), 1, &region);
+    vk::memoryBarrier(cmd);
+}
+
+FrameReport GpuVolume::integrate(const DepthImage& depth, const Intrinsics& intrinsics, const Pose& cameraToWorld) {
+    if (depth.width != config_.imageWidth || depth.height != config_.imageHeight ||
+        depth.meters.size() != size_t(depth.width) * depth.height)
+        throw Error("depth image is " + std::to_string(depth.width) + "x" + std::to_string(depth.height) +
+                    " but the volume was created for " + std::to_string(config_.imageWidth) + "x" +
+                    std::to_string(config_.imageHeight));
+    if (intrinsics.width != depth.width || intrinsics.height != depth.height)
+        throw Error("intrinsics are for " + std::to_string(intrinsics.width) + "x" + std::to_string(intrinsics.height) +
+                    " images but the depth image is " + std::to_string(depth.width) + "x" + std::to_string(depth.height));
+    std::memcpy(depthStaging_.mapped(), depth.meters.data(), depth.meters.size() * sizeof(float));
+    FramePush push = makeFramePush(intrinsics, cameraToWorld, config_.params, ++frameNumber_);
+    lastPush_ = push;
+
+    VkCommandBuffer cmd = recorder_.begin();
+    timer_.reset(cmd);
+    VkBufferCopy region{0, 0, depthStaging_.size()};
+    vkCmdCopyBuffer(cmd, depthStaging_.handle(), depth_.handle(), 1, &region);
+    vkCmdFillBuffer(cmd, counters_.handle(), COUNTERS_PER_FRAME_OFFSET, COUNTERS_PER_FRAME_SIZE, 0);
+    vk::memoryBarrier(cmd);
+    timer_.mark(cmd, "start");
+    allocate_.record(cmd, push, counters_);
+    timer_.mark(cmd, "allocate");
+    fuse_.record(cmd, push, counters_);
+    timer_.mark(cmd, "fuse");
+    recordCountersReadback(cmd);
+    recorder_.submitAndWait();
+
+    FrameReport report;
+    countersReadback_.invalidate();
+    std::memcpy(&report.counters, countersReadback_.mapped(), sizeof(Counters));
+    report.stageMs = timer_.read();
+    const Counters& k = report.counters;
+    if (k.hashFull)
+        report.warnings.push_back(std::to_string(k.hashFull) + " block insertions found no free hash slot within " +
+                                  std::to_string(HASH_MAX_PROBES) + " probes (hash capacity " +
+                                  std::to_string(config_.hashCapacity) + "); those blocks were not fused this frame");
+    if (k.poolExhausted)
+        report.warnings.push_back("block pool exhausted: " + std::to_string(k.poolExhausted) +
+                                  " new blocks got no memory (capacity " + std::to_string(config_.blockCapacity) +
+                                  " blocks, all in use); raise --blocks. Blocks already fused are kept");
+    if (k.touchedCount > config_.touchedCapacity)
+        report.warnings.push_back("frame touched " + std::to_string(k.touchedCount) + " blocks, more than the touched-list capacity " +
+                                  std::to_string(config_.touchedCapacity) + "; the rest were not fused this frame");
+    if (k.outOfRange)
+        report.warnings.push_back(std::to_string(k.outOfRange) + " block visits lay outside the addressable grid (|coordinate| >= 2^20 blocks)");
+    if (k.rayTruncated)
+        report.warnings.push_back(std::to_string(k.rayTruncated) + " pixels' truncation bands crossed more than " +
+                                  std::to_string(RAY_MAX_BLOCKS) + " blocks and were cut");
+    return report;
+}
+
+TriangleSoup GpuVolume::extractBaselineMesh(std::vector<std::pair<std::string, double>>* stageMs) {
+    for (int attempt = 0; attempt < 2; ++attempt) {
+        VkCommandBuffer cmd = recorder_.begin();
+        timer_.reset(cmd);
+        // liveBlockCount, meshVertices, meshVerticesDropped are consecutive.
+        vkCmdFillBuffer(cmd, counters_.handle(), offsetof(Counters, liveBlockCount), 3 * sizeof(uint32_t), 0);
+        vk::memoryBarrier(cmd);
+        timer_.mark(cmd, "start");
+        baselineMesh_.record(cmd, lastPush_, counters_, config_.hashCapacity);
+        timer_.mark(cmd, "mesh_baseline");
+        recordCountersReadback(cmd);
+        recorder_.submitAndWait();
+        Counters k = readCounters();
+        if (stageMs) *stageMs = timer_.read();
+        if (k.meshVerticesDropped == 0) {
+            TriangleSoup soup;
+            soup.vertices.resize(k.meshVertices);
+            if (k.meshVertices) {
+                std::vector<float> raw(size_t(k.meshVertices) * 4);
+                vk::downloadFromBuffer(context_, meshVertices_, raw.data(), raw.size() * 4);
+                for (size_t i = 0; i < soup.vertices.size(); ++i)
+                    soup.vertices[i] = Eigen::Vector3f(raw[4 * i], raw[4 * i + 1], raw[4 * i + 2]);
+            }
+            return soup;
+        }
+        // Too small: grow to exactly what the GPU counted and run the pass again.
+        VkDeviceSize need = VkDeviceSize(k.meshVertices) * 16;
+        if (need > context_.maxStorageBufferRange())
+            throw Error("the baseline mesh needs " + std::to_string(k.meshVertices) + " vertices (" + std::to_string(need) +
+                        " bytes), more than one storage buffer may hold on this device (" +
+                        std::to_string(context_.maxStorageBufferRange()) + " bytes); use a larger voxel size");
+        config_.meshVertexCapacity = k.meshVertices;
+        meshVertices_ = makeBuffer(need, 0, "baseline mesh vertices", BINDING_MESH_VERTICES);
+        VolumeParamsGpu gp{};
+        vk::downloadFromBuffer(context_, params_, &gp, sizeof(gp));
+        gp.meshVertexCapacity = k.meshVertices;
+        vk::uploadToBuffer(context_, params_, &gp, sizeof(gp));
+    }
+    throw Error("baseline mesh extraction did not fit after growing its buffer");
+}
+
+Counters GpuVolume::readCounters() const {
+    Counters k{};
+    countersReadback_.invalidate();
+    std::memcpy(&k, countersReadback_.mapped(), sizeof(k));
+    return k;
+}
+
+std::vector<BlockSnapshot> GpuVolume::downloadBlocks() const {
+    const GpuVolumeConfig& c = config_;
+    std::vector<uint64_t> keys(c.hashCapacity);
+    std::vector<uint32_t> values(c.hashCapacity);
+    vk::downloadFromBuffer(context_, hashKeys_, keys.data(), keys.size() * 8);
+    vk::downloadFromBuffer(context_, hashValues_, values.data(), values.size() * 4);
+    std::vector<float> sdf(size_t(c.blockCapacity) * VOXELS_PER_BLOCK), weight(sdf.size());
+    vk::downloadFromBuffer(context_, voxelSdf_, sdf.data(), sdf.size() * 4);
+    vk::downloadFromBuffer(context_, voxelWeight_, weight.data(), weight.size() * 4);
+    std::vector<int32_t> coords(size_t(c.blockCapacity) * 4);
+    vk::downloadFromBuffer(context_, blockCoords_, coords.data(), coords.size() * 4);
+
+    std::vector<BlockSnapshot> out;
+    for (uint32_t s = 0; s < c.hashCapacity; ++s) {
+        if (keys[s] == KEY_EMPTY || values[s] == NO_BLOCK) continue;
+        uint32_t b = values[s];
+        BlockSnapshot snap;
+        snap.coord = Eigen::Vector3i(coords[4 * b], coords[4 * b + 1], coords[4 * b + 2]);
+        snap.sdf.assign(sdf.begin() + size_t(b) * VOXELS_PER_BLOCK, sdf.begin() + size_t(b + 1) * VOXELS_PER_BLOCK);
+        snap.weight.assign(weight.begin() + size_t(b) * VOXELS_PER_BLOCK, weight.begin() + size_t(b + 1) * VOXELS_PER_BLOCK);
+        out.push_back(std::move(snap));
+    }
+    return out;
+}
+
+std::vector<PoolInfo> GpuVolume::pools() const {
+    std::vector<PoolInfo> out;
+    for (const vk::Buffer* b : {&params_, &counters_, &hashKeys_, &hashValues_, &hashStamps_, &blockCoords_, &voxelSdf_,
+                                &voxelWeight_, &freeList_, &touched_, &depth_, &mcTables_, &blockList_, &meshVertices_,
+                                &depthStaging_, &countersReadback_})
+        out.push_back({b->name(), size_t(b->size())});
+    return out;
+}
+
+}  // namespace vkmesh::gpu

@@ -1,0 +1,95 @@
+// The GPU data structure (paper §IV): a spatial hash of 8x8x8 blocks, a pool of blocks with a free
+// list, and the TSDF at every cube corner; plus the frame pipeline that fuses depth images into it
+// and the baseline mesh extraction. One command buffer per frame; only the small Counters struct is
+// read back.
+#pragma once
+
+#include <Eigen/Core>
+
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/types.h"
+#include "gpu/layout.h"
+#include "gpu/stages.h"
+#include "vk/buffer.h"
+#include "vk/commands.h"
+#include "vk/context.h"
+#include "vk/pipeline.h"
+
+namespace vkmesh::gpu {
+
+struct GpuVolumeConfig {
+    VolumeParams params;
+    uint32_t blockCapacity = 16384;      // blocks in the pool (512 TSDF corners each)
+    uint32_t hashCapacity = 0;           // hash slots; 0: the power of two >= 2 * blockCapacity
+    uint32_t touchedCapacity = 0;        // blocks one frame may touch; 0: blockCapacity
+    uint32_t meshVertexCapacity = 1u << 20;  // baseline mesh buffer (grown on demand)
+    float minMeshWeight = 1.0f;          // a cube is meshed when all its corners have this weight
+    int imageWidth = 640, imageHeight = 480;
+};
+
+// What one frame did, from the GPU's counters, and how long each stage took on the GPU.
+struct FrameReport {
+    Counters counters{};
+    std::vector<std::pair<std::string, double>> stageMs;
+    // Human-readable capacity problems of this frame (empty when none): hash full, pool exhausted, ...
+    std::vector<std::string> warnings;
+};
+
+// The TSDF of one block as downloaded (tests, snapshots).
+struct BlockSnapshot {
+    Eigen::Vector3i coord;
+    std::vector<float> sdf, weight;   // VOXELS_PER_BLOCK each, x fastest
+};
+
+// A triangle soup: 3 vertices per triangle, in order (the baseline mesh).
+struct TriangleSoup {
+    std::vector<Eigen::Vector3f> vertices;
+    size_t triangleCount() const { return vertices.size() / 3; }
+};
+
+struct PoolInfo {
+    std::string name;
+    size_t bytes;
+};
+
+class GpuVolume {
+public:
+    GpuVolume(const vk::Context& context, const GpuVolumeConfig& config);
+
+    // Fuses one depth image (metres, 0 = none) seen from `cameraToWorld`. One submission.
+    FrameReport integrate(const DepthImage& depth, const Intrinsics& intrinsics, const Pose& cameraToWorld);
+
+    // Marching cubes over every block, each triangle with its own 3 vertices. Never truncated: if the
+    // mesh buffer was too small it is grown to the exact size the GPU counted and the pass re-run.
+    TriangleSoup extractBaselineMesh(std::vector<std::pair<std::string, double>>* stageMs = nullptr);
+
+    std::vector<BlockSnapshot> downloadBlocks() const;
+    Counters readCounters() const;
+    std::vector<PoolInfo> pools() const;
+    const GpuVolumeConfig& config() const { return config_; }
+    uint32_t framesIntegrated() const { return frameNumber_; }
+
+private:
+    vk::Buffer makeBuffer(VkDeviceSize size, VkBufferUsageFlags extraUsage, const std::string& name, uint32_t binding);
+    void recordCountersReadback(VkCommandBuffer cmd);
+
+    const vk::Context& context_;
+    GpuVolumeConfig config_;
+    vk::BindingLayout layout_;
+    vk::Buffer params_, counters_, hashKeys_, hashValues_, hashStamps_, blockCoords_, voxelSdf_, voxelWeight_,
+        freeList_, touched_, depth_, mcTables_, blockList_, meshVertices_;
+    vk::Buffer depthStaging_, countersReadback_;
+    AllocateBlocksStage allocate_;
+    FuseDepthStage fuse_;
+    BaselineMeshStage baselineMesh_;
+    vk::CommandRecorder recorder_;
+    vk::StageTimer timer_;
+    uint32_t frameNumber_ = 0;
+    FramePush lastPush_{};
+};
+
+}  // namespace vkmesh::gpu

@@ -1,0 +1,21 @@
+// The C++ side of shaders_comp/shared_layout.h, with the checks that keep it equal to GLSL's std430.
+#pragma once
+
+#include <cstddef>
+
+#include "shared_layout.h"
+
+namespace vkmesh::gpu {
+
+static_assert(sizeof(VolumeParamsGpu) == 32, "VolumeParamsGpu: std140 layout of 8 scalars");
+static_assert(sizeof(Counters) % 16 == 0);
+static_assert(offsetof(Counters, assignDispatch) == 0 && offsetof(Counters, blockDispatch) == 16 &&
+              offsetof(Counters, listDispatch) == 32, "indirect arguments at 16-byte offsets");
+static_assert(offsetof(Counters, validPixels) == COUNTERS_PER_FRAME_OFFSET);
+static_assert(offsetof(Counters, freeTop) == COUNTERS_PER_FRAME_OFFSET + COUNTERS_PER_FRAME_SIZE,
+              "per-frame counters are one contiguous range, cleared with one fill");
+static_assert(sizeof(FramePush) == 128, "push constants: 128 bytes is all lavapipe guarantees");
+static_assert(VOXELS_PER_BLOCK == BLOCK_SIDE * BLOCK_SIDE * BLOCK_SIDE);
+static_assert(VOXELS_PER_INVOCATION * WG_BLOCK == VOXELS_PER_BLOCK);
+
+}  // namespace vkmesh::gpu

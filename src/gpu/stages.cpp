@@ -1,0 +1,50 @@
+#include "gpu/stages.h"
+
+#include <cstddef>
+
+#include "vk/commands.h"
+
+namespace vkmesh::gpu {
+
+AllocateBlocksStage::AllocateBlocksStage(const vk::Context& context, const vk::BindingLayout& layout)
+    : allocate_(context, layout, "allocate_blocks"),
+      plan_(context, layout, "plan_frame"),
+      assign_(context, layout, "assign_blocks"),
+      commit_(context, layout, "commit_allocation") {}
+
+void AllocateBlocksStage::record(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters) const {
+    uint32_t width = push.imageSize & 0xFFFFu, height = push.imageSize >> 16;
+    allocate_.dispatch(cmd, &push, (width + WG_PIXELS_X - 1) / WG_PIXELS_X, (height + WG_PIXELS_Y - 1) / WG_PIXELS_Y);
+    vk::memoryBarrier(cmd);
+    plan_.dispatch(cmd, &push, 1);
+    vk::memoryBarrier(cmd);
+    assign_.dispatchIndirect(cmd, &push, counters, offsetof(Counters, assignDispatch));
+    vk::memoryBarrier(cmd);
+    commit_.dispatch(cmd, &push, 1);
+    vk::memoryBarrier(cmd);
+}
+
+FuseDepthStage::FuseDepthStage(const vk::Context& context, const vk::BindingLayout& layout)
+    : fuse_(context, layout, "fuse_depth") {}
+
+void FuseDepthStage::record(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters) const {
+    fuse_.dispatchIndirect(cmd, &push, counters, offsetof(Counters, blockDispatch));
+    vk::memoryBarrier(cmd);
+}
+
+BaselineMeshStage::BaselineMeshStage(const vk::Context& context, const vk::BindingLayout& layout)
+    : collect_(context, layout, "collect_blocks"),
+      plan_(context, layout, "plan_block_list"),
+      mesh_(context, layout, "mesh_baseline") {}
+
+void BaselineMeshStage::record(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters,
+                               uint32_t hashCapacity) const {
+    collect_.dispatch(cmd, &push, (hashCapacity + WG_LIST - 1) / WG_LIST);
+    vk::memoryBarrier(cmd);
+    plan_.dispatch(cmd, &push, 1);
+    vk::memoryBarrier(cmd);
+    mesh_.dispatchIndirect(cmd, &push, counters, offsetof(Counters, listDispatch));
+    vk::memoryBarrier(cmd);
+}
+
+}  // namespace vkmesh::gpu

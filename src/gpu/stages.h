@@ -1,0 +1,46 @@
+// The stages of vkmesh's GPU frame pipeline. Each stage is one host class that owns its compute
+// pipelines (shaders_comp/<name>.comp) and records its dispatches; the data structure they work on
+// (src/gpu/gpu_volume.h) owns the buffers. Stages are separated by full memory barriers.
+#pragma once
+
+#include "gpu/layout.h"
+#include "vk/buffer.h"
+#include "vk/pipeline.h"
+
+namespace vkmesh::gpu {
+
+// Paper §V.A, first half: pixels walk their truncation bands and claim block keys in the hash
+// (allocate_blocks), the touched list is sized (plan_frame), touched keys without memory get a block
+// from the free list (assign_blocks), and the free list is shrunk by what was handed out
+// (commit_allocation). Four dispatches, because a free list may not be read and shrunk in one.
+class AllocateBlocksStage {
+public:
+    AllocateBlocksStage(const vk::Context& context, const vk::BindingLayout& layout);
+    void record(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters) const;
+
+private:
+    vk::ComputePipeline allocate_, plan_, assign_, commit_;
+};
+
+// Paper §V.A, second half: one workgroup per touched block updates its 512 TSDF corners.
+class FuseDepthStage {
+public:
+    FuseDepthStage(const vk::Context& context, const vk::BindingLayout& layout);
+    void record(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters) const;
+
+private:
+    vk::ComputePipeline fuse_;
+};
+
+// The Chisel-style baseline mesh: list every live block (collect_blocks, plan_block_list), then
+// marching cubes in every cube, 3 vertices of its own per triangle (mesh_baseline).
+class BaselineMeshStage {
+public:
+    BaselineMeshStage(const vk::Context& context, const vk::BindingLayout& layout);
+    void record(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters, uint32_t hashCapacity) const;
+
+private:
+    vk::ComputePipeline collect_, plan_, mesh_;
+};
+
+}  // namespace vkmesh::gpu

@@ -1,0 +1,299 @@
+#include "vk/context.h"
+
+#include <algorithm>
+#include <cstdlib>
+#include <cstring>
+#include <iostream>
+#include <optional>
+#include <utility>
+
+#include "vk/check.h"
+
+namespace vkmesh::vk {
+namespace {
+
+constexpr const char* kValidationLayer = "VK_LAYER_KHRONOS_validation";
+
+bool envFlag(const char* name) {
+    const char* v = std::getenv(name);
+    return v && *v && std::strcmp(v, "0") != 0;
+}
+
+std::string versionString(uint32_t v) {
+    return std::to_string(VK_API_VERSION_MAJOR(v)) + "." + std::to_string(VK_API_VERSION_MINOR(v)) + "." +
+           std::to_string(VK_API_VERSION_PATCH(v));
+}
+
+std::string typeName(VkPhysicalDeviceType t) {
+    switch (t) {
+        case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU: return "discrete GPU";
+        case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU: return "integrated GPU";
+        case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU: return "virtual GPU";
+        case VK_PHYSICAL_DEVICE_TYPE_CPU: return "CPU";
+        default: return "other";
+    }
+}
+
+int typeRank(VkPhysicalDeviceType t) {
+    switch (t) {
+        case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU: return 0;
+        case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU: return 1;
+        case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU: return 2;
+        case VK_PHYSICAL_DEVICE_TYPE_CPU: return 3;
+        default: return 4;
+    }
+}
+
+bool layerAvailable(const char* name) {
+    uint32_t n = 0;
+    vkEnumerateInstanceLayerProperties(&n, nullptr);
+    std::vector<VkLayerProperties> layers(n);
+    vkEnumerateInstanceLayerProperties(&n, layers.data());
+    return std::any_of(layers.begin(), layers.end(), [&](const auto& l) { return std::strcmp(l.layerName, name) == 0; });
+}
+
+VkInstance createInstance(bool validation) {
+    VkApplicationInfo app{VK_STRUCTURE_TYPE_APPLICATION_INFO};
+    app.pApplicationName = "vkmesh";
+    app.pEngineName = "vkmesh";
+    app.apiVersion = VK_API_VERSION_1_2;
+    std::vector<const char*> layers, extensions;
+    if (validation) {
+        layers.push_back(kValidationLayer);
+        extensions.push_back(VK_EXT_DEBUG_UTILS_EXTENSION_NAME);
+    }
+    VkInstanceCreateInfo info{VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO};
+    info.pApplicationInfo = &app;
+    info.enabledLayerCount = static_cast<uint32_t>(layers.size());
+    info.ppEnabledLayerNames = layers.data();
+    info.enabledExtensionCount = static_cast<uint32_t>(extensions.size());
+    info.ppEnabledExtensionNames = extensions.data();
+    VkInstance instance = VK_NULL_HANDLE;
+    VkResult r = vkCreateInstance(&info, nullptr, &instance);
+    if (r == VK_ERROR_INCOMPATIBLE_DRIVER || r == VK_ERROR_INITIALIZATION_FAILED)
+        throw Error(std::string("No Vulkan driver could be loaded (vkCreateInstance: ") + resultName(r) +
+                    "). Install a Vulkan driver: `apt-get install mesa-vulkan-drivers` gives the lavapipe CPU "
+                    "device; GPU vendors ship their own.");
+    check(r, "vkCreateInstance");
+    return instance;
+}
+
+std::vector<VkPhysicalDevice> physicalDevices(VkInstance instance) {
+    uint32_t n = 0;
+    check(vkEnumeratePhysicalDevices(instance, &n, nullptr), "vkEnumeratePhysicalDevices");
+    std::vector<VkPhysicalDevice> devices(n);
+    check(vkEnumeratePhysicalDevices(instance, &n, devices.data()), "vkEnumeratePhysicalDevices");
+    return devices;
+}
+
+std::optional<uint32_t> computeQueueFamily(VkPhysicalDevice device) {
+    uint32_t n = 0;
+    vkGetPhysicalDeviceQueueFamilyProperties(device, &n, nullptr);
+    std::vector<VkQueueFamilyProperties> families(n);
+    vkGetPhysicalDeviceQueueFamilyProperties(device, &n, families.data());
+    // Prefer a family that also does graphics (the renderer shares it later), else any compute family.
+    for (uint32_t i = 0; i < n; ++i)
+        if ((families[i].queueFlags & VK_QUEUE_COMPUTE_BIT) && (families[i].queueFlags & VK_QUEUE_GRAPHICS_BIT)) return i;
+    for (uint32_t i = 0; i < n; ++i)
+        if (families[i].queueFlags & VK_QUEUE_COMPUTE_BIT) return i;
+    return std::nullopt;
+}
+
+// What vkmesh needs from a device: Vulkan 1.2, a compute queue, 64-bit integers and 64-bit buffer
+// atomics (hash keys are claimed with one 64-bit compare-and-swap), and basic/arithmetic/ballot
+// subgroup operations in compute shaders (counters are aggregated per subgroup).
+DeviceInfo describe(VkPhysicalDevice device, uint32_t index) {
+    VkPhysicalDeviceProperties props{};
+    vkGetPhysicalDeviceProperties(device, &props);
+    VkPhysicalDeviceDriverProperties driver{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DRIVER_PROPERTIES};
+    VkPhysicalDeviceSubgroupProperties subgroup{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
+    subgroup.pNext = props.apiVersion >= VK_API_VERSION_1_2 ? &driver : nullptr;
+    VkPhysicalDeviceProperties2 props2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2};
+    props2.pNext = &subgroup;
+    vkGetPhysicalDeviceProperties2(device, &props2);
+
+    DeviceInfo info;
+    info.index = index;
+    info.name = props.deviceName;
+    info.type = typeName(props.deviceType);
+    info.apiVersion = versionString(props.apiVersion);
+    if (props.apiVersion >= VK_API_VERSION_1_2) info.driver = std::string(driver.driverName) + " " + driver.driverInfo;
+
+    std::vector<std::string> missing;
+    if (props.apiVersion < VK_API_VERSION_1_2) missing.push_back("Vulkan 1.2");
+    if (!computeQueueFamily(device)) missing.push_back("a compute queue");
+    if (props.apiVersion >= VK_API_VERSION_1_2) {
+        VkPhysicalDeviceVulkan12Features f12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
+        VkPhysicalDeviceFeatures2 f{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2};
+        f.pNext = &f12;
+        vkGetPhysicalDeviceFeatures2(device, &f);
+        if (!f.features.shaderInt64) missing.push_back("shaderInt64");
+        if (!f12.shaderBufferInt64Atomics) missing.push_back("shaderBufferInt64Atomics");
+        VkSubgroupFeatureFlags need = VK_SUBGROUP_FEATURE_BASIC_BIT | VK_SUBGROUP_FEATURE_ARITHMETIC_BIT | VK_SUBGROUP_FEATURE_BALLOT_BIT;
+        if ((subgroup.supportedOperations & need) != need || !(subgroup.supportedStages & VK_SHADER_STAGE_COMPUTE_BIT))
+            missing.push_back("subgroup basic+arithmetic+ballot operations in compute shaders");
+    }
+    info.suitable = missing.empty();
+    for (size_t i = 0; i < missing.size(); ++i) info.whyNot += (i ? ", " : "missing ") + missing[i];
+    return info;
+}
+
+}  // namespace
+
+std::vector<DeviceInfo> Context::listDevices() {
+    VkInstance instance = createInstance(false);
+    std::vector<DeviceInfo> out;
+    try {
+        auto devices = physicalDevices(instance);
+        for (uint32_t i = 0; i < devices.size(); ++i) out.push_back(describe(devices[i], i));
+    } catch (...) {
+        vkDestroyInstance(instance, nullptr);
+        throw;
+    }
+    vkDestroyInstance(instance, nullptr);
+    return out;
+}
+
+Context::Context(const ContextOptions& options) {
+    validation_ = options.validation || envFlag("VKMESH_VALIDATION");
+    if (validation_ && !layerAvailable(kValidationLayer))
+        throw Error("Validation was requested but VK_LAYER_KHRONOS_validation is not installed "
+                    "(apt-get install vulkan-validationlayers)");
+    instance_ = createInstance(validation_);
+    try {
+        if (validation_) {
+            VkDebugUtilsMessengerCreateInfoEXT info{VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CREATE_INFO_EXT};
+            info.messageSeverity = VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT;
+            info.messageType = VK_DEBUG_UTILS_MESSAGE_TYPE_GENERAL_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT |
+                               VK_DEBUG_UTILS_MESSAGE_TYPE_PERFORMANCE_BIT_EXT;
+            info.pfnUserCallback = &Context::debugCallback;
+            info.pUserData = this;
+            auto create = reinterpret_cast<PFN_vkCreateDebugUtilsMessengerEXT>(
+                vkGetInstanceProcAddr(instance_, "vkCreateDebugUtilsMessengerEXT"));
+            if (!create) throw Error("vkCreateDebugUtilsMessengerEXT is not available with the validation layer");
+            check(create(instance_, &info, nullptr, &messenger_), "vkCreateDebugUtilsMessengerEXT");
+        }
+
+        auto devices = physicalDevices(instance_);
+        if (devices.empty())
+            throw Error("No Vulkan device found. Install a driver: `apt-get install mesa-vulkan-drivers` "
+                        "gives the lavapipe CPU device; GPU vendors ship their own.");
+        std::vector<DeviceInfo> infos;
+        for (uint32_t i = 0; i < devices.size(); ++i) infos.push_back(describe(devices[i], i));
+
+        int chosen = -1;
+        if (options.deviceIndex >= 0) {
+            if (options.deviceIndex >= static_cast<int>(devices.size()))
+                throw Error("--device " + std::to_string(options.deviceIndex) + " does not exist: there are " +
+                            std::to_string(devices.size()) + " Vulkan devices (see `vkmesh devices`)");
+            if (!infos[options.deviceIndex].suitable)
+                throw Error("Device " + std::to_string(options.deviceIndex) + " (" + infos[options.deviceIndex].name +
+                            ") cannot run vkmesh: " + infos[options.deviceIndex].whyNot);
+            chosen = options.deviceIndex;
+        } else {
+            int bestRank = 1 << 30;
+            for (uint32_t i = 0; i < devices.size(); ++i) {
+                if (!infos[i].suitable) continue;
+                VkPhysicalDeviceProperties p{};
+                vkGetPhysicalDeviceProperties(devices[i], &p);
+                if (typeRank(p.deviceType) < bestRank) bestRank = typeRank(p.deviceType), chosen = static_cast<int>(i);
+            }
+            if (chosen < 0) {
+                std::string why;
+                for (const auto& d : infos) why += "\n  " + std::to_string(d.index) + ": " + d.name + ": " + d.whyNot;
+                throw Error("No Vulkan device can run vkmesh:" + why);
+            }
+        }
+        physical_ = devices[chosen];
+        info_ = infos[chosen];
+        vkGetPhysicalDeviceProperties(physical_, &properties_);
+        vkGetPhysicalDeviceMemoryProperties(physical_, &memoryProperties_);
+        queueFamily_ = *computeQueueFamily(physical_);
+        {
+            uint32_t n = 0;
+            vkGetPhysicalDeviceQueueFamilyProperties(physical_, &n, nullptr);
+            std::vector<VkQueueFamilyProperties> families(n);
+            vkGetPhysicalDeviceQueueFamilyProperties(physical_, &n, families.data());
+            timestampValidBits_ = families[queueFamily_].timestampValidBits;
+        }
+
+        float priority = 1.0f;
+        VkDeviceQueueCreateInfo queueInfo{VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};
+        queueInfo.queueFamilyIndex = queueFamily_;
+        queueInfo.queueCount = 1;
+        queueInfo.pQueuePriorities = &priority;
+        VkPhysicalDeviceVulkan12Features f12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
+        f12.shaderBufferInt64Atomics = VK_TRUE;
+        VkPhysicalDeviceFeatures2 features{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2};
+        features.pNext = &f12;
+        features.features.shaderInt64 = VK_TRUE;
+        VkDeviceCreateInfo deviceInfo{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO};
+        deviceInfo.pNext = &features;
+        deviceInfo.queueCreateInfoCount = 1;
+        deviceInfo.pQueueCreateInfos = &queueInfo;
+        check(vkCreateDevice(physical_, &deviceInfo, nullptr, &device_), "vkCreateDevice");
+        vkGetDeviceQueue(device_, queueFamily_, 0, &queue_);
+
+        VkCommandPoolCreateInfo poolInfo{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
+        poolInfo.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
+        poolInfo.queueFamilyIndex = queueFamily_;
+        check(vkCreateCommandPool(device_, &poolInfo, nullptr, &commandPool_), "vkCreateCommandPool");
+    } catch (...) {
+        release();
+        throw;
+    }
+}
+
+Context::~Context() { release(); }
+
+void Context::release() {
+    if (device_) {
+        vkDeviceWaitIdle(device_);
+        if (commandPool_) vkDestroyCommandPool(device_, commandPool_, nullptr);
+        vkDestroyDevice(device_, nullptr);
+    }
+    if (messenger_) {
+        auto destroy = reinterpret_cast<PFN_vkDestroyDebugUtilsMessengerEXT>(
+            vkGetInstanceProcAddr(instance_, "vkDestroyDebugUtilsMessengerEXT"));
+        if (destroy) destroy(instance_, messenger_, nullptr);
+    }
+    if (instance_) vkDestroyInstance(instance_, nullptr);
+    commandPool_ = VK_NULL_HANDLE;
+    device_ = VK_NULL_HANDLE;
+    messenger_ = VK_NULL_HANDLE;
+    instance_ = VK_NULL_HANDLE;
+}
+
+uint32_t Context::findMemoryType(uint32_t typeBits, VkMemoryPropertyFlags required, VkMemoryPropertyFlags preferred) const {
+    for (int pass = 0; pass < 2; ++pass) {
+        VkMemoryPropertyFlags want = pass == 0 ? (required | preferred) : required;
+        for (uint32_t i = 0; i < memoryProperties_.memoryTypeCount; ++i)
+            if ((typeBits & (1u << i)) && (memoryProperties_.memoryTypes[i].propertyFlags & want) == want) return i;
+    }
+    throw Error("No Vulkan memory type with property flags " + std::to_string(required) + " on " + info_.name);
+}
+
+VKAPI_ATTR VkBool32 VKAPI_CALL Context::debugCallback(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
+                                                      VkDebugUtilsMessageTypeFlagsEXT,
+                                                      const VkDebugUtilsMessengerCallbackDataEXT* data, void* user) {
+    auto* self = static_cast<Context*>(user);
+    std::string text = std::string(severity >= VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT ? "[validation error] " : "[validation warning] ") +
+                       (data && data->pMessage ? data->pMessage : "");
+    std::cerr << text << "\n";
+    std::lock_guard<std::mutex> lock(self->messagesMutex_);
+    self->messages_.push_back(std::move(text));
+    ++self->messageCount_;
+    return VK_FALSE;
+}
+
+std::vector<std::string> Context::takeValidationMessages() {
+    std::lock_guard<std::mutex> lock(messagesMutex_);
+    return std::exchange(messages_, {});
+}
+
+size_t Context::validationMessageCount() const {
+    std::lock_guard<std::mutex> lock(messagesMutex_);
+    return messageCount_;
+}
+
+}  // namespace vkmesh::vk

@@ -1,0 +1,87 @@
+// The Vulkan instance, the chosen physical device, a logical device with one compute queue, and the
+// validation layer when asked for. Everything else in vkmesh (buffers, pipelines, command buffers)
+// is created from a Context.
+#pragma once
+
+#include <vulkan/vulkan.h>
+
+#include <cstdint>
+#include <mutex>
+#include <string>
+#include <vector>
+
+namespace vkmesh::vk {
+
+struct ContextOptions {
+    int deviceIndex = -1;     // index in `vkmesh devices`; -1: a discrete GPU if present, else any suitable one
+    bool validation = false;  // Khronos validation layer; also on when VKMESH_VALIDATION=1 is set
+};
+
+struct DeviceInfo {
+    uint32_t index = 0;
+    std::string name;
+    std::string type;         // "discrete GPU", "integrated GPU", "CPU", ...
+    std::string apiVersion;   // "1.3.230"
+    std::string driver;       // driver name and info where the device reports them
+    bool suitable = false;
+    std::string whyNot;       // what is missing when not suitable
+};
+
+class Context {
+public:
+    explicit Context(const ContextOptions& options = {});
+    ~Context();
+    Context(const Context&) = delete;
+    Context& operator=(const Context&) = delete;
+
+    // Lists the physical devices and whether vkmesh can run on each.
+    static std::vector<DeviceInfo> listDevices();
+
+    VkInstance instance() const { return instance_; }
+    VkPhysicalDevice physicalDevice() const { return physical_; }
+    VkDevice device() const { return device_; }
+    VkQueue queue() const { return queue_; }
+    uint32_t queueFamily() const { return queueFamily_; }
+    VkCommandPool commandPool() const { return commandPool_; }
+    const VkPhysicalDeviceProperties& properties() const { return properties_; }
+    const DeviceInfo& info() const { return info_; }
+    bool validationEnabled() const { return validation_; }
+
+    // Memory type with all `required` flags (and `preferred` ones when possible); throws if none.
+    uint32_t findMemoryType(uint32_t typeBits, VkMemoryPropertyFlags required, VkMemoryPropertyFlags preferred = 0) const;
+
+    // Timestamps: nanoseconds per tick, and whether the compute queue writes them at all.
+    double timestampPeriodNs() const { return properties_.limits.timestampPeriod; }
+    bool timestampsSupported() const { return timestampValidBits_ > 0; }
+    uint32_t maxStorageBufferRange() const { return properties_.limits.maxStorageBufferRange; }
+
+    // Validation-layer messages (warnings and errors) since the last call; tests fail on any.
+    std::vector<std::string> takeValidationMessages();
+    size_t validationMessageCount() const;
+
+private:
+    void release();  // destroys the Vulkan objects (also on a failed construction)
+    static VKAPI_ATTR VkBool32 VKAPI_CALL debugCallback(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
+                                                        VkDebugUtilsMessageTypeFlagsEXT types,
+                                                        const VkDebugUtilsMessengerCallbackDataEXT* data,
+                                                        void* user);
+
+    VkInstance instance_ = VK_NULL_HANDLE;
+    VkDebugUtilsMessengerEXT messenger_ = VK_NULL_HANDLE;
+    VkPhysicalDevice physical_ = VK_NULL_HANDLE;
+    VkDevice device_ = VK_NULL_HANDLE;
+    VkQueue queue_ = VK_NULL_HANDLE;
+    uint32_t queueFamily_ = 0;
+    VkCommandPool commandPool_ = VK_NULL_HANDLE;
+    VkPhysicalDeviceProperties properties_{};
+    VkPhysicalDeviceMemoryProperties memoryProperties_{};
+    uint32_t timestampValidBits_ = 0;
+    DeviceInfo info_;
+    bool validation_ = false;
+
+    mutable std::mutex messagesMutex_;
+    std::vector<std::string> messages_;
+    size_t messageCount_ = 0;
+};
+
+}  // namespace vkmesh::vk

@@ -1,0 +1,226 @@
+// GPU allocation, fusion and baseline mesh against the CPU reference, on synthetic scenes.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <map>
+#include <set>
+
+#include "cpu/reference_volume.h"
+#include "gpu/gpu_volume.h"
+#include "gpu_fixture.h"
+#include "synth/synthetic_scene.h"
+
+namespace vkmesh {
+namespace {
+
+using test::GpuTest;
+
+constexpr int kWidth = 160, kHeight = 120;
+
+gpu::GpuVolumeConfig smallConfig(float voxel = 0.04f) {
+    gpu::GpuVolumeConfig c;
+    c.params.voxelSize = voxel;
+    c.params.truncVoxels = 4;
+    c.params.maxDepth = 6.0f;
+    c.blockCapacity = 8192;
+    c.imageWidth = kWidth;
+    c.imageHeight = kHeight;
+    return c;
+}
+
+struct Frame {
+    DepthImage depth;
+    Pose pose;
+};
+
+std::vector<Frame> roomFrames(size_t count, bool noise) {
+    static const synth::SyntheticScene scene = synth::SyntheticScene::defaultRoom();
+    Intrinsics intr = synth::kinectIntrinsics(kWidth, kHeight);
+    std::vector<Frame> frames;
+    auto path = synth::cameraPath(24, synth::PathKind::Orbit);
+    for (size_t i = 0; i < count; ++i) {
+        synth::RenderOptions options;
+        options.noise = noise;
+        options.seed = uint32_t(i + 1);
+        frames.push_back({scene.renderDepth(intr, path[i * 3 % path.size()], options), path[i * 3 % path.size()]});
+    }
+    return frames;
+}
+
+using BlockMap = std::map<cpu::BlockCoord, gpu::BlockSnapshot>;
+BlockMap byCoord(std::vector<gpu::BlockSnapshot> blocks) {
+    BlockMap out;
+    for (auto& b : blocks) {
+        cpu::BlockCoord c{b.coord.x(), b.coord.y(), b.coord.z()};
+        EXPECT_TRUE(out.emplace(c, std::move(b)).second) << "block listed twice in the hash";
+    }
+    return out;
+}
+
+// Compares every TSDF corner; returns the number of corners that differ by more than `tolerance`.
+size_t compareTsdf(const BlockMap& gpu, const cpu::ReferenceVolume& cpu, float tolerance) {
+    size_t differing = 0;
+    for (const auto& [coord, ref] : cpu.blocks()) {
+        auto it = gpu.find(coord);
+        if (it == gpu.end()) {
+            ADD_FAILURE() << "block " << coord[0] << "," << coord[1] << "," << coord[2] << " missing on the GPU";
+            continue;
+        }
+        for (uint32_t v = 0; v < gpu::VOXELS_PER_BLOCK; ++v) {
+            if (std::abs(it->second.sdf[v] - ref.sdf[v]) > tolerance || it->second.weight[v] != ref.weight[v]) ++differing;
+        }
+    }
+    return differing;
+}
+
+TEST_F(GpuTest, AllocationMatchesReferenceAndCountersConserve) {
+    gpu::GpuVolume volume(context(), smallConfig());
+    cpu::ReferenceVolume reference(smallConfig().params);
+    Intrinsics intr = synth::kinectIntrinsics(kWidth, kHeight);
+    auto frames = roomFrames(3, false);
+    uint32_t distinct = 0;
+    for (const auto& f : frames) {
+        gpu::FrameReport report = volume.integrate(f.depth, intr, f.pose);
+        cpu::ReferenceFrameStats stats = reference.integrate(f.depth, intr, f.pose);
+        const gpu::Counters& k = report.counters;
+        EXPECT_TRUE(report.warnings.empty()) << report.warnings.front();
+        EXPECT_EQ(k.validPixels, stats.validPixels);
+        EXPECT_EQ(k.blockRequests, stats.blockRequests);
+        EXPECT_EQ(k.touchedCount, stats.touchedCount);
+        EXPECT_EQ(k.blocksInserted, stats.blocksInserted);
+        // Every visit of a block is found, inserted, or counted as a failure: nothing vanishes.
+        EXPECT_EQ(k.blockRequests, k.blocksFound + k.blocksInserted + k.hashFull + k.outOfRange);
+        EXPECT_EQ(k.allocRequests, k.blocksInserted);
+        EXPECT_EQ(k.poolExhausted, 0u);
+        EXPECT_EQ(k.fusedBlocks, k.touchedCount);
+        EXPECT_EQ(k.updatedVoxels, stats.updatedVoxels);
+        distinct += k.blocksInserted;
+        EXPECT_EQ(k.blocksInUse, distinct);
+        EXPECT_EQ(k.freeTop + k.blocksInUse, volume.config().blockCapacity);
+    }
+    BlockMap gpuBlocks = byCoord(volume.downloadBlocks());
+    EXPECT_EQ(gpuBlocks.size(), reference.blocks().size());
+    EXPECT_EQ(gpuBlocks.size(), distinct);
+}
+
+TEST_F(GpuTest, FusedTsdfMatchesReference) {
+    gpu::GpuVolume volume(context(), smallConfig());
+    cpu::ReferenceVolume reference(smallConfig().params);
+    Intrinsics intr = synth::kinectIntrinsics(kWidth, kHeight);
+    for (const auto& f : roomFrames(6, true)) {
+        volume.integrate(f.depth, intr, f.pose);
+        reference.integrate(f.depth, intr, f.pose);
+    }
+    BlockMap gpuBlocks = byCoord(volume.downloadBlocks());
+    ASSERT_EQ(gpuBlocks.size(), reference.blocks().size());
+    size_t observed = 0;
+    for (const auto& [c, b] : reference.blocks())
+        observed += std::count_if(b.weight.begin(), b.weight.end(), [](float w) { return w > 0; });
+    EXPECT_GT(observed, 10000u) << "the scene should give the test something to compare";
+    EXPECT_EQ(compareTsdf(gpuBlocks, reference, 1e-6f), 0u);
+}
+
+// Canonical form of a triangle soup: each triangle rotated to start at its smallest vertex (keeping its
+// orientation), vertices rounded to 1 µm, then sorted.
+std::vector<std::array<long, 9>> canonicalTriangles(const std::vector<Eigen::Vector3f>& soup) {
+    std::vector<std::array<long, 9>> out;
+    for (size_t t = 0; t + 2 < soup.size(); t += 3) {
+        std::array<std::array<long, 3>, 3> v;
+        for (int i = 0; i < 3; ++i)
+            for (int k = 0; k < 3; ++k) v[i][k] = std::lround(double(soup[t + i][k]) * 1e6);
+        int first = int(std::min_element(v.begin(), v.end()) - v.begin());
+        std::array<long, 9> tri;
+        for (int i = 0; i < 3; ++i)
+            for (int k = 0; k < 3; ++k) tri[i * 3 + k] = v[(first + i) % 3][k];
+        out.push_back(tri);
+    }
+    std::sort(out.begin(), out.end());
+    return out;
+}
+
+TEST_F(GpuTest, BaselineMeshMatchesReference) {
+    auto config = smallConfig();
+    config.meshVertexCapacity = 1024;   // forces the grow-and-rerun path
+    gpu::GpuVolume volume(context(), config);
+    cpu::ReferenceVolume reference(config.params);
+    Intrinsics intr = synth::kinectIntrinsics(kWidth, kHeight);
+    for (const auto& f : roomFrames(4, false)) {
+        volume.integrate(f.depth, intr, f.pose);
+        reference.integrate(f.depth, intr, f.pose);
+    }
+    gpu::TriangleSoup gpuMesh = volume.extractBaselineMesh();
+    std::vector<Eigen::Vector3f> cpuMesh = reference.extractBaselineMesh();
+    ASSERT_GT(cpuMesh.size(), 3000u);
+    ASSERT_EQ(gpuMesh.vertices.size(), cpuMesh.size());
+    auto a = canonicalTriangles(gpuMesh.vertices), b = canonicalTriangles(cpuMesh);
+    size_t mismatched = 0;
+    for (size_t i = 0; i < a.size(); ++i)
+        for (int k = 0; k < 9; ++k)
+            if (std::abs(a[i][k] - b[i][k]) > 1) { ++mismatched; break; }
+    EXPECT_EQ(mismatched, 0u);
+    EXPECT_EQ(volume.readCounters().meshVerticesDropped, 0u);
+}
+
+TEST_F(GpuTest, PoolExhaustionIsCountedAndKeepsFusedBlocks) {
+    auto config = smallConfig();
+    config.blockCapacity = 40;
+    config.hashCapacity = 4096;
+    config.touchedCapacity = 4096;
+    gpu::GpuVolume volume(context(), config);
+    Intrinsics intr = synth::kinectIntrinsics(kWidth, kHeight);
+    auto frames = roomFrames(2, false);
+    gpu::FrameReport first = volume.integrate(frames[0].depth, intr, frames[0].pose);
+    const gpu::Counters& k = first.counters;
+    EXPECT_GT(k.touchedCount, 40u);
+    EXPECT_EQ(k.blocksInUse, 40u);
+    EXPECT_EQ(k.freeTop, 0u);
+    EXPECT_EQ(k.poolExhausted, k.allocRequests - 40u);
+    ASSERT_FALSE(first.warnings.empty());
+    EXPECT_NE(first.warnings.front().find("pool exhausted"), std::string::npos) << first.warnings.front();
+    auto before = byCoord(volume.downloadBlocks());
+    EXPECT_EQ(before.size(), 40u);
+    // A second frame fuses into the 40 blocks it has and keeps every one of them.
+    gpu::FrameReport second = volume.integrate(frames[1].depth, intr, frames[1].pose);
+    EXPECT_EQ(second.counters.blocksInUse, 40u);
+    auto after = byCoord(volume.downloadBlocks());
+    EXPECT_EQ(after.size(), 40u);
+    for (const auto& [c, b] : before) EXPECT_TRUE(after.count(c));
+}
+
+TEST_F(GpuTest, HashFullIsCountedNeverSilent) {
+    auto config = smallConfig();
+    config.hashCapacity = 64;   // far fewer slots than blocks a frame touches
+    gpu::GpuVolume volume(context(), config);
+    Intrinsics intr = synth::kinectIntrinsics(kWidth, kHeight);
+    auto frames = roomFrames(1, false);
+    gpu::FrameReport report = volume.integrate(frames[0].depth, intr, frames[0].pose);
+    const gpu::Counters& k = report.counters;
+    EXPECT_EQ(k.blocksInserted, 64u);
+    EXPECT_GT(k.hashFull, 0u);
+    EXPECT_EQ(k.blockRequests, k.blocksFound + k.blocksInserted + k.hashFull + k.outOfRange);
+    ASSERT_FALSE(report.warnings.empty());
+    EXPECT_NE(report.warnings.front().find("hash"), std::string::npos);
+    EXPECT_EQ(volume.downloadBlocks().size(), 64u);
+}
+
+TEST_F(GpuTest, RejectsMismatchedImages) {
+    gpu::GpuVolume volume(context(), smallConfig());
+    DepthImage wrong{kWidth / 2, kHeight, std::vector<float>(kWidth / 2 * kHeight, 1.0f)};
+    EXPECT_THROW(volume.integrate(wrong, synth::kinectIntrinsics(kWidth, kHeight), Pose::Identity()), Error);
+}
+
+TEST(GpuVolumeConfig, RejectsAbsurdVoxelSize) {
+    vk::Context context;
+    auto config = smallConfig(50.0f);
+    try {
+        gpu::GpuVolume volume(context, config);
+        FAIL() << "a 50 m voxel was accepted";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("voxel size"), std::string::npos) << e.what();
+    }
+}
+
+}  // namespace
+}  // namespace vkmesh
