@@ -1,1 +1,318 @@
-int main() { return 0; }
+// vkmesh: the command-line program.
+//   vkmesh devices                      list Vulkan devices and whether vkmesh can use them
+//   vkmesh synth OUT_DIR                render a synthetic RGB-D sequence with ground truth (TUM layout)
+//   vkmesh fuse DATASET -o mesh.ply     fuse a depth sequence on the GPU and write its mesh
+//   vkmesh frames DATASET -o f.json     the frames (paths, poses, intrinsics) fuse would use, for peers
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <numeric>
+#include <optional>
+
+#include "gpu/gpu_volume.h"
+#include "io/dataset.h"
+#include "io/ply.h"
+#include "synth/synthetic_scene.h"
+#include "vk/context.h"
+
+namespace {
+
+using namespace vkmesh;
+using json = nlohmann::json;
+
+struct CommonDatasetArgs {
+    std::string dataset;
+    size_t frames = 0;
+    float maxDepth = 4.0f;
+    std::string intrinsics;
+    double depthScale = 0;
+
+    void add(CLI::App* cmd) {
+        cmd->add_option("DATASET", dataset, "dataset folder (TUM, ICL-NUIM, Redwood, 7-Scenes layout)")->required();
+        cmd->add_option("--frames", frames, "use at most N frames (0 = all)");
+        cmd->add_option("--max-depth", maxDepth, "ignore depth beyond M metres")->check(CLI::PositiveNumber);
+        cmd->add_option("--intrinsics", intrinsics, "override the camera: fx,fy,cx,cy");
+        cmd->add_option("--depth-scale", depthScale, "raw depth units per metre (5000 TUM, 1000 mm)")->check(CLI::PositiveNumber);
+    }
+    std::unique_ptr<Dataset> open() const {
+        DatasetOptions options;
+        if (!intrinsics.empty()) options.intrinsics = parseIntrinsics(intrinsics);
+        if (depthScale > 0) options.depthScale = depthScale;
+        options.maxDepth = maxDepth;
+        options.maxFrames = frames;
+        return Dataset::open(dataset, options);
+    }
+};
+
+json statsOf(std::vector<double> values) {
+    if (values.empty()) return json{{"median", nullptr}, {"mean", nullptr}, {"max", nullptr}};
+    double mean = std::accumulate(values.begin(), values.end(), 0.0) / values.size();
+    std::sort(values.begin(), values.end());
+    double median = values.size() % 2 ? values[values.size() / 2]
+                                      : 0.5 * (values[values.size() / 2 - 1] + values[values.size() / 2]);
+    return json{{"median", median}, {"mean", mean}, {"max", values.back()}};
+}
+
+int commandDevices() {
+    auto devices = vk::Context::listDevices();
+    if (devices.empty()) {
+        std::cout << "No Vulkan device. Install a driver (apt-get install mesa-vulkan-drivers gives lavapipe).\n";
+        return 1;
+    }
+    for (const auto& d : devices) {
+        std::cout << d.index << ": " << d.name << " (" << d.type << ", Vulkan " << d.apiVersion << ", " << d.driver << ")"
+                  << (d.suitable ? "" : "  NOT USABLE: " + d.whyNot) << "\n";
+    }
+    return 0;
+}
+
+int commandSynth(const std::string& out, size_t frames, int width, int height, bool noise, uint32_t seed,
+                 const std::string& path) {
+    synth::SequenceOptions options;
+    options.frames = frames;
+    options.width = width;
+    options.height = height;
+    options.intrinsics = synth::kinectIntrinsics(width, height);
+    options.noise = noise;
+    options.seed = seed;
+    options.path = path == "revisit" ? synth::PathKind::Revisit : synth::PathKind::Orbit;
+    synth::writeTumSequence(out, synth::SyntheticScene::defaultRoom(), options);
+    std::cerr << "wrote " << frames << " frames of the synthetic room to " << out << "\n";
+    return 0;
+}
+
+int commandFrames(const CommonDatasetArgs& args, const std::string& out) {
+    auto dataset = args.open();
+    const Intrinsics& k = dataset->intrinsics();
+    json j;
+    j["dataset"] = std::filesystem::absolute(dataset->folder()).string();
+    j["kind"] = toString(dataset->kind());
+    j["depth_scale"] = dataset->depthScale();
+    j["max_depth"] = args.maxDepth;
+    j["intrinsics"] = {{"fx", k.fx}, {"fy", k.fy}, {"cx", k.cx}, {"cy", k.cy}, {"width", k.width}, {"height", k.height}};
+    j["frames"] = json::array();
+    for (size_t i = 0; i < dataset->size(); ++i) {
+        const FrameInfo& f = dataset->frame(i);
+        std::vector<double> m(16);
+        for (int r = 0; r < 4; ++r)
+            for (int c = 0; c < 4; ++c) m[r * 4 + c] = f.cameraToWorld(r, c);
+        j["frames"].push_back({{"index", f.index}, {"timestamp", f.timestamp},
+                               {"depth_path", std::filesystem::absolute(f.depthPath).string()}, {"camera_to_world", m}});
+    }
+    std::ofstream file(out);
+    if (!file) throw Error("cannot write " + out);
+    file << j.dump(1) << "\n";
+    std::cerr << "wrote " << dataset->size() << " frames to " << out << "\n";
+    return 0;
+}
+
+struct FuseArgs {
+    CommonDatasetArgs data;
+    std::string output;
+    std::string statsPath;
+    std::string mode = "baseline";
+    float voxel = 0.03f;
+    float truncVoxels = 4.0f;
+    float maxWeight = 255.0f;
+    uint32_t blocks = 16384;
+    int device = -1;
+    bool validation = false;
+    bool quiet = false;
+};
+
+int commandFuse(const FuseArgs& args) {
+    auto dataset = args.data.open();
+    for (const auto& w : dataset->warnings()) std::cerr << "warning: " << w << "\n";
+    if (dataset->size() == 0) throw Error("no usable frame in " + args.data.dataset);
+    const Intrinsics& intrinsics = dataset->intrinsics();
+
+    vk::Context context({args.device, args.validation});
+    gpu::GpuVolumeConfig config;
+    config.params.voxelSize = args.voxel;
+    config.params.truncVoxels = args.truncVoxels;
+    config.params.maxWeight = args.maxWeight;
+    config.params.maxDepth = args.data.maxDepth;
+    config.blockCapacity = args.blocks;
+    config.imageWidth = intrinsics.width;
+    config.imageHeight = intrinsics.height;
+    gpu::GpuVolume volume(context, config);
+
+    const bool tty = isatty(STDERR_FILENO);
+    std::map<std::string, std::vector<double>> stageMs;
+    std::vector<double> frameWallMs;
+    size_t integrated = 0, skipped = 0;
+    uint64_t hashFull = 0, poolExhausted = 0, touchedOverflow = 0;
+    std::vector<std::string> warnings;
+    auto warn = [&](const std::string& w) {
+        if (warnings.size() < 1000) warnings.push_back(w);
+        if (tty && !args.quiet) std::cerr << "\n";
+        std::cerr << "warning: " << w << "\n";
+    };
+    const auto start = std::chrono::steady_clock::now();
+    for (size_t i = 0; i < dataset->size(); ++i) {
+        DepthImage depth;
+        try {
+            depth = dataset->loadDepth(i);
+        } catch (const Error& e) {
+            warn(std::string("frame ") + std::to_string(i) + " skipped: " + e.what());
+            ++skipped;
+            continue;
+        }
+        size_t valid = std::count_if(depth.meters.begin(), depth.meters.end(), [&](float d) { return d > 0.0f; });
+        if (valid == 0) {
+            warn("frame " + std::to_string(i) + " skipped: no valid depth in " + dataset->frame(i).depthPath.string());
+            ++skipped;
+            continue;
+        }
+        auto t0 = std::chrono::steady_clock::now();
+        gpu::FrameReport report = volume.integrate(depth, intrinsics, dataset->frame(i).cameraToWorld);
+        frameWallMs.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+        ++integrated;
+        for (const auto& [name, ms] : report.stageMs) stageMs[name].push_back(ms);
+        hashFull += report.counters.hashFull;
+        poolExhausted += report.counters.poolExhausted;
+        touchedOverflow += report.counters.touchedCount > volume.config().touchedCapacity;
+        for (const auto& w : report.warnings) warn("frame " + std::to_string(i) + ": " + w);
+        if (!args.quiet && (tty || (i + 1) % 50 == 0 || i + 1 == dataset->size())) {
+            std::fprintf(stderr, "%sframe %zu/%zu  blocks %u  %.1f ms/frame%s", tty ? "\r" : "", i + 1, dataset->size(),
+                         report.counters.blocksInUse, frameWallMs.back(), tty ? "   " : "\n");
+        }
+    }
+    if (tty && !args.quiet) std::cerr << "\n";
+    if (integrated == 0) throw Error("none of the " + std::to_string(dataset->size()) + " frames could be fused");
+    const double fuseSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+    std::vector<std::pair<std::string, double>> meshMs;
+    auto t0 = std::chrono::steady_clock::now();
+    gpu::TriangleSoup soup = volume.extractBaselineMesh(&meshMs);
+    double meshWallMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+
+    Mesh mesh;
+    mesh.positions = soup.vertices;
+    mesh.triangles.reserve(soup.triangleCount());
+    for (uint32_t t = 0; t < soup.triangleCount(); ++t) mesh.triangles.push_back({3 * t, 3 * t + 1, 3 * t + 2});
+    std::filesystem::path out(args.output);
+    if (out.extension() == ".obj")
+        writeObj(out, mesh);
+    else
+        writePly(out, mesh);
+
+    gpu::Counters k = volume.readCounters();
+    json stats;
+    stats["dataset"] = {{"path", std::filesystem::absolute(dataset->folder()).string()},
+                        {"kind", toString(dataset->kind())},
+                        {"frames_available", dataset->size()}};
+    stats["device"] = context.info().name;
+    stats["mode"] = args.mode;
+    stats["frames"] = {{"integrated", integrated}, {"skipped", skipped}};
+    stats["voxel_size"] = args.voxel;
+    stats["truncation_m"] = config.params.truncation();
+    stats["max_depth"] = args.data.maxDepth;
+    stats["blocks"] = {{"in_use", k.blocksInUse}, {"capacity", volume.config().blockCapacity},
+                       {"hash_capacity", volume.config().hashCapacity}};
+    stats["mesh"] = {{"vertices", mesh.positions.size()}, {"triangles", mesh.triangles.size()}, {"path", out.string()}};
+    json gpuMs = json::object();
+    for (const auto& [name, values] : stageMs) gpuMs[name] = statsOf(values);
+    stats["gpu_ms_per_frame"] = gpuMs;
+    json meshStage = json::object();
+    for (const auto& [name, ms] : meshMs) meshStage[name] = ms;
+    stats["gpu_ms_mesh_extraction"] = meshStage;
+    stats["wall_ms_per_frame"] = statsOf(frameWallMs);
+    stats["wall_ms_mesh_extraction"] = meshWallMs;
+    stats["wall_s_fusion_total"] = fuseSeconds;
+    json pools = json::object();
+    size_t total = 0;
+    for (const auto& p : volume.pools()) pools[p.name] = p.bytes, total += p.bytes;
+    stats["gpu_pool_bytes"] = pools;
+    stats["gpu_bytes_total"] = total;
+    stats["capacity_events"] = {{"hash_full", hashFull}, {"pool_exhausted", poolExhausted},
+                                {"frames_touching_more_than_capacity", touchedOverflow}};
+    stats["warnings"] = warnings;
+    if (!args.statsPath.empty()) {
+        std::ofstream file(args.statsPath);
+        if (!file) throw Error("cannot write " + args.statsPath);
+        file << stats.dump(2) << "\n";
+    }
+    auto median = [&](const char* name) { return stageMs.count(name) ? statsOf(stageMs[name])["median"].get<double>() : 0.0; };
+    std::cout << "vkmesh fuse: " << integrated << " frames (" << skipped << " skipped) from " << args.data.dataset << " on "
+              << context.info().name << "\n"
+              << "  voxel " << args.voxel << " m, " << k.blocksInUse << " blocks, mesh (" << args.mode << "): "
+              << mesh.positions.size() << " vertices, " << mesh.triangles.size() << " triangles -> " << out.string() << "\n"
+              << "  GPU per frame (median): allocate " << median("allocate") << " ms, fuse " << median("fuse") << " ms; "
+              << "wall " << statsOf(frameWallMs)["median"].get<double>() << " ms/frame\n";
+    if (!warnings.empty()) std::cout << "  " << warnings.size() << " warnings (see stderr)\n";
+    return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    CLI::App app{"vkmesh: real-time TSDF fusion and meshing on any Vulkan device"};
+    app.require_subcommand(1);
+
+    app.add_subcommand("devices", "list Vulkan devices and whether vkmesh can use them");
+
+    auto* synth = app.add_subcommand("synth", "render a synthetic depth sequence with ground truth (TUM layout)");
+    std::string synthOut, synthPath = "orbit";
+    size_t synthFrames = 60;
+    int synthWidth = 640, synthHeight = 480;
+    bool synthNoise = false;
+    uint32_t synthSeed = 1;
+    synth->add_option("OUT_DIR", synthOut, "folder to write")->required();
+    synth->add_option("--frames", synthFrames, "number of frames")->check(CLI::PositiveNumber);
+    synth->add_option("--width", synthWidth, "image width")->check(CLI::Range(16, 4096));
+    synth->add_option("--height", synthHeight, "image height")->check(CLI::Range(16, 4096));
+    synth->add_flag("--noise", synthNoise, "Kinect-like noise and dropout");
+    synth->add_option("--seed", synthSeed, "noise seed");
+    synth->add_option("--path", synthPath, "camera path")->check(CLI::IsMember({"orbit", "revisit"}));
+
+    auto* frames = app.add_subcommand("frames", "write the frames fuse would use (paths, poses, intrinsics) as JSON");
+    CommonDatasetArgs framesArgs;
+    std::string framesOut;
+    framesArgs.add(frames);
+    frames->add_option("-o,--output", framesOut, "JSON file to write")->required();
+
+    auto* fuse = app.add_subcommand("fuse", "fuse a depth sequence into a TSDF on the GPU and write its mesh");
+    FuseArgs fuseArgs;
+    fuseArgs.data.add(fuse);
+    fuse->add_option("-o,--output", fuseArgs.output, "mesh file (.ply binary, or .obj)")->required();
+    fuse->add_option("--stats", fuseArgs.statsPath, "write counts, timings and memory as JSON");
+    fuse->add_option("--mode", fuseArgs.mode, "meshing: baseline = marching cubes, every triangle with its own vertices")
+        ->check(CLI::IsMember({"baseline"}));
+    fuse->add_option("--voxel", fuseArgs.voxel, "voxel (cube) size in metres");
+    fuse->add_option("--trunc", fuseArgs.truncVoxels, "truncation distance in voxels");
+    fuse->add_option("--max-weight", fuseArgs.maxWeight, "cap of the TSDF weight");
+    fuse->add_option("--blocks", fuseArgs.blocks, "block pool capacity (8x8x8 voxels each)")->check(CLI::PositiveNumber);
+    fuse->add_option("--device", fuseArgs.device, "Vulkan device index (see `vkmesh devices`)");
+    fuse->add_flag("--validation", fuseArgs.validation, "enable the Khronos validation layer (or VKMESH_VALIDATION=1)");
+    fuse->add_flag("-q,--quiet", fuseArgs.quiet, "no progress line");
+
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::ParseError& e) {
+        return app.exit(e);
+    }
+    try {
+        if (app.got_subcommand("devices")) return commandDevices();
+        if (app.got_subcommand("synth"))
+            return commandSynth(synthOut, synthFrames, synthWidth, synthHeight, synthNoise, synthSeed, synthPath);
+        if (app.got_subcommand("frames")) return commandFrames(framesArgs, framesOut);
+        if (app.got_subcommand("fuse")) return commandFuse(fuseArgs);
+    } catch (const vkmesh::Error& e) {
+        std::cerr << "vkmesh: error: " << e.what() << "\n";
+        return 2;
+    } catch (const std::exception& e) {
+        std::cerr << "vkmesh: internal error: " << e.what() << "\n";
+        return 3;
+    }
+    return 0;
+}

@@ -58,32 +58,35 @@ void main() {
             precise vec3 a = transformPoint(frame.cameraToWorld, ray * nearZ) / blockSize;
             precise vec3 b = transformPoint(frame.cameraToWorld, ray * farZ) / blockSize;
 
-            // Amanatides & Woo traversal from a to b, parameter t in [0, 1].
+            // Amanatides & Woo traversal from a to b, parameter t in [0, 1]. Written without dynamic
+            // component indexing (v[axis]), which llvmpipe turns into slow scratch memory.
             precise vec3 dir = b - a;
-            ivec3 cell = ivec3(floor(a));
+            vec3 fa = floor(a);
+            ivec3 cell = ivec3(fa);
             ivec3 last = ivec3(floor(b));
             ivec3 stepDir = ivec3(sign(dir));
-            precise vec3 tMax, tDelta;
-            for (int k = 0; k < 3; ++k) {
-                if (dir[k] > 0.0) {
-                    tMax[k] = (floor(a[k]) + 1.0 - a[k]) / dir[k];
-                    tDelta[k] = 1.0 / dir[k];
-                } else if (dir[k] < 0.0) {
-                    tMax[k] = (a[k] - floor(a[k])) / -dir[k];
-                    tDelta[k] = 1.0 / -dir[k];
-                } else {
-                    tMax[k] = 1e30;
-                    tDelta[k] = 1e30;
-                }
-            }
+            precise vec3 adir = abs(dir);
+            precise vec3 dist = mix(a - fa, fa + 1.0 - a, greaterThan(dir, vec3(0.0)));
+            bvec3 still = equal(dir, vec3(0.0));
+            precise vec3 tMax = mix(dist / adir, vec3(1e30), still);
+            precise vec3 tDelta = mix(1.0 / adir, vec3(1e30), still);
             truncated = 1u;
             for (uint s = 0u; s < RAY_MAX_BLOCKS; ++s) {
                 touchBlock(cell);
                 if (cell == last) { truncated = 0u; break; }
-                int axis = (tMax.x <= tMax.y && tMax.x <= tMax.z) ? 0 : (tMax.y <= tMax.z ? 1 : 2);
-                if (tMax[axis] > 1.0) { truncated = 0u; break; }
-                cell[axis] += stepDir[axis];
-                tMax[axis] += tDelta[axis];
+                if (tMax.x <= tMax.y && tMax.x <= tMax.z) {
+                    if (tMax.x > 1.0) { truncated = 0u; break; }
+                    cell.x += stepDir.x;
+                    tMax.x += tDelta.x;
+                } else if (tMax.y <= tMax.z) {
+                    if (tMax.y > 1.0) { truncated = 0u; break; }
+                    cell.y += stepDir.y;
+                    tMax.y += tDelta.y;
+                } else {
+                    if (tMax.z > 1.0) { truncated = 0u; break; }
+                    cell.z += stepDir.z;
+                    tMax.z += tDelta.z;
+                }
             }
         }
     }

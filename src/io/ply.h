@@ -1,0 +1,40 @@
+// Triangle meshes and point clouds on disk: PLY (read and write) and Wavefront OBJ (write).
+#pragma once
+
+#include "core/types.h"
+
+#include <Eigen/Core>
+
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <vector>
+
+namespace vkmesh {
+
+// An indexed triangle mesh, or a point cloud when `triangles` is empty.
+struct Mesh {
+    std::vector<Eigen::Vector3f> positions;
+    std::vector<Eigen::Vector3f> normals;          // empty, or one per vertex
+    std::vector<uint32_t> vertexAge;               // empty, or one per vertex (frame a vertex was last updated)
+    std::vector<std::array<uint32_t, 3>> triangles;  // vertex indices, counter-clockwise seen from outside
+};
+
+// Writes binary_little_endian 1.0 PLY: vertex `float x y z`, then `float nx ny nz` when normals are present,
+// then `uint age` when ages are present; face `property list uchar uint vertex_indices` (always declared,
+// possibly with 0 faces). Readable by Open3D and MeshLab. Throws Error when the mesh is inconsistent
+// (normals/ages count, index out of range) or the file cannot be written.
+void writePly(const std::filesystem::path& path, const Mesh& mesh);
+
+// Reads ascii, binary_little_endian or binary_big_endian PLY. Vertex x, y, z (any scalar type, float or
+// double usually), optional nx, ny, nz and age; unknown properties and elements are skipped. Faces come from
+// a `vertex_indices` (or `vertex_index`) list; polygons are split into triangle fans. A point cloud gives an
+// empty `triangles`. Normals are kept only when all three are present. Throws Error naming the file for a
+// missing, corrupt, truncated or unsupported file.
+Mesh readPly(const std::filesystem::path& path);
+
+// Writes Wavefront OBJ: `v x y z`, `vn nx ny nz` when normals are present, `f a b c` (or `a//a ...`) with
+// 1-based indices. Ages are not stored. Throws Error as writePly.
+void writeObj(const std::filesystem::path& path, const Mesh& mesh);
+
+}  // namespace vkmesh

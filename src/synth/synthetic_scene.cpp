@@ -1,0 +1,928 @@
+#include "synth/synthetic_scene.h"
+
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include <algorithm>
+#include <array>
+#include <bit>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <limits>
+#include <numbers>
+#include <optional>
+#include <sstream>
+#include <system_error>
+#include <thread>
+#include <unordered_set>
+
+namespace vkmesh::synth {
+
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
+
+double degrees(double value) { return value * kPi / 180.0; }
+
+Eigen::Matrix3d rotationAbout(const Eigen::Vector3d& axis, double angleRadians) {
+    return Eigen::AngleAxisd(angleRadians, axis.normalized()).toRotationMatrix();
+}
+
+Eigen::Isometry3d placement(const Eigen::Vector3d& translation, const Eigen::Matrix3d& rotation) {
+    Eigen::Isometry3d result = Eigen::Isometry3d::Identity();
+    result.linear() = rotation;
+    result.translation() = translation;
+    return result;
+}
+
+std::string formatVector(const Eigen::Vector3d& v) {
+    std::ostringstream out;
+    out << "(" << v.x() << ", " << v.y() << ", " << v.z() << ")";
+    return out.str();
+}
+
+// Exact signed distance to an axis-aligned box of half extents `half` centred on the origin.
+double boxSdf(const Eigen::Vector3d& q, const Eigen::Vector3d& half) {
+    const Eigen::Vector3d d = q.cwiseAbs() - half;
+    return d.cwiseMax(0.0).norm() + std::min(d.maxCoeff(), 0.0);
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// The default room. Everything is laid out in the room's own frame (x along the 4 m side, y along the 3 m
+// side, z up, floor at z = 0, origin at the floor centre) and then turned about the vertical, so that the
+// renderer and the fusion code are never helped by planes aligned with the world axes.
+constexpr double kRoomYawDegrees = 20.0;
+const Eigen::Vector3d kRoomHalfExtents(2.0, 1.5, 1.25);
+
+Eigen::Isometry3d roomToWorld() {
+    return placement(Eigen::Vector3d::Zero(), rotationAbout(Eigen::Vector3d::UnitZ(), degrees(kRoomYawDegrees)));
+}
+
+// The camera orbit, in the room frame. The objects stand within about 1 m of the centre, so this ellipse keeps
+// the camera at least ~0.5 m from every object and ~0.35 m from every wall.
+constexpr double kOrbitSemiAxisX = 1.6;
+constexpr double kOrbitSemiAxisY = 1.15;
+constexpr double kCameraHeight = 1.5;
+constexpr double kCameraHeightSwing = 0.2;
+constexpr double kLookAtHeight = 0.55;
+constexpr double kRollAmplitudeDegrees = 10.0;
+constexpr int kRevisitLaps = 3;
+
+// ---------------------------------------------------------------------------------------------------------
+// Sphere tracing. Past kHitDistance from a surface the tracer hands over to a bracketing search and a
+// bisection, because plain sphere tracing converges only linearly (and very slowly at grazing angles).
+constexpr int kMaxSphereTracingSteps = 256;
+constexpr double kHitDistance = 1e-4;
+// How far past the hand-over point the crossing is searched for. Smaller than the thinnest part of the
+// default room (2.5 cm), so the doubling probe steps cannot jump across a part from one side to the other.
+constexpr double kCrossingSearchWindow = 0.02;
+constexpr double kBisectionTolerance = 1e-7;  // metres along the ray: far below the 0.1 mm depth accuracy
+constexpr int kRenderThreads = 2;             // the development and CI machines have two cores
+
+// Kinect v1 noise model (Nguyen, Izadi, Lovell: "Modeling Kinect sensor noise for improved 3D
+// reconstruction and tracking", 3DIMPVT 2012), and dropout where structured light loses its pattern.
+double axialNoiseSigma(double depth) { return 0.0012 + 0.0019 * (depth - 0.4) * (depth - 0.4); }
+constexpr double kGrazingDropStartDegrees = 70.0;
+constexpr double kGrazingDropAlwaysDegrees = 80.0;
+constexpr double kGrazingDropProbabilityAtAlways = 0.5;
+constexpr double kEdgeDropProbability = 0.5;
+constexpr double kDiscontinuityRelativeJump = 0.04;
+
+// The sensor's raw units: 1/5000 m in a uint16 PNG (TUM RGB-D convention).
+constexpr double kDepthScale = 5000.0;
+constexpr double kFirstTimestamp = 1.0;
+constexpr double kFramePeriod = 0.033;
+
+// Points of another object closer than this to a sample are "in contact": such a sample (a standing
+// object's bottom, the floor beneath it) cannot be seen from free space and is left out of the ground truth.
+constexpr double kContactTolerance = 1e-4;
+constexpr double kHalfSpacePatchHalfSize = 4.0;
+
+// SplitMix64: a tiny counter-based generator, seeded per pixel so the noise does not depend on how the rows
+// are split between threads.
+class PixelRandom {
+public:
+    PixelRandom(uint32_t seed, uint64_t pixel) : state_((static_cast<uint64_t>(seed) << 32) ^ pixel) {}
+    uint64_t next() {
+        uint64_t z = (state_ += 0x9E3779B97F4A7C15ull);
+        z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+        z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+        return z ^ (z >> 31);
+    }
+    double uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }  // [0, 1)
+    double gaussian() {                                                           // Box-Muller
+        const double u1 = 1.0 - uniform();                                       // (0, 1]: log is finite
+        const double u2 = uniform();
+        return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * kPi * u2);
+    }
+
+private:
+    uint64_t state_;
+};
+
+uint32_t frameSeed(uint32_t seed, size_t frame) {
+    PixelRandom mixer(seed, 0xF4A3E5000000ull + frame);
+    return static_cast<uint32_t>(mixer.next() >> 32);
+}
+
+void requireFinitePositive(double value, const Object& object, const char* what) {
+    if (!std::isfinite(value) || value <= 0)
+        throw Error("synthetic object '" + object.name + "' (" + std::string(kindName(object.kind)) + "): " + what +
+                    " must be positive and finite, got " + std::to_string(value));
+}
+
+void validateObject(const Object& object) {
+    if (object.name.empty()) throw Error("synthetic object of kind " + std::string(kindName(object.kind)) + " has no name");
+    const Eigen::Matrix3d rotation = object.objectToWorld.linear();
+    const double orthonormalError = (rotation.transpose() * rotation - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+    if (!object.objectToWorld.matrix().allFinite() || orthonormalError > 1e-9 || rotation.determinant() < 0)
+        throw Error("synthetic object '" + object.name + "': objectToWorld is not a rigid transform (finite, "
+                    "orthonormal rotation with determinant +1)");
+    switch (object.kind) {
+        case ObjectKind::HalfSpace: break;
+        case ObjectKind::Sphere: requireFinitePositive(object.radius, object, "radius"); break;
+        case ObjectKind::Torus:
+            requireFinitePositive(object.radius, object, "radius");
+            requireFinitePositive(object.tubeRadius, object, "tubeRadius");
+            // A self-intersecting (spindle) torus would be sampled twice where it overlaps itself.
+            if (object.tubeRadius >= object.radius)
+                throw Error("synthetic object '" + object.name + "': tubeRadius " + std::to_string(object.tubeRadius) +
+                            " must be smaller than radius " + std::to_string(object.radius));
+            break;
+        case ObjectKind::RoomInterior:
+        case ObjectKind::RoundedBox:
+            for (int axis = 0; axis < 3; ++axis) requireFinitePositive(object.halfExtents[axis], object, "halfExtents");
+            if (object.kind == ObjectKind::RoundedBox &&
+                (!std::isfinite(object.edgeRadius) || object.edgeRadius < 0 ||
+                 object.edgeRadius > object.halfExtents.minCoeff()))
+                throw Error("synthetic object '" + object.name + "': edgeRadius " + std::to_string(object.edgeRadius) +
+                            " must lie in [0, smallest half extent " + std::to_string(object.halfExtents.minCoeff()) + "]");
+            break;
+        case ObjectKind::Cylinder:
+            requireFinitePositive(object.radius, object, "radius");
+            requireFinitePositive(object.halfHeight, object, "halfHeight");
+            break;
+    }
+}
+
+// Where the ray o + t d (d unit length) first meets the surface, t in (0, maxT]; nothing when it does not,
+// or when the ray starts inside matter (then nothing in front of it is visible).
+std::optional<double> intersectRay(const SyntheticScene& scene, const Eigen::Vector3d& origin,
+                                   const Eigen::Vector3d& direction, double maxT) {
+    auto distanceAt = [&](double t) { return scene.sdf(origin + t * direction); };
+    double t = 0, previousT = 0;
+    double distance = distanceAt(0);
+    if (!(distance > 0)) return std::nullopt;
+    int step = 0;
+    while (distance >= kHitDistance) {
+        if (++step > kMaxSphereTracingSteps) return std::nullopt;  // grazing ray that did not converge
+        previousT = t;
+        t += distance;
+        if (t > maxT) return std::nullopt;
+        distance = distanceAt(t);
+    }
+
+    // Bracket the crossing: [outside, inside] with sdf(outside) > 0 >= sdf(inside).
+    double outside = t, inside = t;
+    bool bracketed = false;
+    if (distance <= 0) {  // only through rounding: a valid distance bound never overshoots
+        outside = previousT;
+        bracketed = true;
+    } else {
+        double offset = 0, probeStep = std::max(distance, kBisectionTolerance);
+        while (offset + probeStep <= kCrossingSearchWindow) {
+            offset += probeStep;
+            const double probeDistance = distanceAt(t + offset);
+            if (probeDistance <= 0) {
+                inside = t + offset;
+                bracketed = true;
+                break;
+            }
+            outside = t + offset;
+            probeStep *= 2;
+        }
+    }
+    // The ray only skims the surface (a silhouette) without entering: the closest approach is the hit, less
+    // than kHitDistance from the surface.
+    if (!bracketed) return t <= maxT ? std::optional<double>(t) : std::nullopt;
+
+    while (inside - outside > kBisectionTolerance) {
+        const double middle = 0.5 * (outside + inside);
+        if (distanceAt(middle) > 0)
+            outside = middle;
+        else
+            inside = middle;
+    }
+    const double hit = 0.5 * (outside + inside);
+    if (hit > maxT) return std::nullopt;
+    return hit;
+}
+
+void validatePoseForRendering(const Pose& cameraToWorld) {
+    const Eigen::Matrix3d rotation = cameraToWorld.topLeftCorner<3, 3>();
+    const double orthonormalError = (rotation.transpose() * rotation - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+    if (!cameraToWorld.allFinite() || orthonormalError > 1e-6 || rotation.determinant() < 0 ||
+        (cameraToWorld.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).cwiseAbs().maxCoeff() > 1e-12) {
+        std::ostringstream out;
+        out << "renderDepth: cameraToWorld is not a rigid transform:\n" << cameraToWorld;
+        throw Error(out.str());
+    }
+}
+
+// Applies the Kinect-like sensor model to a clean depth image. cosIncidence[i] is |normal . ray| at pixel i.
+void applySensorNoise(DepthImage& depth, const std::vector<double>& cosIncidence, uint32_t seed) {
+    const DepthImage clean = depth;
+    const double cosAlwaysDrop = std::cos(degrees(kGrazingDropAlwaysDegrees));
+    auto isDiscontinuity = [&](int x, int y, double z) {
+        const std::array<std::array<int, 2>, 4> neighbours{{{x - 1, y}, {x + 1, y}, {x, y - 1}, {x, y + 1}}};
+        for (const auto& [nx, ny] : neighbours) {
+            if (nx < 0 || ny < 0 || nx >= clean.width || ny >= clean.height) continue;
+            const double neighbourDepth = clean.at(nx, ny);
+            if (neighbourDepth <= 0 || std::abs(neighbourDepth - z) > kDiscontinuityRelativeJump * z) return true;
+        }
+        return false;
+    };
+    for (int y = 0; y < depth.height; ++y) {
+        for (int x = 0; x < depth.width; ++x) {
+            const size_t index = static_cast<size_t>(y) * depth.width + x;
+            const double z = clean.meters[index];
+            if (z <= 0) continue;
+            // Always draw the same three numbers per pixel, so one pixel's fate never shifts another's.
+            PixelRandom random(seed, index);
+            const double grazingDraw = random.uniform();
+            const double edgeDraw = random.uniform();
+            const double gaussian = random.gaussian();
+
+            const double incidenceDegrees = std::acos(std::clamp(cosIncidence[index], 0.0, 1.0)) * 180.0 / kPi;
+            double grazingDropProbability = 0;
+            if (cosIncidence[index] < cosAlwaysDrop)
+                grazingDropProbability = 1;
+            else if (incidenceDegrees > kGrazingDropStartDegrees)
+                grazingDropProbability = kGrazingDropProbabilityAtAlways * (incidenceDegrees - kGrazingDropStartDegrees) /
+                                         (kGrazingDropAlwaysDegrees - kGrazingDropStartDegrees);
+            const bool dropped = grazingDraw < grazingDropProbability ||
+                                 (isDiscontinuity(x, y, z) && edgeDraw < kEdgeDropProbability);
+            const double noisy = z + axialNoiseSigma(z) * gaussian;
+            depth.meters[index] = dropped || noisy <= 0 ? 0.0f : static_cast<float>(noisy);
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Surface sampling, uniform by area, in each primitive's local frame.
+class LocalSampler {
+public:
+    LocalSampler(const Object& object, std::vector<SurfaceSample>& out) : object_(object), out_(out) {}
+
+    void add(const Eigen::Vector3d& localPoint, const Eigen::Vector3d& localNormal) {
+        out_.push_back({object_.objectToWorld * localPoint, object_.objectToWorld.linear() * localNormal.normalized()});
+    }
+
+    // A rectangle centred at `center` spanned by unit axes u, v with half sizes halfU, halfV, split into
+    // cells of about spacing x spacing, one sample at each cell centre.
+    void rectangle(const Eigen::Vector3d& center, const Eigen::Vector3d& u, const Eigen::Vector3d& v, double halfU,
+                   double halfV, const Eigen::Vector3d& normal, double spacing) {
+        if (halfU <= 0 || halfV <= 0) return;
+        const int countU = std::max(1, static_cast<int>(std::ceil(2 * halfU / spacing)));
+        const int countV = std::max(1, static_cast<int>(std::ceil(2 * halfV / spacing)));
+        for (int i = 0; i < countU; ++i)
+            for (int j = 0; j < countV; ++j)
+                add(center + u * (-halfU + (i + 0.5) * 2 * halfU / countU) + v * (-halfV + (j + 0.5) * 2 * halfV / countV),
+                    normal);
+    }
+
+private:
+    const Object& object_;
+    std::vector<SurfaceSample>& out_;
+};
+
+// `count` nearly evenly spread unit vectors (Fibonacci lattice): equal area per point on the sphere.
+std::vector<Eigen::Vector3d> fibonacciSphere(int count) {
+    std::vector<Eigen::Vector3d> directions;
+    directions.reserve(count);
+    const double goldenAngle = kPi * (3.0 - std::sqrt(5.0));
+    for (int k = 0; k < count; ++k) {
+        const double z = 1.0 - (2.0 * k + 1.0) / count;
+        const double ring = std::sqrt(std::max(0.0, 1.0 - z * z));
+        directions.emplace_back(ring * std::cos(goldenAngle * k), ring * std::sin(goldenAngle * k), z);
+    }
+    return directions;
+}
+
+int countForArea(double area, double spacing) {
+    return std::max(1, static_cast<int>(std::lround(area / (spacing * spacing))));
+}
+
+void sampleRoundedBox(LocalSampler& sampler, const Eigen::Vector3d& half, double edgeRadius, double spacing) {
+    const Eigen::Vector3d core = half - Eigen::Vector3d::Constant(edgeRadius);
+    for (int axis = 0; axis < 3; ++axis) {
+        const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+        const Eigen::Vector3d axisUnit = Eigen::Vector3d::Unit(axis), uUnit = Eigen::Vector3d::Unit(u),
+                              vUnit = Eigen::Vector3d::Unit(v);
+        for (double side : {-1.0, 1.0}) {
+            // Flat face.
+            sampler.rectangle(side * half[axis] * axisUnit, uUnit, vUnit, core[u], core[v], side * axisUnit, spacing);
+            if (edgeRadius <= 0 || core[axis] <= 0) continue;
+            // The quarter cylinders along `axis`, one per (side of u, side of v): `side` plays u's sign here.
+            for (double vSide : {-1.0, 1.0}) {
+                const Eigen::Vector3d edgeLine = side * core[u] * uUnit + vSide * core[v] * vUnit;
+                const int arcCount = std::max(1, static_cast<int>(std::ceil(0.5 * kPi * edgeRadius / spacing)));
+                const int lengthCount = std::max(1, static_cast<int>(std::ceil(2 * core[axis] / spacing)));
+                for (int a = 0; a < arcCount; ++a) {
+                    const double angle = 0.5 * kPi * (a + 0.5) / arcCount;
+                    const Eigen::Vector3d normal = std::cos(angle) * side * uUnit + std::sin(angle) * vSide * vUnit;
+                    for (int l = 0; l < lengthCount; ++l) {
+                        const double along = -core[axis] + (l + 0.5) * 2 * core[axis] / lengthCount;
+                        sampler.add(edgeLine + along * axisUnit + edgeRadius * normal, normal);
+                    }
+                }
+            }
+        }
+    }
+    if (edgeRadius <= 0) return;
+    // The eight corner octants together make one sphere of radius edgeRadius: spread one lattice over them.
+    const double sphereArea = 4 * kPi * edgeRadius * edgeRadius;
+    for (const Eigen::Vector3d& direction : fibonacciSphere(countForArea(sphereArea, spacing))) {
+        const Eigen::Vector3d corner(std::copysign(core.x(), direction.x()), std::copysign(core.y(), direction.y()),
+                                     std::copysign(core.z(), direction.z()));
+        sampler.add(corner + edgeRadius * direction, direction);
+    }
+}
+
+void sampleObject(const Object& object, double spacing, std::vector<SurfaceSample>& out) {
+    LocalSampler sampler(object, out);
+    switch (object.kind) {
+        case ObjectKind::Sphere:
+            for (const Eigen::Vector3d& direction :
+                 fibonacciSphere(countForArea(4 * kPi * object.radius * object.radius, spacing)))
+                sampler.add(object.radius * direction, direction);
+            break;
+        case ObjectKind::Torus: {
+            // Bands around the tube (angle phi); each band's ring is as long as its distance from the axis, so
+            // it gets proportionally many samples: uniform by area.
+            const int bandCount = std::max(3, static_cast<int>(std::ceil(2 * kPi * object.tubeRadius / spacing)));
+            for (int b = 0; b < bandCount; ++b) {
+                const double phi = 2 * kPi * (b + 0.5) / bandCount;
+                const double ringRadius = object.radius + object.tubeRadius * std::cos(phi);
+                const int ringCount = std::max(3, static_cast<int>(std::lround(2 * kPi * ringRadius / spacing)));
+                for (int r = 0; r < ringCount; ++r) {
+                    const double theta = 2 * kPi * (r + 0.5 * (b % 2)) / ringCount;  // stagger bands
+                    const Eigen::Vector3d normal(std::cos(phi) * std::cos(theta), std::cos(phi) * std::sin(theta),
+                                                 std::sin(phi));
+                    sampler.add(Eigen::Vector3d(ringRadius * std::cos(theta), ringRadius * std::sin(theta),
+                                                object.tubeRadius * std::sin(phi)),
+                                normal);
+                }
+            }
+            break;
+        }
+        case ObjectKind::RoundedBox: sampleRoundedBox(sampler, object.halfExtents, object.edgeRadius, spacing); break;
+        case ObjectKind::RoomInterior:
+            // The six faces of the box, normals pointing into the room (into free space).
+            for (int axis = 0; axis < 3; ++axis) {
+                const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+                for (double side : {-1.0, 1.0})
+                    sampler.rectangle(side * object.halfExtents[axis] * Eigen::Vector3d::Unit(axis),
+                                      Eigen::Vector3d::Unit(u), Eigen::Vector3d::Unit(v), object.halfExtents[u],
+                                      object.halfExtents[v], -side * Eigen::Vector3d::Unit(axis), spacing);
+            }
+            break;
+        case ObjectKind::Cylinder: {
+            const double r = object.radius, h = object.halfHeight;
+            const int aroundCount = std::max(3, static_cast<int>(std::ceil(2 * kPi * r / spacing)));
+            const int heightCount = std::max(1, static_cast<int>(std::ceil(2 * h / spacing)));
+            for (int a = 0; a < aroundCount; ++a) {
+                const double angle = 2 * kPi * (a + 0.5) / aroundCount;
+                const Eigen::Vector3d normal(std::cos(angle), std::sin(angle), 0);
+                for (int k = 0; k < heightCount; ++k)
+                    sampler.add(r * normal + Eigen::Vector3d(0, 0, -h + (k + 0.5) * 2 * h / heightCount), normal);
+            }
+            // Caps as concentric rings of equal width, each with samples in proportion to its area.
+            const int ringCount = std::max(1, static_cast<int>(std::ceil(r / spacing)));
+            const double ringWidth = r / ringCount;
+            for (double side : {-1.0, 1.0}) {
+                for (int ring = 0; ring < ringCount; ++ring) {
+                    const double ringRadius = (ring + 0.5) * ringWidth;
+                    const int count = countForArea(2 * kPi * ringRadius * ringWidth, spacing);
+                    for (int k = 0; k < count; ++k) {
+                        const double angle = 2 * kPi * (k + 0.5 * (ring % 2)) / count;
+                        sampler.add(Eigen::Vector3d(ringRadius * std::cos(angle), ringRadius * std::sin(angle), side * h),
+                                    Eigen::Vector3d(0, 0, side));
+                    }
+                }
+            }
+            break;
+        }
+        case ObjectKind::HalfSpace: {
+            // The plane is infinite: sample the patch around the point nearest the world origin.
+            const Eigen::Vector3d originLocal = object.objectToWorld.inverse() * Eigen::Vector3d::Zero();
+            sampler.rectangle(Eigen::Vector3d(originLocal.x(), originLocal.y(), 0), Eigen::Vector3d::UnitX(),
+                              Eigen::Vector3d::UnitY(), kHalfSpacePatchHalfSize, kHalfSpacePatchHalfSize,
+                              Eigen::Vector3d::UnitZ(), spacing);
+            break;
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Writing.
+std::ofstream openForWriting(const std::filesystem::path& path, std::ios::openmode mode = std::ios::out) {
+    std::ofstream out(path, mode | std::ios::trunc);
+    if (!out) throw Error("cannot write '" + path.string() + "'");
+    return out;
+}
+
+void finishWriting(std::ofstream& out, const std::filesystem::path& path) {
+    out.close();
+    if (!out) throw Error("failed while writing '" + path.string() + "' (disk full?)");
+}
+
+std::string formatTimestamp(size_t frame) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.6f", kFirstTimestamp + kFramePeriod * static_cast<double>(frame));
+    return text;
+}
+
+std::string frameFileName(size_t frame) {
+    char text[32];
+    std::snprintf(text, sizeof text, "depth/%06zu.png", frame);
+    return text;
+}
+
+void writeDepthPng(const std::filesystem::path& path, const DepthImage& depth) {
+    cv::Mat raw(depth.height, depth.width, CV_16UC1);
+    for (int y = 0; y < depth.height; ++y) {
+        auto* row = raw.ptr<uint16_t>(y);
+        for (int x = 0; x < depth.width; ++x) {
+            const double units = std::round(static_cast<double>(depth.at(x, y)) * kDepthScale);
+            // Depth beyond what 16 bits hold (13.1 m) cannot be stored: it becomes "no measurement".
+            row[x] = units > 0 && units <= 65535.0 ? static_cast<uint16_t>(units) : 0;
+        }
+    }
+    bool written = false;
+    try {
+        written = cv::imwrite(path.string(), raw);
+    } catch (const cv::Exception& e) {
+        throw Error("cannot write depth image '" + path.string() + "': " + e.what());
+    }
+    if (!written) throw Error("cannot write depth image '" + path.string() + "'");
+}
+
+void appendLittleEndianFloat(std::string& bytes, double value) {
+    const uint32_t bits = std::bit_cast<uint32_t>(static_cast<float>(value));
+    for (int shift = 0; shift < 32; shift += 8) bytes.push_back(static_cast<char>((bits >> shift) & 0xFF));
+}
+
+void writeGroundTruthPly(const std::filesystem::path& path, const std::vector<SurfaceSample>& samples, double spacing) {
+    std::ofstream out = openForWriting(path, std::ios::out | std::ios::binary);
+    out << "ply\nformat binary_little_endian 1.0\n"
+        << "comment vkmesh synthetic ground truth: true surface sampled uniformly by area, spacing " << spacing
+        << " m\nelement vertex " << samples.size()
+        << "\nproperty float x\nproperty float y\nproperty float z\n"
+           "property float nx\nproperty float ny\nproperty float nz\nend_header\n";
+    std::string bytes;
+    bytes.reserve(samples.size() * 24);
+    for (const SurfaceSample& sample : samples) {
+        for (int i = 0; i < 3; ++i) appendLittleEndianFloat(bytes, sample.position[i]);
+        for (int i = 0; i < 3; ++i) appendLittleEndianFloat(bytes, sample.normal[i]);
+    }
+    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    finishWriting(out, path);
+}
+
+nlohmann::json vectorJson(const Eigen::Vector3d& v) { return nlohmann::json::array({v.x(), v.y(), v.z()}); }
+
+nlohmann::json sceneJson(const SyntheticScene& scene) {
+    nlohmann::json objects = nlohmann::json::array();
+    for (const Object& object : scene.objects()) {
+        nlohmann::json entry;
+        entry["name"] = object.name;
+        entry["kind"] = std::string(kindName(object.kind));
+        entry["center"] = vectorJson(object.center());
+        nlohmann::json rotation = nlohmann::json::array();
+        for (int row = 0; row < 3; ++row) rotation.push_back(vectorJson(object.objectToWorld.linear().row(row).transpose()));
+        entry["rotation"] = rotation;  // object-to-world, row-major; local axes are its columns
+        switch (object.kind) {
+            case ObjectKind::RoomInterior: entry["half_extents"] = vectorJson(object.halfExtents); break;
+            case ObjectKind::HalfSpace:
+                entry["normal"] = vectorJson(object.objectToWorld.linear().col(2));
+                entry["offset"] = object.objectToWorld.linear().col(2).dot(object.center());
+                break;
+            case ObjectKind::Sphere: entry["radius"] = object.radius; break;
+            case ObjectKind::Torus:
+                entry["radius"] = object.radius;
+                entry["tube_radius"] = object.tubeRadius;
+                entry["axis"] = vectorJson(object.objectToWorld.linear().col(2));
+                break;
+            case ObjectKind::RoundedBox:
+                entry["half_extents"] = vectorJson(object.halfExtents);
+                entry["edge_radius"] = object.edgeRadius;
+                break;
+            case ObjectKind::Cylinder:
+                entry["radius"] = object.radius;
+                entry["half_height"] = object.halfHeight;
+                entry["axis"] = vectorJson(object.objectToWorld.linear().col(2));
+                break;
+        }
+        objects.push_back(entry);
+    }
+    nlohmann::json root;
+    root["description"] = "vkmesh synthetic scene: the union of these primitives; metres, world z up";
+    root["sdf_sign"] = "positive in free space, negative inside matter; room_interior: free space inside the box";
+    root["objects"] = objects;
+    return root;
+}
+
+const char* kReadmeText =
+    "Synthetic depth sequence written by vkmesh (src/synth/synthetic_scene.cpp).\n"
+    "\n"
+    "An analytic scene (see scene.json) rendered by sphere tracing its signed distance function, so the\n"
+    "camera poses and the surface are known exactly. The layout is TUM RGB-D's, depth only:\n"
+    "\n"
+    "  depth/NNNNNN.png  16-bit depth, metres x 5000, 0 = no measurement. Camera-frame z, not ray length.\n"
+    "  depth.txt         timestamp and depth file per frame (timestamps 1.0 s, then every 0.033 s).\n"
+    "  groundtruth.txt   timestamp tx ty tz qx qy qz qw: camera-to-world pose (exact), one per frame.\n"
+    "  camera.json       pinhole intrinsics fx fy cx cy (pixel centres at integer coordinates), depth_scale,\n"
+    "                    image size. Camera looks along +z, x right, y down.\n"
+    "  gt_points.ply     ground-truth surface: points sampled uniformly by area on every object's surface\n"
+    "                    with outward normals, leaving out what is hidden inside or in contact with another\n"
+    "                    object. Points, not a mesh; binary little-endian float x y z nx ny nz.\n"
+    "  scene.json        the primitives (name, kind, centre, rotation, sizes) the scene is made of.\n"
+    "\n";
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------------------
+std::string_view kindName(ObjectKind kind) {
+    switch (kind) {
+        case ObjectKind::RoomInterior: return "room_interior";
+        case ObjectKind::HalfSpace: return "half_space";
+        case ObjectKind::Sphere: return "sphere";
+        case ObjectKind::Torus: return "torus";
+        case ObjectKind::RoundedBox: return "rounded_box";
+        case ObjectKind::Cylinder: return "cylinder";
+    }
+    return "unknown";
+}
+
+double Object::sdf(const Eigen::Vector3d& worldPoint) const {
+    const Eigen::Vector3d q = objectToWorld.linear().transpose() * (worldPoint - objectToWorld.translation());
+    switch (kind) {
+        case ObjectKind::RoomInterior: return -boxSdf(q, halfExtents);
+        case ObjectKind::HalfSpace: return q.z();
+        case ObjectKind::Sphere: return q.norm() - radius;
+        case ObjectKind::Torus: {
+            const double fromTubeCircle = std::sqrt(q.x() * q.x() + q.y() * q.y()) - radius;
+            return std::sqrt(fromTubeCircle * fromTubeCircle + q.z() * q.z()) - tubeRadius;
+        }
+        case ObjectKind::RoundedBox: return boxSdf(q, halfExtents - Eigen::Vector3d::Constant(edgeRadius)) - edgeRadius;
+        case ObjectKind::Cylinder: {
+            const double radial = std::sqrt(q.x() * q.x() + q.y() * q.y()) - radius;
+            const double axial = std::abs(q.z()) - halfHeight;
+            const double outsideRadial = std::max(radial, 0.0), outsideAxial = std::max(axial, 0.0);
+            return std::min(std::max(radial, axial), 0.0) +
+                   std::sqrt(outsideRadial * outsideRadial + outsideAxial * outsideAxial);
+        }
+    }
+    return kInfinity;
+}
+
+double Object::boundingRadius() const {
+    switch (kind) {
+        case ObjectKind::RoomInterior:
+        case ObjectKind::HalfSpace: return kInfinity;
+        case ObjectKind::Sphere: return radius;
+        case ObjectKind::Torus: return radius + tubeRadius;
+        case ObjectKind::RoundedBox: return halfExtents.norm();
+        case ObjectKind::Cylinder: return std::sqrt(radius * radius + halfHeight * halfHeight);
+    }
+    return kInfinity;
+}
+
+SyntheticScene::SyntheticScene(std::vector<Object> objects) : objects_(std::move(objects)) {
+    if (objects_.empty()) throw Error("a synthetic scene needs at least one object");
+    std::unordered_set<std::string> names;
+    for (const Object& object : objects_) {
+        validateObject(object);
+        if (!names.insert(object.name).second) throw Error("synthetic scene: two objects are named '" + object.name + "'");
+        boundingRadii_.push_back(object.boundingRadius());
+    }
+}
+
+SyntheticScene SyntheticScene::defaultRoom() {
+    const Eigen::Isometry3d toWorld = roomToWorld();
+    const Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
+    auto inRoom = [&](const Eigen::Vector3d& roomPosition, const Eigen::Matrix3d& roomRotation) {
+        return toWorld * placement(roomPosition, roomRotation);
+    };
+    std::vector<Object> objects;
+
+    Object room{.name = "room", .kind = ObjectKind::RoomInterior};
+    room.objectToWorld = inRoom({0, 0, kRoomHalfExtents.z()}, Eigen::Matrix3d::Identity());
+    room.halfExtents = kRoomHalfExtents;
+    objects.push_back(room);
+
+    // Floating, so that every part of it is in free space and can be seen.
+    Object sphere{.name = "sphere", .kind = ObjectKind::Sphere};
+    sphere.objectToWorld = inRoom({0.55, 0.25, 0.75}, Eigen::Matrix3d::Identity());
+    sphere.radius = 0.35;
+    objects.push_back(sphere);
+
+    // Floating and tilted, so that its hole and both faces show from the orbit.
+    Object torus{.name = "torus", .kind = ObjectKind::Torus};
+    torus.objectToWorld = inRoom({-0.6, 0.2, 0.85}, rotationAbout(up, degrees(30)) *
+                                                        rotationAbout(Eigen::Vector3d::UnitX(), degrees(55)));
+    torus.radius = 0.3;
+    torus.tubeRadius = 0.1;
+    objects.push_back(torus);
+
+    Object roundedBox{.name = "rounded_box", .kind = ObjectKind::RoundedBox};
+    roundedBox.halfExtents = {0.25, 0.18, 0.25};
+    roundedBox.edgeRadius = 0.04;
+    roundedBox.objectToWorld = inRoom({0.1, -0.45, roundedBox.halfExtents.z()}, rotationAbout(up, degrees(30)));
+    objects.push_back(roundedBox);
+
+    // A 3 cm board rising at 30 degrees along its local x; its centre height sinks the lower edge ~1 cm into
+    // the floor, as a ramp resting on the ground would.
+    Object ramp{.name = "ramp", .kind = ObjectKind::RoundedBox};
+    ramp.halfExtents = {0.45, 0.25, 0.015};
+    ramp.objectToWorld = inRoom({-0.75, -0.5, 0.225}, rotationAbout(up, degrees(-15)) *
+                                                          rotationAbout(Eigen::Vector3d::UnitY(), degrees(-30)));
+    objects.push_back(ramp);
+
+    // The thin part: an upright panel 2.5 cm thick, only a few voxels across at usual voxel sizes.
+    Object plate{.name = "thin_plate", .kind = ObjectKind::RoundedBox};
+    plate.halfExtents = {0.25, 0.0125, 0.35};
+    plate.objectToWorld = inRoom({0.05, 0.8, plate.halfExtents.z()}, rotationAbout(up, degrees(10)));
+    objects.push_back(plate);
+
+    Object pole{.name = "pole", .kind = ObjectKind::Cylinder};
+    pole.radius = 0.015;
+    pole.halfHeight = 0.75;
+    // Between the orbit and the sphere (14 cm clear of it), so it often occludes: a thin occluder in front.
+    pole.objectToWorld = inRoom({0.75, -0.2, pole.halfHeight}, Eigen::Matrix3d::Identity());
+    objects.push_back(pole);
+
+    return SyntheticScene(std::move(objects));
+}
+
+SyntheticScene SyntheticScene::singleSphere(const Eigen::Vector3d& center, double radius) {
+    if (!center.allFinite()) throw Error("singleSphere: centre " + formatVector(center) + " is not finite");
+    Object sphere{.name = "sphere", .kind = ObjectKind::Sphere};
+    sphere.objectToWorld = placement(center, Eigen::Matrix3d::Identity());
+    sphere.radius = radius;
+    return SyntheticScene({sphere});
+}
+
+SyntheticScene SyntheticScene::slantedPlane(const Eigen::Vector3d& normal, double offset) {
+    const double length = normal.norm();
+    if (!std::isfinite(length) || length < 1e-12 || !std::isfinite(offset))
+        throw Error("slantedPlane: normal " + formatVector(normal) + " and offset " + std::to_string(offset) +
+                    " do not define a plane (the normal must be finite and non-zero)");
+    const Eigen::Vector3d unitNormal = normal / length;
+    // Any rotation taking local z to the normal will do.
+    const Eigen::Matrix3d rotation =
+        Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), unitNormal).toRotationMatrix();
+    Object plane{.name = "plane", .kind = ObjectKind::HalfSpace};
+    plane.objectToWorld = placement(offset * unitNormal, rotation);
+    return SyntheticScene({plane});
+}
+
+double SyntheticScene::sdf(const Eigen::Vector3d& p) const {
+    double nearest = kInfinity;
+    for (size_t i = 0; i < objects_.size(); ++i) {
+        // Cheap cull: the distance to an object's bounding sphere is a lower bound of the distance to it.
+        if (std::isfinite(boundingRadii_[i]) && (p - objects_[i].center()).norm() - boundingRadii_[i] >= nearest)
+            continue;
+        nearest = std::min(nearest, objects_[i].sdf(p));
+    }
+    return nearest;
+}
+
+Eigen::Vector3d SyntheticScene::normal(const Eigen::Vector3d& p) const {
+    constexpr double h = 1e-6;
+    Eigen::Vector3d gradient;
+    for (int axis = 0; axis < 3; ++axis) {
+        const Eigen::Vector3d step = h * Eigen::Vector3d::Unit(axis);
+        gradient[axis] = sdf(p + step) - sdf(p - step);
+    }
+    const double length = gradient.norm();
+    return length > 0 ? Eigen::Vector3d(gradient / length) : Eigen::Vector3d::Zero();
+}
+
+const Object& SyntheticScene::object(std::string_view name) const {
+    for (const Object& object : objects_)
+        if (object.name == name) return object;
+    std::string available;
+    for (const Object& object : objects_) available += (available.empty() ? "" : ", ") + object.name;
+    throw Error("synthetic scene has no object named '" + std::string(name) + "' (it has: " + available + ")");
+}
+
+Intrinsics kinectIntrinsics(int width, int height) {
+    if (width <= 0 || height <= 0)
+        throw Error("kinectIntrinsics: image size " + std::to_string(width) + "x" + std::to_string(height) +
+                    " must be positive");
+    Intrinsics intrinsics;
+    intrinsics.fx = static_cast<float>(525.0 * width / 640.0);
+    intrinsics.fy = static_cast<float>(525.0 * height / 480.0);
+    // Scale about the image corner in continuous coordinates (pixel centres at integers: corner at -0.5).
+    intrinsics.cx = static_cast<float>((319.5 + 0.5) * width / 640.0 - 0.5);
+    intrinsics.cy = static_cast<float>((239.5 + 0.5) * height / 480.0 - 0.5);
+    intrinsics.width = width;
+    intrinsics.height = height;
+    return intrinsics;
+}
+
+void validateIntrinsics(const Intrinsics& intrinsics) {
+    auto fail = [](const std::string& what) { throw Error("bad intrinsics: " + what); };
+    if (intrinsics.width <= 0 || intrinsics.height <= 0)
+        fail("image size " + std::to_string(intrinsics.width) + "x" + std::to_string(intrinsics.height) +
+             " must be positive");
+    if (!std::isfinite(intrinsics.fx) || intrinsics.fx == 0) fail("fx = " + std::to_string(intrinsics.fx) + " must be finite and non-zero");
+    if (!std::isfinite(intrinsics.fy) || intrinsics.fy == 0) fail("fy = " + std::to_string(intrinsics.fy) + " must be finite and non-zero");
+    if (!std::isfinite(intrinsics.cx)) fail("cx = " + std::to_string(intrinsics.cx) + " must be finite");
+    if (!std::isfinite(intrinsics.cy)) fail("cy = " + std::to_string(intrinsics.cy) + " must be finite");
+}
+
+DepthImage SyntheticScene::renderDepth(const Intrinsics& intrinsics, const Pose& cameraToWorld,
+                                       const RenderOptions& options) const {
+    validateIntrinsics(intrinsics);
+    validatePoseForRendering(cameraToWorld);
+    if (!std::isfinite(options.maxRange) || options.maxRange <= 0)
+        throw Error("renderDepth: maxRange = " + std::to_string(options.maxRange) + " must be positive and finite");
+
+    DepthImage depth;
+    depth.width = intrinsics.width;
+    depth.height = intrinsics.height;
+    const size_t pixelCount = static_cast<size_t>(depth.width) * depth.height;
+    depth.meters.assign(pixelCount, 0.0f);
+    std::vector<double> cosIncidence(options.noise ? pixelCount : 0, 1.0);
+
+    const Eigen::Matrix3d rotation = cameraToWorld.topLeftCorner<3, 3>();
+    const Eigen::Vector3d origin = cameraToWorld.topRightCorner<3, 1>();
+    auto renderRows = [&](int firstRow) {
+        for (int v = firstRow; v < depth.height; v += kRenderThreads) {
+            for (int u = 0; u < depth.width; ++u) {
+                const Eigen::Vector3d cameraRay((u - intrinsics.cx) / intrinsics.fx, (v - intrinsics.cy) / intrinsics.fy, 1.0);
+                const double rayLengthPerDepth = cameraRay.norm();  // the ray's z component is 1
+                const Eigen::Vector3d direction = rotation * (cameraRay / rayLengthPerDepth);
+                const std::optional<double> hit =
+                    intersectRay(*this, origin, direction, options.maxRange * rayLengthPerDepth);
+                if (!hit) continue;
+                const size_t index = static_cast<size_t>(v) * depth.width + u;
+                depth.meters[index] = static_cast<float>(*hit / rayLengthPerDepth);
+                if (options.noise) cosIncidence[index] = std::abs(normal(origin + *hit * direction).dot(direction));
+            }
+        }
+    };
+    std::vector<std::thread> workers;
+    for (int thread = 1; thread < kRenderThreads; ++thread) workers.emplace_back(renderRows, thread);
+    renderRows(0);
+    for (std::thread& worker : workers) worker.join();
+
+    if (options.noise) applySensorNoise(depth, cosIncidence, options.seed);
+    return depth;
+}
+
+std::vector<Pose> cameraPath(size_t frames, PathKind kind) {
+    if (frames == 0) throw Error("cameraPath: frames must be at least 1");
+    const int laps = kind == PathKind::Revisit ? kRevisitLaps : 1;
+    const Eigen::Isometry3d toWorld = roomToWorld();
+    std::vector<Pose> poses;
+    poses.reserve(frames);
+    for (size_t i = 0; i < frames; ++i) {
+        // Every term is periodic in the phase, so the loop closes smoothly and laps coincide.
+        const double phase = 2 * kPi * laps * static_cast<double>(i) / static_cast<double>(frames);
+        const Eigen::Vector3d eye(kOrbitSemiAxisX * std::cos(phase), kOrbitSemiAxisY * std::sin(phase),
+                                  kCameraHeight + kCameraHeightSwing * std::sin(2 * phase));
+        const Eigen::Vector3d target(0.15 * std::cos(3 * phase), 0.1 * std::sin(2 * phase), kLookAtHeight);
+        const double roll = degrees(kRollAmplitudeDegrees) * std::sin(3 * phase + 0.5);
+
+        // Camera axes: x right, y down, z forward.
+        const Eigen::Vector3d forward = (target - eye).normalized();
+        const Eigen::Vector3d right = forward.cross(Eigen::Vector3d::UnitZ()).normalized();
+        const Eigen::Vector3d down = forward.cross(right);
+        Eigen::Matrix3d rotation;
+        rotation << right, down, forward;
+        rotation = rotation * rotationAbout(Eigen::Vector3d::UnitZ(), roll);
+
+        poses.push_back((toWorld * placement(eye, rotation)).matrix());
+    }
+    return poses;
+}
+
+std::vector<SurfaceSample> sampleSurface(const SyntheticScene& scene, double spacing) {
+    if (!std::isfinite(spacing) || spacing <= 0)
+        throw Error("sampleSurface: spacing = " + std::to_string(spacing) + " must be positive and finite");
+    const std::vector<Object>& objects = scene.objects();
+    std::vector<SurfaceSample> kept;
+    std::vector<SurfaceSample> candidates;
+    for (size_t i = 0; i < objects.size(); ++i) {
+        candidates.clear();
+        sampleObject(objects[i], spacing, candidates);
+        for (const SurfaceSample& sample : candidates) {
+            bool visible = true;
+            for (size_t j = 0; j < objects.size() && visible; ++j)
+                if (j != i && objects[j].sdf(sample.position) <= kContactTolerance) visible = false;
+            if (visible) kept.push_back(sample);
+        }
+    }
+    return kept;
+}
+
+void writeTumSequence(const std::filesystem::path& dir, const SyntheticScene& scene, const SequenceOptions& options) {
+    const std::string where = "writeTumSequence('" + dir.string() + "'): ";
+    if (options.frames == 0) throw Error(where + "frames must be at least 1, got 0");
+    if (options.width <= 0 || options.height <= 0)
+        throw Error(where + "image size " + std::to_string(options.width) + "x" + std::to_string(options.height) +
+                    " must be positive");
+    if (options.intrinsics.width != options.width || options.intrinsics.height != options.height)
+        throw Error(where + "the intrinsics are for " + std::to_string(options.intrinsics.width) + "x" +
+                    std::to_string(options.intrinsics.height) + " images but the sequence is " +
+                    std::to_string(options.width) + "x" + std::to_string(options.height) +
+                    " (kinectIntrinsics(width, height) gives matching ones)");
+    try {
+        validateIntrinsics(options.intrinsics);
+    } catch (const Error& e) {
+        throw Error(where + e.what());
+    }
+    if (!std::isfinite(options.gtPointSpacing) || options.gtPointSpacing <= 0)
+        throw Error(where + "gtPointSpacing = " + std::to_string(options.gtPointSpacing) + " must be positive");
+
+    std::error_code error;
+    std::filesystem::create_directories(dir / "depth", error);
+    if (error || !std::filesystem::is_directory(dir / "depth"))
+        throw Error("cannot create folder '" + (dir / "depth").string() + "': " +
+                    (error ? error.message() : std::string("not a directory")));
+
+    const std::vector<Pose> poses = cameraPath(options.frames, options.path);
+    RenderOptions renderOptions;
+    renderOptions.maxRange = options.maxRange;
+    renderOptions.noise = options.noise;
+    for (size_t frame = 0; frame < poses.size(); ++frame) {
+        renderOptions.seed = frameSeed(options.seed, frame);
+        writeDepthPng(dir / frameFileName(frame), scene.renderDepth(options.intrinsics, poses[frame], renderOptions));
+    }
+
+    // The index files come last: a folder with a depth.txt is complete.
+    writeGroundTruthPly(dir / "gt_points.ply", sampleSurface(scene, options.gtPointSpacing), options.gtPointSpacing);
+    {
+        const std::filesystem::path path = dir / "scene.json";
+        std::ofstream out = openForWriting(path);
+        out << sceneJson(scene).dump(2) << "\n";
+        finishWriting(out, path);
+    }
+    {
+        const std::filesystem::path path = dir / "camera.json";
+        nlohmann::json camera;
+        camera["fx"] = options.intrinsics.fx;
+        camera["fy"] = options.intrinsics.fy;
+        camera["cx"] = options.intrinsics.cx;
+        camera["cy"] = options.intrinsics.cy;
+        camera["depth_scale"] = kDepthScale;
+        camera["width"] = options.width;
+        camera["height"] = options.height;
+        std::ofstream out = openForWriting(path);
+        out << camera.dump(2) << "\n";
+        finishWriting(out, path);
+    }
+    {
+        const std::filesystem::path path = dir / "groundtruth.txt";
+        std::ofstream out = openForWriting(path);
+        out << "# ground truth trajectory (camera-to-world), vkmesh synthetic scene\n"
+               "# timestamp tx ty tz qx qy qz qw\n";
+        for (size_t frame = 0; frame < poses.size(); ++frame) {
+            const Eigen::Matrix3d rotation = poses[frame].topLeftCorner<3, 3>();
+            Eigen::Quaterniond q(rotation);
+            q.normalize();
+            if (q.w() < 0) q.coeffs() = -q.coeffs();  // one of the two equivalent signs, for tidy files
+            char line[256];
+            std::snprintf(line, sizeof line, "%s %.9f %.9f %.9f %.9f %.9f %.9f %.9f\n", formatTimestamp(frame).c_str(),
+                          poses[frame](0, 3), poses[frame](1, 3), poses[frame](2, 3), q.x(), q.y(), q.z(), q.w());
+            out << line;
+        }
+        finishWriting(out, path);
+    }
+    {
+        const std::filesystem::path path = dir / "README.txt";
+        std::ofstream out = openForWriting(path);
+        out << kReadmeText << "Frames: " << options.frames << ", " << options.width << "x" << options.height
+            << ", noise: " << (options.noise ? "Kinect-like (seed " + std::to_string(options.seed) + ")" : "none")
+            << ", path: " << (options.path == PathKind::Revisit ? "revisit (the loop driven 3 times)" : "orbit")
+            << ".\n";
+        finishWriting(out, path);
+    }
+    {
+        const std::filesystem::path path = dir / "depth.txt";
+        std::ofstream out = openForWriting(path);
+        out << "# depth maps, vkmesh synthetic scene\n# timestamp filename\n";
+        for (size_t frame = 0; frame < poses.size(); ++frame)
+            out << formatTimestamp(frame) << " " << frameFileName(frame) << "\n";
+        finishWriting(out, path);
+    }
+}
+
+}  // namespace vkmesh::synth

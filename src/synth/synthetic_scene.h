@@ -1,0 +1,179 @@
+// Synthetic RGB-D input with exact ground truth: an analytic scene (a signed distance function built from
+// a few primitives), a sphere-tracing depth renderer with an optional Kinect-like noise model, smooth camera
+// paths, and a writer for the TUM RGB-D folder layout that vkmesh's dataset reader opens.
+//
+// Conventions (the same as everywhere in vkmesh):
+//   * world z is up; metres; poses are camera-to-world;
+//   * camera frame: x right, y down, z forward (OpenCV/TUM); pixel (u, v) has its centre at integer
+//     coordinates and looks along ((u - cx) / fx, (v - cy) / fy, 1);
+//   * depth is the camera-frame z of the surface point (not the length of the ray), 0 = no measurement;
+//   * sdf(p) > 0 in free space, < 0 inside solid matter.
+#pragma once
+
+#include "core/types.h"
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace vkmesh::synth {
+
+// The primitives a scene is made of. Every primitive lives in its own local frame (Object::objectToWorld).
+enum class ObjectKind {
+    RoomInterior,  // the inside of a box (walls, floor, ceiling) seen from within: free space is INSIDE the
+                   // box of `halfExtents` centred on the local origin, matter is outside.
+    HalfSpace,     // matter below the local plane z = 0, free space on the +z side (local z = plane normal).
+    Sphere,        // centred on the local origin, `radius`.
+    Torus,         // centred on the local origin around the local z axis: `radius` from the centre to the
+                   // middle of the tube, `tubeRadius` the tube's own radius.
+    RoundedBox,    // outer `halfExtents` along local x, y, z, edges and corners rounded with `edgeRadius`
+                   // (0 gives a sharp-edged box).
+    Cylinder,      // solid, flat-capped, around the local z axis: `radius`, from z = -halfHeight to +halfHeight.
+};
+
+// "room_interior", "half_space", "sphere", "torus", "rounded_box", "cylinder" (as written to scene.json).
+std::string_view kindName(ObjectKind kind);
+
+// One primitive of a scene. Only the parameters its kind uses (see ObjectKind) are meaningful; the others
+// stay 0.
+struct Object {
+    std::string name;
+    ObjectKind kind = ObjectKind::Sphere;
+    Eigen::Isometry3d objectToWorld = Eigen::Isometry3d::Identity();
+    Eigen::Vector3d halfExtents = Eigen::Vector3d::Zero();
+    double radius = 0;
+    double tubeRadius = 0;
+    double edgeRadius = 0;
+    double halfHeight = 0;
+
+    Eigen::Vector3d center() const { return objectToWorld.translation(); }
+    // Signed distance from a world point to this primitive alone (exact for every kind).
+    double sdf(const Eigen::Vector3d& worldPoint) const;
+    // Radius of a sphere around center() that contains all of the primitive; +infinity for the unbounded
+    // kinds (RoomInterior, HalfSpace).
+    double boundingRadius() const;
+};
+
+struct RenderOptions {
+    float maxRange = 8;    // metres of camera-frame depth; pixels whose surface is farther (or absent) get 0
+    bool noise = false;    // Kinect-like axial noise and dropout (see renderDepth)
+    uint32_t seed = 1;     // the noise is a pure function of (seed, pixel), whatever the thread count
+};
+
+class SyntheticScene {
+public:
+    // The union of `objects`. Throws Error naming the object whose parameters are not positive and finite,
+    // or whose name is empty or repeated.
+    explicit SyntheticScene(std::vector<Object> objects);
+
+    // A furnished room of 4 m x 3 m x 2.5 m, its floor at z = 0 around the world origin, turned 20 degrees
+    // about the vertical so that no wall is aligned with a world axis. It holds, by name:
+    //   "room"        RoomInterior: floor, four walls, ceiling;
+    //   "sphere"      r = 0.35 m, floating (free-standing, fully observable);
+    //   "torus"       R = 0.3 m, r = 0.1 m, floating, its axis tilted 55 degrees from vertical;
+    //   "rounded_box" 0.5 x 0.36 x 0.5 m, 4 cm edge radius, standing on the floor;
+    //   "ramp"        a 3 cm board slanted 30 degrees, its lower edge sunk into the floor;
+    //   "thin_plate"  an upright 2.5 cm thick panel standing on the floor;
+    //   "pole"        a 3 cm diameter, 1.5 m tall vertical cylinder standing on the floor.
+    // No two objects touch, apart from the standing ones with the floor.
+    static SyntheticScene defaultRoom();
+    // A single sphere in empty space (everything outside it is free space).
+    static SyntheticScene singleSphere(const Eigen::Vector3d& center, double radius);
+    // Free space where normal . p > offset, matter below; `normal` need not be unit length (it is normalised,
+    // and offset is taken relative to the unit normal). Throws Error for a zero normal.
+    static SyntheticScene slantedPlane(const Eigen::Vector3d& normal, double offset);
+
+    // Minimum of the objects' signed distances: exact in free space, a lower bound of the magnitude inside
+    // overlapping matter -- safe for sphere tracing.
+    double sdf(const Eigen::Vector3d& p) const;
+    // Unit outward (towards free space) normal by central differences of sdf(); zero where the gradient
+    // vanishes (e.g. a sphere's centre).
+    Eigen::Vector3d normal(const Eigen::Vector3d& p) const;
+
+    const std::vector<Object>& objects() const { return objects_; }
+    // The object called `name`; throws Error naming it (and the names there are) when there is none.
+    const Object& object(std::string_view name) const;
+
+    // Renders camera-frame depth in metres, intrinsics.width x intrinsics.height pixels, by sphere tracing
+    // every pixel (at most 256 steps, then bisection to well under 0.1 mm) on two threads.
+    // With options.noise, a Kinect-like sensor model is applied (Nguyen, Izadi, Lovell 2012):
+    //   * axial Gaussian noise, sigma(z) = 0.0012 + 0.0019 (z - 0.4)^2 metres;
+    //   * dropout where the ray meets the surface at more than 80 degrees from its normal (and with a
+    //     probability rising from 0 at 70 degrees to 0.5 at 80), and with probability 0.5 next to a depth
+    //     discontinuity (a 4-neighbour empty or more than 4 % nearer/farther).
+    // Quantisation to the sensor's 1/5000 m step is left to the writer. Throws Error for bad intrinsics or
+    // a non-finite pose.
+    DepthImage renderDepth(const Intrinsics& intrinsics, const Pose& cameraToWorld,
+                           const RenderOptions& options = {}) const;
+
+private:
+    std::vector<Object> objects_;
+    std::vector<double> boundingRadii_;  // objects_[i].boundingRadius(), cached for the sdf() inner loop
+};
+
+// The default Kinect v1 calibration (fx = fy = 525, cx = 319.5, cy = 239.5 at 640 x 480) scaled to another
+// image size, so that small test images see the same field of view.
+Intrinsics kinectIntrinsics(int width = 640, int height = 480);
+
+// Throws Error naming the value unless the intrinsics can be rendered: width and height > 0, fx and fy
+// finite and non-zero (fy may be negative), cx and cy finite.
+void validateIntrinsics(const Intrinsics& intrinsics);
+
+enum class PathKind {
+    Orbit,    // one smooth loop around the default room's centre, the last frame one step before the first
+    Revisit,  // the same loop driven three times, for loop-closure / revisiting tests: with frames a multiple
+              // of 3, frame i and frame i + frames / 3 have the same pose
+};
+
+// Camera-to-world poses for the default room: an ellipse of 3.2 m x 2.3 m around the room centre, camera
+// height 1.5 m +- 0.2 m, looking at the objects (a gently wandering target ~0.55 m above the floor) with
+// +-10 degrees of roll, so planes are seen from many angles. All rotations are proper (orthonormal,
+// det +1). Throws Error for frames = 0.
+std::vector<Pose> cameraPath(size_t frames, PathKind kind = PathKind::Orbit);
+
+struct SequenceOptions {
+    size_t frames = 60;
+    int width = 640, height = 480;
+    // intrinsics.width/height must equal width/height above (writeTumSequence throws otherwise, rather than
+    // guess how calibration made for one image size applies to another): use kinectIntrinsics(w, h).
+    Intrinsics intrinsics = kinectIntrinsics(640, 480);
+    bool noise = false;
+    uint32_t seed = 1;  // frame i is rendered with a seed derived from (seed, i)
+    PathKind path = PathKind::Orbit;
+    float maxRange = 8;
+    double gtPointSpacing = 0.005;  // metres between ground-truth surface samples in gt_points.ply
+};
+
+// Writes a TUM-layout sequence of `scene` seen along cameraPath(options.frames, options.path) into `dir`
+// (created if needed). The path is made for defaultRoom(); another scene is seen from the same poses (they
+// circle the world z axis at ~1.5 m height, looking down at a point ~0.55 m above the origin). Files:
+//   depth/NNNNNN.png   uint16, metres x 5000 rounded, 0 = no measurement;
+//   depth.txt          "timestamp depth/NNNNNN.png", timestamps 1.0, 1.033, ...;
+//   groundtruth.txt    "timestamp tx ty tz qx qy qz qw", camera-to-world, the same timestamps;
+//   camera.json        {"fx","fy","cx","cy","depth_scale":5000,"width","height"};
+//   gt_points.ply      binary little-endian point cloud (float x y z nx ny nz) sampled uniformly by area
+//                      on the visible-from-free-space surface of every object;
+//   scene.json         the objects and their parameters;  README.txt  what all this is.
+// Throws Error naming the folder, file or value at fault (frames = 0, bad intrinsics, unwritable folder).
+void writeTumSequence(const std::filesystem::path& dir, const SyntheticScene& scene,
+                      const SequenceOptions& options = {});
+
+// A surface point with its outward unit normal.
+struct SurfaceSample {
+    Eigen::Vector3d position;
+    Eigen::Vector3d normal;
+};
+
+// Samples every object's surface uniformly by area, about `spacing` metres apart, keeping only points not
+// inside or in contact with (within 0.1 mm of) another object. Unbounded kinds are sampled over a finite
+// patch: a HalfSpace over 8 m x 8 m around the point of its plane nearest the world origin. Throws Error
+// for spacing <= 0 or non-finite.
+std::vector<SurfaceSample> sampleSurface(const SyntheticScene& scene, double spacing);
+
+}  // namespace vkmesh::synth
