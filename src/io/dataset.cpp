@@ -1,0 +1,854 @@
+#include "io/dataset.h"
+
+#include <Eigen/Geometry>
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+namespace vkmesh {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// ---------------------------------------------------------------------------------------------------
+// Small text helpers
+
+std::string lower(std::string s) {
+    std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    return s;
+}
+
+std::string fmt(double v) {
+    std::ostringstream os;
+    os.precision(10);
+    os << v;
+    return os.str();
+}
+
+std::string fmtFixed(double v, int decimals) {
+    std::ostringstream os;
+    os << std::fixed;
+    os.precision(decimals);
+    os << v;
+    return os.str();
+}
+
+// Timestamps as written in the files: Unix seconds keep their microseconds, frame indices stay integers.
+std::string fmtTime(double t) {
+    if (t == std::floor(t) && std::abs(t) < 1e15) return std::to_string(static_cast<long long>(t));
+    std::string s = fmtFixed(t, 6);
+    while (s.back() == '0') s.pop_back();
+    return s;
+}
+
+// "file:line" for messages; the whole path so that the user can open it straight away.
+std::string at(const fs::path& file, size_t line) { return file.string() + ":" + std::to_string(line); }
+
+std::vector<std::string> splitWhitespace(const std::string& line) {
+    std::vector<std::string> out;
+    std::istringstream is(line);
+    for (std::string tok; is >> tok;) out.push_back(tok);
+    return out;
+}
+
+// Locale-independent number parsing (strtod would read "1,5" in a German locale); the whole token must
+// be a number, so "1.2abc" is rejected rather than silently read as 1.2.
+bool parseNumber(std::string_view tok, double& out) {
+    if (!tok.empty() && tok.front() == '+') tok.remove_prefix(1);  // from_chars refuses a leading '+'
+    if (tok.empty()) return false;
+    auto [end, ec] = std::from_chars(tok.data(), tok.data() + tok.size(), out);
+    return ec == std::errc() && end == tok.data() + tok.size();
+}
+
+bool parseInteger(std::string_view tok, long long& out) {
+    if (!tok.empty() && tok.front() == '+') tok.remove_prefix(1);
+    if (tok.empty()) return false;
+    auto [end, ec] = std::from_chars(tok.data(), tok.data() + tok.size(), out);
+    return ec == std::errc() && end == tok.data() + tok.size();
+}
+
+std::string joined(const std::vector<std::string>& tokens) {
+    std::string s;
+    for (const auto& t : tokens) s += (s.empty() ? "" : " ") + t;
+    return s;
+}
+
+struct TextLine {
+    size_t number;                    // 1-based, as an editor shows it
+    std::vector<std::string> tokens;  // whitespace-separated
+};
+
+// The non-blank, non-comment lines of a text file. Blank lines (a trailing newline, CRLF endings) are
+// harmless and skipped; '#' starts a comment line as in the TUM files.
+std::vector<TextLine> readDataLines(const fs::path& file) {
+    std::ifstream in(file);
+    if (!in) throw Error("cannot open " + file.string());
+    std::vector<TextLine> out;
+    std::string line;
+    for (size_t n = 1; std::getline(in, line); ++n) {
+        if (!line.empty() && line.back() == '\r') line.pop_back();
+        auto first = line.find_first_not_of(" \t");
+        if (first == std::string::npos || line[first] == '#') continue;
+        out.push_back({n, splitWhitespace(line)});
+    }
+    if (in.bad()) throw Error("error while reading " + file.string());
+    return out;
+}
+
+// True if `word` occurs in `name` not preceded by a letter and not followed by a digit: "tum_fr1_rpy" and
+// "rgbd_dataset_freiburg1_rpy" name freiburg 1, "iclnuim_office" names ICL-NUIM, but "bicycle" does not.
+bool containsWord(const std::string& name, const std::string& word) {
+    for (size_t pos = name.find(word); pos != std::string::npos; pos = name.find(word, pos + 1)) {
+        bool leftOk = pos == 0 || !std::isalpha(static_cast<unsigned char>(name[pos - 1]));
+        size_t end = pos + word.size();
+        bool rightOk = end == name.size() || !std::isdigit(static_cast<unsigned char>(name[end]));
+        if (leftOk && rightOk) return true;
+    }
+    return false;
+}
+
+// Orders file names as a person would ("2.png" before "10.png"); identical to plain name order for the
+// zero-padded names Redwood ships, and right for the unpadded ones some converters write.
+bool naturalLess(const std::string& a, const std::string& b) {
+    size_t i = 0, j = 0;
+    while (i < a.size() && j < b.size()) {
+        bool da = std::isdigit(static_cast<unsigned char>(a[i])), db = std::isdigit(static_cast<unsigned char>(b[j]));
+        if (da && db) {
+            size_t i2 = i, j2 = j;
+            while (i2 < a.size() && std::isdigit(static_cast<unsigned char>(a[i2]))) ++i2;
+            while (j2 < b.size() && std::isdigit(static_cast<unsigned char>(b[j2]))) ++j2;
+            std::string_view na(a.data() + i, i2 - i), nb(b.data() + j, j2 - j);
+            while (na.size() > 1 && na.front() == '0') na.remove_prefix(1);
+            while (nb.size() > 1 && nb.front() == '0') nb.remove_prefix(1);
+            if (na.size() != nb.size()) return na.size() < nb.size();
+            if (na != nb) return na < nb;
+            i = i2;
+            j = j2;
+        } else {
+            if (a[i] != b[j]) return a[i] < b[j];
+            ++i;
+            ++j;
+        }
+    }
+    return (a.size() - i) < (b.size() - j) || ((a.size() - i) == (b.size() - j) && a < b);
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Depth images
+
+std::string describeType(const cv::Mat& m) {
+    static const char* depthNames[] = {"8-bit unsigned", "8-bit signed", "16-bit unsigned", "16-bit signed",
+                                       "32-bit signed",  "32-bit float", "64-bit float",    "16-bit float"};
+    int d = m.depth();
+    std::string s = (d >= 0 && d < 8) ? depthNames[d] : "unknown depth " + std::to_string(d);
+    int c = m.channels();
+    return s + ", " + std::to_string(c) + (c == 1 ? " channel" : " channels");
+}
+
+// Reads a depth PNG as raw uint16 samples. Everything that can go wrong is reported with the file's name.
+cv::Mat readRawDepth(const fs::path& file) {
+    std::error_code ec;
+    if (!fs::is_regular_file(file, ec)) throw Error("depth image " + file.string() + " does not exist");
+    cv::Mat img;
+    try {
+        img = cv::imread(file.string(), cv::IMREAD_UNCHANGED);
+    } catch (const cv::Exception& e) {
+        throw Error("cannot decode depth image " + file.string() + ": " + e.what());
+    }
+    if (img.empty()) throw Error("cannot decode depth image " + file.string() + " (unreadable or corrupt)");
+    if (img.type() != CV_16UC1)
+        throw Error("depth image " + file.string() + " is " + describeType(img) + " (" + std::to_string(img.cols) +
+                    "x" + std::to_string(img.rows) + "); expected 16-bit unsigned, 1 channel");
+    return img;
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Poses
+
+Pose poseFromQuaternion(double tx, double ty, double tz, double qx, double qy, double qz, double qw,
+                        const std::string& where) {
+    Eigen::Quaterniond q(qw, qx, qy, qz);
+    double n = q.norm();
+    // Files round the quaternion to 4-6 digits, so it is only approximately unit; a norm far from 1 means
+    // the line is corrupt (swapped columns, a zeroed field), not a rounding issue.
+    if (!std::isfinite(n) || n < 0.5 || n > 2.0)
+        throw Error(where + ": quaternion (" + fmt(qx) + " " + fmt(qy) + " " + fmt(qz) + " " + fmt(qw) +
+                    ") has norm " + fmt(n) + "; expected about 1");
+    q.normalize();
+    Pose T = Pose::Identity();
+    T.topLeftCorner<3, 3>() = q.toRotationMatrix();
+    T.topRightCorner<3, 1>() = Eigen::Vector3d(tx, ty, tz);
+    return T;
+}
+
+// ---------------------------------------------------------------------------------------------------
+// What a layout reader hands back to Dataset::open before the common steps (calibration overrides,
+// maxFrames, reading frame 0).
+
+struct Candidate {
+    double timestamp;
+    fs::path depthPath;
+    std::string origin;  // where the frame was listed, for messages ("depth.txt:12", "depth/000003.png")
+};
+
+struct Layout {
+    DatasetKind kind = DatasetKind::TUM;
+    Intrinsics intrinsics;          // the layout's default
+    std::string intrinsicsWarning;  // set when the default is a guess rather than the sequence's calibration
+    double depthScale = 5000.0;
+    std::optional<uint16_t> invalidRaw;
+    std::vector<FrameInfo> frames;  // frames with a pose, in time order
+    std::vector<std::string> warnings;
+    size_t skipped = 0;
+};
+
+// Per-frame warnings are capped so that a sequence with a long tracking gap does not flood the log.
+constexpr size_t kMaxFrameWarnings = 20;
+
+void warnSkipped(Layout& layout, const std::string& message) {
+    if (layout.skipped < kMaxFrameWarnings) layout.warnings.push_back(message);
+    ++layout.skipped;
+}
+
+void summariseSkipped(Layout& layout, size_t listed, const std::string& why) {
+    if (layout.skipped > kMaxFrameWarnings)
+        layout.warnings.push_back("... and " + std::to_string(layout.skipped - kMaxFrameWarnings) +
+                                  " more skipped frames");
+    if (layout.skipped > 0)
+        layout.warnings.push_back("skipped " + std::to_string(layout.skipped) + " of " + std::to_string(listed) +
+                                  " depth frames (" + why + ")");
+}
+
+// ---------------------------------------------------------------------------------------------------
+// TUM RGB-D and ICL-NUIM (TUM-compatible release)
+
+struct Stamped {
+    double t;
+    size_t line;
+    fs::path path;  // depth entries only
+    Pose pose;      // groundtruth entries only
+};
+
+// depth.txt: "timestamp path" per line.
+std::vector<Stamped> readDepthList(const fs::path& folder, const fs::path& file) {
+    std::vector<Stamped> out;
+    for (const auto& l : readDataLines(file)) {
+        double t;
+        if (l.tokens.size() != 2 || !parseNumber(l.tokens[0], t))
+            throw Error(at(file, l.number) + ": expected 'timestamp path', got '" + joined(l.tokens) + "'");
+        if (!std::isfinite(t)) throw Error(at(file, l.number) + ": timestamp " + l.tokens[0] + " is not finite");
+        out.push_back({t, l.number, folder / l.tokens[1], Pose::Identity()});
+    }
+    return out;
+}
+
+// associations.txt (only read when depth.txt is missing): pairs "timestamp path" side by side, in
+// either order (TUM's associate.py writes rgb first, ICL-NUIM depth first); the depth pair is the one
+// whose path mentions "depth".
+std::vector<Stamped> readAssociations(const fs::path& folder, const fs::path& file) {
+    std::vector<Stamped> out;
+    for (const auto& l : readDataLines(file)) {
+        bool found = false;
+        for (size_t i = 0; i + 1 < l.tokens.size(); ++i) {
+            double t;
+            if (parseNumber(l.tokens[i], t) && lower(l.tokens[i + 1]).find("depth") != std::string::npos) {
+                if (!std::isfinite(t)) throw Error(at(file, l.number) + ": timestamp " + l.tokens[i] + " is not finite");
+                out.push_back({t, l.number, folder / l.tokens[i + 1], Pose::Identity()});
+                found = true;
+                break;
+            }
+        }
+        if (!found) throw Error(at(file, l.number) + ": no 'timestamp depth/...png' pair on this line");
+    }
+    return out;
+}
+
+// groundtruth.txt: "timestamp tx ty tz qx qy qz qw" per line, camera-to-world.
+std::vector<Stamped> readGroundtruth(const fs::path& file) {
+    std::vector<Stamped> out;
+    for (const auto& l : readDataLines(file)) {
+        if (l.tokens.size() != 8)
+            throw Error(at(file, l.number) + ": expected 8 values 'timestamp tx ty tz qx qy qz qw', got " +
+                        std::to_string(l.tokens.size()));
+        double v[8];
+        for (int k = 0; k < 8; ++k) {
+            if (!parseNumber(l.tokens[k], v[k]))
+                throw Error(at(file, l.number) + ": '" + l.tokens[k] + "' is not a number");
+            if (!std::isfinite(v[k]))
+                throw Error(at(file, l.number) + ": value '" + l.tokens[k] + "' is not finite");
+        }
+        std::string where = at(file, l.number);
+        Pose T = poseFromQuaternion(v[1], v[2], v[3], v[4], v[5], v[6], v[7], where);
+        validatePose(T, where);
+        out.push_back({v[0], l.number, {}, T});
+    }
+    return out;
+}
+
+// Sorts by time (unsorted files are legitimate) and drops repeated timestamps, keeping the entry that
+// came first in the file. Returns how many were dropped.
+size_t sortAndDedupe(std::vector<Stamped>& v, const fs::path& file, std::vector<std::string>& warnings) {
+    std::stable_sort(v.begin(), v.end(), [](const Stamped& a, const Stamped& b) { return a.t < b.t; });
+    std::vector<Stamped> kept;
+    kept.reserve(v.size());
+    size_t dropped = 0;
+    for (auto& s : v) {
+        if (!kept.empty() && kept.back().t == s.t) {
+            if (dropped < kMaxFrameWarnings)
+                warnings.push_back(at(file, s.line) + ": timestamp " + fmtTime(s.t) + " repeats line " +
+                                   std::to_string(kept.back().line) + "; kept the first");
+            ++dropped;
+            continue;
+        }
+        kept.push_back(std::move(s));
+    }
+    v = std::move(kept);
+    return dropped;
+}
+
+// ICL-NUIM's TUM-compatible files use frame indices as timestamps; TUM uses Unix time (~1.3e9 s).
+bool timestampsAreFrameIndices(const std::vector<Stamped>& depth) {
+    if (depth.empty()) return false;
+    for (const auto& s : depth)
+        if (s.t < 0 || s.t >= 1e6 || s.t != std::floor(s.t)) return false;
+    return true;
+}
+
+Layout readTum(const fs::path& folder, const std::string& folderName) {
+    Layout layout;
+    fs::path depthFile = folder / "depth.txt";
+    fs::path gtFile = folder / "groundtruth.txt";
+    std::error_code ec;
+    // depth.txt is authoritative; associations.txt is a derived file, used only when it is all there is.
+    fs::path listFile = fs::is_regular_file(depthFile, ec) ? depthFile : folder / "associations.txt";
+    if (!fs::is_regular_file(gtFile, ec))
+        throw Error("TUM/ICL-NUIM layout in " + folder.string() + ": found " + listFile.filename().string() +
+                    " but no groundtruth.txt with the camera poses");
+
+    std::vector<Stamped> depth = listFile == depthFile ? readDepthList(folder, listFile) : readAssociations(folder, listFile);
+    if (depth.empty()) throw Error(listFile.string() + " lists no depth frames");
+    std::vector<Stamped> gt = readGroundtruth(gtFile);
+    if (gt.empty()) throw Error(gtFile.string() + " has no poses");
+
+    const size_t listed = depth.size();
+    layout.skipped = sortAndDedupe(depth, listFile, layout.warnings);
+    sortAndDedupe(gt, gtFile, layout.warnings);
+
+    auto namesSensor = [&](int sensor) {
+        std::string n = std::to_string(sensor);
+        return containsWord(folderName, "freiburg" + n) || containsWord(folderName, "fr" + n);
+    };
+    const int tumSensor = namesSensor(1) ? 1 : namesSensor(2) ? 2 : namesSensor(3) ? 3 : 0;
+    // The folder name is the primary clue (the shared copy is "iclnuim_office_traj0"); frame-index
+    // timestamps catch ICL-NUIM folders renamed after their scene ("living_room_traj0_frei_png"), unless
+    // the name says which TUM sensor recorded the sequence.
+    bool icl = containsWord(folderName, "icl") || (tumSensor == 0 && timestampsAreFrameIndices(depth));
+    layout.kind = icl ? DatasetKind::ICLNUIM : DatasetKind::TUM;
+    layout.depthScale = 5000.0;
+    if (icl) {
+        // fy is negative: ICL-NUIM's poses are for a camera whose image y axis points up.
+        layout.intrinsics = {481.2f, -480.0f, 319.5f, 239.5f, 0, 0};
+    } else if (tumSensor == 1) {
+        layout.intrinsics = {517.3f, 516.5f, 318.6f, 255.3f, 0, 0};
+    } else if (tumSensor == 2) {
+        layout.intrinsics = {520.9f, 521.0f, 325.1f, 249.7f, 0, 0};
+    } else if (tumSensor == 3) {
+        layout.intrinsics = {535.4f, 539.2f, 320.1f, 247.6f, 0, 0};
+    } else {
+        layout.intrinsics = {525.0f, 525.0f, 319.5f, 239.5f, 0, 0};
+        layout.intrinsicsWarning = "folder name '" + folderName +
+                                   "' names no TUM sensor (freiburg1/2/3 or fr1/2/3); using the default "
+                                   "intrinsics 525 525 319.5 239.5 (give --intrinsics or a camera.json)";
+    }
+
+    // TUM's motion capture runs at ~100 Hz, so a pose within 20 ms exists unless tracking dropped out;
+    // ICL-NUIM's timestamps are frame indices and must match exactly.
+    const double tolerance = icl ? 0.5 : 0.020;
+    const std::string tolText = icl ? "the same frame index" : "20 ms";
+    for (const auto& d : depth) {
+        auto it = std::lower_bound(gt.begin(), gt.end(), d.t, [](const Stamped& g, double t) { return g.t < t; });
+        const Stamped* best = nullptr;
+        if (it != gt.end()) best = &*it;
+        if (it != gt.begin() && (!best || d.t - std::prev(it)->t < best->t - d.t)) best = &*std::prev(it);
+        double dt = std::abs(best->t - d.t);
+        bool near = icl ? dt < tolerance : dt <= tolerance;  // strict for ICL: 0.5 would be a tie
+        if (!near) {
+            warnSkipped(layout, at(listFile, d.line) + ": depth frame " + fmtTime(d.t) + " (" + d.path.filename().string() +
+                                    ") has no pose within " + tolText + " in groundtruth.txt (nearest is " +
+                                    (icl ? fmt(dt) + " frames" : fmtFixed(dt * 1000.0, 1) + " ms") + " away); skipped");
+            continue;
+        }
+        FrameInfo f;
+        f.timestamp = d.t;
+        f.depthPath = d.path;
+        f.cameraToWorld = best->pose;
+        layout.frames.push_back(std::move(f));
+    }
+    if (layout.frames.empty())
+        throw Error("none of the " + std::to_string(depth.size()) + " depth frames in " + listFile.string() +
+                    " (timestamps " + fmtTime(depth.front().t) + " .. " + fmtTime(depth.back().t) + ") has a pose within " +
+                    tolText + " in " + gtFile.string() + " (timestamps " + fmtTime(gt.front().t) + " .. " +
+                    fmtTime(gt.back().t) + ")");
+    summariseSkipped(layout, listed, "no pose within " + tolText + ", or a repeated timestamp");
+    return layout;
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Redwood / Zhou-Koltun: a *.log trajectory + depth/*.png (millimetres)
+
+std::vector<fs::path> filesWithExtension(const fs::path& dir, const std::string& ext) {
+    std::vector<fs::path> out;
+    std::error_code ec;
+    for (const auto& e : fs::directory_iterator(dir, ec))
+        if (e.is_regular_file(ec) && lower(e.path().extension().string()) == ext) out.push_back(e.path());
+    std::sort(out.begin(), out.end(),
+              [](const fs::path& a, const fs::path& b) { return naturalLess(a.filename().string(), b.filename().string()); });
+    return out;
+}
+
+// Reads the rows of a 4x4 matrix from four consecutive data lines.
+Pose readMatrixRows(const fs::path& file, const std::vector<TextLine>& lines, size_t first) {
+    Pose T;
+    for (int r = 0; r < 4; ++r) {
+        const TextLine& l = lines[first + r];
+        if (l.tokens.size() != 4)
+            throw Error(at(file, l.number) + ": expected 4 numbers (row " + std::to_string(r + 1) +
+                        " of a 4x4 matrix), got " + std::to_string(l.tokens.size()));
+        for (int c = 0; c < 4; ++c)
+            if (!parseNumber(l.tokens[c], T(r, c)))
+                throw Error(at(file, l.number) + ": '" + l.tokens[c] + "' is not a number");
+    }
+    return T;
+}
+
+Layout readRedwood(const fs::path& folder, const fs::path& logFile) {
+    Layout layout;
+    layout.kind = DatasetKind::Redwood;
+    layout.depthScale = 1000.0;
+    layout.intrinsics = {525.0f, 525.0f, 319.5f, 239.5f, 0, 0};
+
+    std::vector<fs::path> images = filesWithExtension(folder / "depth", ".png");
+    if (images.empty()) throw Error("Redwood layout: " + (folder / "depth").string() + " holds no .png depth images");
+
+    // Blocks of five lines: "id id frame" then the camera-to-world matrix. The first id is the 0-based
+    // index of the depth image (in name order) the pose belongs to.
+    std::vector<TextLine> lines = readDataLines(logFile);
+    std::map<long long, std::pair<Pose, size_t>> poses;  // id -> pose, line of its header
+    size_t duplicates = 0;
+    for (size_t i = 0; i < lines.size(); i += 5) {
+        const TextLine& h = lines[i];
+        long long ids[3];
+        if (h.tokens.size() != 3 || !parseInteger(h.tokens[0], ids[0]) || !parseInteger(h.tokens[1], ids[1]) ||
+            !parseInteger(h.tokens[2], ids[2]))
+            throw Error(at(logFile, h.number) + ": expected a block header of 3 integers 'id id frame'");
+        if (i + 5 > lines.size())
+            throw Error(at(logFile, h.number) + ": the file ends inside the 4x4 matrix of frame " + std::to_string(ids[0]));
+        Pose T = readMatrixRows(logFile, lines, i + 1);
+        validatePose(T, at(logFile, lines[i + 1].number) + " (frame " + std::to_string(ids[0]) + ")");
+        if (!poses.emplace(ids[0], std::make_pair(T, h.number)).second) {
+            if (duplicates++ < kMaxFrameWarnings)
+                layout.warnings.push_back(at(logFile, h.number) + ": frame " + std::to_string(ids[0]) +
+                                          " appears again; kept the first pose");
+        }
+    }
+    if (poses.empty()) throw Error(logFile.string() + " has no poses");
+
+    for (size_t k = 0; k < images.size(); ++k) {
+        auto it = poses.find(static_cast<long long>(k));
+        if (it == poses.end()) {
+            warnSkipped(layout, (fs::path("depth") / images[k].filename()).string() + ": frame " + std::to_string(k) +
+                                    " has no pose in " + logFile.filename().string() + "; skipped");
+            continue;
+        }
+        FrameInfo f;
+        f.timestamp = static_cast<double>(k);
+        f.depthPath = images[k];
+        f.cameraToWorld = it->second.first;
+        layout.frames.push_back(std::move(f));
+    }
+    size_t orphans = 0;
+    for (const auto& [id, p] : poses)
+        if (id < 0 || static_cast<size_t>(id) >= images.size()) ++orphans;
+    if (orphans > 0)
+        layout.warnings.push_back(std::to_string(orphans) + " poses in " + logFile.filename().string() +
+                                  " name frames beyond the " + std::to_string(images.size()) +
+                                  " images in depth/; ignored");
+    if (layout.frames.empty())
+        throw Error("none of the " + std::to_string(images.size()) + " images in " + (folder / "depth").string() +
+                    " has a pose in " + logFile.string() + " (frame ids " + std::to_string(poses.begin()->first) +
+                    " .. " + std::to_string(poses.rbegin()->first) + ")");
+    summariseSkipped(layout, images.size(), "no pose in " + logFile.filename().string());
+    return layout;
+}
+
+// ---------------------------------------------------------------------------------------------------
+// 7-Scenes: frame-NNNNNN.depth.png + frame-NNNNNN.pose.txt (millimetres, 0 and 65535 invalid)
+
+struct SevenScenesFrame {
+    long long number;
+    fs::path depth;
+};
+
+std::vector<SevenScenesFrame> listSevenScenesFrames(const fs::path& dir) {
+    static const std::string prefix = "frame-", suffix = ".depth.png";
+    std::vector<SevenScenesFrame> out;
+    std::error_code ec;
+    for (const auto& e : fs::directory_iterator(dir, ec)) {
+        std::string name = e.path().filename().string();
+        if (name.size() <= prefix.size() + suffix.size() || name.compare(0, prefix.size(), prefix) != 0 ||
+            name.compare(name.size() - suffix.size(), suffix.size(), suffix) != 0)
+            continue;
+        long long n;
+        std::string digits = name.substr(prefix.size(), name.size() - prefix.size() - suffix.size());
+        if (!parseInteger(digits, n) || !std::all_of(digits.begin(), digits.end(), [](unsigned char ch) { return std::isdigit(ch); })) continue;
+        out.push_back({n, e.path()});
+    }
+    std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.number < b.number; });
+    return out;
+}
+
+// All the numbers of a small text file, which must hold exactly `count` of them (a 4x4 pose, a 3x3 K).
+std::vector<double> readNumbers(const fs::path& file, size_t count, const std::string& what) {
+    std::vector<double> out;
+    for (const auto& l : readDataLines(file))
+        for (const auto& tok : l.tokens) {
+            double v;
+            if (!parseNumber(tok, v)) throw Error(at(file, l.number) + ": '" + tok + "' is not a number");
+            if (out.size() == count)
+                throw Error(at(file, l.number) + ": more than " + std::to_string(count) + " numbers; expected " +
+                            std::to_string(count) + " (" + what + ")");
+            out.push_back(v);
+        }
+    if (out.size() != count)
+        throw Error(file.string() + ": found " + std::to_string(out.size()) + " numbers; expected " +
+                    std::to_string(count) + " (" + what + ")");
+    return out;
+}
+
+Layout readSevenScenes(const fs::path& folder, const std::vector<SevenScenesFrame>& images) {
+    Layout layout;
+    layout.kind = DatasetKind::SevenScenes;
+    layout.depthScale = 1000.0;
+    layout.invalidRaw = 65535;  // the Kinect's "no reading" marker in 7-Scenes, besides 0
+    layout.intrinsics = {585.0f, 585.0f, 320.0f, 240.0f, 0, 0};
+
+    // Calibration may sit beside the frames or, for a seq-XX folder, in the scene folder above it.
+    for (const fs::path& dir : {folder, folder.parent_path()}) {
+        fs::path kFile = dir / "camera-intrinsics.txt";
+        std::error_code ec;
+        if (!fs::is_regular_file(kFile, ec)) continue;
+        std::vector<double> K = readNumbers(kFile, 9, "a 3x3 camera matrix");
+        for (double v : K)
+            if (!std::isfinite(v)) throw Error(kFile.string() + ": value " + fmt(v) + " is not finite");
+        if (K[0] == 0 || K[4] == 0)
+            throw Error(kFile.string() + ": focal length fx=" + fmt(K[0]) + " fy=" + fmt(K[4]) + " must be non-zero");
+        layout.intrinsics = {float(K[0]), float(K[4]), float(K[2]), float(K[5]), 0, 0};
+        break;
+    }
+
+    for (const auto& img : images) {
+        std::string stem = img.depth.filename().string();
+        stem.resize(stem.size() - std::string(".depth.png").size());
+        fs::path poseFile = folder / (stem + ".pose.txt");
+        std::error_code ec;
+        if (!fs::is_regular_file(poseFile, ec)) {
+            warnSkipped(layout, img.depth.filename().string() + ": no " + poseFile.filename().string() + "; skipped");
+            continue;
+        }
+        std::vector<double> m = readNumbers(poseFile, 16, "a 4x4 camera-to-world matrix");
+        Pose T;
+        for (int r = 0; r < 4; ++r)
+            for (int c = 0; c < 4; ++c) T(r, c) = m[r * 4 + c];
+        validatePose(T, poseFile.string() + " (frame " + std::to_string(img.number) + ")");
+        FrameInfo f;
+        f.timestamp = static_cast<double>(img.number);
+        f.depthPath = img.depth;
+        f.cameraToWorld = T;
+        layout.frames.push_back(std::move(f));
+    }
+    if (layout.frames.empty())
+        throw Error("none of the " + std::to_string(images.size()) + " frame-*.depth.png files in " + folder.string() +
+                    " has a matching frame-*.pose.txt");
+    summariseSkipped(layout, images.size(), "no pose file");
+    return layout;
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Layout detection
+
+// Which layout's files a folder holds; picks the reader, and finds datasets in subfolders for the
+// error message when the user passes a parent folder.
+struct LayoutFiles {
+    bool tumList = false;              // depth.txt or associations.txt
+    std::vector<fs::path> logs;        // *.log trajectories
+    bool depthDir = false;             // depth/ (Redwood)
+    std::vector<SevenScenesFrame> seven;
+    bool redwood() const { return !logs.empty() && depthDir; }
+    bool any() const { return tumList || redwood() || !seven.empty(); }
+};
+
+LayoutFiles scanLayout(const fs::path& dir) {
+    LayoutFiles f;
+    std::error_code ec;
+    f.tumList = fs::is_regular_file(dir / "depth.txt", ec) || fs::is_regular_file(dir / "associations.txt", ec);
+    f.logs = filesWithExtension(dir, ".log");
+    f.depthDir = fs::is_directory(dir / "depth", ec);
+    f.seven = listSevenScenesFrames(dir);
+    return f;
+}
+
+// ---------------------------------------------------------------------------------------------------
+// camera.json: {"fx":..,"fy":..,"cx":..,"cy":..,"depth_scale":..}, every key optional
+
+struct CameraJson {
+    std::optional<double> fx, fy, cx, cy, depthScale;
+    bool hasAllIntrinsics() const { return fx && fy && cx && cy; }
+};
+
+CameraJson readCameraJson(const fs::path& file) {
+    std::ifstream in(file);
+    if (!in) throw Error("cannot open " + file.string());
+    nlohmann::json j;
+    try {
+        j = nlohmann::json::parse(in);
+    } catch (const nlohmann::json::exception& e) {
+        throw Error(file.string() + ": not valid JSON: " + e.what());
+    }
+    if (!j.is_object()) throw Error(file.string() + ": expected a JSON object with fx, fy, cx, cy, depth_scale");
+    auto get = [&](const char* key) -> std::optional<double> {
+        auto it = j.find(key);
+        if (it == j.end()) return std::nullopt;
+        if (!it->is_number())
+            throw Error(file.string() + ": \"" + key + "\" is " + it->dump() + "; expected a number");
+        double v = it->get<double>();
+        if (!std::isfinite(v)) throw Error(file.string() + ": \"" + key + "\" = " + fmt(v) + " is not finite");
+        return v;
+    };
+    CameraJson c{get("fx"), get("fy"), get("cx"), get("cy"), get("depth_scale")};
+    if ((c.fx && *c.fx == 0) || (c.fy && *c.fy == 0))
+        throw Error(file.string() + ": focal length " + std::string(c.fx && *c.fx == 0 ? "\"fx\"" : "\"fy\"") +
+                    " = 0; it must be non-zero");
+    if (c.depthScale && *c.depthScale <= 0)
+        throw Error(file.string() + ": \"depth_scale\" = " + fmt(*c.depthScale) + "; it must be positive");
+    return c;
+}
+
+void checkIntrinsics(const Intrinsics& k, const std::string& source) {
+    auto check = [&](const char* name, float v, bool nonZero) {
+        if (!std::isfinite(v)) throw Error(source + ": " + name + " = " + fmt(v) + " is not finite");
+        if (nonZero && v == 0) throw Error(source + ": " + name + " = 0; it must be non-zero");
+    };
+    check("fx", k.fx, true);
+    check("fy", k.fy, true);
+    check("cx", k.cx, false);
+    check("cy", k.cy, false);
+}
+
+}  // namespace
+
+// =====================================================================================================
+
+std::string toString(DatasetKind kind) {
+    switch (kind) {
+        case DatasetKind::TUM: return "TUM RGB-D";
+        case DatasetKind::ICLNUIM: return "ICL-NUIM";
+        case DatasetKind::Redwood: return "Redwood";
+        case DatasetKind::SevenScenes: return "7-Scenes";
+    }
+    return "unknown";
+}
+
+Intrinsics parseIntrinsics(const std::string& text) {
+    std::vector<std::string> parts;
+    std::string cur;
+    for (char ch : text) {
+        if (ch == ',') {
+            parts.push_back(cur);
+            cur.clear();
+        } else if (!std::isspace(static_cast<unsigned char>(ch))) {
+            cur += ch;
+        }
+    }
+    parts.push_back(cur);
+    if (parts.size() != 4)
+        throw Error("intrinsics '" + text + "': expected four comma-separated numbers fx,fy,cx,cy, got " +
+                    std::to_string(parts.size()));
+    static const char* names[] = {"fx", "fy", "cx", "cy"};
+    double v[4];
+    for (int i = 0; i < 4; ++i) {
+        if (!parseNumber(parts[i], v[i]))
+            throw Error("intrinsics '" + text + "': " + names[i] + " '" + parts[i] + "' is not a number");
+        if (!std::isfinite(v[i]))
+            throw Error("intrinsics '" + text + "': " + names[i] + " '" + parts[i] + "' is not finite");
+    }
+    Intrinsics k;
+    k.fx = float(v[0]);
+    k.fy = float(v[1]);
+    k.cx = float(v[2]);
+    k.cy = float(v[3]);
+    checkIntrinsics(k, "intrinsics '" + text + "'");
+    return k;
+}
+
+void validatePose(const Pose& pose, const std::string& where) {
+    if (!pose.allFinite()) throw Error(where + ": pose has non-finite entries");
+    Eigen::RowVector4d bottom = pose.row(3);
+    // Files write the last row as literal 0 0 0 1; allow only print rounding.
+    if ((bottom - Eigen::RowVector4d(0, 0, 0, 1)).cwiseAbs().maxCoeff() > 1e-6)
+        throw Error(where + ": pose bottom row is " + fmt(bottom[0]) + " " + fmt(bottom[1]) + " " + fmt(bottom[2]) +
+                    " " + fmt(bottom[3]) + "; expected 0 0 0 1");
+    Eigen::Matrix3d R = pose.topLeftCorner<3, 3>();
+    double err = (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+    if (err > 1e-3)
+        throw Error(where + ": pose rotation is not orthonormal (max |R^T R - I| = " + fmt(err) + ")");
+    // Orthonormal leaves det = +1 (rotation) or -1 (a mirror, e.g. a flipped axis convention).
+    if (R.determinant() < 0) throw Error(where + ": pose rotation has determinant -1 (a reflection, not a rotation)");
+}
+
+std::unique_ptr<Dataset> Dataset::open(const fs::path& folderIn, const DatasetOptions& options) {
+    // Options first: a bad command-line value is reported before any file is touched.
+    if (options.depthScale && !(std::isfinite(*options.depthScale) && *options.depthScale > 0))
+        throw Error("depth scale " + fmt(*options.depthScale) + " must be a positive finite number");
+    if (!(std::isfinite(options.maxDepth) && options.maxDepth >= 0))
+        throw Error("max depth " + fmt(options.maxDepth) + " must be a finite number >= 0 (0 = no limit)");
+    if (options.intrinsics) checkIntrinsics(*options.intrinsics, "--intrinsics");
+
+    std::error_code ec;
+    if (!fs::exists(folderIn, ec)) throw Error("dataset folder " + folderIn.string() + " does not exist");
+    if (!fs::is_directory(folderIn, ec)) throw Error("dataset path " + folderIn.string() + " is not a folder");
+    // Canonical so that "seq/", "." or a symlink still give the real folder name, which carries the
+    // sequence name that selects TUM/ICL intrinsics.
+    fs::path folder = fs::weakly_canonical(fs::absolute(folderIn), ec);
+    if (ec) folder = fs::absolute(folderIn).lexically_normal();
+    std::string folderName = lower(folder.filename().string());
+
+    // --- detect the layout ---
+    Layout layout;
+    LayoutFiles files = scanLayout(folder);
+    if (files.tumList) {
+        layout = readTum(folder, folderName);
+    } else if (files.redwood()) {
+        if (files.logs.size() > 1) {
+            std::string names;
+            for (const auto& l : files.logs) names.append(names.empty() ? "" : " ").append(l.filename().string());
+            throw Error("Redwood layout in " + folder.string() + ": several .log trajectories (" + names +
+                        "); keep one");
+        }
+        layout = readRedwood(folder, files.logs.front());
+    } else if (!files.seven.empty()) {
+        layout = readSevenScenes(folder, files.seven);
+    } else {
+        const std::string lookedFor =
+            "looked for: depth.txt or associations.txt with groundtruth.txt (TUM RGB-D, ICL-NUIM), "
+            "a *.log trajectory with a depth/ folder of PNGs (Redwood), "
+            "frame-NNNNNN.depth.png with frame-NNNNNN.pose.txt (7-Scenes)";
+        // A parent folder (a 7-Scenes scene with seq-XX folders, a folder of sequences) is a common
+        // mistake; which sequence to fuse is the user's choice, so name the candidates instead of guessing.
+        std::vector<std::string> subs;
+        for (const auto& e : fs::directory_iterator(folder, ec))
+            if (e.is_directory(ec) && scanLayout(e.path()).any()) subs.push_back(e.path().filename().string());
+        std::sort(subs.begin(), subs.end(), naturalLess);
+        if (!subs.empty()) {
+            std::string list;
+            for (const auto& n : subs) list.append(list.empty() ? "" : ", ").append(n);
+            throw Error("no dataset directly in " + folder.string() + ", but its subfolders " + list +
+                        " hold one each; pass one of them, e.g. " + (folder / subs.front()).string() + " (" +
+                        lookedFor + ")");
+        }
+        throw Error("no recognised dataset layout in " + folder.string() + "; " + lookedFor);
+    }
+
+    std::unique_ptr<Dataset> ds(new Dataset());
+    ds->kind_ = layout.kind;
+    ds->folder_ = folder;
+    ds->invalidRaw_ = layout.invalidRaw;
+    ds->maxDepth_ = options.maxDepth;
+    ds->warnings_ = std::move(layout.warnings);
+    ds->skippedFrames_ = layout.skipped;
+
+    // --- calibration: DatasetOptions > camera.json > layout default ---
+    Intrinsics k = layout.intrinsics;
+    double scale = layout.depthScale;
+    bool guessed = !layout.intrinsicsWarning.empty();
+    fs::path cameraJson = folder / "camera.json";
+    if (fs::is_regular_file(cameraJson, ec)) {
+        CameraJson c = readCameraJson(cameraJson);
+        if (c.fx) k.fx = float(*c.fx);
+        if (c.fy) k.fy = float(*c.fy);
+        if (c.cx) k.cx = float(*c.cx);
+        if (c.cy) k.cy = float(*c.cy);
+        if (c.depthScale) scale = *c.depthScale;
+        if (c.hasAllIntrinsics()) guessed = false;
+    }
+    if (options.intrinsics) {
+        k.fx = options.intrinsics->fx;
+        k.fy = options.intrinsics->fy;
+        k.cx = options.intrinsics->cx;
+        k.cy = options.intrinsics->cy;
+        guessed = false;
+    }
+    if (options.depthScale) scale = *options.depthScale;
+    if (guessed) ds->warnings_.push_back(layout.intrinsicsWarning);
+    ds->depthScale_ = scale;
+
+    // --- frames ---
+    if (options.maxFrames > 0 && layout.frames.size() > options.maxFrames) layout.frames.resize(options.maxFrames);
+    for (size_t i = 0; i < layout.frames.size(); ++i) {
+        layout.frames[i].index = i;
+        // A listed file that is missing fails now rather than minutes into a reconstruction.
+        if (!fs::is_regular_file(layout.frames[i].depthPath, ec))
+            throw Error("depth image " + layout.frames[i].depthPath.string() + " (frame " + std::to_string(i) +
+                        ") does not exist");
+    }
+    ds->frames_ = std::move(layout.frames);
+
+    // The image size comes from frame 0; loadDepth holds every other frame to it.
+    cv::Mat first = readRawDepth(ds->frames_.front().depthPath);
+    k.width = first.cols;
+    k.height = first.rows;
+    ds->intrinsics_ = k;
+    return ds;
+}
+
+const FrameInfo& Dataset::frame(size_t i) const {
+    if (i >= frames_.size())
+        throw Error("frame " + std::to_string(i) + " out of range: the dataset " + folder_.string() + " has " +
+                    std::to_string(frames_.size()) + " frames");
+    return frames_[i];
+}
+
+DepthImage Dataset::loadDepth(size_t i) const {
+    const FrameInfo& f = frame(i);
+    cv::Mat raw = readRawDepth(f.depthPath);
+    if (raw.cols != intrinsics_.width || raw.rows != intrinsics_.height)
+        throw Error("depth image " + f.depthPath.string() + " is " + std::to_string(raw.cols) + "x" +
+                    std::to_string(raw.rows) + " but frame 0 (" + frames_.front().depthPath.filename().string() +
+                    ") is " + std::to_string(intrinsics_.width) + "x" + std::to_string(intrinsics_.height));
+
+    DepthImage out;
+    out.width = raw.cols;
+    out.height = raw.rows;
+    out.meters.resize(static_cast<size_t>(raw.cols) * raw.rows);
+    const uint16_t invalid = invalidRaw_.value_or(0);
+    for (int y = 0; y < raw.rows; ++y) {
+        const uint16_t* row = raw.ptr<uint16_t>(y);
+        float* dst = out.meters.data() + static_cast<size_t>(y) * raw.cols;
+        for (int x = 0; x < raw.cols; ++x) {
+            uint16_t v = row[x];
+            float m = (v == 0 || v == invalid) ? 0.0f : static_cast<float>(v / depthScale_);
+            if (maxDepth_ > 0 && m > maxDepth_) m = 0.0f;
+            dst[x] = m;
+        }
+    }
+    return out;
+}
+
+}  // namespace vkmesh

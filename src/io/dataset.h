@@ -1,0 +1,93 @@
+// Depth-sequence input: a user hands vkmesh a folder, Dataset::open recognises its layout and yields
+// depth frames in metres with camera-to-world poses and pinhole intrinsics.
+//
+// Layouts (detected in this order):
+//   TUM RGB-D     depth.txt (or, without it, associations.txt) + groundtruth.txt; depth PNG uint16 / 5000.
+//   ICL-NUIM      the same files in the TUM-compatible release; recognised by "icl" in the folder name or by
+//                 timestamps that are small integers (frame indices). fy is negative (-480) with its poses.
+//   Redwood       a *.log trajectory (Zhou-Koltun format) + depth/*.png in millimetres.
+//   7-Scenes      frame-NNNNNN.depth.png (mm, 0 and 65535 invalid) + frame-NNNNNN.pose.txt.
+// Any layout may carry a camera.json ({"fx","fy","cx","cy","depth_scale"}, all optional).
+// Precedence of calibration values: DatasetOptions > camera.json > the layout's default.
+#pragma once
+
+#include "core/types.h"
+
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace vkmesh {
+
+enum class DatasetKind { TUM, ICLNUIM, Redwood, SevenScenes };
+std::string toString(DatasetKind kind);
+
+struct DatasetOptions {
+    std::optional<Intrinsics> intrinsics;  // --intrinsics fx,fy,cx,cy override (width/height come from the images)
+    std::optional<double> depthScale;      // --depth-scale: raw uint16 units per metre (5000 TUM, 1000 mm)
+    float maxDepth = 0;                    // --max-depth in metres; 0 = no limit; deeper samples become 0
+    size_t maxFrames = 0;                  // --frames N: keep the first N frames that have a pose; 0 = all
+};
+
+struct FrameInfo {
+    size_t index = 0;          // position in the Dataset (frame(i).index == i)
+    double timestamp = 0;      // seconds (TUM), frame index (ICL-NUIM), frame number (Redwood, 7-Scenes)
+    std::filesystem::path depthPath;  // absolute or relative to the working directory, ready to open
+    Pose cameraToWorld = Pose::Identity();
+};
+
+class Dataset {
+public:
+    // Detects the layout of `folder`, reads its index and trajectory files, associates depth frames with
+    // poses and reads frame 0's PNG for the image size. Throws vkmesh::Error (naming the file, line or
+    // value at fault) on anything it cannot use; frames without a pose are skipped and reported in
+    // warnings() instead, unless no frame has one.
+    static std::unique_ptr<Dataset> open(const std::filesystem::path& folder, const DatasetOptions& options = {});
+
+    DatasetKind kind() const { return kind_; }
+    const std::filesystem::path& folder() const { return folder_; }
+    const Intrinsics& intrinsics() const { return intrinsics_; }
+    double depthScale() const { return depthScale_; }
+    float maxDepth() const { return maxDepth_; }
+
+    size_t size() const { return frames_.size(); }
+    const FrameInfo& frame(size_t i) const;
+
+    // Human-readable notes from open(): skipped frames and why, fallbacks to default intrinsics, duplicates.
+    const std::vector<std::string>& warnings() const { return warnings_; }
+    // How many listed depth frames open() dropped: no pose near enough, or a duplicated timestamp.
+    size_t skippedFrames() const { return skippedFrames_; }
+
+    // Reads frame i's depth in metres (0 = invalid; samples beyond maxDepth are set to 0). An all-zero image
+    // is returned as is. Const and stateless, so frames may be loaded from several threads at once. Throws vkmesh::Error naming the file if it is missing, unreadable, not a 16-bit
+    // single-channel image, or not the size of frame 0.
+    DepthImage loadDepth(size_t i) const;
+
+private:
+    Dataset() = default;
+
+    DatasetKind kind_ = DatasetKind::TUM;
+    std::filesystem::path folder_;
+    Intrinsics intrinsics_;
+    double depthScale_ = 5000.0;
+    float maxDepth_ = 0;
+    std::optional<uint16_t> invalidRaw_;  // a raw value that also means "no measurement" (7-Scenes: 65535)
+    std::vector<FrameInfo> frames_;
+    std::vector<std::string> warnings_;
+    size_t skippedFrames_ = 0;
+};
+
+// Parses "fx,fy,cx,cy" (as given to --intrinsics); width and height stay 0. Throws Error naming the bad
+// value: not four numbers, a non-number, non-finite values, or fx/fy equal to 0.
+Intrinsics parseIntrinsics(const std::string& text);
+
+// Checks that `pose` is a rigid camera-to-world transform: finite, rotation orthonormal within 1e-3
+// (max |R^T R - I|), determinant +1 (not a reflection), bottom row 0 0 0 1. Throws Error starting with
+// `where` (a file and line, or a frame) otherwise.
+void validatePose(const Pose& pose, const std::string& where);
+
+}  // namespace vkmesh

@@ -1,0 +1,786 @@
+// Dataset input: layout detection, association, poses, depth scaling, calibration precedence and the
+// error messages for bad input, on tiny fixtures written here and on the shared real sequences.
+#include "io/dataset.h"
+#include "test_support.h"
+
+#include <Eigen/Geometry>
+#include <gtest/gtest.h>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <functional>
+#include <iomanip>
+#include <limits>
+#include <map>
+#include <sstream>
+
+namespace fs = std::filesystem;
+using namespace vkmesh;
+
+namespace {
+
+constexpr int W = 8, H = 6;
+
+void writeText(const fs::path& file, const std::string& text) {
+    fs::create_directories(file.parent_path());
+    std::ofstream(file) << text;
+}
+
+void writeDepth(const fs::path& file, const std::function<uint16_t(int, int)>& value, int w = W, int h = H) {
+    fs::create_directories(file.parent_path());
+    cv::Mat m(h, w, CV_16UC1);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) m.at<uint16_t>(y, x) = value(x, y);
+    ASSERT_TRUE(cv::imwrite(file.string(), m)) << file;
+}
+
+// A raw depth ramp that differs per frame, so a test can tell frames apart.
+uint16_t ramp(int frame, int x, int y) { return static_cast<uint16_t>(1000 + 100 * frame + 10 * x + y); }
+
+// The error message of `f`, or a failure if it does not throw vkmesh::Error.
+std::string errorOf(const std::function<void()>& f) {
+    try {
+        f();
+    } catch (const Error& e) {
+        return e.what();
+    } catch (const std::exception& e) {
+        ADD_FAILURE() << "threw a non-vkmesh exception: " << e.what();
+        return e.what();
+    }
+    ADD_FAILURE() << "did not throw";
+    return {};
+}
+
+bool anyContains(const std::vector<std::string>& lines, const std::string& needle) {
+    return std::any_of(lines.begin(), lines.end(), [&](const std::string& l) { return l.find(needle) != std::string::npos; });
+}
+
+std::string joinLines(const std::vector<std::string>& lines) {
+    std::string s;
+    for (const auto& l : lines) s += l + "\n";
+    return s;
+}
+
+// The pose the TUM fixture's groundtruth holds at time t: a rotation growing with t about a fixed
+// oblique axis, and a translation that also grows with t.
+Pose tumPoseAt(double t) {
+    double s = t - 100.0;
+    Pose T = Pose::Identity();
+    T.topLeftCorner<3, 3>() = Eigen::AngleAxisd(2.0 * s, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+    T.topRightCorner<3, 1>() = Eigen::Vector3d(s, 2 * s, 0.5);
+    return T;
+}
+
+std::string gtLine(double t, const Pose& T) {
+    Eigen::Quaterniond q(Eigen::Matrix3d(T.topLeftCorner<3, 3>()));
+    std::ostringstream os;
+    os << std::fixed << std::setprecision(4) << t << std::setprecision(9) << " " << T(0, 3) << " " << T(1, 3) << " "
+       << T(2, 3) << " " << q.x() << " " << q.y() << " " << q.z() << " " << q.w() << "\n";
+    return os.str();
+}
+
+// TUM fixture: six depth frames 4 ms after a 100 Hz groundtruth tick, except frame 3 (t = 100.30),
+// whose groundtruth ticks within 30 ms were removed: it must be skipped.
+struct TumFixture {
+    fs::path dir;
+    std::vector<double> depthTimes{100.004, 100.104, 100.204, 100.300, 100.404, 100.504};
+};
+
+TumFixture makeTum(const std::string& name = "rgbd_dataset_freiburg1_xyz") {
+    TumFixture f;
+    f.dir = test::makeTempDir("tum") / name;
+    std::string depthTxt = "# depth maps\n# timestamp filename\n";
+    for (size_t i = 0; i < f.depthTimes.size(); ++i) {
+        std::ostringstream name;
+        name << std::fixed << std::setprecision(6) << f.depthTimes[i];
+        depthTxt += name.str() + " depth/" + name.str() + ".png\n";
+        writeDepth(f.dir / "depth" / (name.str() + ".png"), [&](int x, int y) { return ramp(int(i), x, y); });
+    }
+    writeText(f.dir / "depth.txt", depthTxt);
+    std::string gt = "# ground truth trajectory\n# timestamp tx ty tz qx qy qz qw\n";
+    for (int k = -5; k <= 60; ++k) {
+        double t = 100.0 + k * 0.01;
+        if (std::abs(t - 100.30) < 0.025) continue;  // the gap: nearest remaining ticks are 30 ms away
+        gt += gtLine(t, tumPoseAt(t));
+    }
+    writeText(f.dir / "groundtruth.txt", gt);
+    return f;
+}
+
+void expectPoseNear(const Pose& a, const Pose& b, double tol) {
+    EXPECT_LT((a - b).cwiseAbs().maxCoeff(), tol) << "got\n" << a << "\nexpected\n" << b;
+}
+
+}  // namespace
+
+// ------------------------------------------------------------------------------------------ TUM
+
+TEST(DatasetTum, DetectsAssociatesAndSkipsFrameWithoutPose) {
+    TumFixture f = makeTum();
+    auto ds = Dataset::open(f.dir);
+    EXPECT_EQ(ds->kind(), DatasetKind::TUM);
+    EXPECT_EQ(toString(ds->kind()), "TUM RGB-D");
+    ASSERT_EQ(ds->size(), 5u);
+    EXPECT_EQ(ds->skippedFrames(), 1u);
+    // The skipped frame is named in a warning, with its distance to the nearest pose.
+    EXPECT_TRUE(anyContains(ds->warnings(), "100.300000.png")) << joinLines(ds->warnings());
+    EXPECT_TRUE(anyContains(ds->warnings(), "30.0 ms")) << joinLines(ds->warnings());
+    EXPECT_TRUE(anyContains(ds->warnings(), "depth.txt:6")) << joinLines(ds->warnings());
+    std::vector<double> kept{100.004, 100.104, 100.204, 100.404, 100.504};
+    for (size_t i = 0; i < ds->size(); ++i) {
+        EXPECT_EQ(ds->frame(i).index, i);
+        EXPECT_DOUBLE_EQ(ds->frame(i).timestamp, kept[i]);
+        // Nearest tick is 4 ms earlier; the file rounds the pose to 9 decimals.
+        expectPoseNear(ds->frame(i).cameraToWorld, tumPoseAt(kept[i] - 0.004), 1e-6);
+        validatePose(ds->frame(i).cameraToWorld, "frame");
+    }
+    EXPECT_FLOAT_EQ(ds->intrinsics().fx, 517.3f);
+    EXPECT_FLOAT_EQ(ds->intrinsics().fy, 516.5f);
+    EXPECT_FLOAT_EQ(ds->intrinsics().cx, 318.6f);
+    EXPECT_FLOAT_EQ(ds->intrinsics().cy, 255.3f);
+    EXPECT_EQ(ds->intrinsics().width, W);
+    EXPECT_EQ(ds->intrinsics().height, H);
+    EXPECT_DOUBLE_EQ(ds->depthScale(), 5000.0);
+}
+
+TEST(DatasetTum, DepthIsRawOver5000AndMaxDepthCuts) {
+    TumFixture f = makeTum();
+    auto ds = Dataset::open(f.dir);
+    DepthImage d = ds->loadDepth(3);  // 4th kept frame = file index 4
+    ASSERT_EQ(d.width, W);
+    ASSERT_EQ(d.height, H);
+    ASSERT_EQ(d.meters.size(), size_t(W * H));
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) EXPECT_FLOAT_EQ(d.at(x, y), ramp(4, x, y) / 5000.0f);
+
+    DatasetOptions o;
+    o.maxDepth = ramp(0, 4, 0) / 5000.0f;  // keeps x <= 4 of frame 0
+    auto cut = Dataset::open(f.dir, o);
+    DepthImage c = cut->loadDepth(0);
+    for (int x = 0; x < W; ++x) EXPECT_EQ(c.at(x, 0) == 0.0f, x > 4) << x;
+}
+
+TEST(DatasetTum, QuaternionConversionAgainstKnownRotation) {
+    auto dir = test::makeTempDir("tumq") / "rgbd_dataset_freiburg2_desk";
+    writeDepth(dir / "depth/1.png", [](int, int) { return 5000; });
+    writeDepth(dir / "depth/2.png", [](int, int) { return 5000; });
+    writeText(dir / "depth.txt", "1.0 depth/1.png\n2.0 depth/2.png\n");
+    // 90 degrees about z; line 2 is the same quaternion scaled by 1.5 (must be normalised).
+    writeText(dir / "groundtruth.txt",
+              "1.0 1 2 3 0 0 0.7071067811865476 0.7071067811865476\n"
+              "2.0 0 0 0 0 0 1.0606601717798212 1.0606601717798212\n");
+    auto ds = Dataset::open(dir);
+    ASSERT_EQ(ds->size(), 2u);
+    Pose expected = Pose::Identity();
+    expected.topLeftCorner<3, 3>() << 0, -1, 0, 1, 0, 0, 0, 0, 1;
+    expected.topRightCorner<3, 1>() << 1, 2, 3;
+    expectPoseNear(ds->frame(0).cameraToWorld, expected, 1e-12);
+    expected.topRightCorner<3, 1>().setZero();
+    expectPoseNear(ds->frame(1).cameraToWorld, expected, 1e-12);
+    EXPECT_FLOAT_EQ(ds->intrinsics().fx, 520.9f);  // freiburg2
+}
+
+TEST(DatasetTum, SequenceNamesSelectIntrinsics) {
+    struct Case { std::string name; float fx; bool warns; };
+    for (const Case& c : {Case{"tum_fr1_rpy", 517.3f, false}, Case{"fr2_desk", 520.9f, false},
+                          Case{"rgbd_dataset_freiburg3_office", 535.4f, false}, Case{"my_room", 525.0f, true}}) {
+        TumFixture f = makeTum(c.name);
+        auto ds = Dataset::open(f.dir);
+        EXPECT_EQ(ds->kind(), DatasetKind::TUM) << c.name;
+        EXPECT_FLOAT_EQ(ds->intrinsics().fx, c.fx) << c.name;
+        EXPECT_EQ(anyContains(ds->warnings(), "default intrinsics"), c.warns) << c.name << "\n" << joinLines(ds->warnings());
+    }
+}
+
+TEST(DatasetTum, IntrinsicsPrecedenceOptionsOverCameraJsonOverDefault) {
+    TumFixture f = makeTum();
+    writeText(f.dir / "camera.json", R"({"fx": 600.5, "cy": 100, "depth_scale": 1000})");
+    auto ds = Dataset::open(f.dir);
+    EXPECT_FLOAT_EQ(ds->intrinsics().fx, 600.5f);  // camera.json
+    EXPECT_FLOAT_EQ(ds->intrinsics().fy, 516.5f);  // layout default (freiburg1)
+    EXPECT_FLOAT_EQ(ds->intrinsics().cx, 318.6f);
+    EXPECT_FLOAT_EQ(ds->intrinsics().cy, 100.0f);
+    EXPECT_DOUBLE_EQ(ds->depthScale(), 1000.0);
+    EXPECT_FLOAT_EQ(ds->loadDepth(0).at(0, 0), ramp(0, 0, 0) / 1000.0f);
+
+    DatasetOptions o;
+    o.intrinsics = parseIntrinsics("400,401,300,200");
+    o.depthScale = 2000.0;
+    auto over = Dataset::open(f.dir, o);
+    EXPECT_FLOAT_EQ(over->intrinsics().fx, 400.0f);
+    EXPECT_FLOAT_EQ(over->intrinsics().fy, 401.0f);
+    EXPECT_FLOAT_EQ(over->intrinsics().cx, 300.0f);
+    EXPECT_FLOAT_EQ(over->intrinsics().cy, 200.0f);
+    EXPECT_EQ(over->intrinsics().width, W);  // size still from the images
+    EXPECT_EQ(over->intrinsics().height, H);
+    EXPECT_DOUBLE_EQ(over->depthScale(), 2000.0);
+    EXPECT_FLOAT_EQ(over->loadDepth(0).at(0, 0), ramp(0, 0, 0) / 2000.0f);
+}
+
+TEST(DatasetTum, FullCameraJsonSilencesTheDefaultIntrinsicsWarning) {
+    TumFixture f = makeTum("synthetic_room");
+    writeText(f.dir / "camera.json", R"({"fx": 300, "fy": 300, "cx": 3.5, "cy": 2.5, "depth_scale": 5000})");
+    auto ds = Dataset::open(f.dir);
+    EXPECT_FALSE(anyContains(ds->warnings(), "default intrinsics")) << joinLines(ds->warnings());
+    EXPECT_FLOAT_EQ(ds->intrinsics().cx, 3.5f);
+}
+
+TEST(DatasetTum, UnsortedTimestampsAreSortedAndDuplicatesKeepTheFirst) {
+    auto dir = test::makeTempDir("tumdup") / "fr1_dup";
+    for (int i = 0; i < 4; ++i) writeDepth(dir / "depth" / (std::to_string(i) + ".png"), [&](int x, int y) { return ramp(i, x, y); });
+    // Out of order, and 3.png repeats 1.png's timestamp on a later line.
+    writeText(dir / "depth.txt", "2.0 depth/2.png\n1.0 depth/1.png\n0.0 depth/0.png\n1.0 depth/3.png\n");
+    writeText(dir / "groundtruth.txt",
+              "2.0 2 0 0 0 0 0 1\n0.0 0 0 0 0 0 0 1\n1.0 1 0 0 0 0 0 1\n1.0 9 0 0 0 0 0 1\n");
+    auto ds = Dataset::open(dir);
+    ASSERT_EQ(ds->size(), 3u);
+    for (size_t i = 0; i < 3; ++i) {
+        EXPECT_DOUBLE_EQ(ds->frame(i).timestamp, double(i));
+        EXPECT_EQ(ds->frame(i).depthPath.filename(), std::to_string(i) + ".png");
+        EXPECT_DOUBLE_EQ(ds->frame(i).cameraToWorld(0, 3), double(i));  // not 9: first groundtruth line kept
+    }
+    EXPECT_TRUE(anyContains(ds->warnings(), "depth.txt:4")) << joinLines(ds->warnings());
+    EXPECT_TRUE(anyContains(ds->warnings(), "groundtruth.txt:4")) << joinLines(ds->warnings());
+}
+
+TEST(DatasetTum, MaxFramesKeepsTheFirstN) {
+    TumFixture f = makeTum();
+    DatasetOptions o;
+    o.maxFrames = 2;
+    auto ds = Dataset::open(f.dir, o);
+    ASSERT_EQ(ds->size(), 2u);
+    EXPECT_DOUBLE_EQ(ds->frame(1).timestamp, 100.104);
+}
+
+TEST(DatasetTum, AllZeroDepthIsReturnedNotRejected) {
+    TumFixture f = makeTum();
+    writeDepth(f.dir / "depth/100.104000.png", [](int, int) { return 0; });
+    auto ds = Dataset::open(f.dir);
+    DepthImage d = ds->loadDepth(1);
+    EXPECT_TRUE(std::all_of(d.meters.begin(), d.meters.end(), [](float v) { return v == 0.0f; }));
+}
+
+TEST(DatasetTum, AssociationsTxtIsUsedOnlyWithoutDepthTxt) {
+    TumFixture f = makeTum();
+    // Lists only two frames, rgb first as TUM's associate.py writes it: ignored while depth.txt exists.
+    writeText(f.dir / "associations.txt",
+              "100.004 rgb/a.png 100.004000 depth/100.004000.png\n100.1 rgb/b.png 100.104000 depth/100.104000.png\n");
+    EXPECT_EQ(Dataset::open(f.dir)->size(), 5u);
+    fs::remove(f.dir / "depth.txt");
+    auto ds = Dataset::open(f.dir);
+    EXPECT_EQ(ds->kind(), DatasetKind::TUM);
+    ASSERT_EQ(ds->size(), 2u);
+    EXPECT_EQ(ds->frame(1).depthPath.filename(), "100.104000.png");
+}
+
+TEST(DatasetTum, NoPoseForAnyFrameIsFatal) {
+    TumFixture f = makeTum();
+    writeText(f.dir / "groundtruth.txt", "50.0 0 0 0 0 0 0 1\n51.0 0 0 0 0 0 0 1\n");
+    std::string msg = errorOf([&] { Dataset::open(f.dir); });
+    EXPECT_NE(msg.find("groundtruth.txt"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("depth.txt"), std::string::npos) << msg;
+}
+
+// ------------------------------------------------------------------------------------------ ICL-NUIM
+
+namespace {
+fs::path makeIcl(const std::string& name, const std::vector<int>& depthIds, const std::vector<int>& poseIds) {
+    auto dir = test::makeTempDir("icl") / name;
+    std::string depthTxt, gt;
+    for (int i : depthIds) {
+        depthTxt += std::to_string(i) + " depth/" + std::to_string(i) + ".png\n";
+        writeDepth(dir / "depth" / (std::to_string(i) + ".png"), [&](int x, int y) { return ramp(i, x, y); });
+    }
+    for (int i : poseIds) gt += std::to_string(i) + " " + std::to_string(i) + " 0 -2.5 0 0 0 1\n";
+    writeText(dir / "depth.txt", depthTxt);
+    writeText(dir / "groundtruth.txt", gt);
+    return dir;
+}
+}  // namespace
+
+TEST(DatasetIcl, DetectedByFolderNameWithNegativeFyAndExactAssociation) {
+    // Frame 3 has no pose; poses 2 and 4 are one frame away and must not be taken for it.
+    auto dir = makeIcl("ICL_office_traj1", {0, 1, 2, 3, 4}, {0, 1, 2, 4});
+    auto ds = Dataset::open(dir);
+    EXPECT_EQ(ds->kind(), DatasetKind::ICLNUIM);
+    EXPECT_EQ(toString(ds->kind()), "ICL-NUIM");
+    ASSERT_EQ(ds->size(), 4u);
+    EXPECT_EQ(ds->skippedFrames(), 1u);
+    EXPECT_TRUE(anyContains(ds->warnings(), "3.png")) << joinLines(ds->warnings());
+    EXPECT_FLOAT_EQ(ds->intrinsics().fx, 481.2f);
+    EXPECT_FLOAT_EQ(ds->intrinsics().fy, -480.0f);
+    EXPECT_FLOAT_EQ(ds->intrinsics().cx, 319.5f);
+    EXPECT_FLOAT_EQ(ds->intrinsics().cy, 239.5f);
+    for (size_t i = 0; i < ds->size(); ++i)
+        EXPECT_DOUBLE_EQ(ds->frame(i).cameraToWorld(0, 3), ds->frame(i).timestamp);  // pose i belongs to frame i
+    EXPECT_FLOAT_EQ(ds->loadDepth(3).at(1, 1), ramp(4, 1, 1) / 5000.0f);
+}
+
+TEST(DatasetIcl, DetectedByFrameIndexTimestamps) {
+    auto dir = makeIcl("living_room_traj0_frei_png", {0, 1, 2}, {0, 1, 2});
+    EXPECT_EQ(Dataset::open(dir)->kind(), DatasetKind::ICLNUIM);
+    // "icl" inside a word is no clue, and Unix-time stamps make it TUM.
+    TumFixture f = makeTum("bicycle_shed");
+    EXPECT_EQ(Dataset::open(f.dir)->kind(), DatasetKind::TUM);
+}
+
+// ------------------------------------------------------------------------------------------ Redwood
+
+namespace {
+Pose redwoodPose(int i) {
+    Pose T = Pose::Identity();
+    T.topLeftCorner<3, 3>() = Eigen::AngleAxisd(0.3 * i, Eigen::Vector3d::UnitY()).toRotationMatrix();
+    T.topRightCorner<3, 1>() = Eigen::Vector3d(0.1 * i, -0.2, 1.5);
+    return T;
+}
+
+std::string logBlock(int id, const Pose& T) {
+    std::ostringstream os;
+    os << id << " " << id << " " << id + 1 << "\n" << std::setprecision(17);
+    for (int r = 0; r < 4; ++r) os << T(r, 0) << " " << T(r, 1) << " " << T(r, 2) << " " << T(r, 3) << "\n";
+    return os.str();
+}
+
+fs::path makeRedwood(const std::vector<int>& poseIds, int images = 5) {
+    auto dir = test::makeTempDir("redwood") / "livingroom1";
+    for (int i = 0; i < images; ++i) {
+        char name[32];
+        std::snprintf(name, sizeof name, "%06d.png", i);
+        writeDepth(dir / "depth" / name, [&](int x, int y) { return ramp(i, x, y); });
+    }
+    std::string log;
+    for (int i : poseIds) log += logBlock(i, redwoodPose(i));
+    writeText(dir / "livingroom1-traj.log", log);
+    return dir;
+}
+}  // namespace
+
+TEST(DatasetRedwood, ReadsLogAndMillimetreDepth) {
+    auto dir = makeRedwood({0, 1, 3, 4});  // frame 2 has no pose
+    auto ds = Dataset::open(dir);
+    EXPECT_EQ(ds->kind(), DatasetKind::Redwood);
+    EXPECT_EQ(toString(ds->kind()), "Redwood");
+    ASSERT_EQ(ds->size(), 4u);
+    EXPECT_EQ(ds->skippedFrames(), 1u);
+    EXPECT_TRUE(anyContains(ds->warnings(), "000002.png")) << joinLines(ds->warnings());
+    std::vector<int> ids{0, 1, 3, 4};
+    for (size_t i = 0; i < 4; ++i) {
+        expectPoseNear(ds->frame(i).cameraToWorld, redwoodPose(ids[i]), 1e-12);
+        EXPECT_FLOAT_EQ(ds->loadDepth(i).at(2, 3), ramp(ids[i], 2, 3) / 1000.0f);
+    }
+    EXPECT_DOUBLE_EQ(ds->depthScale(), 1000.0);
+    EXPECT_FLOAT_EQ(ds->intrinsics().fx, 525.0f);
+    EXPECT_FLOAT_EQ(ds->intrinsics().cy, 239.5f);
+}
+
+TEST(DatasetRedwood, MalformedLogNamesFileAndLine) {
+    auto dir = makeRedwood({0, 1});
+    writeText(dir / "livingroom1-traj.log", logBlock(0, redwoodPose(0)) + "1 1 2\n1 0 0 0\n0 1 0\n0 0 1 0\n0 0 0 1\n");
+    std::string msg = errorOf([&] { Dataset::open(dir); });
+    EXPECT_NE(msg.find("livingroom1-traj.log:8"), std::string::npos) << msg;
+
+    writeText(dir / "livingroom1-traj.log", logBlock(0, redwoodPose(0)) + "1 1 2\n1 0 0 0\n");
+    msg = errorOf([&] { Dataset::open(dir); });
+    EXPECT_NE(msg.find("livingroom1-traj.log:6"), std::string::npos) << msg;
+
+    // A scaled rotation is not a rigid pose.
+    Pose bad = redwoodPose(1);
+    bad.topLeftCorner<3, 3>() *= 1.1;
+    writeText(dir / "livingroom1-traj.log", logBlock(0, redwoodPose(0)) + logBlock(1, bad));
+    msg = errorOf([&] { Dataset::open(dir); });
+    EXPECT_NE(msg.find("livingroom1-traj.log:7"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("orthonormal"), std::string::npos) << msg;
+}
+
+// ------------------------------------------------------------------------------------------ 7-Scenes
+
+namespace {
+fs::path makeSevenScenes(fs::path dir, int frames, const std::function<std::string(int)>& poseText) {
+    for (int i = 0; i < frames; ++i) {
+        char stem[32];
+        std::snprintf(stem, sizeof stem, "frame-%06d", i);
+        // Column x = 0 holds the "no reading" marker 65535, x = 1 holds 0, the rest i+1.5 m (mm).
+        writeDepth(dir / (std::string(stem) + ".depth.png"), [&](int x, int) -> uint16_t {
+            return x == 0 ? 65535 : x == 1 ? 0 : static_cast<uint16_t>(1500 + 1000 * i);
+        });
+        std::string pose = poseText(i);
+        if (!pose.empty()) writeText(dir / (std::string(stem) + ".pose.txt"), pose);
+    }
+    return dir;
+}
+
+std::string matrixText(const Pose& T) {
+    std::ostringstream os;
+    os << std::setprecision(9) << std::scientific;
+    for (int r = 0; r < 4; ++r) os << T(r, 0) << "\t" << T(r, 1) << "\t" << T(r, 2) << "\t" << T(r, 3) << "\t\n";
+    return os.str();
+}
+}  // namespace
+
+TEST(DatasetSevenScenes, ReadsFramesPosesAndInvalidMarkers) {
+    auto dir = makeSevenScenes(test::makeTempDir("7s") / "chess" / "seq-01", 5,
+                               [](int i) { return i == 2 ? std::string() : matrixText(redwoodPose(i)); });
+    auto ds = Dataset::open(dir);
+    EXPECT_EQ(ds->kind(), DatasetKind::SevenScenes);
+    EXPECT_EQ(toString(ds->kind()), "7-Scenes");
+    ASSERT_EQ(ds->size(), 4u);
+    EXPECT_TRUE(anyContains(ds->warnings(), "frame-000002")) << joinLines(ds->warnings());
+    EXPECT_FLOAT_EQ(ds->intrinsics().fx, 585.0f);
+    EXPECT_FLOAT_EQ(ds->intrinsics().cx, 320.0f);
+    EXPECT_FLOAT_EQ(ds->intrinsics().cy, 240.0f);
+    expectPoseNear(ds->frame(2).cameraToWorld, redwoodPose(3), 1e-8);
+    EXPECT_DOUBLE_EQ(ds->frame(2).timestamp, 3.0);
+    DepthImage d = ds->loadDepth(0);
+    for (int y = 0; y < H; ++y) {
+        EXPECT_EQ(d.at(0, y), 0.0f);  // 65535 = invalid
+        EXPECT_EQ(d.at(1, y), 0.0f);
+        EXPECT_FLOAT_EQ(d.at(5, y), 1.5f);
+    }
+    DatasetOptions o;
+    o.maxDepth = 2.0f;
+    auto cut = Dataset::open(dir, o);
+    EXPECT_FLOAT_EQ(cut->loadDepth(0).at(5, 0), 1.5f);
+    EXPECT_EQ(cut->loadDepth(1).at(5, 0), 0.0f);  // 2.5 m > 2 m
+}
+
+TEST(DatasetSevenScenes, CameraIntrinsicsFileAndSceneFolder) {
+    auto scene = test::makeTempDir("7sk") / "heads";
+    auto seq = makeSevenScenes(scene / "seq-02", 3, [](int i) { return matrixText(redwoodPose(i)); });
+    writeText(scene / "camera-intrinsics.txt", "532.5 0 320.5\n0 531.0 240.5\n0 0 1\n");
+    auto ds = Dataset::open(seq);
+    EXPECT_FLOAT_EQ(ds->intrinsics().fx, 532.5f);
+    EXPECT_FLOAT_EQ(ds->intrinsics().fy, 531.0f);
+    EXPECT_FLOAT_EQ(ds->intrinsics().cx, 320.5f);
+    EXPECT_FLOAT_EQ(ds->intrinsics().cy, 240.5f);
+    // camera.json beats the layout's file; options beat camera.json.
+    writeText(seq / "camera.json", R"({"fy": 500})");
+    EXPECT_FLOAT_EQ(Dataset::open(seq)->intrinsics().fy, 500.0f);
+    EXPECT_FLOAT_EQ(Dataset::open(seq)->intrinsics().fx, 532.5f);
+
+    // The scene folder itself holds sequences, not frames: the error says which to pass.
+    std::string msg = errorOf([&] { Dataset::open(scene); });
+    EXPECT_NE(msg.find("seq-02"), std::string::npos) << msg;
+
+    writeText(scene / "camera-intrinsics.txt", "532.5 0 320.5\n0 531.0 240.5\n");
+    msg = errorOf([&] { Dataset::open(seq); });
+    EXPECT_NE(msg.find("camera-intrinsics.txt"), std::string::npos) << msg;
+}
+
+TEST(DatasetSevenScenes, BadPosesNameTheFile) {
+    auto base = test::makeTempDir("7sbad");
+    struct Case { std::string name, text, needle; };
+    Pose mirror = Pose::Identity();
+    mirror(2, 2) = -1;
+    Pose bottom = Pose::Identity();
+    bottom(3, 0) = 0.5;
+    std::vector<Case> cases{
+        {"nan", "nan 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n", "non-finite"},
+        {"skew", "1 0.1 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n", "orthonormal"},
+        {"mirror", matrixText(mirror), "determinant"},
+        {"bottom", matrixText(bottom), "bottom row"},
+        {"short", "1 0 0 0\n0 1 0 0\n0 0 1 0\n", "16"},
+        {"word", "1 0 0 0\n0 1 x 0\n0 0 1 0\n0 0 0 1\n", ":2"},
+    };
+    for (const Case& c : cases) {
+        auto dir = makeSevenScenes(base / c.name, 2,
+                                   [&](int i) { return i == 1 ? c.text : matrixText(Pose::Identity()); });
+        std::string msg = errorOf([&] { Dataset::open(dir); });
+        EXPECT_NE(msg.find("frame-000001.pose.txt"), std::string::npos) << c.name << ": " << msg;
+        EXPECT_NE(msg.find(c.needle), std::string::npos) << c.name << ": " << msg;
+    }
+}
+
+// ------------------------------------------------------------------------------------------ bad input
+
+TEST(DatasetErrors, MissingFolderAndUnknownLayout) {
+    auto base = test::makeTempDir("err");
+    std::string msg = errorOf([&] { Dataset::open(base / "nope"); });
+    EXPECT_NE(msg.find((base / "nope").string()), std::string::npos) << msg;
+
+    writeText(base / "file.txt", "x");
+    msg = errorOf([&] { Dataset::open(base / "file.txt"); });
+    EXPECT_NE(msg.find("file.txt"), std::string::npos) << msg;
+
+    fs::create_directories(base / "empty");
+    writeText(base / "empty" / "groundtruth.txt", "1 0 0 0 0 0 0 1\n");
+    msg = errorOf([&] { Dataset::open(base / "empty"); });
+    for (const char* looked : {"empty", "depth.txt", "groundtruth.txt", ".log", "frame-NNNNNN.depth.png"})
+        EXPECT_NE(msg.find(looked), std::string::npos) << looked << ": " << msg;
+}
+
+TEST(DatasetErrors, DepthTxtWithoutGroundtruth) {
+    TumFixture f = makeTum();
+    fs::remove(f.dir / "groundtruth.txt");
+    std::string msg = errorOf([&] { Dataset::open(f.dir); });
+    EXPECT_NE(msg.find("groundtruth.txt"), std::string::npos) << msg;
+}
+
+TEST(DatasetErrors, MalformedIndexLinesNameFileAndLine) {
+    struct Case { std::string file, text, needle; };
+    std::vector<Case> cases{
+        {"depth.txt", "", "depth.txt"},  // no frames at all
+        {"depth.txt", "# c\n100.004000 depth/100.004000.png\n100.104000\n", "depth.txt:3"},
+        {"depth.txt", "100.004000 depth/100.004000.png\nabc depth/x.png\n", "depth.txt:2"},
+        {"depth.txt", "inf depth/100.004000.png\n", "depth.txt:1"},
+        {"groundtruth.txt", "", "groundtruth.txt"},
+        {"groundtruth.txt", "100.0 0 0 0 0 0 0 1\n100.1 0 0 0 0 0 1\n", "groundtruth.txt:2"},
+        {"groundtruth.txt", "100.0 0 0 0 0 0 0 1\n\n100.1 0 nan 0 0 0 0 1\n", "groundtruth.txt:3"},
+        {"groundtruth.txt", "100.0 0 0 0 0 0 0 1\n100.1 0 0 0 0 0 0 0.1\n", "groundtruth.txt:2"},  // |q| = 0.1
+        {"groundtruth.txt", "100.0 0 0 0 0 0 0 1\n100.1 0 0 0 2 2 0 1\n", "groundtruth.txt:2"},  // |q| = 3
+        {"groundtruth.txt", "100.0 0 0 0 0 0 0 1x\n", "1x"},
+    };
+    for (const Case& c : cases) {
+        TumFixture f = makeTum();
+        writeText(f.dir / c.file, c.text);
+        std::string msg = errorOf([&] { Dataset::open(f.dir); });
+        EXPECT_NE(msg.find(c.needle), std::string::npos) << c.file << " '" << c.text << "': " << msg;
+    }
+    // A quaternion rounded in print (norm 0.9) is accepted and normalised; norm 0.3 is a corrupt line.
+    TumFixture f = makeTum();
+    writeText(f.dir / "groundtruth.txt", "100.0 0 0 0 0 0 0 0.9\n100.1 0 0 0 0 0 0 0.9\n");
+    auto ds = Dataset::open(f.dir);
+    expectPoseNear(ds->frame(0).cameraToWorld, Pose::Identity(), 1e-12);
+    writeText(f.dir / "groundtruth.txt", "100.0 0 0 0 0 0 0 1\n100.1 0 0 0 0 0 0 0.3\n");
+    std::string msg = errorOf([&] { Dataset::open(f.dir); });
+    EXPECT_NE(msg.find("groundtruth.txt:2"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("norm"), std::string::npos) << msg;
+}
+
+TEST(DatasetErrors, BadImagesNameTheFile) {
+    // Frame 0 corrupt: reported at open time.
+    {
+        TumFixture f = makeTum();
+        writeText(f.dir / "depth/100.004000.png", "not a png at all");
+        std::string msg = errorOf([&] { Dataset::open(f.dir); });
+        EXPECT_NE(msg.find("100.004000.png"), std::string::npos) << msg;
+    }
+    TumFixture f = makeTum();
+    auto ds = Dataset::open(f.dir);
+    // Truncated PNG (header intact, data cut).
+    {
+        fs::path p = f.dir / "depth/100.104000.png";
+        auto size = fs::file_size(p);
+        fs::resize_file(p, size / 2);
+        std::string msg = errorOf([&] { ds->loadDepth(1); });
+        EXPECT_NE(msg.find("100.104000.png"), std::string::npos) << msg;
+    }
+    // 8-bit grayscale.
+    {
+        cv::Mat m(H, W, CV_8UC1, cv::Scalar(7));
+        cv::imwrite((f.dir / "depth/100.204000.png").string(), m);
+        std::string msg = errorOf([&] { ds->loadDepth(2); });
+        EXPECT_NE(msg.find("100.204000.png"), std::string::npos) << msg;
+        EXPECT_NE(msg.find("8-bit"), std::string::npos) << msg;
+    }
+    // 16-bit but three channels.
+    {
+        cv::Mat m(H, W, CV_16UC3, cv::Scalar(7, 7, 7));
+        cv::imwrite((f.dir / "depth/100.404000.png").string(), m);
+        std::string msg = errorOf([&] { ds->loadDepth(3); });
+        EXPECT_NE(msg.find("100.404000.png"), std::string::npos) << msg;
+        EXPECT_NE(msg.find("3 channels"), std::string::npos) << msg;
+    }
+    // Another size than frame 0.
+    {
+        writeDepth(f.dir / "depth/100.504000.png", [](int, int) { return 1000; }, W + 2, H);
+        std::string msg = errorOf([&] { ds->loadDepth(4); });
+        EXPECT_NE(msg.find("100.504000.png"), std::string::npos) << msg;
+        EXPECT_NE(msg.find("10x6"), std::string::npos) << msg;
+    }
+    // Deleted after open.
+    {
+        fs::remove(f.dir / "depth/100.004000.png");
+        std::string msg = errorOf([&] { ds->loadDepth(0); });
+        EXPECT_NE(msg.find("100.004000.png"), std::string::npos) << msg;
+    }
+    // Out-of-range frame index.
+    std::string msg = errorOf([&] { ds->loadDepth(99); });
+    EXPECT_NE(msg.find("99"), std::string::npos) << msg;
+    // Listed but missing at open time: reported then, not in the middle of a run.
+    msg = errorOf([&] { Dataset::open(f.dir); });
+    EXPECT_NE(msg.find("100.004000.png"), std::string::npos) << msg;
+}
+
+TEST(DatasetErrors, BadOptionsAndCameraJsonNameTheValue) {
+    TumFixture f = makeTum();
+    for (double s : {0.0, -5.0, std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity()}) {
+        DatasetOptions o;
+        o.depthScale = s;
+        std::string msg = errorOf([&] { Dataset::open(f.dir, o); });
+        EXPECT_NE(msg.find("depth scale"), std::string::npos) << msg;
+    }
+    {
+        DatasetOptions o;
+        o.depthScale = -5.0;
+        EXPECT_NE(errorOf([&] { Dataset::open(f.dir, o); }).find("-5"), std::string::npos);
+    }
+    {
+        DatasetOptions o;
+        o.maxDepth = -1.5f;
+        std::string msg = errorOf([&] { Dataset::open(f.dir, o); });
+        EXPECT_NE(msg.find("-1.5"), std::string::npos) << msg;
+    }
+    {
+        DatasetOptions o;
+        o.intrinsics = Intrinsics{0.0f, 500.0f, 1, 1, 0, 0};
+        std::string msg = errorOf([&] { Dataset::open(f.dir, o); });
+        EXPECT_NE(msg.find("fx"), std::string::npos) << msg;
+    }
+    struct Case { std::string json, needle; };
+    for (const Case& c : {Case{"{\"fx\": 500,", "camera.json"}, Case{R"({"fx": "five hundred"})", "fx"},
+                          Case{R"({"fy": 0})", "fy"}, Case{R"({"depth_scale": -1})", "depth_scale"},
+                          Case{"[1, 2]", "camera.json"}}) {
+        writeText(f.dir / "camera.json", c.json);
+        std::string msg = errorOf([&] { Dataset::open(f.dir); });
+        EXPECT_NE(msg.find(c.needle), std::string::npos) << c.json << ": " << msg;
+        EXPECT_NE(msg.find("camera.json"), std::string::npos) << c.json << ": " << msg;
+    }
+}
+
+TEST(ParseIntrinsics, AcceptsFourNumbersAndNamesTheBadValue) {
+    Intrinsics k = parseIntrinsics("481.2, -480, 319.5,239.5");
+    EXPECT_FLOAT_EQ(k.fx, 481.2f);
+    EXPECT_FLOAT_EQ(k.fy, -480.0f);
+    EXPECT_FLOAT_EQ(k.cx, 319.5f);
+    EXPECT_FLOAT_EQ(k.cy, 239.5f);
+    EXPECT_EQ(k.width, 0);
+    EXPECT_NE(errorOf([] { parseIntrinsics("525,525,319.5"); }).find("525,525,319.5"), std::string::npos);
+    EXPECT_NE(errorOf([] { parseIntrinsics("525,abc,319.5,239.5"); }).find("abc"), std::string::npos);
+    EXPECT_NE(errorOf([] { parseIntrinsics("525,0,319.5,239.5"); }).find("fy"), std::string::npos);
+    EXPECT_NE(errorOf([] { parseIntrinsics("nan,525,319.5,239.5"); }).find("nan"), std::string::npos);
+    EXPECT_NE(errorOf([] { parseIntrinsics(""); }).find("fx,fy,cx,cy"), std::string::npos);
+}
+
+TEST(ValidatePose, AcceptsRigidRejectsTheRest) {
+    Pose ok = Pose::Identity();
+    ok.topLeftCorner<3, 3>() = Eigen::AngleAxisd(1.0, Eigen::Vector3d(0.3, -1, 2).normalized()).toRotationMatrix();
+    ok.topRightCorner<3, 1>() << 1, -2, 3;
+    EXPECT_NO_THROW(validatePose(ok, "ok"));
+    Pose nearly = ok;
+    nearly(0, 0) += 2e-4;  // print rounding
+    EXPECT_NO_THROW(validatePose(nearly, "nearly"));
+
+    Pose p = ok;
+    p(1, 3) = std::numeric_limits<double>::infinity();
+    EXPECT_NE(errorOf([&] { validatePose(p, "traj.txt:7"); }).find("traj.txt:7"), std::string::npos);
+    p = ok;
+    p.topLeftCorner<3, 3>() *= 1.01;
+    EXPECT_NE(errorOf([&] { validatePose(p, "frame 3"); }).find("frame 3"), std::string::npos);
+    p = ok;
+    p.col(0) *= -1;  // mirror
+    std::string msg = errorOf([&] { validatePose(p, "frame 4"); });
+    EXPECT_NE(msg.find("determinant"), std::string::npos) << msg;
+    p = ok;
+    p(3, 2) = 1;
+    msg = errorOf([&] { validatePose(p, "frame 5"); });
+    EXPECT_NE(msg.find("bottom row"), std::string::npos) << msg;
+}
+
+// ------------------------------------------------------------------------------------------ real data
+
+namespace {
+// Percentile of the valid (non-zero) samples of a depth image.
+std::pair<float, float> validPercentiles(const DepthImage& d, double lo, double hi, size_t& valid) {
+    std::vector<float> v;
+    for (float m : d.meters)
+        if (m > 0) v.push_back(m);
+    valid = v.size();
+    if (v.empty()) return {0, 0};
+    std::sort(v.begin(), v.end());
+    return {v[size_t(lo * (v.size() - 1))], v[size_t(hi * (v.size() - 1))]};
+}
+
+std::optional<fs::path> realDataset(const std::string& name) {
+    auto root = test::sharedDatasetsDir();
+    if (!root || !fs::is_directory(*root / name)) return std::nullopt;
+    return *root / name;
+}
+}  // namespace
+
+TEST(DatasetReal, TumFr1Rpy) {
+    auto dir = realDataset("tum_fr1_rpy");
+    if (!dir) GTEST_SKIP() << "shared datasets not found at ../shared/datasets (or $VKMESH_DATASETS)";
+    auto ds = Dataset::open(*dir);
+    EXPECT_EQ(ds->kind(), DatasetKind::TUM);
+    // 361 depth frames; 1305031244.881801 falls in a motion-capture gap (README).
+    EXPECT_EQ(ds->size(), 360u);
+    EXPECT_EQ(ds->skippedFrames(), 1u);
+    EXPECT_TRUE(anyContains(ds->warnings(), "depth.txt:235: depth frame 1305031244.881801")) << joinLines(ds->warnings());
+    const Intrinsics& k = ds->intrinsics();
+    EXPECT_FLOAT_EQ(k.fx, 517.3f);
+    EXPECT_FLOAT_EQ(k.fy, 516.5f);
+    EXPECT_FLOAT_EQ(k.cx, 318.6f);
+    EXPECT_FLOAT_EQ(k.cy, 255.3f);
+    EXPECT_EQ(k.width, 640);
+    EXPECT_EQ(k.height, 480);
+    for (size_t i = 0; i < ds->size(); ++i) EXPECT_NO_THROW(validatePose(ds->frame(i).cameraToWorld, "frame"));
+
+    // The derived pairing file (nearest groundtruth line within 20 ms, values copied) must agree with
+    // our association, pose for pose.
+    std::ifstream assoc(*dir / "depth_groundtruth_assoc.txt");
+    std::map<double, Pose> expected;
+    for (std::string line; std::getline(assoc, line);) {
+        if (line.empty() || line[0] == '#') continue;
+        std::istringstream is(line);
+        double t, gtT, tx, ty, tz, qx, qy, qz, qw;
+        std::string file;
+        is >> t >> file >> gtT >> tx >> ty >> tz >> qx >> qy >> qz >> qw;
+        Pose T = Pose::Identity();
+        T.topLeftCorner<3, 3>() = Eigen::Quaterniond(qw, qx, qy, qz).normalized().toRotationMatrix();
+        T.topRightCorner<3, 1>() << tx, ty, tz;
+        expected[t] = T;
+    }
+    ASSERT_EQ(expected.size(), ds->size());
+    for (size_t i = 0; i < ds->size(); ++i) {
+        auto it = expected.find(ds->frame(i).timestamp);
+        ASSERT_NE(it, expected.end()) << std::setprecision(17) << ds->frame(i).timestamp;
+        expectPoseNear(ds->frame(i).cameraToWorld, it->second, 1e-12);
+    }
+
+    for (size_t i : {size_t(0), ds->size() / 2, ds->size() - 1}) {
+        DepthImage d = ds->loadDepth(i);
+        ASSERT_EQ(d.width, 640);
+        size_t valid = 0;
+        auto [p1, p99] = validPercentiles(d, 0.01, 0.99, valid);
+        // README: 20-30 % holes, valid range 0.57-9.8 m over the sequence.
+        EXPECT_GT(valid, d.meters.size() / 2) << i;
+        EXPECT_GE(p1, 0.3f) << i;
+        EXPECT_LE(p99, 6.0f) << i;
+    }
+}
+
+TEST(DatasetReal, IclNuimOfficeTraj0) {
+    auto dir = realDataset("iclnuim_office_traj0");
+    if (!dir) GTEST_SKIP() << "shared datasets not found at ../shared/datasets (or $VKMESH_DATASETS)";
+    auto ds = Dataset::open(*dir);
+    EXPECT_EQ(ds->kind(), DatasetKind::ICLNUIM);
+    EXPECT_EQ(ds->size(), 252u);
+    EXPECT_EQ(ds->skippedFrames(), 0u);
+    const Intrinsics& k = ds->intrinsics();
+    EXPECT_FLOAT_EQ(k.fx, 481.2f);
+    EXPECT_FLOAT_EQ(k.fy, -480.0f);
+    EXPECT_FLOAT_EQ(k.cx, 319.5f);
+    EXPECT_FLOAT_EQ(k.cy, 239.5f);
+    EXPECT_EQ(k.width, 640);
+    EXPECT_EQ(k.height, 480);
+    for (size_t i = 0; i < ds->size(); ++i) {
+        EXPECT_NO_THROW(validatePose(ds->frame(i).cameraToWorld, "frame"));
+        // depth/<i>.png carries pose i
+        EXPECT_EQ(ds->frame(i).depthPath.stem().string(), std::to_string(int(ds->frame(i).timestamp)));
+    }
+    EXPECT_DOUBLE_EQ(ds->frame(0).timestamp, 2.0);
+    EXPECT_NEAR(ds->frame(0).cameraToWorld(2, 3), -2.5, 1e-12);  // first groundtruth line: "2 0.000472546 0.00897074 -2.5 ..."
+    EXPECT_NEAR(ds->frame(0).cameraToWorld(0, 3), 0.000472546, 1e-12);
+
+    for (size_t i : {size_t(0), ds->size() / 2, ds->size() - 1}) {
+        DepthImage d = ds->loadDepth(i);
+        size_t valid = 0;
+        auto [p1, p99] = validPercentiles(d, 0.01, 0.99, valid);
+        EXPECT_EQ(valid, d.meters.size()) << i;  // synthetic: no holes
+        EXPECT_GE(p1, 0.3f) << i;
+        EXPECT_LE(p99, 6.0f) << i;
+    }
+}
