@@ -1,0 +1,29 @@
+#!/usr/bin/env bash
+# Installs the Debian 12 packages vkmesh needs to build, test and run on lavapipe (software Vulkan).
+# Installs only what is missing; uses sudo when not root. Pass --bench to add Open3D for the peer
+# benchmark.
+set -euo pipefail
+
+packages=(
+  cmake g++ make pkg-config
+  libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers vulkan-tools glslang-tools spirv-tools
+  libeigen3-dev libopencv-core-dev libopencv-imgcodecs-dev libcli11-dev nlohmann-json3-dev libgtest-dev
+)
+if [[ "${1:-}" == "--bench" ]]; then
+  packages+=(python3-open3d python3-numpy)
+fi
+
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if (( ${#missing[@]} == 0 )); then
+  exit 0
+fi
+
+sudo=""
+if (( EUID != 0 )); then sudo="sudo"; fi
+echo "vkmesh: installing ${missing[*]}" >&2
+export DEBIAN_FRONTEND=noninteractive
+$sudo apt-get update -q
+$sudo apt-get install -y -q --no-install-recommends "${missing[@]}"

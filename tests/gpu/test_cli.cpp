@@ -1,0 +1,173 @@
+// The vkmesh program end to end: a synthetic sequence in, a mesh and stats out; bad input gives a
+// clear error (exit code != 0) or, for a single bad frame, a warning and the frame skipped.
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+
+#include "io/ply.h"
+#include "test_support.h"
+
+namespace vkmesh {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct CliRun {
+    int exitCode;
+    std::string out, err;
+};
+
+std::string readText(const fs::path& p) {
+    std::ifstream f(p);
+    std::stringstream s;
+    s << f.rdbuf();
+    return s.str();
+}
+
+CliRun runCli(const std::string& args) {
+    static int counter = 0;
+    fs::path dir = test::makeTempDir("cli_run" + std::to_string(counter++));
+    std::string cmd = std::string(VKMESH_CLI) + " " + args + " > " + (dir / "out").string() + " 2> " + (dir / "err").string();
+    int status = std::system(cmd.c_str());
+    CliRun r{WIFEXITED(status) ? WEXITSTATUS(status) : -1, readText(dir / "out"), readText(dir / "err")};
+    fs::remove_all(dir);
+    return r;
+}
+
+// A small synthetic sequence, made once for the whole test program.
+const fs::path& smallSequence() {
+    static fs::path dir = [] {
+        fs::path d = test::makeTempDir("cli_seq");
+        CliRun r = runCli("synth " + d.string() + " --frames 6 --width 160 --height 120");
+        EXPECT_EQ(r.exitCode, 0) << r.err;
+        return d;
+    }();
+    return dir;
+}
+
+fs::path copyOfSmallSequence(const std::string& tag) {
+    fs::path d = test::makeTempDir(tag);
+    fs::copy(smallSequence(), d, fs::copy_options::recursive | fs::copy_options::overwrite_existing);
+    return d;
+}
+
+TEST(Cli, DevicesListsAUsableDevice) {
+    CliRun r = runCli("devices");
+    EXPECT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_NE(r.out.find("0: "), std::string::npos) << r.out;
+}
+
+TEST(Cli, FuseWritesMeshAndStats) {
+    fs::path out = test::makeTempDir("cli_fuse");
+    CliRun r = runCli("fuse " + smallSequence().string() + " -o " + (out / "mesh.ply").string() + " --stats " +
+                   (out / "stats.json").string() + " --voxel 0.04 --validation");
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_EQ(r.err.find("[validation"), std::string::npos) << r.err;
+    Mesh mesh = readPly(out / "mesh.ply");
+    EXPECT_GT(mesh.triangles.size(), 1000u);
+    EXPECT_EQ(mesh.positions.size(), 3 * mesh.triangles.size());   // baseline: no shared vertices
+    auto stats = nlohmann::json::parse(readText(out / "stats.json"));
+    EXPECT_EQ(stats["frames"]["integrated"], 6);
+    EXPECT_EQ(stats["frames"]["skipped"], 0);
+    EXPECT_EQ(stats["mesh"]["triangles"], mesh.triangles.size());
+    EXPECT_GT(stats["blocks"]["in_use"].get<int>(), 0);
+    EXPECT_TRUE(stats["gpu_ms_per_frame"].contains("allocate"));
+    EXPECT_TRUE(stats["gpu_ms_per_frame"]["fuse"].contains("median"));
+    EXPECT_GT(stats["gpu_pool_bytes"]["voxel sdf"].get<size_t>(), 0u);
+    // Every vertex lies in the synthetic room (4 x 3 x 2.5 m around the origin, turned 20 degrees).
+    for (const auto& p : mesh.positions) ASSERT_LT(p.norm(), 4.0f);
+    fs::remove_all(out);
+}
+
+TEST(Cli, ObjOutputByExtension) {
+    fs::path out = test::makeTempDir("cli_obj");
+    CliRun r = runCli("fuse " + smallSequence().string() + " -o " + (out / "mesh.obj").string() + " --frames 2 --voxel 0.05 -q");
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    std::string obj = readText(out / "mesh.obj");
+    EXPECT_NE(obj.find("\nv "), std::string::npos);
+    EXPECT_NE(obj.find("\nf "), std::string::npos);
+    fs::remove_all(out);
+}
+
+TEST(Cli, FramesJsonListsPosesAndIntrinsics) {
+    fs::path out = test::makeTempDir("cli_frames");
+    CliRun r = runCli("frames " + smallSequence().string() + " -o " + (out / "frames.json").string() + " --frames 4");
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    auto j = nlohmann::json::parse(readText(out / "frames.json"));
+    EXPECT_EQ(j["frames"].size(), 4u);
+    EXPECT_EQ(j["intrinsics"]["width"], 160);
+    EXPECT_EQ(j["frames"][0]["camera_to_world"].size(), 16u);
+    EXPECT_TRUE(fs::exists(j["frames"][0]["depth_path"].get<std::string>()));
+    fs::remove_all(out);
+}
+
+TEST(Cli, MissingFolderIsAClearError) {
+    CliRun r = runCli("fuse /nonexistent/vkmesh_data -o /tmp/x.ply");
+    EXPECT_EQ(r.exitCode, 2);
+    EXPECT_NE(r.err.find("/nonexistent/vkmesh_data"), std::string::npos) << r.err;
+}
+
+TEST(Cli, AbsurdVoxelSizeIsAClearError) {
+    CliRun r = runCli("fuse " + smallSequence().string() + " -o /tmp/x.ply --voxel 40");
+    EXPECT_EQ(r.exitCode, 2);
+    EXPECT_NE(r.err.find("voxel size"), std::string::npos) << r.err;
+}
+
+TEST(Cli, CorruptAndEmptyFramesAreSkippedWithAWarning) {
+    fs::path seq = copyOfSmallSequence("cli_bad_frames");
+    // Frame 1: not a PNG at all. Frame 2: a valid PNG with no depth anywhere.
+    std::ofstream(seq / "depth" / "000001.png") << "this is not a png";
+    cv::imwrite((seq / "depth" / "000002.png").string(), cv::Mat(120, 160, CV_16UC1, cv::Scalar(0)));
+    fs::path out = test::makeTempDir("cli_bad_out");
+    CliRun r = runCli("fuse " + seq.string() + " -o " + (out / "m.ply").string() + " --stats " + (out / "s.json").string() +
+                   " --voxel 0.05 -q");
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_NE(r.err.find("000001.png"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("no valid depth"), std::string::npos) << r.err;
+    auto stats = nlohmann::json::parse(readText(out / "s.json"));
+    EXPECT_EQ(stats["frames"]["integrated"], 4);
+    EXPECT_EQ(stats["frames"]["skipped"], 2);
+    fs::remove_all(seq);
+    fs::remove_all(out);
+}
+
+TEST(Cli, AllFramesBadFails) {
+    fs::path seq = copyOfSmallSequence("cli_all_bad");
+    for (auto& f : fs::directory_iterator(seq / "depth"))
+        cv::imwrite(f.path().string(), cv::Mat(120, 160, CV_16UC1, cv::Scalar(0)));
+    CliRun r = runCli("fuse " + seq.string() + " -o /tmp/vkmesh_never.ply -q");
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_NE(r.err.find("none of the"), std::string::npos) << r.err;
+    fs::remove_all(seq);
+}
+
+TEST(Cli, NonOrthonormalPoseIsAClearError) {
+    fs::path seq = copyOfSmallSequence("cli_bad_pose");
+    std::string gt = readText(seq / "groundtruth.txt");
+    // The first pose gets a quaternion with a NaN component.
+    std::istringstream in(gt);
+    std::string line, rewritten;
+    bool done = false;
+    while (std::getline(in, line)) {
+        if (!done && !line.empty() && line[0] != '#') {
+            std::istringstream f(line);
+            std::string ts;
+            f >> ts;
+            line = ts + " 0 0 1 nan 0 0 1";
+            done = true;
+        }
+        rewritten += line + "\n";
+    }
+    std::ofstream(seq / "groundtruth.txt") << rewritten;
+    CliRun r = runCli("fuse " + seq.string() + " -o /tmp/vkmesh_never.ply -q");
+    EXPECT_EQ(r.exitCode, 2);
+    EXPECT_NE(r.err.find("groundtruth.txt"), std::string::npos) << r.err;
+    fs::remove_all(seq);
+}
+
+}  // namespace
+}  // namespace vkmesh
