@@ -124,6 +124,7 @@ struct FuseArgs {
     float truncVoxels = 4.0f;
     float maxWeight = 255.0f;
     uint32_t blocks = 16384;
+    int allocStride = 1;
     int device = -1;
     bool validation = false;
     bool quiet = false;
@@ -141,6 +142,7 @@ int commandFuse(const FuseArgs& args) {
     config.params.truncVoxels = args.truncVoxels;
     config.params.maxWeight = args.maxWeight;
     config.params.maxDepth = args.data.maxDepth;
+    config.params.allocationStride = args.allocStride;
     config.blockCapacity = args.blocks;
     config.imageWidth = intrinsics.width;
     config.imageHeight = intrinsics.height;
@@ -216,6 +218,7 @@ int commandFuse(const FuseArgs& args) {
     stats["frames"] = {{"integrated", integrated}, {"skipped", skipped}};
     stats["voxel_size"] = args.voxel;
     stats["truncation_m"] = config.params.truncation();
+    stats["allocation_stride"] = args.allocStride;
     stats["max_depth"] = args.data.maxDepth;
     stats["blocks"] = {{"in_use", k.blocksInUse}, {"capacity", volume.config().blockCapacity},
                        {"hash_capacity", volume.config().hashCapacity}};
@@ -291,6 +294,9 @@ int main(int argc, char** argv) {
     fuse->add_option("--voxel", fuseArgs.voxel, "voxel (cube) size in metres");
     fuse->add_option("--trunc", fuseArgs.truncVoxels, "truncation distance in voxels");
     fuse->add_option("--max-weight", fuseArgs.maxWeight, "cap of the TSDF weight");
+    fuse->add_option("--alloc-stride", fuseArgs.allocStride,
+                     "allocate blocks from every Nth pixel in x and y (1 = every pixel; Open3D uses 4)")
+        ->check(CLI::Range(1, 64));
     fuse->add_option("--blocks", fuseArgs.blocks, "block pool capacity (8x8x8 voxels each)")->check(CLI::PositiveNumber);
     fuse->add_option("--device", fuseArgs.device, "Vulkan device index (see `vkmesh devices`)");
     fuse->add_flag("--validation", fuseArgs.validation, "enable the Khronos validation layer (or VKMESH_VALIDATION=1)");

@@ -16,8 +16,9 @@ uint requests = 0u, found = 0u, inserted = 0u, full = 0u, outOfRange = 0u;
 uint insertKey(ivec3 cell) {
     uint64_t key = packBlockKey(cell);
     uint slot = hashSlot(cell);
+    // Fast path: nearly every visit finds its key already at its home slot.
+    if (hashKeys[slot] == key) { ++found; return slot; }
     for (uint probe = 0u; probe < HASH_MAX_PROBES; ++probe) {
-        if (hashKeys[slot] == key) { ++found; return slot; }
         uint64_t prev = atomicCompSwap(hashKeys[slot], KEY_EMPTY, key);
         if (prev == KEY_EMPTY) { ++inserted; return slot; }
         if (prev == key) { ++found; return slot; }
@@ -43,7 +44,7 @@ void touchBlock(ivec3 cell) {
 
 void main() {
     uvec2 size = frameImageSize();
-    uvec2 pixel = gl_GlobalInvocationID.xy;
+    uvec2 pixel = gl_GlobalInvocationID.xy * params.allocationStride;
     uint valid = 0u, truncated = 0u;
     if (all(lessThan(pixel, size))) {
         float d = depth[pixel.y * size.x + pixel.x];

@@ -49,7 +49,7 @@ VKM_CONST RAY_MAX_BLOCKS = 32u;
 
 // ---- workgroup sizes -----------------------------------------------------------------------
 VKM_CONST WG_PIXELS_X = 16u;               // allocate_blocks: one invocation per pixel
-VKM_CONST WG_PIXELS_Y = 8u;
+VKM_CONST WG_PIXELS_Y = 16u;
 VKM_CONST WG_LIST = 64u;                   // one invocation per list entry (assign, collect)
 VKM_CONST WG_BLOCK = 128u;                 // fuse / mesh: one workgroup per block, 4 voxels per invocation
 VKM_CONST VOXELS_PER_INVOCATION = 4u;      // VOXELS_PER_BLOCK / WG_BLOCK
@@ -87,6 +87,8 @@ struct VolumeParamsGpu {
     uint blockCapacity;     // blocks in the pool
     uint touchedCapacity;   // entries of the touched list
     uint meshVertexCapacity;// vec4 entries of the baseline mesh buffer
+    uint allocationStride;  // allocation walks the bands of every Nth pixel in x and y (fusion uses all)
+    uint pad0, pad1, pad2;
 };
 
 // Counters the GPU keeps; the host reads this struct back after every frame (it is small).

@@ -39,6 +39,9 @@ struct VolumeParams {
     float maxWeight = 255.0f;      // cap of the running-average weight
     float minDepth = 0.1f;         // depth samples outside [minDepth, maxDepth] are ignored
     float maxDepth = 5.0f;
+    // Block allocation walks the truncation bands of every Nth pixel in x and y; fusion always uses
+    // every pixel. 1 follows the paper (every valid pixel); Open3D's VoxelBlockGrid uses 4.
+    int allocationStride = 1;
     float truncation() const { return truncVoxels * voxelSize; }
 };
 

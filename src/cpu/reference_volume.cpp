@@ -71,8 +71,9 @@ std::vector<BlockCoord> ReferenceVolume::blocksTouchedBy(const DepthImage& depth
     std::set<BlockCoord> seen;
     std::vector<BlockCoord> order;
     ReferenceFrameStats local;
-    for (int y = 0; y < depth.height; ++y) {
-        for (int x = 0; x < depth.width; ++x) {
+    const int stride = params_.allocationStride;
+    for (int y = 0; y < depth.height; y += stride) {
+        for (int x = 0; x < depth.width; x += stride) {
             float d = depth.at(x, y);
             if (!(d >= push.minDepth && d <= push.maxDepth)) continue;
             ++local.validPixels;

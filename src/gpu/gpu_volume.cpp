@@ -49,6 +49,8 @@ void validateConfig(const GpuVolumeConfig& c) {
     if (!(p.maxWeight >= 1.0f)) throw Error("max weight " + std::to_string(p.maxWeight) + " must be >= 1");
     if (!(p.minDepth > 0.0f && p.maxDepth > p.minDepth))
         throw Error("depth range [" + std::to_string(p.minDepth) + ", " + std::to_string(p.maxDepth) + "] m is empty");
+    if (p.allocationStride < 1 || p.allocationStride > 64)
+        throw Error("allocation stride " + std::to_string(p.allocationStride) + " must be in [1, 64]");
     if (c.blockCapacity == 0 || c.blockCapacity > (1u << 30)) throw Error("block capacity must be in [1, 2^30]");
     if (c.imageWidth <= 0 || c.imageHeight <= 0 || c.imageWidth > 65535 || c.imageHeight > 65535)
         throw Error("image size " + std::to_string(c.imageWidth) + "x" + std::to_string(c.imageHeight) + " is not supported");
@@ -110,6 +112,7 @@ GpuVolume::GpuVolume(const vk::Context& context, const GpuVolumeConfig& config)
     gp.blockCapacity = c.blockCapacity;
     gp.touchedCapacity = c.touchedCapacity;
     gp.meshVertexCapacity = c.meshVertexCapacity;
+    gp.allocationStride = uint32_t(c.params.allocationStride);
     vk::uploadToBuffer(context, params_, &gp, sizeof(gp));
     auto tables = packMarchingCubesTables();
     vk::uploadToBuffer(context, mcTables_, tables.data(), tables.size() * 4);
@@ -155,7 +158,7 @@ FrameReport GpuVolume::integrate(const DepthImage& depth, const Intrinsics& intr
     vkCmdFillBuffer(cmd, counters_.handle(), COUNTERS_PER_FRAME_OFFSET, COUNTERS_PER_FRAME_SIZE, 0);
     vk::memoryBarrier(cmd);
     timer_.mark(cmd, "start");
-    allocate_.record(cmd, push, counters_);
+    allocate_.record(cmd, push, counters_, uint32_t(config_.params.allocationStride));
     timer_.mark(cmd, "allocate");
     fuse_.record(cmd, push, counters_);
     timer_.mark(cmd, "fuse");

@@ -7,7 +7,7 @@
 
 namespace vkmesh::gpu {
 
-static_assert(sizeof(VolumeParamsGpu) == 32, "VolumeParamsGpu: std140 layout of 8 scalars");
+static_assert(sizeof(VolumeParamsGpu) == 48, "VolumeParamsGpu: std140 layout of 12 scalars");
 static_assert(sizeof(Counters) % 16 == 0);
 static_assert(offsetof(Counters, assignDispatch) == 0 && offsetof(Counters, blockDispatch) == 16 &&
               offsetof(Counters, listDispatch) == 32, "indirect arguments at 16-byte offsets");

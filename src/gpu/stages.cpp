@@ -12,8 +12,10 @@ AllocateBlocksStage::AllocateBlocksStage(const vk::Context& context, const vk::B
       assign_(context, layout, "assign_blocks"),
       commit_(context, layout, "commit_allocation") {}
 
-void AllocateBlocksStage::record(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters) const {
-    uint32_t width = push.imageSize & 0xFFFFu, height = push.imageSize >> 16;
+void AllocateBlocksStage::record(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters,
+                                 uint32_t pixelStride) const {
+    uint32_t width = ((push.imageSize & 0xFFFFu) + pixelStride - 1) / pixelStride;
+    uint32_t height = ((push.imageSize >> 16) + pixelStride - 1) / pixelStride;
     allocate_.dispatch(cmd, &push, (width + WG_PIXELS_X - 1) / WG_PIXELS_X, (height + WG_PIXELS_Y - 1) / WG_PIXELS_Y);
     vk::memoryBarrier(cmd);
     plan_.dispatch(cmd, &push, 1);

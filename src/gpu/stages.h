@@ -16,7 +16,7 @@ namespace vkmesh::gpu {
 class AllocateBlocksStage {
 public:
     AllocateBlocksStage(const vk::Context& context, const vk::BindingLayout& layout);
-    void record(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters) const;
+    void record(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters, uint32_t pixelStride) const;
 
 private:
     vk::ComputePipeline allocate_, plan_, assign_, commit_;

@@ -75,9 +75,13 @@ size_t compareTsdf(const BlockMap& gpu, const cpu::ReferenceVolume& cpu, float t
     return differing;
 }
 
-TEST_F(GpuTest, AllocationMatchesReferenceAndCountersConserve) {
-    gpu::GpuVolume volume(context(), smallConfig());
-    cpu::ReferenceVolume reference(smallConfig().params);
+class AllocationTest : public GpuTest, public ::testing::WithParamInterface<int> {};
+
+TEST_P(AllocationTest, MatchesReferenceAndCountersConserve) {
+    auto config = smallConfig();
+    config.params.allocationStride = GetParam();
+    gpu::GpuVolume volume(context(), config);
+    cpu::ReferenceVolume reference(config.params);
     Intrinsics intr = synth::kinectIntrinsics(kWidth, kHeight);
     auto frames = roomFrames(3, false);
     uint32_t distinct = 0;
@@ -103,7 +107,10 @@ TEST_F(GpuTest, AllocationMatchesReferenceAndCountersConserve) {
     BlockMap gpuBlocks = byCoord(volume.downloadBlocks());
     EXPECT_EQ(gpuBlocks.size(), reference.blocks().size());
     EXPECT_EQ(gpuBlocks.size(), distinct);
+    EXPECT_EQ(compareTsdf(gpuBlocks, reference, 1e-6f), 0u);
 }
+
+INSTANTIATE_TEST_SUITE_P(PixelStride, AllocationTest, ::testing::Values(1, 4));
 
 TEST_F(GpuTest, FusedTsdfMatchesReference) {
     gpu::GpuVolume volume(context(), smallConfig());
