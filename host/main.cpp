@@ -124,7 +124,7 @@ struct FuseArgs {
     float truncVoxels = 4.0f;
     float maxWeight = 255.0f;
     uint32_t blocks = 16384;
-    int allocStride = 1;
+    int allocStride = VolumeParams{}.allocationStride;
     int device = -1;
     bool validation = false;
     bool quiet = false;
@@ -295,7 +295,7 @@ int main(int argc, char** argv) {
     fuse->add_option("--trunc", fuseArgs.truncVoxels, "truncation distance in voxels");
     fuse->add_option("--max-weight", fuseArgs.maxWeight, "cap of the TSDF weight");
     fuse->add_option("--alloc-stride", fuseArgs.allocStride,
-                     "allocate blocks from every Nth pixel in x and y (1 = every pixel; Open3D uses 4)")
+                     "allocate blocks from every Nth pixel in x and y (1 = every pixel, as the paper; Open3D uses 4)")
         ->check(CLI::Range(1, 64));
     fuse->add_option("--blocks", fuseArgs.blocks, "block pool capacity (8x8x8 voxels each)")->check(CLI::PositiveNumber);
     fuse->add_option("--device", fuseArgs.device, "Vulkan device index (see `vkmesh devices`)");
