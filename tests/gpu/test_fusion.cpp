@@ -10,7 +10,9 @@
 #include "cpu/reference_volume.h"
 #include "gpu/gpu_volume.h"
 #include "gpu_fixture.h"
+#include "io/dataset.h"
 #include "synth/synthetic_scene.h"
+#include "test_support.h"
 
 namespace vkmesh {
 namespace {
@@ -210,6 +212,61 @@ TEST_F(GpuTest, HashFullIsCountedNeverSilent) {
     ASSERT_FALSE(report.warnings.empty());
     EXPECT_NE(report.warnings.front().find("hash"), std::string::npos);
     EXPECT_EQ(volume.downloadBlocks().size(), 64u);
+}
+
+TEST_F(GpuTest, HeavyContentionInsertsEachKeyOnce) {
+    // A wall 0.4 m in front of the camera: all 19,200 pixels walk into the same few blocks at once.
+    auto config = smallConfig(0.05f);
+    config.params.allocationStride = 1;
+    gpu::GpuVolume volume(context(), config);
+    cpu::ReferenceVolume reference(config.params);
+    Intrinsics intr = synth::kinectIntrinsics(kWidth, kHeight);
+    DepthImage wall{kWidth, kHeight, std::vector<float>(size_t(kWidth) * kHeight, 0.4f)};
+    for (int i = 0; i < 3; ++i) {
+        Pose pose = Pose::Identity();
+        pose(0, 3) = 0.01 * i;
+        gpu::FrameReport r = volume.integrate(wall, intr, pose);
+        cpu::ReferenceFrameStats stats = reference.integrate(wall, intr, pose);
+        EXPECT_EQ(r.counters.blockRequests, stats.blockRequests);
+        EXPECT_GE(r.counters.blockRequests, 2u * kWidth * kHeight);   // every pixel crosses >= 2 blocks
+        EXPECT_EQ(r.counters.blocksInserted, stats.blocksInserted);
+        EXPECT_EQ(r.counters.touchedCount, stats.touchedCount);
+        EXPECT_EQ(r.counters.blockRequests,
+                  r.counters.blocksFound + r.counters.blocksInserted + r.counters.hashFull + r.counters.outOfRange);
+    }
+    BlockMap blocks = byCoord(volume.downloadBlocks());   // fails on a key listed twice
+    EXPECT_EQ(blocks.size(), reference.blocks().size());
+    EXPECT_LT(blocks.size(), 64u);
+    EXPECT_EQ(compareTsdf(blocks, reference, 1e-6f), 0u);
+}
+
+TEST_F(GpuTest, RealIclNuimFramesMatchReference) {
+    // ICL-NUIM's negative fy and real depth noise, through the same comparison.
+    auto root = test::sharedDatasetsDir();
+    if (!root) GTEST_SKIP() << "shared datasets not found at ../shared/datasets (or $VKMESH_DATASETS)";
+    DatasetOptions options;
+    options.maxFrames = 3;
+    options.maxDepth = 4.0f;
+    auto dataset = Dataset::open(*root / "iclnuim_office_traj0", options);
+    const Intrinsics& intr = dataset->intrinsics();
+    ASSERT_LT(intr.fy, 0.0f);
+    auto config = smallConfig(0.03f);
+    config.imageWidth = intr.width;
+    config.imageHeight = intr.height;
+    config.params.maxDepth = 4.0f;
+    gpu::GpuVolume volume(context(), config);
+    cpu::ReferenceVolume reference(config.params);
+    for (size_t i = 0; i < dataset->size(); ++i) {
+        DepthImage depth = dataset->loadDepth(i);
+        gpu::FrameReport r = volume.integrate(depth, intr, dataset->frame(i).cameraToWorld);
+        cpu::ReferenceFrameStats stats = reference.integrate(depth, intr, dataset->frame(i).cameraToWorld);
+        EXPECT_EQ(r.counters.touchedCount, stats.touchedCount);
+        EXPECT_EQ(r.counters.updatedVoxels, stats.updatedVoxels);
+    }
+    BlockMap blocks = byCoord(volume.downloadBlocks());
+    ASSERT_EQ(blocks.size(), reference.blocks().size());
+    EXPECT_GT(blocks.size(), 100u);
+    EXPECT_EQ(compareTsdf(blocks, reference, 1e-6f), 0u);
 }
 
 TEST_F(GpuTest, RejectsMismatchedImages) {
