@@ -11,15 +11,16 @@ function(vkmesh_embed_shaders target)
     get_filename_component(name ${src} NAME_WE)
     set(spv ${gen_dir}/${name}.spv)
     set(hdr ${gen_dir}/${name}.spv.h)
+    # The header-writing run emits the depfile, so its target is this command's OUTPUT and an edit of an
+    # included .glsl/.h rebuilds the shader.
     add_custom_command(
       OUTPUT ${hdr}
       COMMAND ${Vulkan_GLSLANG_VALIDATOR_EXECUTABLE} --target-env vulkan1.2 -V
-              -I${CMAKE_CURRENT_SOURCE_DIR}/shaders_comp
-              --depfile ${gen_dir}/${name}.d -o ${spv} ${src}
+              -I${CMAKE_CURRENT_SOURCE_DIR}/shaders_comp -o ${spv} ${src}
       COMMAND ${SPIRV_VAL} --target-env vulkan1.2 ${spv}
       COMMAND ${Vulkan_GLSLANG_VALIDATOR_EXECUTABLE} --target-env vulkan1.2 -V
               -I${CMAKE_CURRENT_SOURCE_DIR}/shaders_comp
-              --vn vkmesh_spv_${name} -o ${hdr} ${src}
+              --vn vkmesh_spv_${name} --depfile ${gen_dir}/${name}.d -o ${hdr} ${src}
       DEPENDS ${src}
       DEPFILE ${gen_dir}/${name}.d
       COMMENT "GLSL -> SPIR-V (validated): ${name}.comp"

@@ -26,6 +26,20 @@ layout(std430, set = 0, binding = BINDING_DEPTH) readonly buffer Depth { float d
 layout(std430, set = 0, binding = BINDING_MC_TABLES) readonly buffer McTables { uint mcTables[]; };
 layout(std430, set = 0, binding = BINDING_BLOCK_LIST) buffer BlockList { uint blockList[]; };
 layout(std430, set = 0, binding = BINDING_MESH_VERTICES) buffer MeshVertices { vec4 meshVertices[]; };
+layout(std430, set = 0, binding = BINDING_CUBE_STATE) buffer CubeState { uint cubeState[]; };
+layout(std430, set = 0, binding = BINDING_EDGE_VERTEX) coherent buffer EdgeVertex { uint edgeVertex[]; };
+layout(std430, set = 0, binding = BINDING_MESH_STAMPS) coherent buffer MeshStamps { uint meshStamps[]; };
+layout(std430, set = 0, binding = BINDING_DIRTY_LIST) buffer DirtyList { uint dirtyList[]; };
+layout(std430, set = 0, binding = BINDING_VERTICES) coherent buffer Vertices { Vertex vertices[]; };
+layout(std430, set = 0, binding = BINDING_VERTEX_OWNER) buffer VertexOwner { uint vertexOwner[]; };
+layout(std430, set = 0, binding = BINDING_VERTEX_FREE) buffer VertexFree { uint vertexFree[]; };
+layout(std430, set = 0, binding = BINDING_GC_CANDIDATES) buffer GcCandidates { uint gcCandidates[]; };
+layout(std430, set = 0, binding = BINDING_CHUNK_TRIANGLES) buffer ChunkTriangles { uint chunkTriangles[]; };
+layout(std430, set = 0, binding = BINDING_CHUNK_FREE) buffer ChunkFree { uint chunkFree[]; };
+layout(std430, set = 0, binding = BINDING_CHUNK_RELEASE) buffer ChunkRelease { uint chunkRelease[]; };
+layout(std430, set = 0, binding = BINDING_EXPORT_VERTICES) buffer ExportVertices { Vertex exportVertices[]; };
+layout(std430, set = 0, binding = BINDING_EXPORT_INDICES) buffer ExportIndices { uint exportIndices[]; };
+layout(std430, set = 0, binding = BINDING_VERTEX_REMAP) buffer VertexRemap { uint vertexRemap[]; };
 
 layout(push_constant) uniform Push { FramePush frame; };
 

@@ -69,7 +69,32 @@ VKM_CONST BINDING_DEPTH = 10u;         // float depth image in metres
 VKM_CONST BINDING_MC_TABLES = 11u;     // uint marching-cubes tables, see McTableLayout
 VKM_CONST BINDING_BLOCK_LIST = 12u;    // uint list of all live blocks (for whole-volume passes)
 VKM_CONST BINDING_MESH_VERTICES = 13u; // vec4 per vertex of the baseline mesh (3 per triangle)
-VKM_CONST BINDING_COUNT = 14u;
+// The incremental shared-vertex mesh (docs/MESH.md).
+VKM_CONST BINDING_CUBE_STATE = 14u;    // uint per cube: type | INCOMPLETE | (chunk + 1) << 9
+VKM_CONST BINDING_EDGE_VERTEX = 15u;   // uint per cube and axis: vertex on the owned edge, or EMPTY_SLOT
+VKM_CONST BINDING_MESH_STAMPS = 16u;   // uint per block: frame number that last marked it dirty
+VKM_CONST BINDING_DIRTY_LIST = 17u;    // uint list of the frame's dirty blocks
+VKM_CONST BINDING_VERTICES = 18u;      // Vertex heap
+VKM_CONST BINDING_VERTEX_OWNER = 19u;  // uint per vertex: global edge id (block * 512 + cube) * 3 + axis
+VKM_CONST BINDING_VERTEX_FREE = 20u;   // uint stack of free vertex indices
+VKM_CONST BINDING_GC_CANDIDATES = 21u; // uint list: vertices that may have lost their last triangle
+VKM_CONST BINDING_CHUNK_TRIANGLES = 22u; // uint: 5 triangles x 3 vertex indices per chunk
+VKM_CONST BINDING_CHUNK_FREE = 23u;    // uint stack of free chunk indices
+VKM_CONST BINDING_CHUNK_RELEASE = 24u; // uint list: chunks released this frame
+VKM_CONST BINDING_EXPORT_VERTICES = 25u; // Vertex: the compacted mesh's vertices
+VKM_CONST BINDING_EXPORT_INDICES = 26u;  // uint: the compacted mesh's triangles
+VKM_CONST BINDING_VERTEX_REMAP = 27u;    // uint per vertex: its index in the compacted mesh
+VKM_CONST BINDING_COUNT = 28u;
+
+VKM_CONST EMPTY_SLOT = 0xFFFFFFFFu;    // an edge with no vertex
+VKM_CONST CLAIMED_SLOT = 0xFFFFFFFEu;  // claimed, the winner is allocating (within one dispatch only)
+VKM_CONST INVALID_INDEX = 0xFFFFFFFFu; // a triangle slot holding no triangle
+VKM_CONST DEAD_REFCOUNT = 0xFFFFFFFFu; // the refcount of a vertex on the free stack
+VKM_CONST CUBE_TYPE_MASK = 0xFFu;
+VKM_CONST CUBE_INCOMPLETE = 0x100u;    // some triangle could not be built: rebuild when next dirty
+VKM_CONST CUBE_CHUNK_SHIFT = 9u;       // chunk index + 1 in the remaining 23 bits (0 = no chunk)
+VKM_CONST TRIANGLES_PER_CHUNK = 5u;
+VKM_CONST CHUNK_WORDS = 15u;
 
 // Marching-cubes tables as uint words: [0,256): edgeMask | triangleCount << 16;
 // [256, 256 + 256*4): 16 edge ids per type, 4 bytes per word (15 used, 0xFF padded).
@@ -88,7 +113,18 @@ struct VolumeParamsGpu {
     uint touchedCapacity;   // entries of the touched list
     uint meshVertexCapacity;// vec4 entries of the baseline mesh buffer
     uint allocationStride;  // allocation walks the bands of every Nth pixel in x and y (fusion uses all)
-    uint pad0, pad1, pad2;
+    uint vertexCapacity;    // vertex heap (also the GC candidate list and the remap table)
+    uint chunkCapacity;     // triangle chunks (also the chunk release list)
+    uint exportTriangleCapacity;
+};
+
+// One mesh vertex, as stored in the heap and in the compacted export (stride 32: a renderer reads the
+// position at offset 0 and the normal at offset 16).
+struct Vertex {
+    float px, py, pz;
+    uint refcount;          // live triangles using it; DEAD_REFCOUNT while free
+    float nx, ny, nz;
+    uint createdFrame;      // frame number that created it (its age is now - createdFrame)
 };
 
 // Counters the GPU keeps; the host reads this struct back after every frame (it is small).
@@ -97,6 +133,9 @@ struct Counters {
     uint assignDispatch[4];     // over the touched list, WG_LIST per group
     uint blockDispatch[4];      // one workgroup per touched block
     uint listDispatch[4];       // over the live block list, one workgroup per block
+    uint dirtyDispatch[4];      // one workgroup per dirty block
+    uint candidateDispatch[4];  // over the GC candidates, WG_LIST per group
+    uint releaseDispatch[4];    // over the released chunks, WG_LIST per group
     // --- per frame: reset at the start of every frame ---
     uint validPixels;           // pixels with a depth inside [minDepth, maxDepth]
     uint blockRequests;         // blocks visited by all pixels' band walks (hash insert attempts)
@@ -110,16 +149,40 @@ struct Counters {
     uint poolExhausted;         //  ... that got none (their key stays; retried when seen again)
     uint fusedBlocks;           // touched blocks that the fuse stage updated
     uint updatedVoxels;         // TSDF corners updated this frame
+    uint dirtyCount;            // blocks re-meshed this frame (touched + neighbours reading them)
+    uint cubesRetyped;          // cubes whose triangles were rebuilt
+    uint vertexAllocRequests;   // edge slots claimed that asked the vertex heap for a vertex
+    uint vertexExhausted;       //  ... that got none
+    uint chunkAllocRequests;    // cubes that needed a triangle chunk
+    uint chunkExhausted;        //  ... that got none
+    uint candidateCount;        // GC candidates listed (may exceed vertexCapacity)
+    uint releaseCount;          // chunks released
+    uint vertexPushes;          // vertices freed
+    uint chunkPushes;           // chunks freed
+    uint trianglesCreated;
+    uint trianglesReleased;
+    uint trianglesInvalid;      // triangles not built because an edge had no vertex (heap exhausted)
+    uint framePad[3];
     // --- persistent across frames ---
     uint freeTop;               // blocks on the free list
     uint blocksInUse;           // blocks handed out of the pool
     uint liveBlockCount;        // entries written by collect_blocks (whole-volume passes)
     uint meshVertices;          // baseline mesh: vertices wanted (3 per triangle)
     uint meshVerticesDropped;   // ... that did not fit in the mesh buffer
-    uint pad[3];
+    uint vertexFreeTop;         // vertex heap: free entries on the stack
+    uint verticesInUse;
+    uint vertexHighWater;       // most vertices in use at any time
+    uint chunkFreeTop;
+    uint chunksInUse;
+    uint chunkHighWater;
+    uint liveTriangles;
+    uint exportVertices;        // compaction: vertices written
+    uint exportTriangles;       //  ... triangles wanted
+    uint exportUnreferenced;    //  ... allocated vertices with refcount 0 (0 unless GC fell behind)
+    uint pad;
 };
-VKM_CONST COUNTERS_PER_FRAME_OFFSET = 48u;   // byte offset of validPixels
-VKM_CONST COUNTERS_PER_FRAME_SIZE = 48u;     // 12 per-frame uints
+VKM_CONST COUNTERS_PER_FRAME_OFFSET = 96u;   // byte offset of validPixels
+VKM_CONST COUNTERS_PER_FRAME_SIZE = 112u;    // 28 per-frame uints
 
 // Push constants of every compute stage: the current frame's camera. Rigid transforms are stored as
 // the 3 rows of [R | t] (x' = row.x*x + row.y*y + row.z*z + row.w), the order the CPU reference uses too.

@@ -62,6 +62,11 @@ GpuVolumeConfig resolved(GpuVolumeConfig c) {
     if ((c.hashCapacity & (c.hashCapacity - 1)) != 0)
         throw Error("hash capacity " + std::to_string(c.hashCapacity) + " must be a power of two");
     if (c.touchedCapacity == 0) c.touchedCapacity = c.blockCapacity;
+    if (c.meshMode == MeshMode::Baseline) c.vertexCapacity = c.chunkCapacity = 1024;   // unused: keep them small
+    if (c.vertexCapacity < 64 || c.vertexCapacity >= CLAIMED_SLOT)
+        throw Error("vertex capacity " + std::to_string(c.vertexCapacity) + " must be in [64, 2^32 - 2)");
+    if (c.chunkCapacity < 64 || c.chunkCapacity >= (1u << (32 - CUBE_CHUNK_SHIFT)) - 1)
+        throw Error("triangle chunk capacity " + std::to_string(c.chunkCapacity) + " must be in [64, 2^23 - 1)");
     c.meshVertexCapacity = std::max(c.meshVertexCapacity, 1024u);
     return c;
 }
@@ -81,6 +86,8 @@ GpuVolume::GpuVolume(const vk::Context& context, const GpuVolumeConfig& config)
       allocate_(context, layout_),
       fuse_(context, layout_),
       baselineMesh_(context, layout_),
+      incrementalMesh_(context, layout_),
+      exportMesh_(context, layout_),
       recorder_(context),
       timer_(context) {
     const GpuVolumeConfig& c = config_;
@@ -100,6 +107,21 @@ GpuVolume::GpuVolume(const vk::Context& context, const GpuVolumeConfig& config)
     mcTables_ = makeBuffer(MC_TABLE_WORDS * 4, 0, "marching cubes tables", BINDING_MC_TABLES);
     blockList_ = makeBuffer(VkDeviceSize(c.blockCapacity) * 4, 0, "block list", BINDING_BLOCK_LIST);
     meshVertices_ = makeBuffer(VkDeviceSize(c.meshVertexCapacity) * 16, 0, "baseline mesh vertices", BINDING_MESH_VERTICES);
+    const VkDeviceSize cubes = voxels;
+    cubeState_ = makeBuffer(cubes * 4, 0, "cube state", BINDING_CUBE_STATE);
+    edgeVertex_ = makeBuffer(cubes * 12, 0, "edge vertex slots", BINDING_EDGE_VERTEX);
+    meshStamps_ = makeBuffer(VkDeviceSize(c.blockCapacity) * 4, 0, "mesh stamps", BINDING_MESH_STAMPS);
+    dirtyList_ = makeBuffer(VkDeviceSize(c.blockCapacity) * 4, 0, "dirty list", BINDING_DIRTY_LIST);
+    vertices_ = makeBuffer(VkDeviceSize(c.vertexCapacity) * sizeof(Vertex), 0, "vertex heap", BINDING_VERTICES);
+    vertexOwner_ = makeBuffer(VkDeviceSize(c.vertexCapacity) * 4, 0, "vertex owners", BINDING_VERTEX_OWNER);
+    vertexFree_ = makeBuffer(VkDeviceSize(c.vertexCapacity) * 4, 0, "vertex free stack", BINDING_VERTEX_FREE);
+    gcCandidates_ = makeBuffer(VkDeviceSize(c.vertexCapacity) * 4, 0, "GC candidates", BINDING_GC_CANDIDATES);
+    chunkTriangles_ = makeBuffer(VkDeviceSize(c.chunkCapacity) * CHUNK_WORDS * 4, 0, "triangle chunks", BINDING_CHUNK_TRIANGLES);
+    chunkFree_ = makeBuffer(VkDeviceSize(c.chunkCapacity) * 4, 0, "chunk free stack", BINDING_CHUNK_FREE);
+    chunkRelease_ = makeBuffer(VkDeviceSize(c.chunkCapacity) * 4, 0, "chunk release list", BINDING_CHUNK_RELEASE);
+    vertexRemap_ = makeBuffer(VkDeviceSize(c.vertexCapacity) * 4, 0, "vertex remap", BINDING_VERTEX_REMAP);
+    exportVertices_ = makeBuffer(1024 * sizeof(Vertex), 0, "export vertices", BINDING_EXPORT_VERTICES);
+    exportIndices_ = makeBuffer(1024 * 12, 0, "export indices", BINDING_EXPORT_INDICES);
     depthStaging_ = vk::Buffer(context, depth_.size(), VK_BUFFER_USAGE_TRANSFER_SRC_BIT, vk::MemoryUse::Upload, "depth staging");
     countersReadback_ = vk::Buffer(context, sizeof(Counters), VK_BUFFER_USAGE_TRANSFER_DST_BIT, vk::MemoryUse::Readback, "counters readback");
 
@@ -113,6 +135,9 @@ GpuVolume::GpuVolume(const vk::Context& context, const GpuVolumeConfig& config)
     gp.touchedCapacity = c.touchedCapacity;
     gp.meshVertexCapacity = c.meshVertexCapacity;
     gp.allocationStride = uint32_t(c.params.allocationStride);
+    gp.vertexCapacity = c.vertexCapacity;
+    gp.chunkCapacity = c.chunkCapacity;
+    gp.exportTriangleCapacity = 1024;
     vk::uploadToBuffer(context, params_, &gp, sizeof(gp));
     auto tables = packMarchingCubesTables();
     vk::uploadToBuffer(context, mcTables_, tables.data(), tables.size() * 4);
@@ -130,6 +155,39 @@ GpuVolume::GpuVolume(const vk::Context& context, const GpuVolumeConfig& config)
     vkCmdFillBuffer(cmd, hashStamps_.handle(), 0, VK_WHOLE_SIZE, 0);
     vk::memoryBarrier(cmd);
     recorder_.submitAndWait();
+    resetMeshState();
+}
+
+void GpuVolume::resetMeshState() {
+    const GpuVolumeConfig& c = config_;
+    VkCommandBuffer cmd = recorder_.begin();
+    vkCmdFillBuffer(cmd, cubeState_.handle(), 0, VK_WHOLE_SIZE, 0);
+    vkCmdFillBuffer(cmd, edgeVertex_.handle(), 0, VK_WHOLE_SIZE, EMPTY_SLOT);
+    vkCmdFillBuffer(cmd, meshStamps_.handle(), 0, VK_WHOLE_SIZE, 0);
+    vkCmdFillBuffer(cmd, vertices_.handle(), 0, VK_WHOLE_SIZE, 0xFFFFFFFFu);   // refcount DEAD everywhere
+    vk::memoryBarrier(cmd);
+    recorder_.submitAndWait();
+    // Free stacks popped from the top: index 0 first.
+    std::vector<uint32_t> stack(std::max(c.vertexCapacity, c.chunkCapacity));
+    for (uint32_t i = 0; i < c.vertexCapacity; ++i) stack[i] = c.vertexCapacity - 1 - i;
+    vk::uploadToBuffer(context_, vertexFree_, stack.data(), VkDeviceSize(c.vertexCapacity) * 4);
+    for (uint32_t i = 0; i < c.chunkCapacity; ++i) stack[i] = c.chunkCapacity - 1 - i;
+    vk::uploadToBuffer(context_, chunkFree_, stack.data(), VkDeviceSize(c.chunkCapacity) * 4);
+    Counters k{};
+    vk::downloadFromBuffer(context_, counters_, &k, sizeof(k));
+    k.vertexFreeTop = c.vertexCapacity;
+    k.verticesInUse = k.vertexHighWater = 0;
+    k.chunkFreeTop = c.chunkCapacity;
+    k.chunksInUse = k.chunkHighWater = 0;
+    k.liveTriangles = 0;
+    vk::uploadToBuffer(context_, counters_, &k, sizeof(k));
+}
+
+void GpuVolume::setParam(uint32_t VolumeParamsGpu::*field, uint32_t value) {
+    VolumeParamsGpu gp{};
+    vk::downloadFromBuffer(context_, params_, &gp, sizeof(gp));
+    gp.*field = value;
+    vk::uploadToBuffer(context_, params_, &gp, sizeof(gp));
 }
 
 void GpuVolume::recordCountersReadback(VkCommandBuffer cmd) {
@@ -162,6 +220,11 @@ FrameReport GpuVolume::integrate(const DepthImage& depth, const Intrinsics& intr
     timer_.mark(cmd, "allocate");
     fuse_.record(cmd, push, counters_);
     timer_.mark(cmd, "fuse");
+    if (config_.meshMode == MeshMode::Incremental) {
+        incrementalMesh_.recordMarkTouched(cmd, push, counters_);
+        timer_.mark(cmd, "mesh_mark");
+        incrementalMesh_.recordMesh(cmd, push, counters_, &timer_);
+    }
     recordCountersReadback(cmd);
     recorder_.submitAndWait();
 
@@ -183,6 +246,15 @@ FrameReport GpuVolume::integrate(const DepthImage& depth, const Intrinsics& intr
                                   std::to_string(config_.touchedCapacity) + "; the rest were not fused this frame");
     if (k.outOfRange)
         report.warnings.push_back(std::to_string(k.outOfRange) + " block visits lay outside the addressable grid (|coordinate| >= 2^20 blocks)");
+    if (k.vertexExhausted)
+        report.warnings.push_back("vertex heap exhausted: " + std::to_string(k.vertexExhausted) + " edge vertices not created (capacity " +
+                                  std::to_string(config_.vertexCapacity) + "); their triangles are missing until there is room");
+    if (k.chunkExhausted)
+        report.warnings.push_back("triangle chunk heap exhausted: " + std::to_string(k.chunkExhausted) + " cubes without triangles (capacity " +
+                                  std::to_string(config_.chunkCapacity) + ")");
+    if (k.candidateCount > config_.vertexCapacity)
+        report.warnings.push_back(std::to_string(k.candidateCount - config_.vertexCapacity) +
+                                  " garbage-collection candidates did not fit in their list; those vertices stay allocated until re-meshed");
     if (k.rayTruncated)
         report.warnings.push_back(std::to_string(k.rayTruncated) + " pixels' truncation bands crossed more than " +
                                   std::to_string(RAY_MAX_BLOCKS) + " blocks and were cut");
@@ -230,6 +302,84 @@ TriangleSoup GpuVolume::extractBaselineMesh(std::vector<std::pair<std::string, d
     throw Error("baseline mesh extraction did not fit after growing its buffer");
 }
 
+ExportedMesh GpuVolume::exportMesh(std::vector<std::pair<std::string, double>>* stageMs) {
+    if (config_.meshMode != MeshMode::Incremental) throw Error("exportMesh needs the incremental mesh mode");
+    for (int attempt = 0; attempt < 2; ++attempt) {
+        Counters before = readCounters();
+        // Size the export buffers for what the counters say is alive.
+        if (exportVertices_.size() < VkDeviceSize(before.verticesInUse) * sizeof(Vertex))
+            exportVertices_ = makeBuffer(VkDeviceSize(before.verticesInUse) * sizeof(Vertex), 0, "export vertices", BINDING_EXPORT_VERTICES);
+        uint32_t triangleCapacity = uint32_t(exportIndices_.size() / 12);
+        if (triangleCapacity < before.liveTriangles) {
+            triangleCapacity = before.liveTriangles;
+            exportIndices_ = makeBuffer(VkDeviceSize(triangleCapacity) * 12, 0, "export indices", BINDING_EXPORT_INDICES);
+            setParam(&VolumeParamsGpu::exportTriangleCapacity, triangleCapacity);
+        }
+        VkCommandBuffer cmd = recorder_.begin();
+        timer_.reset(cmd);
+        vkCmdFillBuffer(cmd, counters_.handle(), offsetof(Counters, liveBlockCount), sizeof(uint32_t), 0);
+        vkCmdFillBuffer(cmd, counters_.handle(), offsetof(Counters, exportVertices), 3 * sizeof(uint32_t), 0);
+        vk::memoryBarrier(cmd);
+        timer_.mark(cmd, "start");
+        baselineMesh_.recordCollect(cmd, lastPush_, config_.hashCapacity);
+        exportMesh_.record(cmd, lastPush_, counters_, config_.vertexCapacity);
+        timer_.mark(cmd, "export");
+        recordCountersReadback(cmd);
+        recorder_.submitAndWait();
+        if (stageMs) *stageMs = timer_.read();
+        Counters k = readCounters();
+        if (k.exportTriangles > triangleCapacity) continue;   // cannot happen if liveTriangles is right; grow and retry
+        ExportedMesh out;
+        out.unreferencedVertices = k.exportUnreferenced;
+        out.vertices.resize(k.exportVertices);
+        out.triangles.resize(k.exportTriangles);
+        if (k.exportVertices)
+            vk::downloadFromBuffer(context_, exportVertices_, out.vertices.data(), out.vertices.size() * sizeof(Vertex));
+        if (k.exportTriangles)
+            vk::downloadFromBuffer(context_, exportIndices_, out.triangles.data(), out.triangles.size() * 12);
+        return out;
+    }
+    throw Error("mesh export did not fit after growing its buffers");
+}
+
+void GpuVolume::rebuildMesh() {
+    resetMeshState();
+    VkCommandBuffer cmd = recorder_.begin();
+    vkCmdFillBuffer(cmd, counters_.handle(), COUNTERS_PER_FRAME_OFFSET, COUNTERS_PER_FRAME_SIZE, 0);
+    vkCmdFillBuffer(cmd, counters_.handle(), offsetof(Counters, liveBlockCount), sizeof(uint32_t), 0);
+    vk::memoryBarrier(cmd);
+    baselineMesh_.recordCollect(cmd, lastPush_, config_.hashCapacity);
+    incrementalMesh_.recordMarkAll(cmd, lastPush_, config_.blockCapacity);
+    incrementalMesh_.recordMesh(cmd, lastPush_, counters_, nullptr);
+    recordCountersReadback(cmd);
+    recorder_.submitAndWait();
+}
+
+MeshStateSnapshot GpuVolume::downloadMeshState() const {
+    const GpuVolumeConfig& c = config_;
+    MeshStateSnapshot s;
+    s.counters = readCounters();
+    s.vertices.resize(c.vertexCapacity);
+    vk::downloadFromBuffer(context_, vertices_, s.vertices.data(), s.vertices.size() * sizeof(Vertex));
+    s.vertexOwner.resize(c.vertexCapacity);
+    vk::downloadFromBuffer(context_, vertexOwner_, s.vertexOwner.data(), s.vertexOwner.size() * 4);
+    s.edgeVertex.resize(size_t(c.blockCapacity) * VOXELS_PER_BLOCK * 3);
+    vk::downloadFromBuffer(context_, edgeVertex_, s.edgeVertex.data(), s.edgeVertex.size() * 4);
+    std::vector<uint32_t> state(size_t(c.blockCapacity) * VOXELS_PER_BLOCK), chunks(size_t(c.chunkCapacity) * CHUNK_WORDS);
+    vk::downloadFromBuffer(context_, cubeState_, state.data(), state.size() * 4);
+    vk::downloadFromBuffer(context_, chunkTriangles_, chunks.data(), chunks.size() * 4);
+    const MarchingCubesTables& tables = marchingCubesTables();
+    for (uint32_t st : state) {
+        uint32_t chunk = st >> CUBE_CHUNK_SHIFT;
+        if (!chunk) continue;
+        for (uint32_t t = 0; t < tables.triangleCount[st & CUBE_TYPE_MASK]; ++t) {
+            const uint32_t* tri = &chunks[size_t(chunk - 1) * CHUNK_WORDS + 3 * t];
+            if (tri[0] != INVALID_INDEX) s.liveTriangles.push_back({tri[0], tri[1], tri[2]});
+        }
+    }
+    return s;
+}
+
 Counters GpuVolume::readCounters() const {
     Counters k{};
     countersReadback_.invalidate();
@@ -266,6 +416,8 @@ std::vector<PoolInfo> GpuVolume::pools() const {
     std::vector<PoolInfo> out;
     for (const vk::Buffer* b : {&params_, &counters_, &hashKeys_, &hashValues_, &hashStamps_, &blockCoords_, &voxelSdf_,
                                 &voxelWeight_, &freeList_, &touched_, &depth_, &mcTables_, &blockList_, &meshVertices_,
+                                &cubeState_, &edgeVertex_, &meshStamps_, &dirtyList_, &vertices_, &vertexOwner_, &vertexFree_, &gcCandidates_,
+                                &chunkTriangles_, &chunkFree_, &chunkRelease_, &exportVertices_, &exportIndices_, &vertexRemap_,
                                 &depthStaging_, &countersReadback_})
         out.push_back({b->name(), size_t(b->size())});
     return out;

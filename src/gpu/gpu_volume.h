@@ -6,6 +6,7 @@
 
 #include <Eigen/Core>
 
+#include <array>
 #include <memory>
 #include <string>
 #include <utility>
@@ -21,6 +22,11 @@
 
 namespace vkmesh::gpu {
 
+enum class MeshMode {
+    Incremental,  // the paper's persistent shared-vertex mesh, updated every frame (docs/MESH.md)
+    Baseline,     // no per-frame mesh; marching cubes over everything on demand, 3 vertices per triangle
+};
+
 struct GpuVolumeConfig {
     VolumeParams params;
     uint32_t blockCapacity = 16384;      // blocks in the pool (512 TSDF corners each)
@@ -28,6 +34,9 @@ struct GpuVolumeConfig {
     uint32_t touchedCapacity = 0;        // blocks one frame may touch; 0: blockCapacity
     uint32_t meshVertexCapacity = 1u << 20;  // baseline mesh buffer (grown on demand)
     float minMeshWeight = 1.0f;          // a cube is meshed when all its corners have this weight
+    MeshMode meshMode = MeshMode::Incremental;
+    uint32_t vertexCapacity = 1u << 20;  // shared-vertex heap (32 B each)
+    uint32_t chunkCapacity = 1u << 19;   // triangle chunks, 5 triangles each (60 B)
     int imageWidth = 640, imageHeight = 480;
 };
 
@@ -51,6 +60,22 @@ struct TriangleSoup {
     size_t triangleCount() const { return vertices.size() / 3; }
 };
 
+// The compacted shared-vertex mesh, and what the compaction saw.
+struct ExportedMesh {
+    std::vector<Vertex> vertices;                 // position, normal, createdFrame (refcount as it was)
+    std::vector<std::array<uint32_t, 3>> triangles;
+    uint32_t unreferencedVertices = 0;            // allocated vertices with no triangle (0 unless GC fell behind)
+};
+
+// The raw mesh state, for tests of its invariants.
+struct MeshStateSnapshot {
+    std::vector<Vertex> vertices;                 // the whole heap; refcount DEAD_REFCOUNT when free
+    std::vector<uint32_t> vertexOwner;
+    std::vector<std::array<uint32_t, 3>> liveTriangles;   // raw heap indices
+    std::vector<uint32_t> edgeVertex;             // per cube and axis of every pool block
+    Counters counters{};
+};
+
 struct PoolInfo {
     std::string name;
     size_t bytes;
@@ -67,6 +92,13 @@ public:
     // mesh buffer was too small it is grown to the exact size the GPU counted and the pass re-run.
     TriangleSoup extractBaselineMesh(std::vector<std::pair<std::string, double>>* stageMs = nullptr);
 
+    // The shared-vertex mesh, compacted on the GPU. Never truncated (buffers grow to the exact counts).
+    ExportedMesh exportMesh(std::vector<std::pair<std::string, double>>* stageMs = nullptr);
+    // Throws away the mesh state (not the TSDF) and rebuilds it from scratch over every block: the
+    // reference an incremental mesh must equal.
+    void rebuildMesh();
+    MeshStateSnapshot downloadMeshState() const;
+
     std::vector<BlockSnapshot> downloadBlocks() const;
     Counters readCounters() const;
     std::vector<PoolInfo> pools() const;
@@ -76,16 +108,22 @@ public:
 private:
     vk::Buffer makeBuffer(VkDeviceSize size, VkBufferUsageFlags extraUsage, const std::string& name, uint32_t binding);
     void recordCountersReadback(VkCommandBuffer cmd);
+    void resetMeshState();
+    void setParam(uint32_t VolumeParamsGpu::*field, uint32_t value);
 
     const vk::Context& context_;
     GpuVolumeConfig config_;
     vk::BindingLayout layout_;
     vk::Buffer params_, counters_, hashKeys_, hashValues_, hashStamps_, blockCoords_, voxelSdf_, voxelWeight_,
         freeList_, touched_, depth_, mcTables_, blockList_, meshVertices_;
+    vk::Buffer cubeState_, edgeVertex_, meshStamps_, dirtyList_, vertices_, vertexOwner_, vertexFree_, gcCandidates_,
+        chunkTriangles_, chunkFree_, chunkRelease_, exportVertices_, exportIndices_, vertexRemap_;
     vk::Buffer depthStaging_, countersReadback_;
     AllocateBlocksStage allocate_;
     FuseDepthStage fuse_;
     BaselineMeshStage baselineMesh_;
+    IncrementalMeshStage incrementalMesh_;
+    ExportMeshStage exportMesh_;
     vk::CommandRecorder recorder_;
     vk::StageTimer timer_;
     uint32_t frameNumber_ = 0;

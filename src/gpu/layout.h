@@ -10,7 +10,12 @@ namespace vkmesh::gpu {
 static_assert(sizeof(VolumeParamsGpu) == 48, "VolumeParamsGpu: std140 layout of 12 scalars");
 static_assert(sizeof(Counters) % 16 == 0);
 static_assert(offsetof(Counters, assignDispatch) == 0 && offsetof(Counters, blockDispatch) == 16 &&
-              offsetof(Counters, listDispatch) == 32, "indirect arguments at 16-byte offsets");
+              offsetof(Counters, listDispatch) == 32 && offsetof(Counters, dirtyDispatch) == 48 &&
+              offsetof(Counters, candidateDispatch) == 64 && offsetof(Counters, releaseDispatch) == 80,
+              "indirect arguments at 16-byte offsets");
+static_assert(sizeof(Vertex) == 32, "Vertex: 32-byte stride for renderers");
+static_assert(offsetof(Counters, meshVerticesDropped) == offsetof(Counters, liveBlockCount) + 8);
+static_assert(offsetof(Counters, exportUnreferenced) == offsetof(Counters, exportVertices) + 8);
 static_assert(offsetof(Counters, validPixels) == COUNTERS_PER_FRAME_OFFSET);
 static_assert(offsetof(Counters, freeTop) == COUNTERS_PER_FRAME_OFFSET + COUNTERS_PER_FRAME_SIZE,
               "per-frame counters are one contiguous range, cleared with one fill");

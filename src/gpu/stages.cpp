@@ -39,13 +39,75 @@ BaselineMeshStage::BaselineMeshStage(const vk::Context& context, const vk::Bindi
       plan_(context, layout, "plan_block_list"),
       mesh_(context, layout, "mesh_baseline") {}
 
-void BaselineMeshStage::record(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters,
-                               uint32_t hashCapacity) const {
+void BaselineMeshStage::recordCollect(VkCommandBuffer cmd, const FramePush& push, uint32_t hashCapacity) const {
     collect_.dispatch(cmd, &push, (hashCapacity + WG_LIST - 1) / WG_LIST);
     vk::memoryBarrier(cmd);
     plan_.dispatch(cmd, &push, 1);
     vk::memoryBarrier(cmd);
+}
+
+void BaselineMeshStage::record(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters,
+                               uint32_t hashCapacity) const {
+    recordCollect(cmd, push, hashCapacity);
     mesh_.dispatchIndirect(cmd, &push, counters, offsetof(Counters, listDispatch));
+    vk::memoryBarrier(cmd);
+}
+
+IncrementalMeshStage::IncrementalMeshStage(const vk::Context& context, const vk::BindingLayout& layout)
+    : markDirty_(context, layout, "mark_dirty"),
+      markAllDirty_(context, layout, "mark_all_dirty"),
+      plan_(context, layout, "plan_mesh"),
+      claim_(context, layout, "mesh_claim"),
+      commitVertices_(context, layout, "commit_vertices"),
+      triangulate_(context, layout, "mesh_triangulate"),
+      commitChunks_(context, layout, "commit_chunks"),
+      freeVertices_(context, layout, "free_vertices"),
+      freeChunks_(context, layout, "free_chunks"),
+      commitFree_(context, layout, "commit_free") {}
+
+void IncrementalMeshStage::recordMarkTouched(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters) const {
+    // assignDispatch covers the touched list (sized by plan_frame).
+    markDirty_.dispatchIndirect(cmd, &push, counters, offsetof(Counters, assignDispatch));
+    vk::memoryBarrier(cmd);
+}
+
+void IncrementalMeshStage::recordMarkAll(VkCommandBuffer cmd, const FramePush& push, uint32_t blockCapacity) const {
+    markAllDirty_.dispatch(cmd, &push, (blockCapacity + WG_LIST - 1) / WG_LIST);
+    vk::memoryBarrier(cmd);
+}
+
+void IncrementalMeshStage::recordMesh(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters,
+                                      vk::StageTimer* timer) const {
+    auto mark = [&](const char* name) { if (timer) timer->mark(cmd, name); };
+    plan_.dispatch(cmd, &push, 1);
+    vk::memoryBarrier(cmd);
+    claim_.dispatchIndirect(cmd, &push, counters, offsetof(Counters, dirtyDispatch));
+    vk::memoryBarrier(cmd);
+    commitVertices_.dispatch(cmd, &push, 1);
+    vk::memoryBarrier(cmd);
+    mark("mesh_claim");
+    triangulate_.dispatchIndirect(cmd, &push, counters, offsetof(Counters, dirtyDispatch));
+    vk::memoryBarrier(cmd);
+    commitChunks_.dispatch(cmd, &push, 1);
+    vk::memoryBarrier(cmd);
+    mark("mesh_triangulate");
+    freeVertices_.dispatchIndirect(cmd, &push, counters, offsetof(Counters, candidateDispatch));
+    vk::memoryBarrier(cmd);
+    freeChunks_.dispatchIndirect(cmd, &push, counters, offsetof(Counters, releaseDispatch));
+    vk::memoryBarrier(cmd);
+    commitFree_.dispatch(cmd, &push, 1);
+    vk::memoryBarrier(cmd);
+    mark("mesh_gc");
+}
+
+ExportMeshStage::ExportMeshStage(const vk::Context& context, const vk::BindingLayout& layout)
+    : vertices_(context, layout, "export_vertices"), triangles_(context, layout, "export_triangles") {}
+
+void ExportMeshStage::record(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters,
+                             uint32_t vertexCapacity) const {
+    vertices_.dispatch(cmd, &push, (vertexCapacity + WG_LIST - 1) / WG_LIST);
+    vk::memoryBarrier(cmd);
+    triangles_.dispatchIndirect(cmd, &push, counters, offsetof(Counters, listDispatch));
     vk::memoryBarrier(cmd);
 }
 

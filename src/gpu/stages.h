@@ -5,6 +5,7 @@
 
 #include "gpu/layout.h"
 #include "vk/buffer.h"
+#include "vk/commands.h"
 #include "vk/pipeline.h"
 
 namespace vkmesh::gpu {
@@ -37,10 +38,41 @@ private:
 class BaselineMeshStage {
 public:
     BaselineMeshStage(const vk::Context& context, const vk::BindingLayout& layout);
+    // Lists every live block (blockList, liveBlockCount) and sizes listDispatch; other passes use it too.
+    void recordCollect(VkCommandBuffer cmd, const FramePush& push, uint32_t hashCapacity) const;
     void record(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters, uint32_t hashCapacity) const;
 
 private:
     vk::ComputePipeline collect_, plan_, mesh_;
+};
+
+// The incremental shared-vertex mesh (docs/MESH.md), recorded after fusion every frame: list the dirty
+// blocks (mark_dirty, or mark_all_dirty for a from-scratch pass), claim edge vertices (mesh_claim,
+// commit_vertices), update vertices and rebuild changed cubes' triangles (mesh_triangulate,
+// commit_chunks), collect garbage (free_vertices, free_chunks, commit_free).
+class IncrementalMeshStage {
+public:
+    IncrementalMeshStage(const vk::Context& context, const vk::BindingLayout& layout);
+    // Dirty = blocks touched this frame and their -x/-y/-z neighbours.
+    void recordMarkTouched(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters) const;
+    // Dirty = every block listed by collect_blocks (record BaselineMeshStage::recordCollect first).
+    void recordMarkAll(VkCommandBuffer cmd, const FramePush& push, uint32_t blockCapacity) const;
+    void recordMesh(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters, class vk::StageTimer* timer) const;
+
+private:
+    vk::ComputePipeline markDirty_, markAllDirty_, plan_, claim_, commitVertices_, triangulate_, commitChunks_,
+        freeVertices_, freeChunks_, commitFree_;
+};
+
+// Compaction of the shared-vertex mesh into dense vertex and index buffers.
+class ExportMeshStage {
+public:
+    ExportMeshStage(const vk::Context& context, const vk::BindingLayout& layout);
+    // Needs the live block list (BaselineMeshStage::recordCollect) for the triangle pass.
+    void record(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters, uint32_t vertexCapacity) const;
+
+private:
+    vk::ComputePipeline vertices_, triangles_;
 };
 
 }  // namespace vkmesh::gpu

@@ -1,0 +1,202 @@
+// The shared-vertex mesh on the GPU (docs/MESH.md): the incremental mesh equals a from-scratch rebuild
+// and the welded baseline; refcounts, owners and heaps stay consistent; heaps are bounded and exhaustion
+// is counted.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <map>
+#include <set>
+
+#include "gpu/gpu_volume.h"
+#include "gpu_fixture.h"
+#include "synth/synthetic_scene.h"
+
+namespace vkmesh {
+namespace {
+
+using test::GpuTest;
+
+constexpr int kWidth = 160, kHeight = 120;
+
+gpu::GpuVolumeConfig meshConfig() {
+    gpu::GpuVolumeConfig c;
+    c.params.voxelSize = 0.04f;
+    c.params.maxDepth = 6.0f;
+    c.blockCapacity = 4096;
+    c.vertexCapacity = 1u << 17;
+    c.chunkCapacity = 1u << 17;
+    c.imageWidth = kWidth;
+    c.imageHeight = kHeight;
+    return c;
+}
+
+void integrateRoom(gpu::GpuVolume& volume, size_t frames, synth::PathKind path = synth::PathKind::Orbit,
+                   size_t pathLength = 24, std::vector<gpu::FrameReport>* reports = nullptr) {
+    static const synth::SyntheticScene scene = synth::SyntheticScene::defaultRoom();
+    Intrinsics intr = synth::kinectIntrinsics(kWidth, kHeight);
+    auto poses = synth::cameraPath(pathLength, path);
+    for (size_t i = 0; i < frames; ++i) {
+        synth::RenderOptions options;
+        options.noise = true;
+        options.seed = uint32_t(i + 1);
+        const Pose& pose = poses[i % poses.size()];
+        gpu::FrameReport r = volume.integrate(scene.renderDepth(intr, pose, options), intr, pose);
+        if (reports) reports->push_back(r);
+    }
+}
+
+using Triangle = std::array<long, 9>;
+
+// Triangles as position triples rounded to 1 µm, each rotated to start at its smallest vertex (keeping
+// the orientation), sorted.
+std::vector<Triangle> canonical(const std::vector<Eigen::Vector3f>& soup) {
+    std::vector<Triangle> out;
+    for (size_t t = 0; t + 2 < soup.size(); t += 3) {
+        std::array<std::array<long, 3>, 3> v;
+        for (int i = 0; i < 3; ++i)
+            for (int k = 0; k < 3; ++k) v[i][k] = std::lround(double(soup[t + i][k]) * 1e6);
+        int first = int(std::min_element(v.begin(), v.end()) - v.begin());
+        Triangle tri;
+        for (int i = 0; i < 3; ++i)
+            for (int k = 0; k < 3; ++k) tri[i * 3 + k] = v[(first + i) % 3][k];
+        out.push_back(tri);
+    }
+    std::sort(out.begin(), out.end());
+    return out;
+}
+
+std::vector<Eigen::Vector3f> soupOf(const gpu::ExportedMesh& mesh) {
+    std::vector<Eigen::Vector3f> soup;
+    for (const auto& t : mesh.triangles)
+        for (uint32_t v : t) soup.emplace_back(mesh.vertices[v].px, mesh.vertices[v].py, mesh.vertices[v].pz);
+    return soup;
+}
+
+// Checks every invariant of docs/MESH.md on the raw GPU state; returns the problems found.
+std::vector<std::string> checkInvariants(const gpu::MeshStateSnapshot& s, const gpu::GpuVolumeConfig& config) {
+    std::vector<std::string> problems;
+    auto fail = [&](const std::string& p) { if (problems.size() < 10) problems.push_back(p); };
+    std::vector<uint32_t> uses(s.vertices.size(), 0);
+    for (const auto& t : s.liveTriangles)
+        for (uint32_t v : t) {
+            if (v >= s.vertices.size()) { fail("triangle uses vertex " + std::to_string(v) + " out of range"); continue; }
+            ++uses[v];
+        }
+    uint32_t live = 0;
+    for (uint32_t v = 0; v < s.vertices.size(); ++v) {
+        uint32_t refs = s.vertices[v].refcount;
+        if (refs == gpu::DEAD_REFCOUNT) {
+            if (uses[v]) fail("free vertex " + std::to_string(v) + " used by " + std::to_string(uses[v]) + " triangles");
+            continue;
+        }
+        ++live;
+        if (refs != uses[v]) fail("vertex " + std::to_string(v) + " refcount " + std::to_string(refs) + " but " + std::to_string(uses[v]) + " triangles");
+        if (refs == 0) fail("vertex " + std::to_string(v) + " alive without triangles");
+        if (s.vertexOwner[v] >= s.edgeVertex.size() || s.edgeVertex[s.vertexOwner[v]] != v)
+            fail("vertex " + std::to_string(v) + "'s owner slot does not point back");
+    }
+    for (size_t slot = 0; slot < s.edgeVertex.size(); ++slot) {
+        uint32_t v = s.edgeVertex[slot];
+        if (v == gpu::EMPTY_SLOT) continue;
+        if (v >= s.vertices.size() || s.vertices[v].refcount == gpu::DEAD_REFCOUNT || s.vertexOwner[v] != slot)
+            fail("edge slot " + std::to_string(slot) + " holds " + std::to_string(v) + ", not a live vertex it owns");
+    }
+    const gpu::Counters& k = s.counters;
+    if (live != k.verticesInUse) fail("verticesInUse " + std::to_string(k.verticesInUse) + " but " + std::to_string(live) + " live");
+    if (k.vertexFreeTop + k.verticesInUse != config.vertexCapacity) fail("vertex heap: free + in use != capacity");
+    if (k.chunkFreeTop + k.chunksInUse != config.chunkCapacity) fail("chunk heap: free + in use != capacity");
+    if (k.liveTriangles != s.liveTriangles.size())
+        fail("liveTriangles " + std::to_string(k.liveTriangles) + " but " + std::to_string(s.liveTriangles.size()) + " found");
+    return problems;
+}
+
+TEST_F(GpuTest, IncrementalMeshEqualsRebuildFromScratch) {
+    gpu::GpuVolume volume(context(), meshConfig());
+    std::vector<gpu::FrameReport> reports;
+    integrateRoom(volume, 10, synth::PathKind::Orbit, 24, &reports);
+    for (const auto& r : reports) {
+        EXPECT_GT(r.counters.dirtyCount, r.counters.touchedCount / 2);
+        EXPECT_TRUE(r.warnings.empty()) << r.warnings.front();
+    }
+    auto problems = checkInvariants(volume.downloadMeshState(), volume.config());
+    EXPECT_TRUE(problems.empty()) << problems.front();
+    gpu::ExportedMesh incremental = volume.exportMesh();
+    EXPECT_EQ(incremental.unreferencedVertices, 0u);
+    ASSERT_GT(incremental.triangles.size(), 5000u);
+
+    volume.rebuildMesh();
+    problems = checkInvariants(volume.downloadMeshState(), volume.config());
+    EXPECT_TRUE(problems.empty()) << problems.front();
+    gpu::ExportedMesh scratch = volume.exportMesh();
+    EXPECT_EQ(incremental.vertices.size(), scratch.vertices.size());
+    EXPECT_EQ(canonical(soupOf(incremental)), canonical(soupOf(scratch)));
+}
+
+TEST_F(GpuTest, SharedMeshIsTheWeldedBaseline) {
+    gpu::GpuVolume volume(context(), meshConfig());
+    integrateRoom(volume, 6);
+    gpu::ExportedMesh shared = volume.exportMesh();
+    gpu::TriangleSoup baseline = volume.extractBaselineMesh();
+    // Same triangles, and exactly one vertex per distinct baseline position: every vertex shared.
+    EXPECT_EQ(canonical(soupOf(shared)), canonical(baseline.vertices));
+    std::set<std::array<float, 3>> distinct;
+    for (const auto& p : baseline.vertices) distinct.insert({p.x(), p.y(), p.z()});
+    EXPECT_EQ(shared.vertices.size(), distinct.size());
+    std::set<std::array<float, 3>> positions;
+    for (const auto& v : shared.vertices) positions.insert({v.px, v.py, v.pz});
+    EXPECT_EQ(positions.size(), shared.vertices.size()) << "duplicate vertex positions";
+    EXPECT_LE(double(shared.vertices.size()), 0.2 * double(baseline.vertices.size()));
+    // Normals are unit and point to free space (positive TSDF side): mostly agree with the face normals.
+    size_t agree = 0;
+    for (const auto& t : shared.triangles) {
+        Eigen::Vector3f a(shared.vertices[t[0]].px, shared.vertices[t[0]].py, shared.vertices[t[0]].pz);
+        Eigen::Vector3f b(shared.vertices[t[1]].px, shared.vertices[t[1]].py, shared.vertices[t[1]].pz);
+        Eigen::Vector3f c(shared.vertices[t[2]].px, shared.vertices[t[2]].py, shared.vertices[t[2]].pz);
+        Eigen::Vector3f n(shared.vertices[t[0]].nx, shared.vertices[t[0]].ny, shared.vertices[t[0]].nz);
+        EXPECT_NEAR(n.norm(), 1.0f, 1e-4f);
+        if ((b - a).cross(c - a).dot(n) > 0) ++agree;
+    }
+    EXPECT_GT(double(agree), 0.95 * double(shared.triangles.size()));
+}
+
+TEST_F(GpuTest, RevisitsKeepHeapsBounded) {
+    gpu::GpuVolume volume(context(), meshConfig());
+    // Three laps of 12 frames over the same loop.
+    integrateRoom(volume, 12, synth::PathKind::Orbit, 12);
+    gpu::Counters afterFirst = volume.readCounters();
+    integrateRoom(volume, 24, synth::PathKind::Orbit, 12);
+    gpu::Counters afterThird = volume.readCounters();
+    std::cout << "vertex high water after lap 1: " << afterFirst.vertexHighWater << ", after lap 3: "
+              << afterThird.vertexHighWater << "; chunks " << afterFirst.chunkHighWater << " -> "
+              << afterThird.chunkHighWater << "\n";
+    EXPECT_LE(double(afterThird.vertexHighWater), 1.05 * afterFirst.vertexHighWater);
+    EXPECT_LE(double(afterThird.chunkHighWater), 1.05 * afterFirst.chunkHighWater);
+    auto problems = checkInvariants(volume.downloadMeshState(), volume.config());
+    EXPECT_TRUE(problems.empty()) << problems.front();
+}
+
+TEST_F(GpuTest, VertexHeapExhaustionIsCountedAndConsistent) {
+    auto config = meshConfig();
+    config.vertexCapacity = 512;
+    gpu::GpuVolume volume(context(), config);
+    std::vector<gpu::FrameReport> reports;
+    integrateRoom(volume, 3, synth::PathKind::Orbit, 24, &reports);
+    EXPECT_GT(reports[0].counters.vertexExhausted, 0u);
+    EXPECT_GT(reports[0].counters.trianglesInvalid, 0u);
+    ASSERT_FALSE(reports[0].warnings.empty());
+    EXPECT_NE(reports[0].warnings.front().find("vertex heap exhausted"), std::string::npos) << reports[0].warnings.front();
+    auto state = volume.downloadMeshState();
+    // The heap filled up; vertices whose triangles could not all be built were collected again.
+    EXPECT_EQ(state.counters.vertexHighWater, 512u);
+    EXPECT_GT(state.counters.verticesInUse, 0u);
+    auto problems = checkInvariants(state, volume.config());
+    EXPECT_TRUE(problems.empty()) << problems.front();
+    gpu::ExportedMesh mesh = volume.exportMesh();   // what exists is exportable
+    EXPECT_GT(mesh.triangles.size(), 0u);
+    EXPECT_EQ(mesh.unreferencedVertices, 0u);
+}
+
+}  // namespace
+}  // namespace vkmesh
