@@ -4,6 +4,7 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include <algorithm>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
@@ -69,7 +70,11 @@ TEST(Cli, FuseWritesMeshAndStats) {
     EXPECT_EQ(r.err.find("[validation"), std::string::npos) << r.err;
     Mesh mesh = readPly(out / "mesh.ply");
     EXPECT_GT(mesh.triangles.size(), 1000u);
-    EXPECT_EQ(mesh.positions.size(), 3 * mesh.triangles.size());   // baseline: no shared vertices
+    // The shared-vertex mesh: about half as many vertices as triangles, each with a normal and an age.
+    EXPECT_LT(mesh.positions.size(), mesh.triangles.size());
+    EXPECT_EQ(mesh.normals.size(), mesh.positions.size());
+    ASSERT_EQ(mesh.vertexAge.size(), mesh.positions.size());
+    EXPECT_LT(*std::max_element(mesh.vertexAge.begin(), mesh.vertexAge.end()), 6u);
     auto stats = nlohmann::json::parse(readText(out / "stats.json"));
     EXPECT_EQ(stats["frames"]["integrated"], 6);
     EXPECT_EQ(stats["frames"]["skipped"], 0);
@@ -78,8 +83,23 @@ TEST(Cli, FuseWritesMeshAndStats) {
     EXPECT_TRUE(stats["gpu_ms_per_frame"].contains("allocate"));
     EXPECT_TRUE(stats["gpu_ms_per_frame"]["fuse"].contains("median"));
     EXPECT_GT(stats["gpu_pool_bytes"]["voxel sdf"].get<size_t>(), 0u);
+    EXPECT_TRUE(stats["gpu_ms_per_frame"].contains("mesh_triangulate"));
+    EXPECT_EQ(stats["mesh"]["baseline_vertices"], 3 * mesh.triangles.size());
+    EXPECT_EQ(stats["mesh"]["unreferenced_vertices"], 0);
+    EXPECT_EQ(stats["heaps"]["vertices"]["live"], mesh.positions.size());
+    EXPECT_EQ(stats["bytes_per_cube"], 24);
     // Every vertex lies in the synthetic room (4 x 3 x 2.5 m around the origin, turned 20 degrees).
     for (const auto& p : mesh.positions) ASSERT_LT(p.norm(), 4.0f);
+    fs::remove_all(out);
+}
+
+TEST(Cli, BaselineModeWritesATriangleSoup) {
+    fs::path out = test::makeTempDir("cli_baseline");
+    CliRun r = runCli("fuse " + smallSequence().string() + " -o " + (out / "mesh.ply").string() + " --voxel 0.05 --mode baseline -q");
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    Mesh mesh = readPly(out / "mesh.ply");
+    EXPECT_GT(mesh.triangles.size(), 500u);
+    EXPECT_EQ(mesh.positions.size(), 3 * mesh.triangles.size());
     fs::remove_all(out);
 }
 
