@@ -154,7 +154,7 @@ int commandFuse(const FuseArgs& args) {
     gpu::GpuVolume volume(context, config);
 
     const bool tty = isatty(STDERR_FILENO);
-    std::map<std::string, std::vector<double>> stageMs;
+    std::map<std::string, std::vector<double>> stageMs, perFrame;
     std::vector<double> frameWallMs;
     size_t integrated = 0, skipped = 0;
     uint64_t hashFull = 0, poolExhausted = 0, touchedOverflow = 0;
@@ -185,6 +185,10 @@ int commandFuse(const FuseArgs& args) {
         frameWallMs.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
         ++integrated;
         for (const auto& [name, ms] : report.stageMs) stageMs[name].push_back(ms);
+        perFrame["touched_blocks"].push_back(report.counters.touchedCount);
+        perFrame["dirty_blocks"].push_back(report.counters.dirtyCount);
+        perFrame["cubes_retyped"].push_back(report.counters.cubesRetyped);
+        perFrame["triangles_created"].push_back(report.counters.trianglesCreated);
         hashFull += report.counters.hashFull;
         poolExhausted += report.counters.poolExhausted;
         touchedOverflow += report.counters.touchedCount > volume.config().touchedCapacity;
@@ -262,6 +266,9 @@ int commandFuse(const FuseArgs& args) {
     json gpuMs = json::object();
     for (const auto& [name, values] : stageMs) gpuMs[name] = statsOf(values);
     stats["gpu_ms_per_frame"] = gpuMs;
+    json counts = json::object();
+    for (const auto& [name, values] : perFrame) counts[name] = statsOf(values);
+    stats["per_frame_counts"] = counts;
     json meshStage = json::object();
     for (const auto& [name, ms] : meshMs) meshStage[name] = ms;
     stats["gpu_ms_mesh_export"] = meshStage;
@@ -288,7 +295,7 @@ int commandFuse(const FuseArgs& args) {
               << mesh.positions.size() << " vertices (baseline " << baselineVertices << "), " << mesh.triangles.size()
               << " triangles -> " << out.string() << "\n"
               << "  GPU per frame (median): allocate " << median("allocate") << " ms, fuse " << median("fuse") << " ms, mesh "
-              << median("mesh_mark") + median("mesh_claim") + median("mesh_triangulate") + median("mesh_gc") << " ms; "
+              << median("mesh_mark") + median("mesh_claim") + median("mesh_update") + median("mesh_triangulate") + median("mesh_gc") << " ms; "
               << "wall " << statsOf(frameWallMs)["median"].get<double>() << " ms/frame\n";
     if (!warnings.empty()) std::cout << "  " << warnings.size() << " warnings (see stderr)\n";
     return 0;

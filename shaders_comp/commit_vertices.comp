@@ -1,5 +1,6 @@
 #version 460
-// One invocation after mesh_claim: pops the vertices handed out from the heap's free stack.
+// One invocation after mesh_claim: pops the vertices handed out from the heap's free stack, and sizes
+// update_vertices over the part of the heap ever used (indices below the high water).
 #extension GL_GOOGLE_include_directive : require
 #include "common.glsl"
 
@@ -11,4 +12,7 @@ void main() {
     counters.vertexFreeTop -= granted;
     counters.verticesInUse += granted;
     counters.vertexHighWater = max(counters.vertexHighWater, counters.verticesInUse);
+    counters.vertexDispatch[0] = (counters.vertexHighWater + WG_LIST - 1u) / WG_LIST;
+    counters.vertexDispatch[1] = 1u;
+    counters.vertexDispatch[2] = 1u;
 }

@@ -40,6 +40,8 @@ layout(std430, set = 0, binding = BINDING_CHUNK_RELEASE) buffer ChunkRelease { u
 layout(std430, set = 0, binding = BINDING_EXPORT_VERTICES) buffer ExportVertices { Vertex exportVertices[]; };
 layout(std430, set = 0, binding = BINDING_EXPORT_INDICES) buffer ExportIndices { uint exportIndices[]; };
 layout(std430, set = 0, binding = BINDING_VERTEX_REMAP) buffer VertexRemap { uint vertexRemap[]; };
+layout(std430, set = 0, binding = BINDING_RETYPE_MASK) coherent buffer RetypeMask { uint retypeMask[]; };
+layout(std430, set = 0, binding = BINDING_RETYPE_LIST) buffer RetypeList { uint retypeList[]; };
 
 layout(push_constant) uniform Push { FramePush frame; };
 

@@ -1,10 +1,12 @@
-// Marching cubes inside one block per workgroup: the block and its +x/+y/+z neighbours (which hold the
-// corners and owned edges of the block's border cubes) are looked up once through the hash, then every
-// cube reads its 8 corners and finds the owner slot of each of its 12 edges with plain indexing.
+// Marching cubes on the hashed grid. A cube (block, local x y z) reads its 8 corners and finds the owner
+// slot of each of its 12 edges in its own block or its +x/+y/+z neighbours, collected in a CubeRef.
 // Conventions: src/core/marching_cubes.h (corner i at (i&1, i>>1&1, i>>2&1); edges axis-major).
 
-shared uint neighbour[8];   // block at offset cornerOffset(i) from the workgroup's block, or NO_BLOCK
-shared ivec3 blockOrigin;   // global index of the block's corner 0 (block coordinate * 8)
+struct CubeRef {
+    uint nb[8];       // block at offset cornerOffset(i) from the cube's block (nb[0]), NO_BLOCK if absent
+    ivec3 origin;     // global grid index of the block's corner 0 (block coordinate * 8)
+    uvec3 cube;       // the cube's position in its block
+};
 
 uvec3 cornerOffset(uint c) { return uvec3(c & 1u, (c >> 1) & 1u, (c >> 2) & 1u); }
 
@@ -12,38 +14,44 @@ uvec3 cubeOfLocal(uint local) {
     return uvec3(local % BLOCK_SIDE, (local / BLOCK_SIDE) % BLOCK_SIDE, local / (BLOCK_SIDE * BLOCK_SIDE));
 }
 
-// Fills the neighbour table; every invocation of the workgroup must call it (it has a barrier).
-void loadNeighbours(uint block) {
-    if (gl_LocalInvocationIndex < 8u) {
-        ivec3 coord = blockCoords[block].xyz;
-        uint i = gl_LocalInvocationIndex;
-        neighbour[i] = i == 0u ? block : findBlock(coord + ivec3(cornerOffset(i)));
-        if (i == 0u) blockOrigin = coord * int(BLOCK_SIDE);
+uint localOfCube(uvec3 c) { return (c.z * BLOCK_SIDE + c.y) * BLOCK_SIDE + c.x; }
+
+// A cube on its own: the neighbours it can reach (only on the axes where it sits at the block's far
+// side) are looked up in the hash. For the few cubes a frame retypes.
+CubeRef cubeRef(uint block, uint local) {
+    CubeRef r;
+    r.cube = cubeOfLocal(local);
+    ivec3 coord = blockCoords[block].xyz;
+    r.origin = coord * int(BLOCK_SIDE);
+    uvec3 far = uvec3(equal(r.cube, uvec3(BLOCK_SIDE - 1u)));
+    r.nb[0] = block;
+    for (uint i = 1u; i < 8u; ++i) {
+        uvec3 o = cornerOffset(i);
+        bool reachable = all(lessThanEqual(o, far));
+        r.nb[i] = reachable ? findBlock(coord + ivec3(o)) : NO_BLOCK;
     }
-    barrier();
+    return r;
 }
 
-// A position up to 8 (inclusive) on each axis inside the 2x2x2 neighbourhood: which block holds it and
-// where. Returns NO_BLOCK when that block is not allocated.
-uint blockHolding(uvec3 g, out uvec3 local) {
+// A position up to 8 (inclusive) on each axis from the cube's block: which block holds it and where.
+uint blockHolding(CubeRef r, uvec3 g, out uvec3 local) {
     uvec3 wrap = g / BLOCK_SIDE;
     local = g % BLOCK_SIDE;
-    return neighbour[wrap.x | (wrap.y << 1) | (wrap.z << 2)];
+    return r.nb[wrap.x | (wrap.y << 1) | (wrap.z << 2)];
 }
 
 // The 8 corner values of a cube (present[c]: the corner's block exists) and its MC type; `observed` is
 // false (type 0) unless every corner's block exists and every corner has weight >= minMeshWeight.
-uint loadCube(uvec3 cube, out float d[8], out bool present[8], out bool observed) {
+uint loadCube(CubeRef r, out float d[8], out bool present[8], out bool observed) {
     uint type = 0u;
     observed = true;
     for (uint c = 0u; c < 8u; ++c) {
         uvec3 local;
-        uint nb = blockHolding(cube + cornerOffset(c), local);
+        uint nb = blockHolding(r, r.cube + cornerOffset(c), local);
         d[c] = 0.0;
-        present[c] = false;
+        present[c] = nb != NO_BLOCK;
         if (nb == NO_BLOCK) { observed = false; continue; }
         uint v = voxelIndex(nb, local);
-        present[c] = true;
         if (voxelWeight[v] < params.minMeshWeight) observed = false;
         d[c] = voxelSdf[v];
         if (d[c] < 0.0) type |= 1u << c;
@@ -65,21 +73,21 @@ uint triangleEdge(uint type, uint i) {
     return (word >> ((i % 4u) * 8u)) & 0xFFu;
 }
 
-// Index into edgeVertex of the slot holding edge e of `cube`: the slot (axis of e) of the cube at the
+// Index into edgeVertex of the slot holding edge e of the cube: the slot (axis of e) of the cube at the
 // edge's low corner, which may be in a neighbouring block. NO_BLOCK if that block does not exist.
-uint edgeSlot(uvec3 cube, uint e) {
+uint edgeSlot(CubeRef r, uint e) {
     uvec3 local;
-    uint nb = blockHolding(cube + cornerOffset(edgeLowCorner(e)), local);
+    uint nb = blockHolding(r, r.cube + cornerOffset(edgeLowCorner(e)), local);
     if (nb == NO_BLOCK) return NO_BLOCK;
-    return (nb * VOXELS_PER_BLOCK + (local.z * BLOCK_SIDE + local.y) * BLOCK_SIDE + local.x) * 3u + e / 4u;
+    return (nb * VOXELS_PER_BLOCK + localOfCube(local)) * 3u + e / 4u;
 }
 
-// Position of the vertex on the edge from corner `lo` along `axis` of `cube`: linear interpolation of the
-// zero crossing, in grid units, then metres. Written out so the CPU reference reproduces it bit for bit;
-// the baseline and the shared-vertex mesh use this one function, so their vertices coincide exactly.
-vec3 edgeVertexPosition(uvec3 cube, uint lo, uint axis, float dLo, float dHi) {
+// Position of the vertex on the edge from corner `lo` along `axis` of the cube: linear interpolation of
+// the zero crossing, in grid units, then metres. Written out so the CPU reference reproduces it bit for
+// bit; the baseline and the shared-vertex mesh use this one function, so their vertices coincide exactly.
+vec3 edgeVertexPosition(CubeRef r, uint lo, uint axis, float dLo, float dHi) {
     precise float s = dLo / (dLo - dHi);
-    precise vec3 p = vec3(blockOrigin + ivec3(cube + cornerOffset(lo)));
+    precise vec3 p = vec3(r.origin + ivec3(r.cube + cornerOffset(lo)));
     p[axis] += s;
     precise vec3 world = p * params.voxelSize;
     return world;

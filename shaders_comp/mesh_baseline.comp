@@ -10,17 +10,26 @@ layout(local_size_x = WG_BLOCK) in;
 
 #include "cube_access.glsl"
 
+shared uint neighbour[8];   // the workgroup's block and its 7 +x/+y/+z neighbours, looked up once
+
 void main() {
     uint block = blockList[gl_WorkGroupID.x];
-    loadNeighbours(block);
+    if (gl_LocalInvocationIndex < 8u) {
+        uint i = gl_LocalInvocationIndex;
+        neighbour[i] = i == 0u ? block : findBlock(blockCoords[block].xyz + ivec3(cornerOffset(i)));
+    }
+    barrier();
+    CubeRef r;
+    for (uint i = 0u; i < 8u; ++i) r.nb[i] = neighbour[i];
+    r.origin = blockCoords[block].xyz * int(BLOCK_SIDE);
 
     uint dropped = 0u;
     for (uint k = 0u; k < VOXELS_PER_INVOCATION; ++k) {
-        uvec3 cube = cubeOfLocal(gl_LocalInvocationIndex + k * WG_BLOCK);
+        r.cube = cubeOfLocal(gl_LocalInvocationIndex + k * WG_BLOCK);
         float d[8];
         bool present[8];
         bool observed;
-        uint type = loadCube(cube, d, present, observed);
+        uint type = loadCube(r, d, present, observed);
         uint triangles = observed ? triangleCountOf(type) : 0u;
         uint vertexCount = 3u * triangles;
 
@@ -38,7 +47,7 @@ void main() {
                 uint e = triangleEdge(type, t);
                 uint lo = edgeLowCorner(e);
                 uint hi = lo | (1u << (e / 4u));
-                meshVertices[base + t] = vec4(edgeVertexPosition(cube, lo, e / 4u, d[lo], d[hi]), 1.0);
+                meshVertices[base + t] = vec4(edgeVertexPosition(r, lo, e / 4u, d[lo], d[hi]), 1.0);
             }
         }
     }

@@ -1,12 +1,12 @@
 #version 460
-// One invocation: one workgroup per dirty block for the meshing passes.
+// One invocation after mark_dirty: one invocation per retype-mask word of the dirty blocks.
 #extension GL_GOOGLE_include_directive : require
 #include "common.glsl"
 
 layout(local_size_x = 1) in;
 
 void main() {
-    counters.dirtyDispatch[0] = counters.dirtyCount;
-    counters.dirtyDispatch[1] = 1u;
-    counters.dirtyDispatch[2] = 1u;
+    counters.collectDispatch[0] = (counters.dirtyCount * MASK_WORDS + WG_LIST - 1u) / WG_LIST;
+    counters.collectDispatch[1] = 1u;
+    counters.collectDispatch[2] = 1u;
 }

@@ -84,7 +84,10 @@ VKM_CONST BINDING_CHUNK_RELEASE = 24u; // uint list: chunks released this frame
 VKM_CONST BINDING_EXPORT_VERTICES = 25u; // Vertex: the compacted mesh's vertices
 VKM_CONST BINDING_EXPORT_INDICES = 26u;  // uint: the compacted mesh's triangles
 VKM_CONST BINDING_VERTEX_REMAP = 27u;    // uint per vertex: its index in the compacted mesh
-VKM_CONST BINDING_COUNT = 28u;
+VKM_CONST BINDING_RETYPE_MASK = 28u;   // 16 uint per block: cubes that may change MC type (a corner flipped)
+VKM_CONST BINDING_RETYPE_LIST = 29u;   // uint list of this frame's retype candidates: block * 512 + cube
+VKM_CONST BINDING_COUNT = 30u;
+VKM_CONST MASK_WORDS = 16u;            // VOXELS_PER_BLOCK / 32
 
 VKM_CONST EMPTY_SLOT = 0xFFFFFFFFu;    // an edge with no vertex
 VKM_CONST CLAIMED_SLOT = 0xFFFFFFFEu;  // claimed, the winner is allocating (within one dispatch only)
@@ -116,6 +119,8 @@ struct VolumeParamsGpu {
     uint vertexCapacity;    // vertex heap (also the GC candidate list and the remap table)
     uint chunkCapacity;     // triangle chunks (also the chunk release list)
     uint exportTriangleCapacity;
+    uint retypeCapacity;    // entries of the retype list (cubes retyped per pass)
+    uint pad0, pad1, pad2;
 };
 
 // One mesh vertex, as stored in the heap and in the compacted export (stride 32: a renderer reads the
@@ -133,7 +138,9 @@ struct Counters {
     uint assignDispatch[4];     // over the touched list, WG_LIST per group
     uint blockDispatch[4];      // one workgroup per touched block
     uint listDispatch[4];       // over the live block list, one workgroup per block
-    uint dirtyDispatch[4];      // one workgroup per dirty block
+    uint collectDispatch[4];    // over the dirty blocks' retype-mask words, WG_LIST per group
+    uint retypeDispatch[4];     // over the retype list, WG_LIST per group
+    uint vertexDispatch[4];     // over the vertex heap up to its high water, WG_LIST per group
     uint candidateDispatch[4];  // over the GC candidates, WG_LIST per group
     uint releaseDispatch[4];    // over the released chunks, WG_LIST per group
     // --- per frame: reset at the start of every frame ---
@@ -162,7 +169,9 @@ struct Counters {
     uint trianglesCreated;
     uint trianglesReleased;
     uint trianglesInvalid;      // triangles not built because an edge had no vertex (heap exhausted)
-    uint framePad[3];
+    uint retypeCount;           // cubes listed for retyping this pass
+    uint retypeDeferred;        // cubes that did not fit in the retype list (their bits stay for the next pass)
+    uint framePad;
     // --- persistent across frames ---
     uint freeTop;               // blocks on the free list
     uint blocksInUse;           // blocks handed out of the pool
@@ -181,7 +190,7 @@ struct Counters {
     uint exportUnreferenced;    //  ... allocated vertices with refcount 0 (0 unless GC fell behind)
     uint pad;
 };
-VKM_CONST COUNTERS_PER_FRAME_OFFSET = 96u;   // byte offset of validPixels
+VKM_CONST COUNTERS_PER_FRAME_OFFSET = 128u;  // byte offset of validPixels
 VKM_CONST COUNTERS_PER_FRAME_SIZE = 112u;    // 28 per-frame uints
 
 // Push constants of every compute stage: the current frame's camera. Rigid transforms are stored as

@@ -126,6 +126,7 @@ ReferenceFrameStats ReferenceVolume::integrate(const DepthImage& depth, const In
             ++stats.updatedVoxels;
         }
     }
+    lastTouched_ = std::move(touched);
     return stats;
 }
 

@@ -48,10 +48,14 @@ public:
     // Baseline mesh: every cube's triangles with 3 vertices of their own (a triangle soup).
     std::vector<Eigen::Vector3f> extractBaselineMesh() const;
 
+    // The blocks touched by the last integrate() call (allocation order), what the incremental mesh marks dirty.
+    const std::vector<BlockCoord>& lastTouched() const { return lastTouched_; }
+
 private:
     VolumeParams params_;
     float minMeshWeight_;
     std::map<BlockCoord, ReferenceBlock> blocks_;
+    std::vector<BlockCoord> lastTouched_;
 };
 
 }  // namespace vkmesh::cpu

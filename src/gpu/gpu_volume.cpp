@@ -63,6 +63,7 @@ GpuVolumeConfig resolved(GpuVolumeConfig c) {
         throw Error("hash capacity " + std::to_string(c.hashCapacity) + " must be a power of two");
     if (c.touchedCapacity == 0) c.touchedCapacity = c.blockCapacity;
     if (c.meshMode == MeshMode::Baseline) c.vertexCapacity = c.chunkCapacity = 1024;   // unused: keep them small
+    if (c.retypeCapacity < 1024) throw Error("retype capacity " + std::to_string(c.retypeCapacity) + " must be >= 1024");
     if (c.vertexCapacity < 64 || c.vertexCapacity >= CLAIMED_SLOT)
         throw Error("vertex capacity " + std::to_string(c.vertexCapacity) + " must be in [64, 2^32 - 2)");
     if (c.chunkCapacity < 64 || c.chunkCapacity >= (1u << (32 - CUBE_CHUNK_SHIFT)) - 1)
@@ -120,6 +121,8 @@ GpuVolume::GpuVolume(const vk::Context& context, const GpuVolumeConfig& config)
     chunkFree_ = makeBuffer(VkDeviceSize(c.chunkCapacity) * 4, 0, "chunk free stack", BINDING_CHUNK_FREE);
     chunkRelease_ = makeBuffer(VkDeviceSize(c.chunkCapacity) * 4, 0, "chunk release list", BINDING_CHUNK_RELEASE);
     vertexRemap_ = makeBuffer(VkDeviceSize(c.vertexCapacity) * 4, 0, "vertex remap", BINDING_VERTEX_REMAP);
+    retypeMask_ = makeBuffer(VkDeviceSize(c.blockCapacity) * MASK_WORDS * 4, 0, "retype masks", BINDING_RETYPE_MASK);
+    retypeList_ = makeBuffer(VkDeviceSize(c.retypeCapacity) * 4, 0, "retype list", BINDING_RETYPE_LIST);
     exportVertices_ = makeBuffer(1024 * sizeof(Vertex), 0, "export vertices", BINDING_EXPORT_VERTICES);
     exportIndices_ = makeBuffer(1024 * 12, 0, "export indices", BINDING_EXPORT_INDICES);
     depthStaging_ = vk::Buffer(context, depth_.size(), VK_BUFFER_USAGE_TRANSFER_SRC_BIT, vk::MemoryUse::Upload, "depth staging");
@@ -138,6 +141,7 @@ GpuVolume::GpuVolume(const vk::Context& context, const GpuVolumeConfig& config)
     gp.vertexCapacity = c.vertexCapacity;
     gp.chunkCapacity = c.chunkCapacity;
     gp.exportTriangleCapacity = 1024;
+    gp.retypeCapacity = c.retypeCapacity;
     vk::uploadToBuffer(context, params_, &gp, sizeof(gp));
     auto tables = packMarchingCubesTables();
     vk::uploadToBuffer(context, mcTables_, tables.data(), tables.size() * 4);
@@ -164,6 +168,7 @@ void GpuVolume::resetMeshState() {
     vkCmdFillBuffer(cmd, cubeState_.handle(), 0, VK_WHOLE_SIZE, 0);
     vkCmdFillBuffer(cmd, edgeVertex_.handle(), 0, VK_WHOLE_SIZE, EMPTY_SLOT);
     vkCmdFillBuffer(cmd, meshStamps_.handle(), 0, VK_WHOLE_SIZE, 0);
+    vkCmdFillBuffer(cmd, retypeMask_.handle(), 0, VK_WHOLE_SIZE, 0);
     vkCmdFillBuffer(cmd, vertices_.handle(), 0, VK_WHOLE_SIZE, 0xFFFFFFFFu);   // refcount DEAD everywhere
     vk::memoryBarrier(cmd);
     recorder_.submitAndWait();
@@ -246,6 +251,9 @@ FrameReport GpuVolume::integrate(const DepthImage& depth, const Intrinsics& intr
                                   std::to_string(config_.touchedCapacity) + "; the rest were not fused this frame");
     if (k.outOfRange)
         report.warnings.push_back(std::to_string(k.outOfRange) + " block visits lay outside the addressable grid (|coordinate| >= 2^20 blocks)");
+    if (k.retypeDeferred)
+        report.warnings.push_back(std::to_string(k.retypeDeferred) + " cubes to re-mesh did not fit in the retype list (capacity " +
+                                  std::to_string(config_.retypeCapacity) + "); they are re-meshed when their blocks are next dirty");
     if (k.vertexExhausted)
         report.warnings.push_back("vertex heap exhausted: " + std::to_string(k.vertexExhausted) + " edge vertices not created (capacity " +
                                   std::to_string(config_.vertexCapacity) + "); their triangles are missing until there is room");
@@ -344,15 +352,26 @@ ExportedMesh GpuVolume::exportMesh(std::vector<std::pair<std::string, double>>* 
 
 void GpuVolume::rebuildMesh() {
     resetMeshState();
+    // Every cube of every block is listed for retyping; a pass retypes up to retypeCapacity of them and
+    // leaves the rest of the bits set, so passes repeat until none is left.
     VkCommandBuffer cmd = recorder_.begin();
-    vkCmdFillBuffer(cmd, counters_.handle(), COUNTERS_PER_FRAME_OFFSET, COUNTERS_PER_FRAME_SIZE, 0);
-    vkCmdFillBuffer(cmd, counters_.handle(), offsetof(Counters, liveBlockCount), sizeof(uint32_t), 0);
+    vkCmdFillBuffer(cmd, retypeMask_.handle(), 0, VK_WHOLE_SIZE, 0xFFFFFFFFu);
     vk::memoryBarrier(cmd);
-    baselineMesh_.recordCollect(cmd, lastPush_, config_.hashCapacity);
-    incrementalMesh_.recordMarkAll(cmd, lastPush_, config_.blockCapacity);
-    incrementalMesh_.recordMesh(cmd, lastPush_, counters_, nullptr);
-    recordCountersReadback(cmd);
     recorder_.submitAndWait();
+    const uint32_t maxPasses = 2 + config_.blockCapacity * VOXELS_PER_BLOCK / config_.retypeCapacity;
+    for (uint32_t pass = 0; pass < maxPasses; ++pass) {
+        cmd = recorder_.begin();
+        vkCmdFillBuffer(cmd, counters_.handle(), COUNTERS_PER_FRAME_OFFSET, COUNTERS_PER_FRAME_SIZE, 0);
+        vkCmdFillBuffer(cmd, counters_.handle(), offsetof(Counters, liveBlockCount), sizeof(uint32_t), 0);
+        vk::memoryBarrier(cmd);
+        baselineMesh_.recordCollect(cmd, lastPush_, config_.hashCapacity);
+        incrementalMesh_.recordMarkAll(cmd, lastPush_, config_.blockCapacity);
+        incrementalMesh_.recordMesh(cmd, lastPush_, counters_, nullptr);
+        recordCountersReadback(cmd);
+        recorder_.submitAndWait();
+        if (readCounters().retypeDeferred == 0) return;
+    }
+    throw Error("mesh rebuild did not finish in " + std::to_string(maxPasses) + " passes");
 }
 
 MeshStateSnapshot GpuVolume::downloadMeshState() const {
@@ -418,6 +437,7 @@ std::vector<PoolInfo> GpuVolume::pools() const {
                                 &voxelWeight_, &freeList_, &touched_, &depth_, &mcTables_, &blockList_, &meshVertices_,
                                 &cubeState_, &edgeVertex_, &meshStamps_, &dirtyList_, &vertices_, &vertexOwner_, &vertexFree_, &gcCandidates_,
                                 &chunkTriangles_, &chunkFree_, &chunkRelease_, &exportVertices_, &exportIndices_, &vertexRemap_,
+                                &retypeMask_, &retypeList_,
                                 &depthStaging_, &countersReadback_})
         out.push_back({b->name(), size_t(b->size())});
     return out;

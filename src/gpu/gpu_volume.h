@@ -37,6 +37,7 @@ struct GpuVolumeConfig {
     MeshMode meshMode = MeshMode::Incremental;
     uint32_t vertexCapacity = 1u << 20;  // shared-vertex heap (32 B each)
     uint32_t chunkCapacity = 1u << 19;   // triangle chunks, 5 triangles each (60 B)
+    uint32_t retypeCapacity = 1u << 20;  // cubes one mesh pass can retype (more wait for the next pass)
     int imageWidth = 640, imageHeight = 480;
 };
 
@@ -117,7 +118,7 @@ private:
     vk::Buffer params_, counters_, hashKeys_, hashValues_, hashStamps_, blockCoords_, voxelSdf_, voxelWeight_,
         freeList_, touched_, depth_, mcTables_, blockList_, meshVertices_;
     vk::Buffer cubeState_, edgeVertex_, meshStamps_, dirtyList_, vertices_, vertexOwner_, vertexFree_, gcCandidates_,
-        chunkTriangles_, chunkFree_, chunkRelease_, exportVertices_, exportIndices_, vertexRemap_;
+        chunkTriangles_, chunkFree_, chunkRelease_, exportVertices_, exportIndices_, vertexRemap_, retypeMask_, retypeList_;
     vk::Buffer depthStaging_, countersReadback_;
     AllocateBlocksStage allocate_;
     FuseDepthStage fuse_;

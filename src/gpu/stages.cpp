@@ -57,8 +57,11 @@ IncrementalMeshStage::IncrementalMeshStage(const vk::Context& context, const vk:
     : markDirty_(context, layout, "mark_dirty"),
       markAllDirty_(context, layout, "mark_all_dirty"),
       plan_(context, layout, "plan_mesh"),
+      collect_(context, layout, "collect_retype"),
+      planRetype_(context, layout, "plan_retype"),
       claim_(context, layout, "mesh_claim"),
       commitVertices_(context, layout, "commit_vertices"),
+      update_(context, layout, "update_vertices"),
       triangulate_(context, layout, "mesh_triangulate"),
       commitChunks_(context, layout, "commit_chunks"),
       freeVertices_(context, layout, "free_vertices"),
@@ -81,12 +84,19 @@ void IncrementalMeshStage::recordMesh(VkCommandBuffer cmd, const FramePush& push
     auto mark = [&](const char* name) { if (timer) timer->mark(cmd, name); };
     plan_.dispatch(cmd, &push, 1);
     vk::memoryBarrier(cmd);
-    claim_.dispatchIndirect(cmd, &push, counters, offsetof(Counters, dirtyDispatch));
+    collect_.dispatchIndirect(cmd, &push, counters, offsetof(Counters, collectDispatch));
+    vk::memoryBarrier(cmd);
+    planRetype_.dispatch(cmd, &push, 1);
+    vk::memoryBarrier(cmd);
+    claim_.dispatchIndirect(cmd, &push, counters, offsetof(Counters, retypeDispatch));
     vk::memoryBarrier(cmd);
     commitVertices_.dispatch(cmd, &push, 1);
     vk::memoryBarrier(cmd);
     mark("mesh_claim");
-    triangulate_.dispatchIndirect(cmd, &push, counters, offsetof(Counters, dirtyDispatch));
+    update_.dispatchIndirect(cmd, &push, counters, offsetof(Counters, vertexDispatch));
+    vk::memoryBarrier(cmd);
+    mark("mesh_update");
+    triangulate_.dispatchIndirect(cmd, &push, counters, offsetof(Counters, retypeDispatch));
     vk::memoryBarrier(cmd);
     commitChunks_.dispatch(cmd, &push, 1);
     vk::memoryBarrier(cmd);

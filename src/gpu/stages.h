@@ -47,8 +47,9 @@ private:
 };
 
 // The incremental shared-vertex mesh (docs/MESH.md), recorded after fusion every frame: list the dirty
-// blocks (mark_dirty, or mark_all_dirty for a from-scratch pass), claim edge vertices (mesh_claim,
-// commit_vertices), update vertices and rebuild changed cubes' triangles (mesh_triangulate,
+// blocks (mark_dirty, or mark_all_dirty for a from-scratch pass) and the cubes that may change type
+// (plan_mesh, collect_retype, plan_retype), claim edge vertices (mesh_claim, commit_vertices), move the
+// dirty blocks' vertices (update_vertices), rebuild changed cubes' triangles (mesh_triangulate,
 // commit_chunks), collect garbage (free_vertices, free_chunks, commit_free).
 class IncrementalMeshStage {
 public:
@@ -60,8 +61,8 @@ public:
     void recordMesh(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters, class vk::StageTimer* timer) const;
 
 private:
-    vk::ComputePipeline markDirty_, markAllDirty_, plan_, claim_, commitVertices_, triangulate_, commitChunks_,
-        freeVertices_, freeChunks_, commitFree_;
+    vk::ComputePipeline markDirty_, markAllDirty_, plan_, collect_, planRetype_, claim_, commitVertices_, update_,
+        triangulate_, commitChunks_, freeVertices_, freeChunks_, commitFree_;
 };
 
 // Compaction of the shared-vertex mesh into dense vertex and index buffers.

@@ -1,0 +1,133 @@
+// The CPU reference of the incremental shared-vertex mesh (docs/MESH.md, after Dong et al., ICRA 2018):
+// one persistent mesh beside the TSDF, updated in place every frame over the dirty blocks only. Every
+// vertex sits on exactly one cube edge and belongs to the cube whose corner 0 is the edge's low end; a cube
+// keeps the MC type its triangles were built from and rebuilds them only when that type changes.
+//
+// Serial and plain on purpose: it states what the GPU stages (shaders_comp/mesh_*.comp) compute, and the
+// tests compare the two (same triangles as position triples, same vertex count). Positions use exactly the
+// float operations of ReferenceVolume::extractBaselineMesh, so they equal the baseline's bit for bit.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "cpu/reference_volume.h"
+#include "io/ply.h"
+
+namespace vkmesh::cpu {
+
+// What one update did. Counts are over the frame's passes.
+struct MeshFrameStats {
+    uint32_t dirtyBlocks = 0;        // |D|
+    uint32_t cubesRetyped = 0;       // cubes whose triangles were rebuilt (type changed, or INCOMPLETE)
+    uint32_t verticesAllocated = 0;  // claim: vertices taken from the heap
+    uint32_t verticesFreed = 0;      // garbage collection: vertices given back
+    uint32_t trianglesCreated = 0;
+    uint32_t trianglesReleased = 0;
+    uint32_t trianglesInvalid = 0;   // triangles not created (an edge without a vertex, or no chunk)
+    uint32_t vertexExhausted = 0;    // claims the vertex heap could not serve (the slot stays EMPTY)
+    uint32_t chunkExhausted = 0;     // cubes that needed a chunk the chunk heap could not give
+    uint32_t chunksAllocated = 0;
+    uint32_t chunksFreed = 0;
+    // Vertices claimed this frame whose owner cube lies in a block outside D: the per-cube update pass over D
+    // does not visit them, so the update pass also positions every vertex allocated this frame (see update()).
+    uint32_t newVerticesOutsideDirty = 0;
+};
+
+// One vertex of the heap, the layout of the GPU's `vertices` buffer (32 bytes).
+struct MeshVertex {
+    float px = 0, py = 0, pz = 0;
+    uint32_t refcount = 0;  // live triangles using it; DEAD while on the free stack
+    float nx = 0, ny = 0, nz = 0;
+    uint32_t createdFrame = 0;
+};
+
+// The mesh state of one block, created (all slots EMPTY, every cube state 0) the first time the block exists in
+// the volume.
+struct BlockMeshState {
+    // Per cube (index x + 8 (y + 8 z)): bits 0-7 the MC type its triangles were built from, bit 8 INCOMPLETE,
+    // bits 9-31 its triangle chunk + 1 (0 = none).
+    std::array<uint32_t, gpu::VOXELS_PER_BLOCK> cubeState{};
+    // Per cube and axis (index cube * 3 + axis): the vertex on the edge leaving the cube's corner 0 along that
+    // axis, or EMPTY.
+    std::array<uint32_t, gpu::VOXELS_PER_BLOCK * 3> edgeVertex{};
+    BlockCoord coord{};
+    uint32_t index = 0;  // creation order: the block number in global edge ids (block * 512 + cube) * 3 + axis
+};
+
+class ReferenceMesher {
+public:
+    static constexpr uint32_t kEmpty = 0xFFFFFFFFu;    // edge slot without a vertex
+    static constexpr uint32_t kInvalid = 0xFFFFFFFFu;  // first index of a triangle that does not exist
+    static constexpr uint32_t kDead = 0xFFFFFFFFu;     // refcount of a vertex on the free stack
+    static constexpr uint32_t kTypeMask = 0xFFu;
+    static constexpr uint32_t kIncomplete = 1u << 8;
+    static constexpr uint32_t kChunkShift = 9;
+    static constexpr uint32_t kMaxChunkCapacity = (1u << 23) - 1;  // chunk + 1 must fit in bits 9-31
+    static constexpr int kChunkTriangles = 5;
+
+    // Throws Error for a zero capacity or a chunk capacity above kMaxChunkCapacity.
+    explicit ReferenceMesher(const VolumeParams& params, float minMeshWeight = 1.0f,
+                             uint32_t vertexCapacity = 1u << 20, uint32_t chunkCapacity = 1u << 20);
+
+    // One frame of docs/MESH.md on the TSDF as it is now; `touched` = the blocks the frame fused
+    // (volume.lastTouched()), `frameNumber` goes into new vertices' createdFrame.
+    MeshFrameStats update(const ReferenceVolume& volume, const std::vector<BlockCoord>& touched, uint32_t frameNumber);
+    // The same with every block of the volume dirty: on a fresh mesher, the from-scratch extraction.
+    MeshFrameStats updateAll(const ReferenceVolume& volume, uint32_t frameNumber);
+
+    // Dense copy: the live vertices (refcount > 0) in heap order with positions, normals and
+    // vertexAge = currentFrame - createdFrame; the live triangles (blocks in coordinate order, then cubes).
+    Mesh exportMesh(uint32_t currentFrame) const;
+
+    // Violated invariants, empty when all hold: refcount = number of live triangles using the vertex and > 0 for
+    // every live vertex; owner slot points back (and every filled slot points to a live vertex it owns);
+    // live + free = capacity for both heaps; every live chunk belongs to exactly one cube; a complete cube's
+    // triangles are exactly its type's triangles on its current edge vertices.
+    std::vector<std::string> checkInvariants() const;
+
+    uint32_t liveVertices() const { return vertexCapacity_ - uint32_t(freeVertices_.size()); }
+    uint32_t vertexHighWater() const { return vertexHighWater_; }  // most live vertices at any time
+    uint32_t liveChunks() const { return chunkCapacity_ - uint32_t(freeChunks_.size()); }
+    uint32_t chunkHighWater() const { return chunkHighWater_; }
+    uint32_t incompleteCubes() const;  // cubes marked INCOMPLETE (rebuilt when next dirty)
+    uint32_t vertexCapacity() const { return vertexCapacity_; }
+    uint32_t chunkCapacity() const { return chunkCapacity_; }
+
+    const std::map<BlockCoord, BlockMeshState>& blockStates() const { return blocks_; }
+    const MeshVertex& vertex(uint32_t v) const { return vertices_.at(v); }
+
+private:
+    struct DirtyBlock;
+    // A block and its 7 neighbours in +x, +y, +z (indexed like cube corners; null where not allocated).
+    using TsdfBlocks = std::array<const ReferenceBlock*, 8>;
+
+    void createBlockStates(const ReferenceVolume& volume);
+    void claim(DirtyBlock& block, MeshFrameStats& stats, uint32_t frameNumber);
+    void updateVertex(const TsdfBlocks& tsdf, const BlockMeshState& owner, uint32_t cube, int axis);
+    void triangulate(DirtyBlock& block, MeshFrameStats& stats);
+    void releaseReference(uint32_t v);
+    void collectGarbage(MeshFrameStats& stats);
+
+    VolumeParams params_;
+    float minMeshWeight_;
+    uint32_t vertexCapacity_, chunkCapacity_;
+
+    std::map<BlockCoord, BlockMeshState> blocks_;
+    std::vector<BlockMeshState*> blockByIndex_;  // BlockMeshState::index -> state
+
+    std::vector<MeshVertex> vertices_;
+    std::vector<uint64_t> vertexOwner_;         // global edge id of the slot holding the vertex
+    std::vector<uint32_t> freeVertices_;        // stack, top at the back
+    std::vector<std::array<uint32_t, 3 * kChunkTriangles>> chunkTriangles_;
+    std::vector<uint32_t> freeChunks_;          // stack, top at the back
+    uint32_t vertexHighWater_ = 0, chunkHighWater_ = 0;
+
+    // Per frame: garbage-collection candidates, chunks to give back, vertices allocated this frame.
+    std::vector<uint32_t> gcCandidates_, releasedChunks_, newVertices_;
+};
+
+}  // namespace vkmesh::cpu
