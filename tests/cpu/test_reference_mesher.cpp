@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include "test_support.h"
+
 #include <Eigen/Geometry>
 
 #include <algorithm>
@@ -36,33 +38,6 @@ std::string joined(const std::vector<std::string>& lines) {
     std::string out;
     for (const auto& l : lines) out += l + "\n";
     return out;
-}
-
-// A camera at `eye` looking at `target`: x right, y down, z forward, world z up; a proper rotation.
-Pose lookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& target) {
-    const Eigen::Vector3d forward = (target - eye).normalized();
-    const Eigen::Vector3d right = forward.cross(Eigen::Vector3d::UnitZ()).normalized();
-    const Eigen::Vector3d down = forward.cross(right);
-    Pose pose = Pose::Identity();
-    pose.topLeftCorner<3, 3>() << right, down, forward;
-    pose.topRightCorner<3, 1>() = eye;
-    return pose;
-}
-
-// Poses orbiting `centre` at `distance`, at several elevations, all looking at the centre.
-std::vector<Pose> orbitAround(const Eigen::Vector3d& centre, double distance) {
-    std::vector<Pose> poses;
-    const double elevations[] = {-70, -40, -10, 20, 50, 75};
-    for (double elevation : elevations) {
-        for (int k = 0; k < 8; ++k) {
-            const double azimuth = (k + 0.5 * (elevation > 0)) * std::numbers::pi / 4;
-            const double e = elevation * std::numbers::pi / 180;
-            const Eigen::Vector3d eye =
-                centre + distance * Eigen::Vector3d(std::cos(e) * std::cos(azimuth), std::cos(e) * std::sin(azimuth), std::sin(e));
-            poses.push_back(lookAt(eye, centre));
-        }
-    }
-    return poses;
 }
 
 DepthImage render(const synth::SyntheticScene& scene, const Pose& pose, bool noise, uint32_t seed) {
@@ -224,7 +199,7 @@ ClosedRun meshAllAround(const synth::SyntheticScene& scene, const Eigen::Vector3
     params.truncVoxels = 3;
     cpu::ReferenceVolume volume(params);
     cpu::ReferenceMesher mesher(params, 1.0f, 1u << 16, 1u << 16);
-    const auto poses = orbitAround(centre, distance);
+    const auto poses = test::orbitAround(centre, distance);
     uint32_t frame = 0;
     for (const Pose& pose : poses) {
         ++frame;
@@ -278,16 +253,8 @@ TEST(ReferenceMesher, SphereSeenFromAllAroundIsClosedWithChiTwo) {
 }
 
 TEST(ReferenceMesher, TorusSeenFromAllAroundIsClosedWithChiZero) {
-    synth::Object torus;
-    torus.name = "torus";
-    torus.kind = synth::ObjectKind::Torus;
-    const Eigen::Vector3d centre(-0.07, 0.11, 0.95);
-    torus.objectToWorld = Eigen::Isometry3d::Identity();
-    torus.objectToWorld.linear() = Eigen::AngleAxisd(0.5, Eigen::Vector3d(1, 0.3, 0).normalized()).toRotationMatrix();
-    torus.objectToWorld.translation() = centre;
-    torus.radius = 0.42;
-    torus.tubeRadius = 0.15;
-    const ClosedRun run = meshAllAround(synth::SyntheticScene({torus}), centre, 1.8);
+    const Eigen::Vector3d centre = test::kTorusCentre;
+    const ClosedRun run = meshAllAround(test::tiltedTorus(), centre, 1.8);
     const TopologyReport& t = run.topology;
     EXPECT_TRUE(t.closedManifold());
     EXPECT_EQ(t.boundaryEdges, 0u);

@@ -9,9 +9,13 @@
 #include <map>
 #include <set>
 
+#include "core/mesh_analysis.h"
+#include "cpu/reference_mesher.h"
+#include "cpu/reference_volume.h"
 #include "gpu/gpu_volume.h"
 #include "gpu_fixture.h"
 #include "synth/synthetic_scene.h"
+#include "test_support.h"
 
 namespace vkmesh {
 namespace {
@@ -196,6 +200,85 @@ TEST_F(GpuTest, VertexHeapExhaustionIsCountedAndConsistent) {
     gpu::ExportedMesh mesh = volume.exportMesh();   // what exists is exportable
     EXPECT_GT(mesh.triangles.size(), 0u);
     EXPECT_EQ(mesh.unreferencedVertices, 0u);
+}
+
+Mesh toMesh(const gpu::ExportedMesh& e) {
+    Mesh m;
+    for (const auto& v : e.vertices) {
+        m.positions.emplace_back(v.px, v.py, v.pz);
+        m.normals.emplace_back(v.nx, v.ny, v.nz);
+    }
+    m.triangles = e.triangles;
+    return m;
+}
+
+TEST_F(GpuTest, MatchesCpuReferenceMesherFrameByFrame) {
+    auto config = meshConfig();
+    gpu::GpuVolume volume(context(), config);
+    cpu::ReferenceVolume referenceVolume(config.params);
+    cpu::ReferenceMesher mesher(config.params, config.minMeshWeight, config.vertexCapacity, config.chunkCapacity);
+    static const synth::SyntheticScene scene = synth::SyntheticScene::defaultRoom();
+    Intrinsics intr = synth::kinectIntrinsics(kWidth, kHeight);
+    auto poses = synth::cameraPath(24, synth::PathKind::Orbit);
+    for (uint32_t frame = 1; frame <= 8; ++frame) {
+        synth::RenderOptions options;
+        options.noise = true;
+        options.seed = frame;
+        const Pose& pose = poses[(frame * 2) % poses.size()];
+        DepthImage depth = scene.renderDepth(intr, pose, options);
+        gpu::FrameReport r = volume.integrate(depth, intr, pose);
+        referenceVolume.integrate(depth, intr, pose);
+        cpu::MeshFrameStats s = mesher.update(referenceVolume, referenceVolume.lastTouched(), frame);
+        // The same cubes change type and the same triangles come and go.
+        EXPECT_EQ(r.counters.trianglesCreated, s.trianglesCreated) << "frame " << frame;
+        EXPECT_EQ(r.counters.trianglesReleased, s.trianglesReleased) << "frame " << frame;
+        if (frame % 4 == 0) {
+            Mesh gpuMesh = toMesh(volume.exportMesh()), cpuMesh = mesher.exportMesh(frame);
+            EXPECT_EQ(gpuMesh.positions.size(), cpuMesh.positions.size()) << "frame " << frame;
+            EXPECT_EQ(countTriangleMismatches(canonicalTriangles(gpuMesh), canonicalTriangles(cpuMesh), 0), 0u) << "frame " << frame;
+        }
+    }
+}
+
+// Integrates views from all around a closed object and checks the GPU mesh is a closed 2-manifold.
+TopologyReport closedObjectTopology(vk::Context& context, const synth::SyntheticScene& scene, const Eigen::Vector3d& centre,
+                                    double distance, Mesh* meshOut) {
+    auto config = meshConfig();
+    config.params.truncVoxels = 3;   // see tests/cpu/test_reference_mesher.cpp: 4 leaves a projective-TSDF artifact on the torus
+    gpu::GpuVolume volume(context, config);
+    Intrinsics intr = synth::kinectIntrinsics(kWidth, kHeight);
+    uint32_t seed = 0;
+    for (const Pose& pose : test::orbitAround(centre, distance)) {
+        synth::RenderOptions options;
+        options.noise = true;
+        options.seed = ++seed;
+        gpu::FrameReport r = volume.integrate(scene.renderDepth(intr, pose, options), intr, pose);
+        EXPECT_TRUE(r.warnings.empty()) << r.warnings.front();
+    }
+    *meshOut = toMesh(volume.exportMesh());
+    return analyzeTopology(*meshOut);
+}
+
+TEST_F(GpuTest, SphereSeenFromAllAroundIsWatertight) {
+    const Eigen::Vector3d centre(0.13, -0.21, 1.05);
+    Mesh mesh;
+    TopologyReport t = closedObjectTopology(context(), synth::SyntheticScene::singleSphere(centre, 0.45), centre, 1.7, &mesh);
+    EXPECT_TRUE(t.closedManifold()) << t.boundaryEdges << " boundary, " << t.nonManifoldEdges << " non-manifold, "
+                                    << t.misorientedEdges << " misoriented edges";
+    EXPECT_EQ(t.components, 1u);
+    EXPECT_EQ(t.eulerCharacteristic, 2);
+    EXPECT_EQ(countDuplicatePositions(mesh), 0u);
+    EXPECT_EQ(countUnreferencedVertices(mesh), 0u);
+}
+
+TEST_F(GpuTest, TorusSeenFromAllAroundIsWatertightWithGenusOne) {
+    Mesh mesh;
+    TopologyReport t = closedObjectTopology(context(), test::tiltedTorus(), test::kTorusCentre, 1.8, &mesh);
+    EXPECT_TRUE(t.closedManifold()) << t.boundaryEdges << " boundary, " << t.nonManifoldEdges << " non-manifold, "
+                                    << t.misorientedEdges << " misoriented edges";
+    EXPECT_EQ(t.components, 1u);
+    EXPECT_EQ(t.eulerCharacteristic, 0);
+    EXPECT_EQ(countDuplicatePositions(mesh), 0u);
 }
 
 }  // namespace

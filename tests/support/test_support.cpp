@@ -1,6 +1,10 @@
 #include "test_support.h"
 
+#include <Eigen/Geometry>
+
 #include <atomic>
+#include <cmath>
+#include <numbers>
 #include <cstdlib>
 #include <unistd.h>
 
@@ -24,6 +28,43 @@ std::filesystem::path makeTempDir(const std::string& tag) {
     std::filesystem::remove_all(dir);
     std::filesystem::create_directories(dir);
     return dir;
+}
+
+Pose lookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& target) {
+    const Eigen::Vector3d forward = (target - eye).normalized();
+    const Eigen::Vector3d right = forward.cross(Eigen::Vector3d::UnitZ()).normalized();
+    const Eigen::Vector3d down = forward.cross(right);
+    Pose pose = Pose::Identity();
+    pose.topLeftCorner<3, 3>() << right, down, forward;
+    pose.topRightCorner<3, 1>() = eye;
+    return pose;
+}
+
+std::vector<Pose> orbitAround(const Eigen::Vector3d& centre, double distance) {
+    std::vector<Pose> poses;
+    const double elevations[] = {-70, -40, -10, 20, 50, 75};
+    for (double elevation : elevations) {
+        for (int k = 0; k < 8; ++k) {
+            const double azimuth = (k + 0.5 * (elevation > 0)) * std::numbers::pi / 4;
+            const double e = elevation * std::numbers::pi / 180;
+            const Eigen::Vector3d eye =
+                centre + distance * Eigen::Vector3d(std::cos(e) * std::cos(azimuth), std::cos(e) * std::sin(azimuth), std::sin(e));
+            poses.push_back(lookAt(eye, centre));
+        }
+    }
+    return poses;
+}
+
+synth::SyntheticScene tiltedTorus() {
+    synth::Object torus;
+    torus.name = "torus";
+    torus.kind = synth::ObjectKind::Torus;
+    torus.objectToWorld = Eigen::Isometry3d::Identity();
+    torus.objectToWorld.linear() = Eigen::AngleAxisd(0.5, Eigen::Vector3d(1, 0.3, 0).normalized()).toRotationMatrix();
+    torus.objectToWorld.translation() = kTorusCentre;
+    torus.radius = 0.42;
+    torus.tubeRadius = 0.15;
+    return synth::SyntheticScene({torus});
 }
 
 }  // namespace vkmesh::test
