@@ -1,10 +1,14 @@
 #!/usr/bin/env python3
-"""Allocation + fusion per frame: vkmesh (on its default Vulkan device) against Open3D 0.16 on the
-same frames, voxel size and truncation, all in one run, so the ratios are measured side by side.
+"""vkmesh (on its default Vulkan device) against Open3D 0.16 on the same frames, voxel size and
+truncation, all in one run, so the ratios are measured side by side:
+  1. allocation + fusion per frame (vkmesh --mode baseline, once per allocation stride) vs Open3D
+     VoxelBlockGrid compute_unique_block_coordinates + integrate (and ScalableTSDFVolume.integrate);
+  2. the incremental shared-vertex mesh (vkmesh default) per frame vs Open3D's full extraction at the
+     end of the sequence, and vertex counts ours / baseline / Open3D.
 
-For each dataset: `vkmesh frames` writes the exact frame list, `vkmesh fuse --stats` runs once per
-allocation stride, and bench/open3d_peer.py runs VoxelBlockGrid (+ ScalableTSDFVolume) on that list.
-Writes a JSON with everything and prints a Markdown table (docs/RESULTS.md quotes it).
+For each dataset: `vkmesh frames` writes the exact frame list, `vkmesh fuse --stats` runs, and
+bench/open3d_peer.py runs the Open3D methods on that list. Writes a JSON with everything and prints
+Markdown tables (docs/RESULTS.md quotes them).
 
 Run with /usr/bin/python3 after `scripts/install_deps.sh --bench` and `scripts/build.sh`:
     /usr/bin/python3 bench/fusion_bench.py --out out/bench
@@ -55,13 +59,17 @@ def main():
         frames_json = out / f"{name}_frames.json"
         common = ["--max-depth", args.max_depth] + (["--frames", args.frames] if args.frames else [])
         run([args.vkmesh, "frames", ds, "-o", frames_json] + common)
-        entry = {"dataset": name, "vkmesh": {}, "open3d": None}
+        entry = {"dataset": name, "vkmesh": {}, "incremental": None, "open3d": None}
+        fuse = [args.vkmesh, "fuse", ds, "-q", "--voxel", args.voxel, "--trunc", args.trunc_voxels,
+                "--device", args.device] + common
         for stride in args.strides.split(","):
-            stats = out / f"{name}_vkmesh_s{stride}.json"
-            run([args.vkmesh, "fuse", ds, "-o", out / f"{name}_vkmesh_s{stride}.ply", "--stats", stats, "-q",
-                 "--voxel", args.voxel, "--trunc", args.trunc_voxels, "--alloc-stride", stride,
-                 "--device", args.device] + common, stdout=subprocess.DEVNULL)
+            stats = out / f"{name}_vkmesh_baseline_s{stride}.json"
+            run(fuse + ["--mode", "baseline", "--alloc-stride", stride, "-o", out / f"{name}_vkmesh_baseline_s{stride}.ply",
+                        "--stats", stats], stdout=subprocess.DEVNULL)
             entry["vkmesh"][stride] = json.loads(stats.read_text())
+        stats = out / f"{name}_vkmesh_incremental.json"
+        run(fuse + ["-o", out / f"{name}_vkmesh_incremental.ply", "--stats", stats], stdout=subprocess.DEVNULL)
+        entry["incremental"] = json.loads(stats.read_text())
         peer = out / f"{name}_open3d.json"
         run(["/usr/bin/python3", ROOT / "bench/open3d_peer.py", frames_json, "--voxel", args.voxel,
              "--trunc-voxels", args.trunc_voxels, "--methods", args.methods, "-o", peer], stdout=subprocess.DEVNULL)
@@ -91,6 +99,18 @@ def markdown(r):
             lines.append(f"| {e['dataset']} | {e['open3d']['num_frames']} | Open3D {e['open3d']['open3d_version']} {m} | "
                          f"- | - | {v['median_ms']:.2f} | {v['median_ms'] / vbg:.2f}x | {v['blocks'] if v['blocks'] is not None else '-'} | "
                          f"{v['vertices']} (welded) | {v['triangles']} |")
+    lines += ["", "Incremental shared-vertex mesh (vkmesh default, allocation stride 2) vs Open3D's full extraction:", "",
+              "| dataset | frames | vkmesh mesh ms/frame (median) | ... last 10% of frames (mean) | Open3D VBG extract_triangle_mesh ms (end) | ratio | vkmesh whole frame ms | vertices ours | baseline | Open3D VBG | ours / baseline | ours / Open3D | triangles ours / Open3D |",
+              "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    for e in r["datasets"]:
+        s = e["incremental"]
+        vbg = e["open3d"]["methods"].get("vbg")
+        mesh = s["gpu_ms_per_frame"]["mesh_total"]["median"]
+        tail = s["gpu_ms_mesh_last_10pct_frames"]["mean"]
+        ours, base = s["mesh"]["vertices"], s["mesh"]["baseline_vertices"]
+        lines.append(f"| {e['dataset']} | {s['frames']['integrated']} | {mesh:.2f} | {tail:.2f} | {vbg['extract_ms']:.1f} | "
+                     f"{tail / vbg['extract_ms']:.2f}x | {s['wall_ms_per_frame']['median']:.2f} | {ours} | {base} | {vbg['vertices']} | "
+                     f"{ours / base:.3f} | {ours / vbg['vertices']:.3f} | {s['mesh']['triangles']} / {vbg['triangles']} |")
     return "\n".join(lines)
 
 

@@ -35,6 +35,7 @@ void main() {
         ivec3 origin = blockCoords[block].xyz * int(BLOCK_SIDE);
         uvec2 size = frameImageSize();
         float trunc = params.truncation;
+        uint flipped = 0u;   // which of this invocation's corners flipped (marked after the loop, which stays lean)
         for (uint k = 0u; k < VOXELS_PER_INVOCATION; ++k) {
             uint local = gl_LocalInvocationIndex + k * WG_BLOCK;
             uvec3 l = uvec3(local % BLOCK_SIDE, (local / BLOCK_SIDE) % BLOCK_SIDE, local / (BLOCK_SIDE * BLOCK_SIDE));
@@ -63,11 +64,15 @@ void main() {
                 }
             }
             bool wasObserved = oldWeight >= params.minMeshWeight, isObserved = newWeight >= params.minMeshWeight;
-            if (wasObserved != isObserved || (isObserved && (oldSdf < 0.0) != (newSdf < 0.0)))
-                markRetype(block, local);
+            if (wasObserved != isObserved || (isObserved && (oldSdf < 0.0) != (newSdf < 0.0))) flipped |= 1u << k;
             if (fresh || newWeight != oldWeight || newSdf != oldSdf) {
                 voxelSdf[v] = newSdf;
                 voxelWeight[v] = newWeight;
+            }
+        }
+        if (params.incrementalMesh != 0u) {
+            for (uint k = 0u; k < VOXELS_PER_INVOCATION && flipped != 0u; ++k) {
+                if ((flipped & (1u << k)) != 0u) markRetype(block, gl_LocalInvocationIndex + k * WG_BLOCK);
             }
         }
     }

@@ -120,7 +120,8 @@ struct VolumeParamsGpu {
     uint chunkCapacity;     // triangle chunks (also the chunk release list)
     uint exportTriangleCapacity;
     uint retypeCapacity;    // entries of the retype list (cubes retyped per pass)
-    uint pad0, pad1, pad2;
+    uint incrementalMesh;   // 1: fusion marks the cubes whose corners flip, for the incremental mesh
+    uint pad0, pad1;
 };
 
 // One mesh vertex, as stored in the heap and in the compacted export (stride 32: a renderer reads the

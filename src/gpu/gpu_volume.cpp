@@ -142,6 +142,7 @@ GpuVolume::GpuVolume(const vk::Context& context, const GpuVolumeConfig& config)
     gp.chunkCapacity = c.chunkCapacity;
     gp.exportTriangleCapacity = 1024;
     gp.retypeCapacity = c.retypeCapacity;
+    gp.incrementalMesh = c.meshMode == MeshMode::Incremental ? 1u : 0u;
     vk::uploadToBuffer(context, params_, &gp, sizeof(gp));
     auto tables = packMarchingCubesTables();
     vk::uploadToBuffer(context, mcTables_, tables.data(), tables.size() * 4);
