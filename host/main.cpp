@@ -18,6 +18,8 @@
 #include <numeric>
 #include <optional>
 
+#include "core/mesh_analysis.h"
+#include "core/refinement.h"
 #include "gpu/gpu_volume.h"
 #include "io/dataset.h"
 #include "io/ply.h"
@@ -124,6 +126,9 @@ struct FuseArgs {
     float truncVoxels = 4.0f;
     float maxWeight = 255.0f;
     float minWeight = 1.0f;
+    bool noRefine = false;
+    float refineEps = gpu::GpuVolumeConfig{}.refineEpsilonVoxels;
+    bool lockFree = false;
     uint32_t blocks = 16384;
     uint32_t vertices = gpu::GpuVolumeConfig{}.vertexCapacity;
     uint32_t chunks = gpu::GpuVolumeConfig{}.chunkCapacity;
@@ -145,6 +150,9 @@ int commandFuse(const FuseArgs& args) {
     config.params.truncVoxels = args.truncVoxels;
     config.params.maxWeight = args.maxWeight;
     config.minMeshWeight = args.minWeight;
+    config.refine = !args.noRefine;
+    config.refineEpsilonVoxels = args.refineEps;
+    config.lockFree = args.lockFree;
     config.params.maxDepth = args.data.maxDepth;
     config.params.allocationStride = args.allocStride;
     config.blockCapacity = args.blocks;
@@ -216,6 +224,7 @@ int commandFuse(const FuseArgs& args) {
     Mesh mesh;
     size_t baselineVertices = 0;
     uint32_t unreferenced = 0;
+    double sliverTriangleShare = 0, irregularCubeShare = 0;
     if (config.meshMode == gpu::MeshMode::Incremental) {
         gpu::ExportedMesh exported = volume.exportMesh(&meshMs);
         unreferenced = exported.unreferencedVertices;
@@ -227,6 +236,16 @@ int commandFuse(const FuseArgs& args) {
         }
         mesh.triangles = std::move(exported.triangles);
         baselineVertices = volume.extractBaselineMesh().vertices.size();
+        // Regularity (what refinement improves): sliver triangles, and surface cubes whose type is not one of
+        // the six half-cube types.
+        sliverTriangleShare = triangleRegularity(mesh).sliverShare();
+        auto types = volume.surfaceCubeTypes();
+        uint64_t surface = 0, irregular = 0;
+        for (int t = 0; t < 256; ++t) {
+            surface += types[t];
+            if (!isRegularType(t)) irregular += types[t];
+        }
+        irregularCubeShare = surface ? double(irregular) / double(surface) : 0.0;
     } else {
         gpu::TriangleSoup soup = volume.extractBaselineMesh(&meshMs);
         mesh.positions = soup.vertices;
@@ -247,6 +266,9 @@ int commandFuse(const FuseArgs& args) {
                         {"frames_available", dataset->size()}};
     stats["device"] = context.info().name;
     stats["mode"] = args.mode;
+    stats["refine"] = !args.noRefine;
+    stats["refine_epsilon_voxels"] = args.refineEps;
+    stats["lock_free"] = args.lockFree;
     stats["frames"] = {{"integrated", integrated}, {"skipped", skipped}};
     stats["voxel_size"] = args.voxel;
     stats["truncation_m"] = config.params.truncation();
@@ -259,7 +281,9 @@ int commandFuse(const FuseArgs& args) {
                      {"path", out.string()},
                      {"baseline_vertices", baselineVertices},
                      {"vertices_vs_baseline", baselineVertices ? double(mesh.positions.size()) / baselineVertices : 0.0},
-                     {"unreferenced_vertices", unreferenced}};
+                     {"unreferenced_vertices", unreferenced},
+                     {"sliver_triangle_share", sliverTriangleShare},   // smallest angle < 10 degrees
+                     {"irregular_cube_share", irregularCubeShare}};
     if (config.meshMode == gpu::MeshMode::Incremental) {
         const gpu::GpuVolumeConfig& c = volume.config();
         stats["heaps"] = {{"vertices", {{"capacity", c.vertexCapacity}, {"live", k.verticesInUse}, {"free", k.vertexFreeTop},
@@ -351,6 +375,10 @@ int main(int argc, char** argv) {
                      "incremental: one shared-vertex mesh updated every frame (default); "
                      "baseline: marching cubes at the end, every triangle with its own 3 vertices")
         ->check(CLI::IsMember({"incremental", "baseline"}));
+    fuse->add_flag("--no-refine", fuseArgs.noRefine, "turn off the Hamming-distance refinement of cube types");
+    fuse->add_option("--refine-eps", fuseArgs.refineEps, "refinement: corners within this many voxels of the surface may flip")
+        ->check(CLI::Range(0.0f, 1.0f));
+    fuse->add_flag("--lock-free", fuseArgs.lockFree, "claim edge vertices in 4 parity-class passes without atomics (paper's lock-free)");
     fuse->add_option("--vertices", fuseArgs.vertices, "vertex heap capacity")->check(CLI::PositiveNumber);
     fuse->add_option("--chunks", fuseArgs.chunks, "triangle chunk heap capacity (5 triangles each)")->check(CLI::PositiveNumber);
     fuse->add_option("--voxel", fuseArgs.voxel, "voxel (cube) size in metres");

@@ -27,7 +27,9 @@ layout(std430, set = 0, binding = BINDING_MC_TABLES) readonly buffer McTables { 
 layout(std430, set = 0, binding = BINDING_BLOCK_LIST) buffer BlockList { uint blockList[]; };
 layout(std430, set = 0, binding = BINDING_MESH_VERTICES) buffer MeshVertices { vec4 meshVertices[]; };
 layout(std430, set = 0, binding = BINDING_CUBE_STATE) buffer CubeState { uint cubeState[]; };
-layout(std430, set = 0, binding = BINDING_EDGE_VERTEX) coherent buffer EdgeVertex { uint edgeVertex[]; };
+layout(std430, set = 0, binding = BINDING_EDGE_VERTEX_X) coherent buffer EdgeVertexX { uint edgeVertexX[]; };
+layout(std430, set = 0, binding = BINDING_EDGE_VERTEX_Y) coherent buffer EdgeVertexY { uint edgeVertexY[]; };
+layout(std430, set = 0, binding = BINDING_EDGE_VERTEX_Z) coherent buffer EdgeVertexZ { uint edgeVertexZ[]; };
 layout(std430, set = 0, binding = BINDING_MESH_STAMPS) coherent buffer MeshStamps { uint meshStamps[]; };
 layout(std430, set = 0, binding = BINDING_DIRTY_LIST) buffer DirtyList { uint dirtyList[]; };
 layout(std430, set = 0, binding = BINDING_VERTICES) coherent buffer Vertices { Vertex vertices[]; };
@@ -86,6 +88,28 @@ uint findSlot(ivec3 c) {
 uint findBlock(ivec3 c) {
     uint slot = findSlot(c);
     return slot == NO_BLOCK ? NO_BLOCK : hashValues[slot];
+}
+
+// ---- edge-vertex slots ---------------------------------------------------------------------------
+// A slot is (block * 512 + cube) * 3 + axis (the owner cube's edge along that axis); the three axes live in
+// three arrays.
+uint edgeLoad(uint slot) {
+    uint c = slot / 3u, a = slot % 3u;
+    return a == 0u ? edgeVertexX[c] : (a == 1u ? edgeVertexY[c] : edgeVertexZ[c]);
+}
+void edgeStore(uint slot, uint v) {
+    uint c = slot / 3u, a = slot % 3u;
+    if (a == 0u) edgeVertexX[c] = v; else if (a == 1u) edgeVertexY[c] = v; else edgeVertexZ[c] = v;
+}
+void edgeStoreAtomic(uint slot, uint v) {
+    uint c = slot / 3u, a = slot % 3u;
+    if (a == 0u) atomicExchange(edgeVertexX[c], v); else if (a == 1u) atomicExchange(edgeVertexY[c], v); else atomicExchange(edgeVertexZ[c], v);
+}
+uint edgeCompSwap(uint slot, uint expected, uint v) {
+    uint c = slot / 3u, a = slot % 3u;
+    if (a == 0u) return atomicCompSwap(edgeVertexX[c], expected, v);
+    if (a == 1u) return atomicCompSwap(edgeVertexY[c], expected, v);
+    return atomicCompSwap(edgeVertexZ[c], expected, v);
 }
 
 // ---- grid positions --------------------------------------------------------------------------------

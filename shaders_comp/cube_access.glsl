@@ -85,10 +85,41 @@ uint edgeSlot(CubeRef r, uint e) {
 // Position of the vertex on the edge from corner `lo` along `axis` of the cube: linear interpolation of
 // the zero crossing, in grid units, then metres. Written out so the CPU reference reproduces it bit for
 // bit; the baseline and the shared-vertex mesh use this one function, so their vertices coincide exactly.
+// s is clamped to [-0.5, 1.5]: refinement can make an edge whose corners share a sign carry a vertex,
+// extrapolated as the paper intends; where the corners differ in sign s is in (0, 1] and unchanged.
 vec3 edgeVertexPosition(CubeRef r, uint lo, uint axis, float dLo, float dHi) {
-    precise float s = dLo / (dLo - dHi);
+    precise float s = clamp(dLo / (dLo - dHi), -0.5, 1.5);
     precise vec3 p = vec3(r.origin + ivec3(r.cube + cornerOffset(lo)));
     p[axis] += s;
     precise vec3 world = p * params.voxelSize;
     return world;
+}
+
+// ---- refinement (paper §V.F, docs/REFINEMENT.md) ---------------------------------------------------
+// The six half-cube types (a plane parallel to a face), in vkmesh's corner numbering; the order breaks ties.
+const uint REGULAR_TYPES[6] = uint[6](0x0Fu, 0xF0u, 0x33u, 0xCCu, 0x55u, 0xAAu);
+
+// The type MC uses for a cube whose triangles were built from `prev` and whose corners now give `t`:
+// a nearby regular type when the corners it flips are all within refineEpsilon of the surface.
+uint refineType(uint prev, uint t, float d[8]) {
+    if (params.refine == 0u || t == 0u || t == 255u || bitCount(prev ^ t) > 3) return t;
+    for (uint k = 0u; k < 6u; ++k) if (REGULAR_TYPES[k] == t) return t;
+    uint best = t;
+    float bestCost = 0.0;
+    for (uint k = 0u; k < 6u; ++k) {
+        uint flips = REGULAR_TYPES[k] ^ t;
+        if (bitCount(flips) > 3) continue;
+        float cost = 0.0;
+        bool ok = true;
+        for (uint i = 0u; i < 8u; ++i) {
+            if ((flips & (1u << i)) == 0u) continue;
+            ok = ok && abs(d[i]) < params.refineEpsilon;
+            cost += abs(d[i]);
+        }
+        if (ok && (best == t || cost < bestCost)) {
+            best = REGULAR_TYPES[k];
+            bestCost = cost;
+        }
+    }
+    return best;
 }

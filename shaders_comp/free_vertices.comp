@@ -13,6 +13,6 @@ void main() {
     if (i >= min(counters.candidateCount, params.vertexCapacity)) return;
     uint v = gcCandidates[i];
     if (atomicCompSwap(vertices[v].refcount, 0u, DEAD_REFCOUNT) != 0u) return;
-    edgeVertex[vertexOwner[v]] = EMPTY_SLOT;
+    edgeStore(vertexOwner[v], EMPTY_SLOT);
     vertexFree[counters.vertexFreeTop + atomicAdd(counters.vertexPushes, 1u)] = v;
 }

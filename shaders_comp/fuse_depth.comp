@@ -64,7 +64,8 @@ void main() {
                 }
             }
             bool wasObserved = oldWeight >= params.minMeshWeight, isObserved = newWeight >= params.minMeshWeight;
-            if (wasObserved != isObserved || (isObserved && (oldSdf < 0.0) != (newSdf < 0.0))) flipped |= 1u << k;
+            bool nearFlip = params.refine != 0u && (abs(oldSdf) < params.refineEpsilon) != (abs(newSdf) < params.refineEpsilon);
+            if (wasObserved != isObserved || (isObserved && ((oldSdf < 0.0) != (newSdf < 0.0) || nearFlip))) flipped |= 1u << k;
             if (fresh || newWeight != oldWeight || newSdf != oldSdf) {
                 voxelSdf[v] = newSdf;
                 voxelWeight[v] = newWeight;

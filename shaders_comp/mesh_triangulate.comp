@@ -25,9 +25,9 @@ void retype(uint id) {
     float d[8];
     bool present[8];
     bool observed;
-    uint type = loadCube(r, d, present, observed);
     uint state = cubeState[id];
     uint oldType = state & CUBE_TYPE_MASK;
+    uint type = refineType(oldType, loadCube(r, d, present, observed), d);
     if (type == oldType && (state & CUBE_INCOMPLETE) == 0u) return;
     ++retyped;
     uint chunk = state >> CUBE_CHUNK_SHIFT;   // chunk index + 1, 0 = none
@@ -69,7 +69,7 @@ void retype(uint id) {
                 bool ok = true;
                 for (uint j = 0u; j < 3u; ++j) {
                     uint slot = edgeSlot(r, triangleEdge(type, 3u * t + j));
-                    tri[j] = slot == NO_BLOCK ? EMPTY_SLOT : edgeVertex[slot];
+                    tri[j] = slot == NO_BLOCK ? EMPTY_SLOT : edgeLoad(slot);
                     ok = ok && tri[j] < CLAIMED_SLOT;
                 }
                 if (!ok) {

@@ -71,7 +71,7 @@ VKM_CONST BINDING_BLOCK_LIST = 12u;    // uint list of all live blocks (for whol
 VKM_CONST BINDING_MESH_VERTICES = 13u; // vec4 per vertex of the baseline mesh (3 per triangle)
 // The incremental shared-vertex mesh (docs/MESH.md).
 VKM_CONST BINDING_CUBE_STATE = 14u;    // uint per cube: type | INCOMPLETE | (chunk + 1) << 9
-VKM_CONST BINDING_EDGE_VERTEX = 15u;   // uint per cube and axis: vertex on the owned edge, or EMPTY_SLOT
+VKM_CONST BINDING_EDGE_VERTEX_X = 15u; // uint per cube: vertex on the owned +x edge, or EMPTY_SLOT
 VKM_CONST BINDING_MESH_STAMPS = 16u;   // uint per block: frame number that last marked it dirty
 VKM_CONST BINDING_DIRTY_LIST = 17u;    // uint list of the frame's dirty blocks
 VKM_CONST BINDING_VERTICES = 18u;      // Vertex heap
@@ -86,7 +86,9 @@ VKM_CONST BINDING_EXPORT_INDICES = 26u;  // uint: the compacted mesh's triangles
 VKM_CONST BINDING_VERTEX_REMAP = 27u;    // uint per vertex: its index in the compacted mesh
 VKM_CONST BINDING_RETYPE_MASK = 28u;   // 16 uint per block: cubes that may change MC type (a corner flipped)
 VKM_CONST BINDING_RETYPE_LIST = 29u;   // uint list of this frame's retype candidates: block * 512 + cube
-VKM_CONST BINDING_COUNT = 30u;
+VKM_CONST BINDING_EDGE_VERTEX_Y = 30u; // ... +y edge (one array per axis keeps each under 128 MiB for 65,536 blocks)
+VKM_CONST BINDING_EDGE_VERTEX_Z = 31u; // ... +z edge
+VKM_CONST BINDING_COUNT = 32u;
 VKM_CONST MASK_WORDS = 16u;            // VOXELS_PER_BLOCK / 32
 
 VKM_CONST EMPTY_SLOT = 0xFFFFFFFFu;    // an edge with no vertex
@@ -121,7 +123,8 @@ struct VolumeParamsGpu {
     uint exportTriangleCapacity;
     uint retypeCapacity;    // entries of the retype list (cubes retyped per pass)
     uint incrementalMesh;   // 1: fusion marks the cubes whose corners flip, for the incremental mesh
-    uint pad0, pad1;
+    uint refine;            // 1: Hamming-distance refinement of cube types (docs/REFINEMENT.md)
+    float refineEpsilon;    // metres: only corners with |sdf| below it may be flipped by refinement
 };
 
 // One mesh vertex, as stored in the heap and in the compacted export (stride 32: a renderer reads the

@@ -1,8 +1,8 @@
 #version 460
 // Incremental mesh, pass 2 (paper §V.B): every live vertex whose owner block is dirty this frame (its
 // edge's corners may have new values), or that was created this frame (its owner block may lie outside
-// the dirty set), moves to the current zero crossing of its edge; its normal is the owner cube's TSDF
-// gradient. A vertex whose edge no longer crosses keeps its place: it is about to lose its triangles.
+// the dirty set), moves to the current zero crossing of its edge (extrapolated, within limits, on an edge
+// that only a refined type uses); its normal is the owner cube's TSDF gradient.
 // The heap is popped lowest index first, so every live vertex lies below the high water.
 #extension GL_GOOGLE_include_directive : require
 #include "common.glsl"
@@ -24,7 +24,8 @@ void main() {
     bool observed;
     loadCube(r, d, present, observed);
     uint hi = 1u << axis;
-    if (!present[0] || !present[hi] || (d[0] < 0.0) == (d[hi] < 0.0)) return;
+    // Also edges whose corners share a sign: refinement may use them (the position is then extrapolated).
+    if (!present[0] || !present[hi] || d[0] == d[hi]) return;
     vec3 p = edgeVertexPosition(r, 0u, axis, d[0], d[hi]);
     vec3 n = vec3(0.0);
     n[axis] = d[hi] - d[0] >= 0.0 ? 1.0 : -1.0;   // fallback: along the edge, toward free space

@@ -1,5 +1,7 @@
 #include "core/mesh_analysis.h"
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
@@ -139,6 +141,25 @@ Mesh weldExactPositions(const std::vector<Eigen::Vector3f>& soup) {
     for (size_t t = 0; t + 2 < soup.size(); t += 3)
         mesh.triangles.push_back({vertexOf(soup[t]), vertexOf(soup[t + 1]), vertexOf(soup[t + 2])});
     return mesh;
+}
+
+RegularityReport triangleRegularity(const Mesh& mesh, double minAngleDegrees) {
+    const double cosLimit = std::cos(minAngleDegrees * 3.14159265358979323846 / 180.0);
+    RegularityReport report;
+    for (const auto& t : mesh.triangles) {
+        ++report.triangles;
+        bool sliver = false;
+        for (int k = 0; k < 3 && !sliver; ++k) {
+            const Eigen::Vector3d p = mesh.positions[t[k]].cast<double>();
+            const Eigen::Vector3d u = mesh.positions[t[(k + 1) % 3]].cast<double>() - p;
+            const Eigen::Vector3d w = mesh.positions[t[(k + 2) % 3]].cast<double>() - p;
+            const double lengths = u.norm() * w.norm();
+            // The angle at p is below the limit when its cosine is above the limit's.
+            sliver = lengths == 0.0 || u.dot(w) / lengths > cosLimit;
+        }
+        if (sliver) ++report.slivers;
+    }
+    return report;
 }
 
 }  // namespace vkmesh

@@ -58,4 +58,14 @@ size_t countTriangleMismatches(const std::vector<CanonicalTriangle>& a, const st
 // vertex (numbered in order of first appearance), triangles keep their order and orientation.
 Mesh weldExactPositions(const std::vector<Eigen::Vector3f>& soup);
 
+// How regular a mesh's triangles are (paper §V.F, Fig. 7: corners whose TSDF is near zero flip cube types
+// and leave thin, irregular triangles). A triangle is a sliver when its smallest angle is below
+// `minAngleDegrees` (degenerate triangles included).
+struct RegularityReport {
+    size_t triangles = 0;
+    size_t slivers = 0;
+    double sliverShare() const { return triangles ? double(slivers) / double(triangles) : 0.0; }
+};
+RegularityReport triangleRegularity(const Mesh& mesh, double minAngleDegrees = 10.0);
+
 }  // namespace vkmesh

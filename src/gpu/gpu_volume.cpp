@@ -63,6 +63,8 @@ GpuVolumeConfig resolved(GpuVolumeConfig c) {
         throw Error("hash capacity " + std::to_string(c.hashCapacity) + " must be a power of two");
     if (c.touchedCapacity == 0) c.touchedCapacity = c.blockCapacity;
     if (c.meshMode == MeshMode::Baseline) c.vertexCapacity = c.chunkCapacity = 1024;   // unused: keep them small
+    if (!(c.refineEpsilonVoxels >= 0.0f && c.refineEpsilonVoxels <= 1.0f))
+        throw Error("refinement epsilon " + std::to_string(c.refineEpsilonVoxels) + " voxels must be in [0, 1]");
     if (c.retypeCapacity < 1024) throw Error("retype capacity " + std::to_string(c.retypeCapacity) + " must be >= 1024");
     if (c.vertexCapacity < 64 || c.vertexCapacity >= CLAIMED_SLOT)
         throw Error("vertex capacity " + std::to_string(c.vertexCapacity) + " must be in [64, 2^32 - 2)");
@@ -110,7 +112,9 @@ GpuVolume::GpuVolume(const vk::Context& context, const GpuVolumeConfig& config)
     meshVertices_ = makeBuffer(VkDeviceSize(c.meshVertexCapacity) * 16, 0, "baseline mesh vertices", BINDING_MESH_VERTICES);
     const VkDeviceSize cubes = voxels;
     cubeState_ = makeBuffer(cubes * 4, 0, "cube state", BINDING_CUBE_STATE);
-    edgeVertex_ = makeBuffer(cubes * 12, 0, "edge vertex slots", BINDING_EDGE_VERTEX);
+    edgeVertexX_ = makeBuffer(cubes * 4, 0, "edge vertex slots x", BINDING_EDGE_VERTEX_X);
+    edgeVertexY_ = makeBuffer(cubes * 4, 0, "edge vertex slots y", BINDING_EDGE_VERTEX_Y);
+    edgeVertexZ_ = makeBuffer(cubes * 4, 0, "edge vertex slots z", BINDING_EDGE_VERTEX_Z);
     meshStamps_ = makeBuffer(VkDeviceSize(c.blockCapacity) * 4, 0, "mesh stamps", BINDING_MESH_STAMPS);
     dirtyList_ = makeBuffer(VkDeviceSize(c.blockCapacity) * 4, 0, "dirty list", BINDING_DIRTY_LIST);
     vertices_ = makeBuffer(VkDeviceSize(c.vertexCapacity) * sizeof(Vertex), 0, "vertex heap", BINDING_VERTICES);
@@ -143,6 +147,8 @@ GpuVolume::GpuVolume(const vk::Context& context, const GpuVolumeConfig& config)
     gp.exportTriangleCapacity = 1024;
     gp.retypeCapacity = c.retypeCapacity;
     gp.incrementalMesh = c.meshMode == MeshMode::Incremental ? 1u : 0u;
+    gp.refine = c.refine ? 1u : 0u;
+    gp.refineEpsilon = c.refineEpsilonVoxels * c.params.voxelSize;
     vk::uploadToBuffer(context, params_, &gp, sizeof(gp));
     auto tables = packMarchingCubesTables();
     vk::uploadToBuffer(context, mcTables_, tables.data(), tables.size() * 4);
@@ -167,7 +173,7 @@ void GpuVolume::resetMeshState() {
     const GpuVolumeConfig& c = config_;
     VkCommandBuffer cmd = recorder_.begin();
     vkCmdFillBuffer(cmd, cubeState_.handle(), 0, VK_WHOLE_SIZE, 0);
-    vkCmdFillBuffer(cmd, edgeVertex_.handle(), 0, VK_WHOLE_SIZE, EMPTY_SLOT);
+    for (const vk::Buffer* b : {&edgeVertexX_, &edgeVertexY_, &edgeVertexZ_}) vkCmdFillBuffer(cmd, b->handle(), 0, VK_WHOLE_SIZE, EMPTY_SLOT);
     vkCmdFillBuffer(cmd, meshStamps_.handle(), 0, VK_WHOLE_SIZE, 0);
     vkCmdFillBuffer(cmd, retypeMask_.handle(), 0, VK_WHOLE_SIZE, 0);
     vkCmdFillBuffer(cmd, vertices_.handle(), 0, VK_WHOLE_SIZE, 0xFFFFFFFFu);   // refcount DEAD everywhere
@@ -229,7 +235,7 @@ FrameReport GpuVolume::integrate(const DepthImage& depth, const Intrinsics& intr
     if (config_.meshMode == MeshMode::Incremental) {
         incrementalMesh_.recordMarkTouched(cmd, push, counters_);
         timer_.mark(cmd, "mesh_mark");
-        incrementalMesh_.recordMesh(cmd, push, counters_, &timer_);
+        incrementalMesh_.recordMesh(cmd, push, counters_, &timer_, config_.lockFree);
     }
     recordCountersReadback(cmd);
     recorder_.submitAndWait();
@@ -367,7 +373,7 @@ void GpuVolume::rebuildMesh() {
         vk::memoryBarrier(cmd);
         baselineMesh_.recordCollect(cmd, lastPush_, config_.hashCapacity);
         incrementalMesh_.recordMarkAll(cmd, lastPush_, config_.blockCapacity);
-        incrementalMesh_.recordMesh(cmd, lastPush_, counters_, nullptr);
+        incrementalMesh_.recordMesh(cmd, lastPush_, counters_, nullptr, config_.lockFree);
         recordCountersReadback(cmd);
         recorder_.submitAndWait();
         if (readCounters().retypeDeferred == 0) return;
@@ -383,8 +389,14 @@ MeshStateSnapshot GpuVolume::downloadMeshState() const {
     vk::downloadFromBuffer(context_, vertices_, s.vertices.data(), s.vertices.size() * sizeof(Vertex));
     s.vertexOwner.resize(c.vertexCapacity);
     vk::downloadFromBuffer(context_, vertexOwner_, s.vertexOwner.data(), s.vertexOwner.size() * 4);
-    s.edgeVertex.resize(size_t(c.blockCapacity) * VOXELS_PER_BLOCK * 3);
-    vk::downloadFromBuffer(context_, edgeVertex_, s.edgeVertex.data(), s.edgeVertex.size() * 4);
+    const size_t cubes = size_t(c.blockCapacity) * VOXELS_PER_BLOCK;
+    s.edgeVertex.resize(cubes * 3);
+    std::vector<uint32_t> axis(cubes);
+    const vk::Buffer* axes[3] = {&edgeVertexX_, &edgeVertexY_, &edgeVertexZ_};
+    for (int a = 0; a < 3; ++a) {
+        vk::downloadFromBuffer(context_, *axes[a], axis.data(), cubes * 4);
+        for (size_t i = 0; i < cubes; ++i) s.edgeVertex[i * 3 + a] = axis[i];
+    }
     std::vector<uint32_t> state(size_t(c.blockCapacity) * VOXELS_PER_BLOCK), chunks(size_t(c.chunkCapacity) * CHUNK_WORDS);
     vk::downloadFromBuffer(context_, cubeState_, state.data(), state.size() * 4);
     vk::downloadFromBuffer(context_, chunkTriangles_, chunks.data(), chunks.size() * 4);
@@ -398,6 +410,15 @@ MeshStateSnapshot GpuVolume::downloadMeshState() const {
         }
     }
     return s;
+}
+
+std::array<uint64_t, 256> GpuVolume::surfaceCubeTypes() const {
+    std::vector<uint32_t> state(size_t(config_.blockCapacity) * VOXELS_PER_BLOCK);
+    vk::downloadFromBuffer(context_, cubeState_, state.data(), state.size() * 4);
+    std::array<uint64_t, 256> histogram{};
+    for (uint32_t st : state)
+        if ((st >> CUBE_CHUNK_SHIFT) != 0) ++histogram[st & CUBE_TYPE_MASK];
+    return histogram;
 }
 
 Counters GpuVolume::readCounters() const {
@@ -436,7 +457,7 @@ std::vector<PoolInfo> GpuVolume::pools() const {
     std::vector<PoolInfo> out;
     for (const vk::Buffer* b : {&params_, &counters_, &hashKeys_, &hashValues_, &hashStamps_, &blockCoords_, &voxelSdf_,
                                 &voxelWeight_, &freeList_, &touched_, &depth_, &mcTables_, &blockList_, &meshVertices_,
-                                &cubeState_, &edgeVertex_, &meshStamps_, &dirtyList_, &vertices_, &vertexOwner_, &vertexFree_, &gcCandidates_,
+                                &cubeState_, &edgeVertexX_, &edgeVertexY_, &edgeVertexZ_, &meshStamps_, &dirtyList_, &vertices_, &vertexOwner_, &vertexFree_, &gcCandidates_,
                                 &chunkTriangles_, &chunkFree_, &chunkRelease_, &exportVertices_, &exportIndices_, &vertexRemap_,
                                 &retypeMask_, &retypeList_,
                                 &depthStaging_, &countersReadback_})

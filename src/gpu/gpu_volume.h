@@ -38,6 +38,9 @@ struct GpuVolumeConfig {
     uint32_t vertexCapacity = 1u << 20;  // shared-vertex heap (32 B each)
     uint32_t chunkCapacity = 1u << 19;   // triangle chunks, 5 triangles each (60 B)
     uint32_t retypeCapacity = 1u << 20;  // cubes one mesh pass can retype (more wait for the next pass)
+    bool refine = true;                  // Hamming-distance refinement of cube types (docs/REFINEMENT.md)
+    float refineEpsilonVoxels = 0.25f;   // corners within this distance of the surface may be flipped
+    bool lockFree = false;               // the paper's lock-free claim: 4 parity-class passes, no slot atomics
     int imageWidth = 640, imageHeight = 480;
 };
 
@@ -99,6 +102,8 @@ public:
     // reference an incremental mesh must equal.
     void rebuildMesh();
     MeshStateSnapshot downloadMeshState() const;
+    // How many cubes carry triangles of each MC type (the stored, possibly refined, type).
+    std::array<uint64_t, 256> surfaceCubeTypes() const;
 
     std::vector<BlockSnapshot> downloadBlocks() const;
     Counters readCounters() const;
@@ -117,7 +122,7 @@ private:
     vk::BindingLayout layout_;
     vk::Buffer params_, counters_, hashKeys_, hashValues_, hashStamps_, blockCoords_, voxelSdf_, voxelWeight_,
         freeList_, touched_, depth_, mcTables_, blockList_, meshVertices_;
-    vk::Buffer cubeState_, edgeVertex_, meshStamps_, dirtyList_, vertices_, vertexOwner_, vertexFree_, gcCandidates_,
+    vk::Buffer cubeState_, edgeVertexX_, edgeVertexY_, edgeVertexZ_, meshStamps_, dirtyList_, vertices_, vertexOwner_, vertexFree_, gcCandidates_,
         chunkTriangles_, chunkFree_, chunkRelease_, exportVertices_, exportIndices_, vertexRemap_, retypeMask_, retypeList_;
     vk::Buffer depthStaging_, countersReadback_;
     AllocateBlocksStage allocate_;

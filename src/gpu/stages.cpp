@@ -60,6 +60,10 @@ IncrementalMeshStage::IncrementalMeshStage(const vk::Context& context, const vk:
       collect_(context, layout, "collect_retype"),
       planRetype_(context, layout, "plan_retype"),
       claim_(context, layout, "mesh_claim"),
+      claimClass0_(context, layout, "mesh_claim", 0u),
+      claimClass1_(context, layout, "mesh_claim", 1u),
+      claimClass2_(context, layout, "mesh_claim", 2u),
+      claimClass3_(context, layout, "mesh_claim", 3u),
       commitVertices_(context, layout, "commit_vertices"),
       update_(context, layout, "update_vertices"),
       triangulate_(context, layout, "mesh_triangulate"),
@@ -80,7 +84,7 @@ void IncrementalMeshStage::recordMarkAll(VkCommandBuffer cmd, const FramePush& p
 }
 
 void IncrementalMeshStage::recordMesh(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters,
-                                      vk::StageTimer* timer) const {
+                                      vk::StageTimer* timer, bool lockFree) const {
     auto mark = [&](const char* name) { if (timer) timer->mark(cmd, name); };
     plan_.dispatch(cmd, &push, 1);
     vk::memoryBarrier(cmd);
@@ -88,8 +92,15 @@ void IncrementalMeshStage::recordMesh(VkCommandBuffer cmd, const FramePush& push
     vk::memoryBarrier(cmd);
     planRetype_.dispatch(cmd, &push, 1);
     vk::memoryBarrier(cmd);
-    claim_.dispatchIndirect(cmd, &push, counters, offsetof(Counters, retypeDispatch));
-    vk::memoryBarrier(cmd);
+    if (lockFree) {
+        for (const vk::ComputePipeline* claim : {&claimClass0_, &claimClass1_, &claimClass2_, &claimClass3_}) {
+            claim->dispatchIndirect(cmd, &push, counters, offsetof(Counters, retypeDispatch));
+            vk::memoryBarrier(cmd);
+        }
+    } else {
+        claim_.dispatchIndirect(cmd, &push, counters, offsetof(Counters, retypeDispatch));
+        vk::memoryBarrier(cmd);
+    }
     commitVertices_.dispatch(cmd, &push, 1);
     vk::memoryBarrier(cmd);
     mark("mesh_claim");

@@ -58,11 +58,14 @@ public:
     void recordMarkTouched(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters) const;
     // Dirty = every block listed by collect_blocks (record BaselineMeshStage::recordCollect first).
     void recordMarkAll(VkCommandBuffer cmd, const FramePush& push, uint32_t blockCapacity) const;
-    void recordMesh(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters, class vk::StageTimer* timer) const;
+    // lockFree: the claim pass runs as 4 dispatches by cube parity class, without atomics on edge slots.
+    void recordMesh(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters, vk::StageTimer* timer,
+                    bool lockFree) const;
 
 private:
-    vk::ComputePipeline markDirty_, markAllDirty_, plan_, collect_, planRetype_, claim_, commitVertices_, update_,
-        triangulate_, commitChunks_, freeVertices_, freeChunks_, commitFree_;
+    vk::ComputePipeline markDirty_, markAllDirty_, plan_, collect_, planRetype_, claim_, claimClass0_, claimClass1_,
+        claimClass2_, claimClass3_, commitVertices_, update_, triangulate_, commitChunks_, freeVertices_, freeChunks_,
+        commitFree_;
 };
 
 // Compaction of the shared-vertex mesh into dense vertex and index buffers.

@@ -66,7 +66,8 @@ void BindingLayout::bind(uint32_t binding, const Buffer& buffer) {
     vkUpdateDescriptorSets(context_.device(), 1, &write, 0, nullptr);
 }
 
-ComputePipeline::ComputePipeline(const Context& context, const BindingLayout& layout, const std::string& shaderName)
+ComputePipeline::ComputePipeline(const Context& context, const BindingLayout& layout, const std::string& shaderName,
+                                 std::optional<uint32_t> specialization)
     : context_(context), layout_(layout), name_(shaderName) {
     const auto& table = shaders::all();
     auto it = table.find(shaderName);
@@ -82,6 +83,12 @@ ComputePipeline::ComputePipeline(const Context& context, const BindingLayout& la
     info.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
     info.stage.module = module;
     info.stage.pName = "main";
+    VkSpecializationMapEntry entry{0, 0, sizeof(uint32_t)};
+    VkSpecializationInfo spec{1, &entry, sizeof(uint32_t), specialization ? &*specialization : nullptr};
+    if (specialization) {
+        info.stage.pSpecializationInfo = &spec;
+        name_ += "[" + std::to_string(*specialization) + "]";
+    }
     info.layout = layout.pipelineLayout();
     VkResult r = vkCreateComputePipelines(context.device(), VK_NULL_HANDLE, 1, &info, nullptr, &pipeline_);
     vkDestroyShaderModule(context.device(), module, nullptr);

@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -46,7 +47,9 @@ private:
 
 class ComputePipeline {
 public:
-    ComputePipeline(const Context& context, const BindingLayout& layout, const std::string& shaderName);
+    // `specialization`: the value of the shader's `layout(constant_id = 0)` constant, when it has one.
+    ComputePipeline(const Context& context, const BindingLayout& layout, const std::string& shaderName,
+                    std::optional<uint32_t> specialization = std::nullopt);
     ~ComputePipeline();
     ComputePipeline(const ComputePipeline&) = delete;
     ComputePipeline& operator=(const ComputePipeline&) = delete;
