@@ -126,7 +126,7 @@ struct FuseArgs {
     float truncVoxels = 4.0f;
     float maxWeight = 255.0f;
     float minWeight = 1.0f;
-    bool noRefine = false;
+    bool refine = false;
     float refineEps = gpu::GpuVolumeConfig{}.refineEpsilonVoxels;
     bool lockFree = false;
     uint32_t blocks = 16384;
@@ -150,7 +150,7 @@ int commandFuse(const FuseArgs& args) {
     config.params.truncVoxels = args.truncVoxels;
     config.params.maxWeight = args.maxWeight;
     config.minMeshWeight = args.minWeight;
-    config.refine = !args.noRefine;
+    config.refine = args.refine;
     config.refineEpsilonVoxels = args.refineEps;
     config.lockFree = args.lockFree;
     config.params.maxDepth = args.data.maxDepth;
@@ -266,7 +266,7 @@ int commandFuse(const FuseArgs& args) {
                         {"frames_available", dataset->size()}};
     stats["device"] = context.info().name;
     stats["mode"] = args.mode;
-    stats["refine"] = !args.noRefine;
+    stats["refine"] = args.refine;
     stats["refine_epsilon_voxels"] = args.refineEps;
     stats["lock_free"] = args.lockFree;
     stats["frames"] = {{"integrated", integrated}, {"skipped", skipped}};
@@ -375,7 +375,9 @@ int main(int argc, char** argv) {
                      "incremental: one shared-vertex mesh updated every frame (default); "
                      "baseline: marching cubes at the end, every triangle with its own 3 vertices")
         ->check(CLI::IsMember({"incremental", "baseline"}));
-    fuse->add_flag("--no-refine", fuseArgs.noRefine, "turn off the Hamming-distance refinement of cube types");
+    fuse->add_flag("--refine,!--no-refine", fuseArgs.refine,
+                   "Hamming-distance refinement of cube types (paper §V.F; off by default: it opens cracks between "
+                   "refined and unrefined cubes, see docs/REFINEMENT.md)");
     fuse->add_option("--refine-eps", fuseArgs.refineEps, "refinement: corners within this many voxels of the surface may flip")
         ->check(CLI::Range(0.0f, 1.0f));
     fuse->add_flag("--lock-free", fuseArgs.lockFree, "claim edge vertices in 4 parity-class passes without atomics (paper's lock-free)");

@@ -38,8 +38,11 @@ struct GpuVolumeConfig {
     uint32_t vertexCapacity = 1u << 20;  // shared-vertex heap (32 B each)
     uint32_t chunkCapacity = 1u << 19;   // triangle chunks, 5 triangles each (60 B)
     uint32_t retypeCapacity = 1u << 20;  // cubes one mesh pass can retype (more wait for the next pass)
-    bool refine = true;                  // Hamming-distance refinement of cube types (docs/REFINEMENT.md)
-    float refineEpsilonVoxels = 0.25f;   // corners within this distance of the surface may be flipped
+    // Hamming-distance refinement of cube types (docs/REFINEMENT.md). Off by default: as the paper specifies
+    // it, a refined cube no longer meets its unrefined neighbours on their shared faces (cracks; measured
+    // in docs/RESULTS.md).
+    bool refine = false;
+    float refineEpsilonVoxels = 0.5f;    // corners within this distance of the surface may be flipped
     bool lockFree = false;               // the paper's lock-free claim: 4 parity-class passes, no slot atomics
     int imageWidth = 640, imageHeight = 480;
 };

@@ -1,0 +1,92 @@
+// Mesh refinement (paper §V.F, docs/REFINEMENT.md) on a slanted plane: fewer irregular cube types and
+// fewer sliver triangles, at the same accuracy.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "core/mesh_analysis.h"
+#include "core/refinement.h"
+#include "gpu/gpu_volume.h"
+#include "gpu_fixture.h"
+#include "synth/synthetic_scene.h"
+#include "test_support.h"
+
+namespace vkmesh {
+namespace {
+
+using test::GpuTest;
+
+constexpr int kWidth = 160, kHeight = 120;
+
+struct PlaneRun {
+    double irregularCubeShare, sliverShare, meanDistance;
+    size_t vertices, triangles, boundaryEdges;
+};
+
+// A plane not aligned with any axis, seen by 24 noisy frames from cameras 1.2-1.8 m in front of it.
+PlaneRun meshSlantedPlane(vk::Context& context, bool refine, float epsilonVoxels) {
+    const Eigen::Vector3d normal = Eigen::Vector3d(0.3, 0.5, 1.0).normalized();
+    const synth::SyntheticScene scene = synth::SyntheticScene::slantedPlane(normal, 0.0);
+    gpu::GpuVolumeConfig config;
+    config.params.voxelSize = 0.03f;
+    config.params.maxDepth = 4.0f;
+    config.blockCapacity = 4096;
+    config.vertexCapacity = 1u << 17;
+    config.chunkCapacity = 1u << 17;
+    config.imageWidth = kWidth;
+    config.imageHeight = kHeight;
+    config.refine = refine;
+    config.refineEpsilonVoxels = epsilonVoxels;
+    gpu::GpuVolume volume(context, config);
+    const Intrinsics intr = synth::kinectIntrinsics(kWidth, kHeight);
+    const Eigen::Vector3d side = normal.cross(Eigen::Vector3d::UnitX()).normalized(), up = normal.cross(side);
+    for (int i = 0; i < 24; ++i) {
+        const double a = i * 0.26;
+        const Eigen::Vector3d eye = normal * (1.2 + 0.025 * i) + 0.3 * (std::cos(a) * side + std::sin(a) * up);
+        const Pose pose = test::lookAt(eye, 0.2 * (std::sin(a) * side + std::cos(a) * up));
+        synth::RenderOptions options;
+        options.noise = true;
+        options.seed = uint32_t(i + 1);
+        volume.integrate(scene.renderDepth(intr, pose, options), intr, pose);
+    }
+    gpu::ExportedMesh exported = volume.exportMesh();
+    Mesh mesh;
+    for (const auto& v : exported.vertices) mesh.positions.emplace_back(v.px, v.py, v.pz);
+    mesh.triangles = exported.triangles;
+    PlaneRun run{};
+    auto types = volume.surfaceCubeTypes();
+    uint64_t surface = 0, irregular = 0;
+    for (int t = 0; t < 256; ++t) {
+        surface += types[t];
+        if (!isRegularType(t)) irregular += types[t];
+    }
+    run.irregularCubeShare = double(irregular) / double(surface);
+    run.sliverShare = triangleRegularity(mesh).sliverShare();
+    double sum = 0;
+    for (const auto& p : mesh.positions) sum += std::abs(normal.dot(p.cast<double>()));
+    run.meanDistance = sum / double(mesh.positions.size());
+    run.vertices = mesh.positions.size();
+    run.boundaryEdges = analyzeTopology(mesh).boundaryEdges;
+    run.triangles = mesh.triangles.size();
+    std::cout << (refine ? "refined (eps " + std::to_string(epsilonVoxels) + " voxel)" : "unrefined") << ": irregular cubes "
+              << run.irregularCubeShare << ", slivers " << run.sliverShare << ", mean |distance| " << run.meanDistance
+              << " m, " << run.vertices << " vertices, " << run.triangles << " triangles, " << run.boundaryEdges << " boundary edges\n";
+    return run;
+}
+
+TEST_F(GpuTest, RefinementHalvesIrregularityOnASlantedPlane) {
+    const float eps = gpu::GpuVolumeConfig{}.refineEpsilonVoxels;
+    PlaneRun off = meshSlantedPlane(context(), false, eps);
+    PlaneRun on = meshSlantedPlane(context(), true, eps);
+    // The paper's aim: noisy near-zero corners no longer make irregular cube types and thin triangles.
+    EXPECT_LE(on.irregularCubeShare, 0.5 * off.irregularCubeShare);
+    EXPECT_LE(on.sliverShare, 0.5 * off.sliverShare);
+    // At a small cost in accuracy (extrapolated vertices): under half a millimetre of mean distance.
+    EXPECT_LT(on.meanDistance - off.meanDistance, 0.0005);
+    // And, as specified, it opens cracks: refined cubes meet unrefined neighbours on different edges.
+    // This is why refinement is off by default (docs/REFINEMENT.md); the test keeps the measurement honest.
+    EXPECT_GT(on.boundaryEdges, 5 * off.boundaryEdges);
+}
+
+}  // namespace
+}  // namespace vkmesh
