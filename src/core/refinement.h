@@ -13,8 +13,8 @@ namespace vkmesh {
 // breaks ties: inside half z = 0, z = 1, y = 0, y = 1, x = 0, x = 1.
 inline constexpr std::array<uint8_t, 6> kRegularTypes{0x0F, 0xF0, 0x33, 0xCC, 0x55, 0xAA};
 
-// The default refinement epsilon, metres: a quarter of a voxel.
-inline float defaultRefineEpsilon(float voxelSize) { return 0.25f * voxelSize; }
+// The default refinement epsilon, metres: half a voxel (docs/REFINEMENT.md; GpuVolumeConfig::refineEpsilonVoxels).
+inline float defaultRefineEpsilon(float voxelSize) { return 0.5f * voxelSize; }
 
 // True when t (0..255) is one of kRegularTypes.
 bool isRegularType(int t);

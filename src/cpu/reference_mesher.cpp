@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "core/marching_cubes.h"
+#include "core/refinement.h"
 
 namespace vkmesh::cpu {
 namespace {
@@ -75,6 +76,17 @@ uint64_t globalEdgeId(const BlockMeshState& state, uint32_t cube, int axis) {
     return uint64_t(state.index) * kSlotsPerBlock + cube * 3 + uint32_t(axis);
 }
 
+// The lock-free claim passes (docs/REFINEMENT.md): pass k claims the cubes whose global position parity
+// p = (x&1) | (y&1) << 1 | (z&1) << 2 is one of kParityPasses[k], i.e. (x&1, y&1, z&1) in {000, 111},
+// {001, 110}, {010, 101}, {100, 011}: two parity vectors that differ on all three axes.
+constexpr int kParityPasses[4][2] = {{0, 7}, {4, 3}, {2, 5}, {1, 6}};
+
+int globalParity(const BlockCoord& block, uint32_t cube) {
+    const auto l = cubeCoords(cube);
+    const int side = int(BLOCK_SIDE);
+    return ((block[0] * side + l[0]) & 1) | (((block[1] * side + l[1]) & 1) << 1) | (((block[2] * side + l[2]) & 1) << 2);
+}
+
 }  // namespace
 
 // A block of D with everything its cubes read: the TSDF and the mesh state of it and its +x/+y/+z
@@ -84,7 +96,8 @@ struct ReferenceMesher::DirtyBlock {
     BlockMeshState* state = nullptr;
     TsdfBlocks tsdf{};
     BlockMeshState* mesh[8] = {};
-    std::array<uint8_t, VOXELS_PER_BLOCK> newType{};
+    CubeMask retype;                              // the cubes claim and triangulate visit
+    std::array<uint8_t, VOXELS_PER_BLOCK> newType{};  // for those cubes: the (refined) type to build
 
     DirtyBlock(const ReferenceVolume& volume, std::map<BlockCoord, BlockMeshState>& states, const BlockCoord& c)
         : coord(c), state(&states.at(c)), tsdf(tsdfNeighbourhood(volume, c)) {
@@ -112,8 +125,13 @@ struct ReferenceMesher::DirtyBlock {
 };
 
 ReferenceMesher::ReferenceMesher(const VolumeParams& params, float minMeshWeight, uint32_t vertexCapacity,
-                                 uint32_t chunkCapacity)
-    : params_(params), minMeshWeight_(minMeshWeight), vertexCapacity_(vertexCapacity), chunkCapacity_(chunkCapacity) {
+                                 uint32_t chunkCapacity, const MesherOptions& options)
+    : params_(params),
+      minMeshWeight_(minMeshWeight),
+      options_(options),
+      refineEpsilon_(options.refineEpsilon ? *options.refineEpsilon : defaultRefineEpsilon(params.voxelSize)),
+      vertexCapacity_(vertexCapacity),
+      chunkCapacity_(chunkCapacity) {
     if (vertexCapacity == 0 || chunkCapacity == 0) throw Error("ReferenceMesher: heap capacities must be positive");
     if (chunkCapacity > kMaxChunkCapacity)
         throw Error("ReferenceMesher: chunk capacity " + std::to_string(chunkCapacity) + " exceeds " +
@@ -148,11 +166,19 @@ MeshFrameStats ReferenceMesher::updateAll(const ReferenceVolume& volume, uint32_
     std::vector<BlockCoord> all;
     all.reserve(volume.blocks().size());
     for (const auto& [coord, block] : volume.blocks()) all.push_back(coord);
-    return update(volume, all, frameNumber);
+    return update(volume, all, frameNumber, RetypeScope::AllCubes);
 }
 
 MeshFrameStats ReferenceMesher::update(const ReferenceVolume& volume, const std::vector<BlockCoord>& touched,
-                                       uint32_t frameNumber) {
+                                       uint32_t frameNumber, RetypeScope scope) {
+    if (scope == RetypeScope::FlippedCorners) {
+        if (volume.minMeshWeight() != minMeshWeight_)
+            throw Error("ReferenceMesher: the volume flags corners at minMeshWeight " +
+                        std::to_string(volume.minMeshWeight()) + ", the mesher meshes at " + std::to_string(minMeshWeight_));
+        if (options_.refine && (!volume.refinement() || volume.refineEpsilon() != refineEpsilon_))
+            throw Error("ReferenceMesher: refinement is on (epsilon " + std::to_string(refineEpsilon_) +
+                        " m) but the volume does not flag corners crossing that epsilon (ReferenceVolume::setRefinement)");
+    }
     MeshFrameStats stats;
     createBlockStates(volume);
     gcCandidates_.clear();
@@ -173,23 +199,68 @@ MeshFrameStats ReferenceMesher::update(const ReferenceVolume& volume, const std:
     for (const BlockCoord& c : dirtySet) dirty.emplace_back(volume, blocks_, c);
     stats.dirtyBlocks = uint32_t(dirty.size());
 
-    // New type of every cube of D: MC type of its corners if all 8 exist with weight >= minMeshWeight, else 0.
+    // The cubes to re-evaluate (the GPU's retype list): all of D, or the cubes around the corners the last
+    // integrate() flipped and the INCOMPLETE cubes (the GPU sets their retype bit again). The other cubes of D
+    // keep their type: without a flipped corner neither their MC type nor their refined type can change.
+    for (DirtyBlock& b : dirty) {
+        if (scope == RetypeScope::AllCubes) {
+            b.retype.set();
+        } else {
+            auto it = volume.retypeCubes().find(b.coord);
+            if (it != volume.retypeCubes().end()) b.retype = it->second;
+            for (uint32_t cube = 0; cube < VOXELS_PER_BLOCK; ++cube)
+                if (b.state->cubeState[cube] & kIncomplete) b.retype.set(cube);
+        }
+        stats.cubesListed += uint32_t(b.retype.count());
+    }
+
+    // New type of every listed cube: t = MC type of its corners if all 8 exist with weight >= minMeshWeight,
+    // else 0; with refinement, refineType(stored type, t, d, epsilon). Computed before any cube state changes,
+    // so claim and triangulate see the same type.
     for (DirtyBlock& b : dirty) {
         for (uint32_t cube = 0; cube < VOXELS_PER_BLOCK; ++cube) {
+            if (!b.retype.test(cube)) continue;
             const CubeCorners corners = readCorners(b.tsdf, cube, minMeshWeight_);
-            b.newType[cube] = uint8_t(corners.observed ? cubeType(corners.d) : 0);
+            int t = corners.observed ? cubeType(corners.d) : 0;
+            if (options_.refine) t = refineType(int(b.state->cubeState[cube] & kTypeMask), t, corners.d, refineEpsilon_);
+            b.newType[cube] = uint8_t(t);
         }
     }
 
-    // 1. Claim.
-    for (DirtyBlock& b : dirty) claim(b, stats, frameNumber);
+    // 1. Claim: block by block (the default order), or in the 4 parity passes of the lock-free variant, each
+    // over all of D. Within one lock-free pass no two cubes may look at the same edge slot (counted).
+    if (!options_.lockFree) {
+        for (DirtyBlock& b : dirty)
+            for (uint32_t cube = 0; cube < VOXELS_PER_BLOCK; ++cube)
+                if (b.retype.test(cube)) claimCube(b, cube, stats, frameNumber);
+    } else {
+        const MarchingCubesTables& tables = marchingCubesTables();
+        for (const auto& pass : kParityPasses) {
+            std::set<uint64_t> slotsSeen;  // (owner block index, cube, axis) of the slots this pass looked at
+            for (DirtyBlock& b : dirty) {
+                for (uint32_t cube = 0; cube < VOXELS_PER_BLOCK; ++cube) {
+                    if (!b.retype.test(cube)) continue;
+                    const int parity = globalParity(b.coord, cube);
+                    if (parity != pass[0] && parity != pass[1]) continue;
+                    const uint32_t mask = tables.edgeMask[b.newType[cube]];
+                    for (int e = 0; e < kCubeEdges; ++e) {
+                        if (!((mask >> e) & 1)) continue;
+                        const DirtyBlock::Slot slot = b.edgeSlot(cube, e);
+                        if (!slotsSeen.insert(globalEdgeId(*slot.state, slot.cube, slot.axis)).second)
+                            ++stats.lockFreeSharedSlots;
+                    }
+                    claimCube(b, cube, stats, frameNumber);
+                }
+            }
+        }
+    }
 
-    // 2. Update: every owned slot of D's cubes that holds a vertex ...
+    // 2. Update: every live vertex whose owner block is in D (every owned slot of D's cubes that holds one) ...
     for (DirtyBlock& b : dirty)
         for (uint32_t cube = 0; cube < VOXELS_PER_BLOCK; ++cube)
             for (int axis = 0; axis < 3; ++axis)
                 if (b.state->edgeVertex[cube * 3 + uint32_t(axis)] != kEmpty) updateVertex(b.tsdf, *b.state, cube, axis);
-    // ... and every vertex claimed this frame whose owner block is not in D (not in docs/MESH.md, needed for
+    // ... and every vertex claimed this frame whose owner block is not in D (docs/MESH.md; needed for
     // incremental == from scratch). A cube of block B in D can need an edge lying wholly in B + o, o != 0,
     // while B + o is outside D: e.g. the cube's corners in B just reached minMeshWeight (or B was just
     // allocated) and no other cube used that edge before. The pass over D alone would leave the new vertex
@@ -210,31 +281,29 @@ MeshFrameStats ReferenceMesher::update(const ReferenceVolume& volume, const std:
     return stats;
 }
 
-void ReferenceMesher::claim(DirtyBlock& b, MeshFrameStats& stats, uint32_t frameNumber) {
-    const MarchingCubesTables& tables = marchingCubesTables();
-    for (uint32_t cube = 0; cube < VOXELS_PER_BLOCK; ++cube) {
-        const uint32_t mask = tables.edgeMask[b.newType[cube]];
-        for (int e = 0; e < kCubeEdges; ++e) {
-            if (!((mask >> e) & 1)) continue;
-            const DirtyBlock::Slot slot = b.edgeSlot(cube, e);
-            if (slot.vertex() != kEmpty) continue;
-            if (freeVertices_.empty()) {  // the slot stays EMPTY; triangles on it become INVALID
-                ++stats.vertexExhausted;
-                continue;
-            }
-            const uint32_t v = freeVertices_.back();
-            freeVertices_.pop_back();
-            vertexHighWater_ = std::max(vertexHighWater_, liveVertices());
-            MeshVertex& vertex = vertices_[v];
-            vertex = MeshVertex{};
-            vertex.refcount = 0;
-            vertex.createdFrame = frameNumber;
-            vertexOwner_[v] = globalEdgeId(*slot.state, slot.cube, slot.axis);
-            slot.vertex() = v;
-            newVertices_.push_back(v);
-            gcCandidates_.push_back(v);  // freed at the end of the frame if no triangle takes it
-            ++stats.verticesAllocated;
+// Claim (docs/MESH.md, pass 1) for one cube: every edge of its new type without a vertex gets one from the heap.
+void ReferenceMesher::claimCube(DirtyBlock& b, uint32_t cube, MeshFrameStats& stats, uint32_t frameNumber) {
+    const uint32_t mask = marchingCubesTables().edgeMask[b.newType[cube]];
+    for (int e = 0; e < kCubeEdges; ++e) {
+        if (!((mask >> e) & 1)) continue;
+        const DirtyBlock::Slot slot = b.edgeSlot(cube, e);
+        if (slot.vertex() != kEmpty) continue;
+        if (freeVertices_.empty()) {  // the slot stays EMPTY; triangles on it become INVALID
+            ++stats.vertexExhausted;
+            continue;
         }
+        const uint32_t v = freeVertices_.back();
+        freeVertices_.pop_back();
+        vertexHighWater_ = std::max(vertexHighWater_, liveVertices());
+        MeshVertex& vertex = vertices_[v];
+        vertex = MeshVertex{};
+        vertex.refcount = 0;
+        vertex.createdFrame = frameNumber;
+        vertexOwner_[v] = globalEdgeId(*slot.state, slot.cube, slot.axis);
+        slot.vertex() = v;
+        newVertices_.push_back(v);
+        gcCandidates_.push_back(v);  // freed at the end of the frame if no triangle takes it
+        ++stats.verticesAllocated;
     }
 }
 
@@ -245,10 +314,12 @@ void ReferenceMesher::updateVertex(const TsdfBlocks& tsdf, const BlockMeshState&
     const CubeCorners corners = readCorners(tsdf, cube, minMeshWeight_);
     const int hi = 1 << axis;
     const float dLo = corners.d[0], dHi = corners.d[hi];
-    if (!corners.exists[0] || !corners.exists[hi] || (dLo < 0.0f) == (dHi < 0.0f)) return;  // keeps its position
+    if (!corners.exists[0] || !corners.exists[hi] || dLo == dHi) return;  // keeps its position
 
-    // Exactly the float operations of ReferenceVolume::extractBaselineMesh.
-    const float s = dLo / (dLo - dHi);
+    // Exactly the float operations of ReferenceVolume::extractBaselineMesh, s clamped to [-0.5, 1.5]: an edge
+    // of a refined type whose corners have the same sign gets an extrapolated vertex (docs/REFINEMENT.md);
+    // where they differ in sign s is in (0, 1] and the clamp changes nothing.
+    const float s = std::clamp(dLo / (dLo - dHi), -0.5f, 1.5f);
     const auto local = cubeCoords(cube);
     float p[3] = {float(owner.coord[0] * 8 + local[0]), float(owner.coord[1] * 8 + local[1]),
                   float(owner.coord[2] * 8 + local[2])};
@@ -285,6 +356,7 @@ void ReferenceMesher::releaseReference(uint32_t v) {
 void ReferenceMesher::triangulate(DirtyBlock& b, MeshFrameStats& stats) {
     const MarchingCubesTables& tables = marchingCubesTables();
     for (uint32_t cube = 0; cube < VOXELS_PER_BLOCK; ++cube) {
+        if (!b.retype.test(cube)) continue;
         const uint32_t state = b.state->cubeState[cube];
         const uint32_t oldType = state & kTypeMask;
         const uint32_t newType = b.newType[cube];

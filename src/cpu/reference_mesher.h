@@ -1,7 +1,10 @@
 // The CPU reference of the incremental shared-vertex mesh (docs/MESH.md, after Dong et al., ICRA 2018):
 // one persistent mesh beside the TSDF, updated in place every frame over the dirty blocks only. Every
 // vertex sits on exactly one cube edge and belongs to the cube whose corner 0 is the edge's low end; a cube
-// keeps the MC type its triangles were built from and rebuilds them only when that type changes.
+// keeps the MC type its triangles were built from and rebuilds them only when that type changes. A frame
+// re-evaluates only the cubes around the corners fusion flipped (ReferenceVolume::retypeCubes()) and the
+// INCOMPLETE ones, as the GPU does; optionally with mesh refinement (docs/REFINEMENT.md: the type built is
+// refineType(stored type, MC type, corners, epsilon)) and in the lock-free claim order.
 //
 // Serial and plain on purpose: it states what the GPU stages (shaders_comp/mesh_*.comp) compute, and the
 // tests compare the two (same triangles as position triples, same vertex count). Positions use exactly the
@@ -11,6 +14,7 @@
 #include <array>
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -22,6 +26,7 @@ namespace vkmesh::cpu {
 // What one update did. Counts are over the frame's passes.
 struct MeshFrameStats {
     uint32_t dirtyBlocks = 0;        // |D|
+    uint32_t cubesListed = 0;        // cubes of D visited by claim and triangulate (the GPU's retype list)
     uint32_t cubesRetyped = 0;       // cubes whose triangles were rebuilt (type changed, or INCOMPLETE)
     uint32_t verticesAllocated = 0;  // claim: vertices taken from the heap
     uint32_t verticesFreed = 0;      // garbage collection: vertices given back
@@ -35,6 +40,9 @@ struct MeshFrameStats {
     // Vertices claimed this frame whose owner cube lies in a block outside D: the per-cube update pass over D
     // does not visit them, so the update pass also positions every vertex allocated this frame (see update()).
     uint32_t newVerticesOutsideDirty = 0;
+    // Lock-free claim order only: edge slots looked at by two cubes of the same parity pass (a race on the
+    // GPU's plain read-and-write claim). Always 0 by construction; counted to show it.
+    uint32_t lockFreeSharedSlots = 0;
 };
 
 // One vertex of the heap, the layout of the GPU's `vertices` buffer (32 bytes).
@@ -58,6 +66,25 @@ struct BlockMeshState {
     uint32_t index = 0;  // creation order: the block number in global edge ids (block * 512 + cube) * 3 + axis
 };
 
+// Options of the mesher beyond its heap sizes (docs/REFINEMENT.md).
+struct MesherOptions {
+    bool refine = false;                 // mesh refinement (paper §V.F): claim and triangulate use refineType()
+    std::optional<float> refineEpsilon;  // metres; default defaultRefineEpsilon(voxelSize) = half a voxel
+    // The lock-free claim order (paper §V.C): 4 passes, one per parity class {000,111}, {001,110}, {010,101},
+    // {100,011} of the cube's global position (x&1, y&1, z&1). Serially it only changes the order of claims
+    // (so which heap index a vertex gets), never the mesh.
+    bool lockFree = false;
+};
+
+// Which cubes of D one update() re-evaluates (claim + triangulate).
+enum class RetypeScope {
+    // The GPU's rule: the cubes of volume.retypeCubes() (the 8 cubes around every corner the last integrate()
+    // flipped) and the INCOMPLETE cubes of D. Requires update() after every integrate().
+    FlippedCorners,
+    // Every cube of D (a from-scratch rebuild: updateAll()).
+    AllCubes,
+};
+
 class ReferenceMesher {
 public:
     static constexpr uint32_t kEmpty = 0xFFFFFFFFu;    // edge slot without a vertex
@@ -71,13 +98,21 @@ public:
 
     // Throws Error for a zero capacity or a chunk capacity above kMaxChunkCapacity.
     explicit ReferenceMesher(const VolumeParams& params, float minMeshWeight = 1.0f,
-                             uint32_t vertexCapacity = 1u << 20, uint32_t chunkCapacity = 1u << 20);
+                             uint32_t vertexCapacity = 1u << 20, uint32_t chunkCapacity = 1u << 20,
+                             const MesherOptions& options = {});
 
     // One frame of docs/MESH.md on the TSDF as it is now; `touched` = the blocks the frame fused
-    // (volume.lastTouched()), `frameNumber` goes into new vertices' createdFrame.
-    MeshFrameStats update(const ReferenceVolume& volume, const std::vector<BlockCoord>& touched, uint32_t frameNumber);
-    // The same with every block of the volume dirty: on a fresh mesher, the from-scratch extraction.
+    // (volume.lastTouched()), `frameNumber` goes into new vertices' createdFrame. With the default scope, the
+    // cubes re-evaluated are the volume's retypeCubes() and the INCOMPLETE cubes of D; then the volume must
+    // have this mesher's minMeshWeight, and refinement on with the same epsilon when this mesher refines
+    // (throws Error otherwise: its flipped corners would not be the ones this mesher needs).
+    MeshFrameStats update(const ReferenceVolume& volume, const std::vector<BlockCoord>& touched, uint32_t frameNumber,
+                          RetypeScope scope = RetypeScope::FlippedCorners);
+    // Every block of the volume dirty and every cube re-evaluated: on a fresh mesher, the from-scratch extraction.
     MeshFrameStats updateAll(const ReferenceVolume& volume, uint32_t frameNumber);
+
+    const MesherOptions& options() const { return options_; }
+    float refineEpsilon() const { return refineEpsilon_; }  // metres, the default resolved
 
     // Dense copy: the live vertices (refcount > 0) in heap order with positions, normals and
     // vertexAge = currentFrame - createdFrame; the live triangles (blocks in coordinate order, then cubes).
@@ -106,7 +141,7 @@ private:
     using TsdfBlocks = std::array<const ReferenceBlock*, 8>;
 
     void createBlockStates(const ReferenceVolume& volume);
-    void claim(DirtyBlock& block, MeshFrameStats& stats, uint32_t frameNumber);
+    void claimCube(DirtyBlock& block, uint32_t cube, MeshFrameStats& stats, uint32_t frameNumber);
     void updateVertex(const TsdfBlocks& tsdf, const BlockMeshState& owner, uint32_t cube, int axis);
     void triangulate(DirtyBlock& block, MeshFrameStats& stats);
     void releaseReference(uint32_t v);
@@ -114,6 +149,8 @@ private:
 
     VolumeParams params_;
     float minMeshWeight_;
+    MesherOptions options_;
+    float refineEpsilon_;
     uint32_t vertexCapacity_, chunkCapacity_;
 
     std::map<BlockCoord, BlockMeshState> blocks_;

@@ -6,6 +6,7 @@
 
 #include "core/camera.h"
 #include "core/marching_cubes.h"
+#include "core/refinement.h"
 
 namespace vkmesh::cpu {
 namespace {
@@ -59,8 +60,21 @@ bool walkBand(const Eigen::Vector3f& a, const Eigen::Vector3f& b, Visit&& visit)
 
 }  // namespace
 
-ReferenceVolume::ReferenceVolume(const VolumeParams& params, float minMeshWeight)
-    : params_(params), minMeshWeight_(minMeshWeight) {}
+ReferenceVolume::ReferenceVolume(const VolumeParams& params, float minMeshWeight, bool refine, float refineEpsilon)
+    : params_(params), minMeshWeight_(minMeshWeight) {
+    setRefinement(refine, refineEpsilon);
+}
+
+void ReferenceVolume::setRefinement(bool refine, float refineEpsilon) {
+    refine_ = refine;
+    refineEpsilon_ = refineEpsilon < 0.0f ? defaultRefineEpsilon(params_.voxelSize) : refineEpsilon;
+}
+
+size_t ReferenceVolume::retypeCubeCount() const {
+    size_t n = 0;
+    for (const auto& [coord, mask] : retypeCubes_) n += mask.count();
+    return n;
+}
 
 std::vector<BlockCoord> ReferenceVolume::blocksTouchedBy(const DepthImage& depth, const Intrinsics& intrinsics,
                                                          const Pose& cameraToWorld, ReferenceFrameStats* stats) const {
@@ -101,6 +115,8 @@ ReferenceFrameStats ReferenceVolume::integrate(const DepthImage& depth, const In
     const gpu::FramePush push = makeFramePush(intrinsics, cameraToWorld, params_, 1);
     const float fx = push.intrinsics[0], fy = push.intrinsics[1], cx = push.intrinsics[2], cy = push.intrinsics[3];
     const float truncation = params_.truncation();
+    const float eps = refineEpsilon_;
+    lastFlipped_.clear();
     for (const BlockCoord& c : touched) {
         auto [it, inserted] = blocks_.try_emplace(c);   // a new block starts at weight 0
         if (inserted) ++stats.blocksInserted;
@@ -121,12 +137,35 @@ ReferenceFrameStats ReferenceVolume::integrate(const DepthImage& depth, const In
             if (!(d >= push.minDepth && d <= push.maxDepth && sdf >= -truncation)) continue;
             float tsdf = std::min(sdf, truncation);
             float oldSdf = block.sdf[v], oldWeight = block.weight[v];
-            block.sdf[v] = (oldSdf * oldWeight + tsdf) / (oldWeight + 1.0f);
-            block.weight[v] = std::min(oldWeight + 1.0f, params_.maxWeight);
+            const float newSdf = (oldSdf * oldWeight + tsdf) / (oldWeight + 1.0f);
+            const float newWeight = std::min(oldWeight + 1.0f, params_.maxWeight);
+            block.sdf[v] = newSdf;
+            block.weight[v] = newWeight;
             ++stats.updatedVoxels;
+            // Did the corner flip (fuse_depth.comp)? Corners not updated keep their values and never flip.
+            const bool wasObserved = oldWeight >= minMeshWeight_, isObserved = newWeight >= minMeshWeight_;
+            bool flipped = wasObserved != isObserved || (isObserved && (oldSdf < 0.0f) != (newSdf < 0.0f));
+            if (refine_ && isObserved && (std::fabs(oldSdf) < eps) != (std::fabs(newSdf) < eps)) flipped = true;
+            if (flipped)
+                lastFlipped_.push_back({c[0] * int(BLOCK_SIDE) + lx, c[1] * int(BLOCK_SIDE) + ly, c[2] * int(BLOCK_SIDE) + lz});
         }
     }
     lastTouched_ = std::move(touched);
+
+    // The 8 cubes around every flipped corner, in the blocks that exist now.
+    retypeCubes_.clear();
+    const int side = int(BLOCK_SIDE);
+    auto floorDiv = [side](int a) { return a >= 0 ? a / side : -((-a + side - 1) / side); };
+    for (const auto& g : lastFlipped_) {
+        for (int o = 0; o < 8; ++o) {
+            const auto off = cornerOffset(o);
+            const int x = g[0] - off[0], y = g[1] - off[1], z = g[2] - off[2];
+            const BlockCoord b{floorDiv(x), floorDiv(y), floorDiv(z)};
+            if (!blocks_.count(b)) continue;
+            const uint32_t cube = uint32_t((x - b[0] * side) + side * ((y - b[1] * side) + side * (z - b[2] * side)));
+            retypeCubes_[b].set(cube);
+        }
+    }
     return stats;
 }
 

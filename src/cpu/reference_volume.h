@@ -7,6 +7,7 @@
 #include <Eigen/Core>
 
 #include <array>
+#include <bitset>
 #include <map>
 #include <vector>
 
@@ -32,9 +33,24 @@ struct ReferenceFrameStats {
     uint32_t rayTruncated = 0;
 };
 
+// Which cubes the incremental mesh re-evaluates after a frame (docs/MESH.md, docs/REFINEMENT.md): per block,
+// one bit per cube (index x + 8 (y + 8 z)).
+using CubeMask = std::bitset<gpu::VOXELS_PER_BLOCK>;
+
 class ReferenceVolume {
 public:
-    explicit ReferenceVolume(const VolumeParams& params, float minMeshWeight = 1.0f);
+    // minMeshWeight: a corner is "observed" (meshable) from this weight on; refine / refineEpsilon (metres):
+    // whether mesh refinement is on (then a corner crossing |d| < epsilon also flips, see lastFlipped());
+    // a negative epsilon stands for the default, defaultRefineEpsilon(voxelSize) = half a voxel.
+    explicit ReferenceVolume(const VolumeParams& params, float minMeshWeight = 1.0f, bool refine = false,
+                             float refineEpsilon = -1.0f);
+
+    // The same settings afterwards (they apply from the next integrate() on). Negative epsilon: the default.
+    void setRefinement(bool refine, float refineEpsilon = -1.0f);
+    bool refinement() const { return refine_; }
+    float refineEpsilon() const { return refineEpsilon_; }
+    float minMeshWeight() const { return minMeshWeight_; }
+    const VolumeParams& params() const { return params_; }
 
     ReferenceFrameStats integrate(const DepthImage& depth, const Intrinsics& intrinsics, const Pose& cameraToWorld);
 
@@ -51,11 +67,30 @@ public:
     // The blocks touched by the last integrate() call (allocation order), what the incremental mesh marks dirty.
     const std::vector<BlockCoord>& lastTouched() const { return lastTouched_; }
 
+    // The corners (voxels, global coordinates block * 8 + local) that "flipped" in the last integrate() call,
+    // in fusion order: the rule of shaders_comp/fuse_depth.comp. With o/n the old/new weight and sdf,
+    // observed = weight >= minMeshWeight, a corner flips when
+    //   observed(o) != observed(n), or observed(n) and (sdf_o < 0) != (sdf_n < 0), or, with refinement on,
+    //   observed(n) and (|sdf_o| < epsilon) != (|sdf_n| < epsilon).
+    // (A block allocated this frame starts at sdf 0, weight 0.)
+    const std::vector<std::array<int, 3>>& lastFlipped() const { return lastFlipped_; }
+
+    // The cubes whose MC (or refined) type may have changed in the last integrate() call: for every flipped
+    // corner, the 8 cubes around it (corner - o, o in {0,1}^3), in whatever block they lie, for the blocks that
+    // exist after that call. Every such block is a dirty block of the frame (touched, or touched - o).
+    const std::map<BlockCoord, CubeMask>& retypeCubes() const { return retypeCubes_; }
+    // Number of cubes in retypeCubes().
+    size_t retypeCubeCount() const;
+
 private:
     VolumeParams params_;
     float minMeshWeight_;
+    bool refine_ = false;
+    float refineEpsilon_ = 0.0f;
     std::map<BlockCoord, ReferenceBlock> blocks_;
     std::vector<BlockCoord> lastTouched_;
+    std::vector<std::array<int, 3>> lastFlipped_;
+    std::map<BlockCoord, CubeMask> retypeCubes_;
 };
 
 }  // namespace vkmesh::cpu

@@ -119,6 +119,16 @@ std::vector<std::string> checkInvariants(const gpu::MeshStateSnapshot& s, const 
     return problems;
 }
 
+Mesh toMesh(const gpu::ExportedMesh& e) {
+    Mesh m;
+    for (const auto& v : e.vertices) {
+        m.positions.emplace_back(v.px, v.py, v.pz);
+        m.normals.emplace_back(v.nx, v.ny, v.nz);
+    }
+    m.triangles = e.triangles;
+    return m;
+}
+
 TEST_F(GpuTest, IncrementalMeshEqualsRebuildFromScratch) {
     gpu::GpuVolume volume(context(), meshConfig());
     std::vector<gpu::FrameReport> reports;
@@ -206,30 +216,29 @@ TEST_F(GpuTest, VertexHeapExhaustionIsCountedAndConsistent) {
     EXPECT_EQ(mesh.unreferencedVertices, 0u);
 }
 
-Mesh toMesh(const gpu::ExportedMesh& e) {
-    Mesh m;
-    for (const auto& v : e.vertices) {
-        m.positions.emplace_back(v.px, v.py, v.pz);
-        m.normals.emplace_back(v.nx, v.ny, v.nz);
-    }
-    m.triangles = e.triangles;
-    return m;
-}
+class CpuReferenceTest : public GpuTest, public ::testing::WithParamInterface<bool> {};
 
-TEST_F(GpuTest, MatchesCpuReferenceMesherFrameByFrame) {
+// The GPU passes against the serial CPU reference of the same algorithm, frame by frame, with refinement
+// off and on (on, the retype rule and each cube's history matter, so this is the real check).
+TEST_P(CpuReferenceTest, MatchesCpuReferenceMesherFrameByFrame) {
     auto config = meshConfig();
+    config.refine = GetParam();
+    const float epsilon = config.refineEpsilonVoxels * config.params.voxelSize;
     gpu::GpuVolume volume(context(), config);
-    cpu::ReferenceVolume referenceVolume(config.params);
-    cpu::ReferenceMesher mesher(config.params, config.minMeshWeight, config.vertexCapacity, config.chunkCapacity);
+    cpu::ReferenceVolume referenceVolume(config.params, config.minMeshWeight, config.refine, epsilon);
+    cpu::MesherOptions options;
+    options.refine = config.refine;
+    options.refineEpsilon = epsilon;
+    cpu::ReferenceMesher mesher(config.params, config.minMeshWeight, config.vertexCapacity, config.chunkCapacity, options);
     static const synth::SyntheticScene scene = synth::SyntheticScene::defaultRoom();
     Intrinsics intr = synth::kinectIntrinsics(kWidth, kHeight);
     auto poses = synth::cameraPath(24, synth::PathKind::Orbit);
     for (uint32_t frame = 1; frame <= 8; ++frame) {
-        synth::RenderOptions options;
-        options.noise = true;
-        options.seed = frame;
+        synth::RenderOptions render;
+        render.noise = true;
+        render.seed = frame;
         const Pose& pose = poses[(frame * 2) % poses.size()];
-        DepthImage depth = scene.renderDepth(intr, pose, options);
+        DepthImage depth = scene.renderDepth(intr, pose, render);
         gpu::FrameReport r = volume.integrate(depth, intr, pose);
         referenceVolume.integrate(depth, intr, pose);
         cpu::MeshFrameStats s = mesher.update(referenceVolume, referenceVolume.lastTouched(), frame);
@@ -243,6 +252,8 @@ TEST_F(GpuTest, MatchesCpuReferenceMesherFrameByFrame) {
         }
     }
 }
+
+INSTANTIATE_TEST_SUITE_P(Refinement, CpuReferenceTest, ::testing::Values(false, true));
 
 // Integrates views from all around a closed object and checks the GPU mesh is a closed 2-manifold.
 TopologyReport closedObjectTopology(vk::Context& context, const synth::SyntheticScene& scene, const Eigen::Vector3d& centre,
