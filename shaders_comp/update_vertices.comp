@@ -11,8 +11,7 @@ layout(local_size_x = WG_LIST) in;
 
 #include "cube_access.glsl"
 
-void main() {
-    uint v = gl_GlobalInvocationID.x;
+void updateVertex(uint v) {
     if (v >= counters.vertexHighWater || vertices[v].refcount == DEAD_REFCOUNT) return;
     uint owner = vertexOwner[v];
     uint block = owner / (VOXELS_PER_BLOCK * 3u);
@@ -42,4 +41,11 @@ void main() {
     vertices[v].nx = n.x;
     vertices[v].ny = n.y;
     vertices[v].nz = n.z;
+}
+
+// VERTICES_PER_INVOCATION heap entries per invocation: most entries are skipped at once, and on lavapipe
+// the per-invocation overhead, not the skip, is what costs.
+void main() {
+    for (uint k = 0u; k < VERTICES_PER_INVOCATION; ++k)
+        updateVertex(gl_GlobalInvocationID.x * VERTICES_PER_INVOCATION + k);
 }
