@@ -3,6 +3,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -40,6 +41,7 @@ struct EvalArgs {
     uint32_t seed = 1;
     std::string jsonPath;
     std::string seenPath;
+    std::string precisionAgainst = "all";
 };
 
 std::vector<double> parseThresholds(const std::string& text) {
@@ -128,7 +130,8 @@ int runEval(const EvalArgs& args) {
 
     // The GT surface the sequence saw.
     t0 = std::chrono::steady_clock::now();
-    std::vector<Eigen::Vector3f> gt;
+    std::vector<bool> seen;
+    size_t seenCount = gtAll.size();
     json datasetJson = nullptr;
     if (!args.dataset.empty()) {
         DatasetOptions dopts;
@@ -140,11 +143,10 @@ int runEval(const EvalArgs& args) {
         for (const auto& w : dataset->warnings()) warnings.push_back(w);
         if (dataset->size() == 0) throw Error("no usable frame in " + args.dataset);
         const size_t stride = std::max<size_t>(args.frameStride, 1);
-        const std::vector<bool> seen = eval::seenMask(gtAll, *dataset, stride, args.seenTolerance, &warnings);
-        for (size_t i = 0; i < gtAll.size(); ++i)
-            if (seen[i]) gt.push_back(gtAll[i]);
+        seen = eval::seenMask(gtAll, *dataset, stride, args.seenTolerance, &warnings);
+        seenCount = size_t(std::count(seen.begin(), seen.end(), true));
         const size_t framesUsed = (dataset->size() + stride - 1) / stride;
-        if (gt.empty())
+        if (seenCount == 0)
             throw Error("none of the " + std::to_string(gtAll.size()) + " ground-truth points of '" + args.gt +
                         "' was seen in the " + std::to_string(framesUsed) + " frames of '" + args.dataset +
                         "' (do the GT and the dataset's poses share one coordinate frame?)");
@@ -157,18 +159,29 @@ int runEval(const EvalArgs& args) {
                        {"seen_tolerance", std::max(args.seenTolerance, 3.0 / dataset->depthScale())}};
         if (!args.seenPath.empty()) {
             Mesh seenCloud;
-            seenCloud.positions = gt;
+            for (size_t i = 0; i < gtAll.size(); ++i)
+                if (seen[i]) seenCloud.positions.push_back(gtAll[i]);
             writePly(args.seenPath, seenCloud);
         }
-    } else {
-        gt = gtAll;
     }
     const double seenSeconds = secondsSince(t0);
 
+    // Completeness and recall of the seen GT; accuracy and precision against all of it (or, with
+    // --precision-against seen, against the seen part only).
     t0 = std::chrono::steady_clock::now();
-    eval::EvalResult result = eval::evaluate(samples, gt, options);
+    eval::EvalResult result;
+    if (seen.empty()) {
+        result = eval::evaluate(samples, gtAll, options);
+    } else if (args.precisionAgainst == "all") {
+        result = eval::evaluate(samples, gtAll, seen, options);
+    } else {
+        std::vector<Eigen::Vector3f> gtSeen;
+        for (size_t i = 0; i < gtAll.size(); ++i)
+            if (seen[i]) gtSeen.push_back(gtAll[i]);
+        result = eval::evaluate(samples, gtSeen, options);
+    }
     result.gtPoints = gtAll.size();
-    result.gtPointsSeen = gt.size();
+    result.gtPointsSeen = seenCount;
     const double distanceSeconds = secondsSince(t0);
 
     json j;
@@ -178,7 +191,9 @@ int runEval(const EvalArgs& args) {
     j["options"] = {{"sample_spacing", options.sampleSpacing},
                     {"seed", options.seed},
                     {"max_distance", options.maxDistance},
-                    {"thresholds", options.thresholds}};
+                    {"thresholds", options.thresholds},
+                    {"precision_against", seen.empty() || args.precisionAgainst == "all" ? "all GT points" : "seen GT points"},
+                    {"recall_of", seen.empty() ? "all GT points" : "seen GT points"}};
     j["reconstruction_samples"] = result.reconstructionSamples;
     j["gt_points"] = result.gtPoints;
     j["gt_points_seen"] = result.gtPointsSeen;
@@ -207,10 +222,12 @@ int runEval(const EvalArgs& args) {
     std::printf("vkmesh eval: %s (%zu samples) vs %s (%zu GT points, %zu seen%s)\n", args.mesh.c_str(),
                 result.reconstructionSamples, args.gt.c_str(), result.gtPoints, result.gtPointsSeen,
                 args.dataset.empty() ? ", no --dataset: all" : "");
-    std::printf("  accuracy      mean %7.2f mm  median %7.2f mm   (reconstruction -> GT, capped at %.0f mm)\n",
-                1000 * result.accuracyMean, 1000 * result.accuracyMedian, 1000 * options.maxDistance);
-    std::printf("  completeness  mean %7.2f mm  median %7.2f mm   (GT -> reconstruction)\n",
-                1000 * result.completenessMean, 1000 * result.completenessMedian);
+    const bool precisionOfSeen = !seen.empty() && args.precisionAgainst == "seen";
+    std::printf("  accuracy      mean %7.2f mm  median %7.2f mm   (reconstruction -> %s GT, capped at %.0f mm)\n",
+                1000 * result.accuracyMean, 1000 * result.accuracyMedian, precisionOfSeen ? "seen" : "all",
+                1000 * options.maxDistance);
+    std::printf("  completeness  mean %7.2f mm  median %7.2f mm   (%s GT -> reconstruction)\n",
+                1000 * result.completenessMean, 1000 * result.completenessMedian, seen.empty() ? "all" : "seen");
     std::printf("  %9s  %9s  %7s  %7s\n", "threshold", "precision", "recall", "F-score");
     for (const auto& s : result.scores)
         std::printf("  %6.1f mm  %9.4f  %7.4f  %7.4f\n", 1000 * s.threshold, s.precision, s.recall, s.fscore);
@@ -242,6 +259,10 @@ std::function<int()> addEvalCommand(CLI::App& app) {
                     "with --dataset: a GT point is seen where |its depth - measured depth| < this (metres)")
         ->check(CLI::NonNegativeNumber);
     cmd->add_option("--write-seen", args->seenPath, "with --dataset: write the seen GT points to this PLY");
+    cmd->add_option("--precision-against", args->precisionAgainst,
+                    "with --dataset: accuracy/precision against all GT points (default) or the seen ones only; "
+                    "completeness/recall are always of the seen ones")
+        ->check(CLI::IsMember({"all", "seen"}));
     cmd->add_option("--spacing", args->spacing, "metres between area samples of the mesh");
     cmd->add_option("--thresholds", args->thresholds, "distance thresholds in metres, comma-separated");
     cmd->add_option("--max-distance", args->maxDistance, "distances are capped here (metres) for means and medians");

@@ -3,6 +3,7 @@
 //   vkmesh synth OUT_DIR                render a synthetic RGB-D sequence with ground truth (TUM layout)
 //   vkmesh fuse DATASET -o mesh.ply     fuse a depth sequence on the GPU and write its mesh
 //   vkmesh frames DATASET -o f.json     the frames (paths, poses, intrinsics) fuse would use, for peers
+//   vkmesh eval MESH --gt GT.ply        accuracy, completeness, precision/recall/F-score against ground truth
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
@@ -19,6 +20,7 @@
 #include <optional>
 
 #include "core/mesh_analysis.h"
+#include "eval_command.h"
 #include "core/refinement.h"
 #include "gpu/gpu_volume.h"
 #include "io/dataset.h"
@@ -396,6 +398,8 @@ int main(int argc, char** argv) {
     fuse->add_flag("--validation", fuseArgs.validation, "enable the Khronos validation layer (or VKMESH_VALIDATION=1)");
     fuse->add_flag("-q,--quiet", fuseArgs.quiet, "no progress line");
 
+    auto runEval = vkmesh::addEvalCommand(app);
+
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
@@ -407,6 +411,7 @@ int main(int argc, char** argv) {
             return commandSynth(synthOut, synthFrames, synthWidth, synthHeight, synthNoise, synthSeed, synthPath);
         if (app.got_subcommand("frames")) return commandFrames(framesArgs, framesOut);
         if (app.got_subcommand("fuse")) return commandFuse(fuseArgs);
+        if (app.got_subcommand("eval")) return runEval();
     } catch (const vkmesh::Error& e) {
         std::cerr << "vkmesh: error: " << e.what() << "\n";
         return 2;
