@@ -12,8 +12,7 @@ void main() {
     counters.vertexFreeTop -= granted;
     counters.verticesInUse += granted;
     counters.vertexHighWater = max(counters.vertexHighWater, counters.verticesInUse);
-    uint perGroup = WG_LIST * VERTICES_PER_INVOCATION;
-    counters.vertexDispatch[0] = (counters.vertexHighWater + perGroup - 1u) / perGroup;
+    counters.vertexDispatch[0] = (counters.vertexHighWater + WG_LIST - 1u) / WG_LIST;
     counters.vertexDispatch[1] = 1u;
     counters.vertexDispatch[2] = 1u;
 }

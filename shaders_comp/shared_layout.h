@@ -53,7 +53,6 @@ VKM_CONST WG_PIXELS_Y = 16u;
 VKM_CONST WG_LIST = 64u;                   // one invocation per list entry (assign, collect)
 VKM_CONST WG_BLOCK = 128u;                 // fuse / mesh: one workgroup per block, 4 voxels per invocation
 VKM_CONST VOXELS_PER_INVOCATION = 4u;      // VOXELS_PER_BLOCK / WG_BLOCK
-VKM_CONST VERTICES_PER_INVOCATION = 4u;    // update_vertices: heap entries per invocation
 
 // ---- descriptor bindings (set 0, shared by all compute stages) --------------------------------
 VKM_CONST BINDING_PARAMS = 0u;         // uniform VolumeParamsGpu

@@ -11,7 +11,8 @@ layout(local_size_x = WG_LIST) in;
 
 #include "cube_access.glsl"
 
-void updateVertex(uint v) {
+void main() {
+    uint v = gl_GlobalInvocationID.x;
     if (v >= counters.vertexHighWater || vertices[v].refcount == DEAD_REFCOUNT) return;
     uint owner = vertexOwner[v];
     uint block = owner / (VOXELS_PER_BLOCK * 3u);
@@ -41,11 +42,4 @@ void updateVertex(uint v) {
     vertices[v].nx = n.x;
     vertices[v].ny = n.y;
     vertices[v].nz = n.z;
-}
-
-// VERTICES_PER_INVOCATION heap entries per invocation: most entries are skipped at once, and on lavapipe
-// the per-invocation overhead, not the skip, is what costs.
-void main() {
-    for (uint k = 0u; k < VERTICES_PER_INVOCATION; ++k)
-        updateVertex(gl_GlobalInvocationID.x * VERTICES_PER_INVOCATION + k);
 }
