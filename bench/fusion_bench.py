@@ -71,7 +71,7 @@ def main():
         run(fuse + ["-o", out / f"{name}_vkmesh_incremental.ply", "--stats", stats], stdout=subprocess.DEVNULL)
         entry["incremental"] = json.loads(stats.read_text())
         peer = out / f"{name}_open3d.json"
-        run(["/usr/bin/python3", ROOT / "bench/open3d_peer.py", frames_json, "--voxel", args.voxel,
+        run(["/usr/bin/python3", ROOT / "bench/open3d_peer_guarded.py", frames_json, "--voxel", args.voxel,
              "--trunc-voxels", args.trunc_voxels, "--methods", args.methods, "-o", peer], stdout=subprocess.DEVNULL)
         entry["open3d"] = json.loads(peer.read_text())
         results["datasets"].append(entry)
