@@ -332,28 +332,9 @@ TEST(SeenMask, SphereSeenFromOneSide) {
 
 namespace {
 
-struct CliRun {
-    int exitCode;
-    std::string out, err;
-};
-
-std::string readText(const fs::path& p) {
-    std::ifstream f(p);
-    std::stringstream s;
-    s << f.rdbuf();
-    return s.str();
-}
-
-CliRun runCli(const std::string& args) {
-    static int counter = 0;
-    const fs::path dir = test::makeTempDir("eval_cli" + std::to_string(counter++));
-    const std::string cmd = std::string(VKMESH_CLI) + " " + args + " > " + (dir / "out").string() + " 2> " +
-                            (dir / "err").string();
-    const int status = std::system(cmd.c_str());
-    CliRun r{WIFEXITED(status) ? WEXITSTATUS(status) : -1, readText(dir / "out"), readText(dir / "err")};
-    fs::remove_all(dir);
-    return r;
-}
+using test::CliRun;
+using test::readText;
+using test::runCli;
 
 bool cliHasEval() {
     static const bool has = runCli("eval --help").exitCode == 0;

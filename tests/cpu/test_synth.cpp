@@ -27,16 +27,7 @@ Eigen::Vector3d toWorld(const Pose& cameraToWorld, const Eigen::Vector3d& camera
     return cameraToWorld.topLeftCorner<3, 3>() * cameraPoint + cameraToWorld.topRightCorner<3, 1>();
 }
 
-// A camera at `eye` looking at `target`, x right, y down, z forward, with world z up.
-Pose lookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& target) {
-    const Eigen::Vector3d forward = (target - eye).normalized();
-    const Eigen::Vector3d right = forward.cross(Eigen::Vector3d::UnitZ()).normalized();
-    const Eigen::Vector3d down = forward.cross(right);
-    Pose pose = Pose::Identity();
-    pose.topLeftCorner<3, 3>() << right, down, forward;
-    pose.topRightCorner<3, 1>() = eye;
-    return pose;
-}
+using test::lookAt;
 
 // A small camera whose principal point is a pixel centre, so that pixel (cx, cy) looks along +z exactly.
 Intrinsics centredIntrinsics(int width, int height, float focal) {

@@ -17,27 +17,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct CliRun {
-    int exitCode;
-    std::string out, err;
-};
-
-std::string readText(const fs::path& p) {
-    std::ifstream f(p);
-    std::stringstream s;
-    s << f.rdbuf();
-    return s.str();
-}
-
-CliRun runCli(const std::string& args) {
-    static int counter = 0;
-    fs::path dir = test::makeTempDir("cli_run" + std::to_string(counter++));
-    std::string cmd = std::string(VKMESH_CLI) + " " + args + " > " + (dir / "out").string() + " 2> " + (dir / "err").string();
-    int status = std::system(cmd.c_str());
-    CliRun r{WIFEXITED(status) ? WEXITSTATUS(status) : -1, readText(dir / "out"), readText(dir / "err")};
-    fs::remove_all(dir);
-    return r;
-}
+using test::CliRun;
+using test::readText;
+using test::runCli;
 
 // A small synthetic sequence, made once for the whole test program.
 const fs::path& smallSequence() {

@@ -54,26 +54,6 @@ void integrateRoom(gpu::GpuVolume& volume, size_t frames, synth::PathKind path =
     }
 }
 
-using Triangle = std::array<long, 9>;
-
-// Triangles as position triples rounded to 1 µm, each rotated to start at its smallest vertex (keeping
-// the orientation), sorted.
-std::vector<Triangle> canonical(const std::vector<Eigen::Vector3f>& soup) {
-    std::vector<Triangle> out;
-    for (size_t t = 0; t + 2 < soup.size(); t += 3) {
-        std::array<std::array<long, 3>, 3> v;
-        for (int i = 0; i < 3; ++i)
-            for (int k = 0; k < 3; ++k) v[i][k] = std::lround(double(soup[t + i][k]) * 1e6);
-        int first = int(std::min_element(v.begin(), v.end()) - v.begin());
-        Triangle tri;
-        for (int i = 0; i < 3; ++i)
-            for (int k = 0; k < 3; ++k) tri[i * 3 + k] = v[(first + i) % 3][k];
-        out.push_back(tri);
-    }
-    std::sort(out.begin(), out.end());
-    return out;
-}
-
 std::vector<Eigen::Vector3f> soupOf(const gpu::ExportedMesh& mesh) {
     std::vector<Eigen::Vector3f> soup;
     for (const auto& t : mesh.triangles)
@@ -148,7 +128,7 @@ TEST_F(GpuTest, IncrementalMeshEqualsRebuildFromScratch) {
     EXPECT_TRUE(problems.empty()) << problems.front();
     gpu::ExportedMesh scratch = volume.exportMesh();
     EXPECT_EQ(incremental.vertices.size(), scratch.vertices.size());
-    EXPECT_EQ(canonical(soupOf(incremental)), canonical(soupOf(scratch)));
+    EXPECT_EQ(canonicalTriangles(soupOf(incremental)), canonicalTriangles(soupOf(scratch)));
 }
 
 TEST_F(GpuTest, SharedMeshIsTheWeldedBaseline) {
@@ -157,7 +137,7 @@ TEST_F(GpuTest, SharedMeshIsTheWeldedBaseline) {
     gpu::ExportedMesh shared = volume.exportMesh();
     gpu::TriangleSoup baseline = volume.extractBaselineMesh();
     // Same triangles, and exactly one vertex per distinct baseline position: every vertex shared.
-    EXPECT_EQ(canonical(soupOf(shared)), canonical(baseline.vertices));
+    EXPECT_EQ(canonicalTriangles(soupOf(shared)), canonicalTriangles(baseline.vertices));
     std::set<std::array<float, 3>> distinct;
     for (const auto& p : baseline.vertices) distinct.insert({p.x(), p.y(), p.z()});
     EXPECT_EQ(shared.vertices.size(), distinct.size());
@@ -309,7 +289,7 @@ TEST_F(GpuTest, LockFreeClaimsBuildTheSameMesh) {
         integrateRoom(lockFree, 8);
         gpu::ExportedMesh a = lockBased.exportMesh(), b = lockFree.exportMesh();
         EXPECT_EQ(a.vertices.size(), b.vertices.size()) << "refine " << refine;
-        EXPECT_EQ(canonical(soupOf(a)), canonical(soupOf(b))) << "refine " << refine;
+        EXPECT_EQ(canonicalTriangles(soupOf(a)), canonicalTriangles(soupOf(b))) << "refine " << refine;
         auto problems = checkInvariants(lockFree.downloadMeshState(), lockFree.config());
         EXPECT_TRUE(problems.empty()) << problems.front();
     }

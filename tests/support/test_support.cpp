@@ -2,7 +2,11 @@
 
 #include <Eigen/Geometry>
 
+#include <sys/wait.h>
+
 #include <atomic>
+#include <fstream>
+#include <sstream>
 #include <cmath>
 #include <numbers>
 #include <cstdlib>
@@ -28,6 +32,24 @@ std::filesystem::path makeTempDir(const std::string& tag) {
     std::filesystem::remove_all(dir);
     std::filesystem::create_directories(dir);
     return dir;
+}
+
+std::string readText(const std::filesystem::path& path) {
+    std::ifstream file(path);
+    std::stringstream text;
+    text << file.rdbuf();
+    return text.str();
+}
+
+CliRun runCli(const std::string& args) {
+    static std::atomic<int> counter{0};
+    const std::filesystem::path dir = makeTempDir("cli_run" + std::to_string(counter++));
+    const std::string cmd =
+        std::string(VKMESH_CLI) + " " + args + " > " + (dir / "out").string() + " 2> " + (dir / "err").string();
+    const int status = std::system(cmd.c_str());
+    CliRun run{WIFEXITED(status) ? WEXITSTATUS(status) : -1, readText(dir / "out"), readText(dir / "err")};
+    std::filesystem::remove_all(dir);
+    return run;
 }
 
 Pose lookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& target) {

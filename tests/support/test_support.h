@@ -20,6 +20,15 @@ std::optional<std::filesystem::path> sharedDatasetsDir();
 // A fresh empty temporary folder for one test, removed by the caller or left for inspection.
 std::filesystem::path makeTempDir(const std::string& tag);
 
+// Runs the vkmesh program with `args` (a shell-quoted string); returns its exit code and what it printed.
+struct CliRun {
+    int exitCode;
+    std::string out, err;
+};
+CliRun runCli(const std::string& args);
+
+std::string readText(const std::filesystem::path& path);
+
 // A camera at `eye` looking at `target`: x right, y down, z forward, world z up; a proper rotation.
 Pose lookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& target);
 
