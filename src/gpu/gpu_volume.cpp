@@ -193,6 +193,10 @@ void GpuVolume::resetMeshState() {
     k.chunksInUse = k.chunkHighWater = 0;
     k.liveTriangles = 0;
     vk::uploadToBuffer(context_, counters_, &k, sizeof(k));
+    // readCounters() reads the host copy: keep it current even before the first frame.
+    VkCommandBuffer readback = recorder_.begin();
+    recordCountersReadback(readback);
+    recorder_.submitAndWait();
 }
 
 void GpuVolume::setParam(uint32_t VolumeParamsGpu::*field, uint32_t value) {

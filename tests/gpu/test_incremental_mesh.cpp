@@ -175,6 +175,15 @@ TEST_F(GpuTest, RevisitsKeepHeapsBounded) {
     EXPECT_TRUE(problems.empty()) << problems.front();
 }
 
+TEST_F(GpuTest, EmptyVolumeExportsAnEmptyMesh) {
+    gpu::GpuVolume volume(context(), meshConfig());
+    EXPECT_EQ(volume.readCounters().freeTop, volume.config().blockCapacity);
+    gpu::ExportedMesh mesh = volume.exportMesh();
+    EXPECT_TRUE(mesh.vertices.empty());
+    EXPECT_TRUE(mesh.triangles.empty());
+    EXPECT_TRUE(volume.extractBaselineMesh().vertices.empty());
+}
+
 TEST_F(GpuTest, VertexHeapExhaustionIsCountedAndConsistent) {
     auto config = meshConfig();
     config.vertexCapacity = 512;
