@@ -175,6 +175,25 @@ TEST_F(GpuTest, RevisitsKeepHeapsBounded) {
     EXPECT_TRUE(problems.empty()) << problems.front();
 }
 
+// The same input gives the same mesh (as a set of triangles, and the same vertex count) on every run,
+// whatever order the GPU happened to run invocations in.
+TEST_F(GpuTest, SameInputSameMesh) {
+    std::vector<std::vector<CanonicalTriangle>> runs;
+    std::vector<size_t> vertexCounts;
+    for (int run = 0; run < 3; ++run) {
+        gpu::GpuVolume volume(context(), meshConfig());
+        integrateRoom(volume, 6);
+        gpu::ExportedMesh mesh = volume.exportMesh();
+        runs.push_back(canonicalTriangles(soupOf(mesh)));
+        vertexCounts.push_back(mesh.vertices.size());
+    }
+    EXPECT_GT(runs[0].size(), 1000u);
+    EXPECT_EQ(runs[0], runs[1]);
+    EXPECT_EQ(runs[0], runs[2]);
+    EXPECT_EQ(vertexCounts[0], vertexCounts[1]);
+    EXPECT_EQ(vertexCounts[0], vertexCounts[2]);
+}
+
 TEST_F(GpuTest, EmptyVolumeExportsAnEmptyMesh) {
     gpu::GpuVolume volume(context(), meshConfig());
     EXPECT_EQ(volume.readCounters().freeTop, volume.config().blockCapacity);
