@@ -9,4 +9,5 @@ void main() {
     counters.collectDispatch[0] = (counters.dirtyCount * MASK_WORDS + WG_LIST - 1u) / WG_LIST;
     counters.collectDispatch[1] = 1u;
     counters.collectDispatch[2] = 1u;
+
 }

@@ -125,7 +125,12 @@ struct VolumeParamsGpu {
     uint incrementalMesh;   // 1: fusion marks the cubes whose corners flip, for the incremental mesh
     uint refine;            // 1: Hamming-distance refinement of cube types (docs/REFINEMENT.md)
     float refineEpsilon;    // metres: only corners with |sdf| below it may be flipped by refinement
+    uint vertexUpdate;      // VERTEX_UPDATE_*: how vertices are moved each frame
+    uint pad0, pad1, pad2;
 };
+VKM_CONST VERTEX_UPDATE_AUTO = 0u;     // whichever of the two visits fewer entries this frame
+VKM_CONST VERTEX_UPDATE_HEAP = 1u;     // scan the heap (update_heap_vertices)
+VKM_CONST VERTEX_UPDATE_DIRTY = 2u;    // the dirty blocks' cubes + new vertices (update_vertices, update_new_vertices)
 
 // One mesh vertex, as stored in the heap and in the compacted export (stride 32: a renderer reads the
 // position at offset 0 and the normal at offset 16).
@@ -144,8 +149,9 @@ struct Counters {
     uint listDispatch[4];       // over the live block list, one workgroup per block
     uint collectDispatch[4];    // over the dirty blocks' retype-mask words, WG_LIST per group
     uint retypeDispatch[4];     // over the retype list, WG_LIST per group
-    uint vertexDispatch[4];     // over the vertex heap up to its high water, WG_LIST per group
-    uint candidateDispatch[4];  // over the GC candidates, WG_LIST per group
+    uint vertexDispatch[4];     // update_vertices: VOXELS_PER_BLOCK / WG_BLOCK workgroups per dirty block, or 0
+    uint heapDispatch[4];       // update_heap_vertices: over the heap up to its high water, or 0 (the cheaper runs)
+    uint candidateDispatch[4];  // over the GC candidates, WG_LIST per group (first for update_new_vertices)
     uint releaseDispatch[4];    // over the released chunks, WG_LIST per group
     // --- per frame: reset at the start of every frame ---
     uint validPixels;           // pixels with a depth inside [minDepth, maxDepth]
@@ -194,7 +200,7 @@ struct Counters {
     uint exportUnreferenced;    //  ... allocated vertices with refcount 0 (0 unless GC fell behind)
     uint pad;
 };
-VKM_CONST COUNTERS_PER_FRAME_OFFSET = 128u;  // byte offset of validPixels
+VKM_CONST COUNTERS_PER_FRAME_OFFSET = 144u;  // byte offset of validPixels
 VKM_CONST COUNTERS_PER_FRAME_SIZE = 112u;    // 28 per-frame uints
 
 // Push constants of every compute stage: the current frame's camera. Rigid transforms are stored as

@@ -149,6 +149,7 @@ GpuVolume::GpuVolume(const vk::Context& context, const GpuVolumeConfig& config)
     gp.incrementalMesh = c.meshMode == MeshMode::Incremental ? 1u : 0u;
     gp.refine = c.refine ? 1u : 0u;
     gp.refineEpsilon = c.refineEpsilonVoxels * c.params.voxelSize;
+    gp.vertexUpdate = c.vertexUpdate;
     vk::uploadToBuffer(context, params_, &gp, sizeof(gp));
     auto tables = packMarchingCubesTables();
     vk::uploadToBuffer(context, mcTables_, tables.data(), tables.size() * 4);

@@ -44,6 +44,7 @@ struct GpuVolumeConfig {
     bool refine = false;
     float refineEpsilonVoxels = 0.5f;    // corners within this distance of the surface may be flipped
     bool lockFree = false;               // the paper's lock-free claim: 4 parity-class passes, no slot atomics
+    uint32_t vertexUpdate = VERTEX_UPDATE_AUTO;   // how vertices are moved (both ways give the same mesh)
     int imageWidth = 640, imageHeight = 480;
 };
 

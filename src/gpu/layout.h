@@ -7,12 +7,13 @@
 
 namespace vkmesh::gpu {
 
-static_assert(sizeof(VolumeParamsGpu) == 64, "VolumeParamsGpu: std140 layout of 16 scalars");
+static_assert(sizeof(VolumeParamsGpu) == 80, "VolumeParamsGpu: std140 layout of 20 scalars");
 static_assert(sizeof(Counters) % 16 == 0);
 static_assert(offsetof(Counters, assignDispatch) == 0 && offsetof(Counters, blockDispatch) == 16 &&
               offsetof(Counters, listDispatch) == 32 && offsetof(Counters, collectDispatch) == 48 &&
               offsetof(Counters, retypeDispatch) == 64 && offsetof(Counters, vertexDispatch) == 80 &&
-              offsetof(Counters, candidateDispatch) == 96 && offsetof(Counters, releaseDispatch) == 112,
+              offsetof(Counters, heapDispatch) == 96 && offsetof(Counters, candidateDispatch) == 112 &&
+              offsetof(Counters, releaseDispatch) == 128,
               "indirect arguments at 16-byte offsets");
 static_assert(sizeof(Vertex) == 32, "Vertex: 32-byte stride for renderers");
 static_assert(offsetof(Counters, meshVerticesDropped) == offsetof(Counters, liveBlockCount) + 8);

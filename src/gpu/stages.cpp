@@ -66,6 +66,8 @@ IncrementalMeshStage::IncrementalMeshStage(const vk::Context& context, const vk:
       claimClass3_(context, layout, "mesh_claim", 3u),
       commitVertices_(context, layout, "commit_vertices"),
       update_(context, layout, "update_vertices"),
+      updateNew_(context, layout, "update_new_vertices"),
+      updateHeap_(context, layout, "update_heap_vertices"),
       triangulate_(context, layout, "mesh_triangulate"),
       commitChunks_(context, layout, "commit_chunks"),
       freeVertices_(context, layout, "free_vertices"),
@@ -105,6 +107,10 @@ void IncrementalMeshStage::recordMesh(VkCommandBuffer cmd, const FramePush& push
     vk::memoryBarrier(cmd);
     mark("mesh_claim");
     update_.dispatchIndirect(cmd, &push, counters, offsetof(Counters, vertexDispatch));
+    vk::memoryBarrier(cmd);
+    updateNew_.dispatchIndirect(cmd, &push, counters, offsetof(Counters, candidateDispatch));
+    vk::memoryBarrier(cmd);
+    updateHeap_.dispatchIndirect(cmd, &push, counters, offsetof(Counters, heapDispatch));
     vk::memoryBarrier(cmd);
     mark("mesh_update");
     triangulate_.dispatchIndirect(cmd, &push, counters, offsetof(Counters, retypeDispatch));

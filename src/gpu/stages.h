@@ -49,8 +49,8 @@ private:
 // The incremental shared-vertex mesh (docs/MESH.md), recorded after fusion every frame: list the dirty
 // blocks (mark_dirty, or mark_all_dirty for a from-scratch pass) and the cubes that may change type
 // (plan_mesh, collect_retype, plan_retype), claim edge vertices (mesh_claim, commit_vertices), move the
-// dirty blocks' vertices (update_vertices), rebuild changed cubes' triangles (mesh_triangulate,
-// commit_chunks), collect garbage (free_vertices, free_chunks, commit_free).
+// dirty blocks' vertices and the new ones (update_vertices + update_new_vertices, or update_heap_vertices),
+// rebuild changed cubes' triangles (mesh_triangulate, commit_chunks), collect garbage (free_vertices, free_chunks, commit_free).
 class IncrementalMeshStage {
 public:
     IncrementalMeshStage(const vk::Context& context, const vk::BindingLayout& layout);
@@ -64,7 +64,7 @@ public:
 
 private:
     vk::ComputePipeline markDirty_, markAllDirty_, plan_, collect_, planRetype_, claim_, claimClass0_, claimClass1_,
-        claimClass2_, claimClass3_, commitVertices_, update_, triangulate_, commitChunks_, freeVertices_, freeChunks_,
+        claimClass2_, claimClass3_, commitVertices_, update_, updateNew_, updateHeap_, triangulate_, commitChunks_, freeVertices_, freeChunks_,
         commitFree_;
 };
 

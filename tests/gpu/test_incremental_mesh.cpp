@@ -194,6 +194,32 @@ TEST_F(GpuTest, SameInputSameMesh) {
     EXPECT_EQ(vertexCounts[0], vertexCounts[2]);
 }
 
+// The two ways of moving vertices (scan the heap; visit the dirty blocks' cubes and the new vertices) give
+// the same mesh, positions and normals included.
+TEST_F(GpuTest, BothVertexUpdatePathsGiveTheSameMesh) {
+    auto config = meshConfig();
+    config.vertexUpdate = gpu::VERTEX_UPDATE_HEAP;
+    gpu::GpuVolume heap(context(), config);
+    config.vertexUpdate = gpu::VERTEX_UPDATE_DIRTY;
+    gpu::GpuVolume dirty(context(), config);
+    integrateRoom(heap, 8);
+    integrateRoom(dirty, 8);
+    Mesh a = toMesh(heap.exportMesh()), b = toMesh(dirty.exportMesh());
+    ASSERT_EQ(a.positions.size(), b.positions.size());
+    EXPECT_EQ(canonicalTriangles(a), canonicalTriangles(b));
+    std::map<std::array<float, 3>, std::array<float, 3>> normals;
+    for (size_t i = 0; i < a.positions.size(); ++i)
+        normals[{a.positions[i].x(), a.positions[i].y(), a.positions[i].z()}] = {a.normals[i].x(), a.normals[i].y(), a.normals[i].z()};
+    size_t differing = 0;
+    for (size_t i = 0; i < b.positions.size(); ++i) {
+        auto it = normals.find({b.positions[i].x(), b.positions[i].y(), b.positions[i].z()});
+        if (it == normals.end() || it->second != std::array<float, 3>{b.normals[i].x(), b.normals[i].y(), b.normals[i].z()}) ++differing;
+    }
+    EXPECT_EQ(differing, 0u);
+    auto problems = checkInvariants(dirty.downloadMeshState(), dirty.config());
+    EXPECT_TRUE(problems.empty()) << problems.front();
+}
+
 TEST_F(GpuTest, EmptyVolumeExportsAnEmptyMesh) {
     gpu::GpuVolume volume(context(), meshConfig());
     EXPECT_EQ(volume.readCounters().freeTop, volume.config().blockCapacity);
