@@ -4,6 +4,7 @@
 //   vkmesh fuse DATASET -o mesh.ply     fuse a depth sequence on the GPU and write its mesh
 //   vkmesh frames DATASET -o f.json     the frames (paths, poses, intrinsics) fuse would use, for peers
 //   vkmesh eval MESH --gt GT.ply        accuracy, completeness, precision/recall/F-score against ground truth
+//   vkmesh render MESH -o view.png      render a mesh offscreen (Vulkan graphics pipeline) to a PNG
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
@@ -21,6 +22,7 @@
 
 #include "core/mesh_analysis.h"
 #include "eval_command.h"
+#include "render_command.h"
 #include "core/refinement.h"
 #include "gpu/gpu_volume.h"
 #include "io/dataset.h"
@@ -399,6 +401,7 @@ int main(int argc, char** argv) {
     fuse->add_flag("-q,--quiet", fuseArgs.quiet, "no progress line");
 
     auto runEval = vkmesh::addEvalCommand(app);
+    auto runRender = vkmesh::addRenderCommand(app);
 
     try {
         app.parse(argc, argv);
@@ -412,6 +415,7 @@ int main(int argc, char** argv) {
         if (app.got_subcommand("frames")) return commandFrames(framesArgs, framesOut);
         if (app.got_subcommand("fuse")) return commandFuse(fuseArgs);
         if (app.got_subcommand("eval")) return runEval();
+        if (app.got_subcommand("render")) return runRender();
     } catch (const vkmesh::Error& e) {
         std::cerr << "vkmesh: error: " << e.what() << "\n";
         return 2;

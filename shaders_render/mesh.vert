@@ -1,0 +1,19 @@
+#version 450
+// Mesh renderer, vertex stage: world-space position, normal and normalised age passed through.
+#extension GL_GOOGLE_include_directive : require
+#include "mesh_render.h"
+
+layout(location = RENDER_LOC_POSITION) in vec3 inPosition;
+layout(location = RENDER_LOC_NORMAL) in vec3 inNormal;
+layout(location = RENDER_LOC_AGE) in float inAge;
+
+layout(location = 0) out vec3 worldPos;
+layout(location = 1) out vec3 worldNormal;
+layout(location = 2) out float age;
+
+void main() {
+    worldPos = inPosition;
+    worldNormal = inNormal;
+    age = inAge;
+    gl_Position = pc.viewProj * vec4(inPosition, 1.0);
+}

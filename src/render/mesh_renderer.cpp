@@ -1,0 +1,554 @@
+#include "render/mesh_renderer.h"
+
+#include <Eigen/Geometry>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <map>
+#include <span>
+#include <numbers>
+#include <sstream>
+
+#include "../../shaders_render/mesh_render.h"
+#include "core/types.h"
+#include "vk/buffer.h"
+#include "vk/check.h"
+#include "vk/commands.h"
+
+namespace vkmesh::shaders {
+// Every shaders_render/* file as SPIR-V words, by file name ("mesh.vert"); see cmake/EmbedShaders.cmake.
+const std::map<std::string, std::span<const uint32_t>>& graphics();
+}  // namespace vkmesh::shaders
+
+namespace vkmesh::render {
+namespace {
+
+constexpr VkFormat kColorFormat = VK_FORMAT_R8G8B8A8_UNORM;
+constexpr VkFormat kDepthFormat = VK_FORMAT_D32_SFLOAT;
+
+// The interleaved vertex the shaders read (RENDER_LOC_*).
+struct RenderVertex {
+    float position[3];
+    float normal[3];
+    float age;  // 0 (newest) .. 1 (oldest in the mesh)
+};
+
+std::string trim(const std::string& s) {
+    size_t a = s.find_first_not_of(" \t");
+    size_t b = s.find_last_not_of(" \t");
+    return a == std::string::npos ? std::string() : s.substr(a, b - a + 1);
+}
+
+VkShaderModule createModule(VkDevice device, const std::string& name) {
+    const auto& table = shaders::graphics();
+    auto it = table.find(name);
+    if (it == table.end()) throw Error("graphics shader '" + name + "' is not embedded in this build");
+    VkShaderModuleCreateInfo info{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
+    info.codeSize = it->second.size() * sizeof(uint32_t);
+    info.pCode = it->second.data();
+    VkShaderModule module = VK_NULL_HANDLE;
+    VKM_CHECK(vkCreateShaderModule(device, &info, nullptr, &module));
+    return module;
+}
+
+// Per-render Vulkan objects, destroyed in reverse order whatever happens.
+struct Target {
+    VkDevice device = VK_NULL_HANDLE;
+    VkImage color = VK_NULL_HANDLE, depth = VK_NULL_HANDLE;
+    VkDeviceMemory colorMemory = VK_NULL_HANDLE, depthMemory = VK_NULL_HANDLE;
+    VkImageView colorView = VK_NULL_HANDLE, depthView = VK_NULL_HANDLE;
+    VkFramebuffer framebuffer = VK_NULL_HANDLE;
+    explicit Target(VkDevice d) : device(d) {}
+    Target(const Target&) = delete;
+    Target& operator=(const Target&) = delete;
+    ~Target() {
+        if (framebuffer) vkDestroyFramebuffer(device, framebuffer, nullptr);
+        if (depthView) vkDestroyImageView(device, depthView, nullptr);
+        if (colorView) vkDestroyImageView(device, colorView, nullptr);
+        if (depth) vkDestroyImage(device, depth, nullptr);
+        if (color) vkDestroyImage(device, color, nullptr);
+        if (depthMemory) vkFreeMemory(device, depthMemory, nullptr);
+        if (colorMemory) vkFreeMemory(device, colorMemory, nullptr);
+    }
+};
+
+void createImage(const vk::Context& context, int width, int height, VkFormat format, VkImageUsageFlags usage,
+                 VkImageAspectFlags aspect, VkImage& image, VkDeviceMemory& memory, VkImageView& view) {
+    VkDevice device = context.device();
+    VkImageCreateInfo info{VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO};
+    info.imageType = VK_IMAGE_TYPE_2D;
+    info.format = format;
+    info.extent = {static_cast<uint32_t>(width), static_cast<uint32_t>(height), 1};
+    info.mipLevels = 1;
+    info.arrayLayers = 1;
+    info.samples = VK_SAMPLE_COUNT_1_BIT;
+    info.tiling = VK_IMAGE_TILING_OPTIMAL;
+    info.usage = usage;
+    info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
+    info.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+    VKM_CHECK(vkCreateImage(device, &info, nullptr, &image));
+    VkMemoryRequirements req{};
+    vkGetImageMemoryRequirements(device, image, &req);
+    VkMemoryAllocateInfo alloc{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+    alloc.allocationSize = req.size;
+    alloc.memoryTypeIndex = context.findMemoryType(req.memoryTypeBits, 0, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
+    VKM_CHECK(vkAllocateMemory(device, &alloc, nullptr, &memory));
+    VKM_CHECK(vkBindImageMemory(device, image, memory, 0));
+    VkImageViewCreateInfo viewInfo{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
+    viewInfo.image = image;
+    viewInfo.viewType = VK_IMAGE_VIEW_TYPE_2D;
+    viewInfo.format = format;
+    viewInfo.subresourceRange = {aspect, 0, 1, 0, 1};
+    VKM_CHECK(vkCreateImageView(device, &viewInfo, nullptr, &view));
+}
+
+void bounds(const Mesh& mesh, Eigen::Vector3f& lo, Eigen::Vector3f& hi) {
+    lo = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());
+    hi = Eigen::Vector3f::Constant(-std::numeric_limits<float>::max());
+    for (const auto& p : mesh.positions) {
+        lo = lo.cwiseMin(p);
+        hi = hi.cwiseMax(p);
+    }
+}
+
+void checkMesh(const Mesh& mesh) {
+    const size_t n = mesh.positions.size();
+    if (n == 0 || mesh.triangles.empty())
+        throw Error("the mesh is empty (" + std::to_string(n) + " vertices, " + std::to_string(mesh.triangles.size()) +
+                    " triangles): nothing to render");
+    if (!mesh.normals.empty() && mesh.normals.size() != n)
+        throw Error("the mesh has " + std::to_string(mesh.normals.size()) + " normals for " + std::to_string(n) + " vertices");
+    if (!mesh.vertexAge.empty() && mesh.vertexAge.size() != n)
+        throw Error("the mesh has " + std::to_string(mesh.vertexAge.size()) + " ages for " + std::to_string(n) + " vertices");
+    for (const auto& t : mesh.triangles)
+        for (uint32_t i : t)
+            if (i >= n) throw Error("triangle index " + std::to_string(i) + " out of range (" + std::to_string(n) + " vertices)");
+    for (const auto& p : mesh.positions)
+        if (!p.allFinite()) throw Error("the mesh has a vertex position that is not finite");
+}
+
+std::vector<RenderVertex> vertexData(const Mesh& mesh) {
+    const size_t n = mesh.positions.size();
+    std::vector<Eigen::Vector3f> normals = mesh.normals;
+    if (normals.empty()) {  // area-weighted face normals
+        normals.assign(n, Eigen::Vector3f::Zero());
+        for (const auto& t : mesh.triangles) {
+            Eigen::Vector3f fn = (mesh.positions[t[1]] - mesh.positions[t[0]]).cross(mesh.positions[t[2]] - mesh.positions[t[0]]);
+            for (uint32_t i : t) normals[i] += fn;
+        }
+        for (auto& v : normals)
+            if (v.norm() > 0) v.normalize();
+    }
+    uint32_t maxAge = 0;
+    for (uint32_t a : mesh.vertexAge) maxAge = std::max(maxAge, a);
+    std::vector<RenderVertex> out(n);
+    for (size_t i = 0; i < n; ++i) {
+        for (int k = 0; k < 3; ++k) {
+            out[i].position[k] = mesh.positions[i][k];
+            out[i].normal[k] = normals[i].allFinite() ? normals[i][k] : 0.0f;
+        }
+        out[i].age = (mesh.vertexAge.empty() || maxAge == 0) ? 0.0f : float(mesh.vertexAge[i]) / float(maxAge);
+    }
+    return out;
+}
+
+}  // namespace
+
+ColorMode parseColorMode(const std::string& text) {
+    if (text == "shade") return ColorMode::Shade;
+    if (text == "normal") return ColorMode::Normal;
+    if (text == "age") return ColorMode::Age;
+    throw Error("unknown colour mode '" + text + "' (expected shade, normal or age)");
+}
+
+Camera parseCamera(const std::string& text) {
+    std::vector<float> values;
+    std::stringstream stream(text);
+    std::string item;
+    while (std::getline(stream, item, ',')) {
+        std::string s = trim(item);
+        size_t used = 0;
+        float v = 0;
+        try {
+            v = std::stof(s, &used);
+        } catch (const std::exception&) {
+            used = 0;
+        }
+        if (s.empty() || used != s.size() || !std::isfinite(v))
+            throw Error("bad --camera '" + text + "': '" + item + "' is not a number (expected eye_x,eye_y,eye_z,target_x,target_y,target_z)");
+        values.push_back(v);
+    }
+    if (!text.empty() && text.back() == ',') values.push_back(0), values.push_back(0);  // forces the count error below
+    if (values.size() != 6)
+        throw Error("bad --camera '" + text + "': expected 6 numbers eye_x,eye_y,eye_z,target_x,target_y,target_z, got " +
+                    std::to_string(values.size()));
+    Camera c;
+    c.eye = {values[0], values[1], values[2]};
+    c.target = {values[3], values[4], values[5]};
+    if ((c.target - c.eye).norm() < 1e-9f) throw Error("bad --camera '" + text + "': eye and target are the same point");
+    return c;
+}
+
+Camera defaultCamera(const Mesh& mesh, int width, int height) {
+    if (mesh.positions.empty()) throw Error("the mesh is empty: no default camera");
+    Eigen::Vector3f lo, hi;
+    bounds(mesh, lo, hi);
+    Eigen::Vector3f center = 0.5f * (lo + hi);
+    float radius = std::max(0.5f * (hi - lo).norm(), 1e-3f);
+    const float halfV = kVerticalFovDegrees * 0.5f * std::numbers::pi_v<float> / 180.0f;
+    const float aspect = float(width) / float(std::max(height, 1));
+    const float halfH = std::atan(std::tan(halfV) * aspect);
+    const float distance = 1.05f * radius / std::sin(std::min(halfV, halfH));  // > radius: outside the box
+    Camera c;
+    c.target = center;
+    c.eye = center + distance * Eigen::Vector3f(1.0f, -1.0f, 1.0f).normalized();
+    return c;
+}
+
+Eigen::Matrix4f viewProjection(const Camera& camera, const Eigen::Vector3f& boundsMin, const Eigen::Vector3f& boundsMax,
+                               int width, int height) {
+    Eigen::Vector3f f = camera.target - camera.eye;
+    if (f.norm() <= 0) throw Error("camera eye and target are the same point");
+    f.normalize();
+    Eigen::Vector3f up(0, 0, 1);
+    if (f.cross(up).norm() < 1e-4f) up = Eigen::Vector3f(0, 1, 0);  // looking straight up or down
+    Eigen::Vector3f s = f.cross(up).normalized();
+    Eigen::Vector3f u = s.cross(f);
+    Eigen::Matrix4f view = Eigen::Matrix4f::Identity();
+    view.block<1, 3>(0, 0) = s.transpose();
+    view.block<1, 3>(1, 0) = u.transpose();
+    view.block<1, 3>(2, 0) = -f.transpose();
+    view(0, 3) = -s.dot(camera.eye);
+    view(1, 3) = -u.dot(camera.eye);
+    view(2, 3) = f.dot(camera.eye);
+
+    // Near and far: the range of depths of the bounding box's corners along the view direction.
+    float dMin = std::numeric_limits<float>::max(), dMax = -std::numeric_limits<float>::max();
+    for (int i = 0; i < 8; ++i) {
+        Eigen::Vector3f corner((i & 1) ? boundsMax.x() : boundsMin.x(), (i & 2) ? boundsMax.y() : boundsMin.y(),
+                               (i & 4) ? boundsMax.z() : boundsMin.z());
+        float d = f.dot(corner - camera.eye);
+        dMin = std::min(dMin, d);
+        dMax = std::max(dMax, d);
+    }
+    float farZ = dMax > 0 ? dMax * 1.01f + 1e-4f : 1.0f;
+    float nearZ = std::max(dMin * 0.99f, farZ * 1e-4f);
+
+    const float t = std::tan(kVerticalFovDegrees * 0.5f * std::numbers::pi_v<float> / 180.0f);
+    const float aspect = float(width) / float(height);
+    Eigen::Matrix4f proj = Eigen::Matrix4f::Zero();
+    proj(0, 0) = 1.0f / (t * aspect);
+    proj(1, 1) = -1.0f / t;  // Vulkan: framebuffer y points down
+    proj(2, 2) = farZ / (nearZ - farZ);
+    proj(2, 3) = nearZ * farZ / (nearZ - farZ);
+    proj(3, 2) = -1.0f;
+    return proj * view;
+}
+
+MeshRenderer::MeshRenderer(const vk::Context& context) : context_(context) {
+    uint32_t familyCount = 0;
+    vkGetPhysicalDeviceQueueFamilyProperties(context.physicalDevice(), &familyCount, nullptr);
+    std::vector<VkQueueFamilyProperties> families(familyCount);
+    vkGetPhysicalDeviceQueueFamilyProperties(context.physicalDevice(), &familyCount, families.data());
+    if (context.queueFamily() >= familyCount || !(families[context.queueFamily()].queueFlags & VK_QUEUE_GRAPHICS_BIT))
+        throw Error("device '" + context.info().name + "': vkmesh's queue does not support graphics, cannot render");
+    VkFormatProperties depthProps{};
+    vkGetPhysicalDeviceFormatProperties(context.physicalDevice(), kDepthFormat, &depthProps);
+    if (!(depthProps.optimalTilingFeatures & VK_FORMAT_FEATURE_DEPTH_STENCIL_ATTACHMENT_BIT))
+        throw Error("device '" + context.info().name + "' cannot use D32_SFLOAT as a depth attachment");
+
+    VkDevice device = context.device();
+    VkShaderModule vert = VK_NULL_HANDLE, frag = VK_NULL_HANDLE;
+    try {
+        VkAttachmentDescription attachments[2]{};
+        attachments[0].format = kColorFormat;
+        attachments[0].samples = VK_SAMPLE_COUNT_1_BIT;
+        attachments[0].loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
+        attachments[0].storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+        attachments[0].stencilLoadOp = VK_ATTACHMENT_LOAD_OP_DONT_CARE;
+        attachments[0].stencilStoreOp = VK_ATTACHMENT_STORE_OP_DONT_CARE;
+        attachments[0].initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+        attachments[0].finalLayout = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
+        attachments[1].format = kDepthFormat;
+        attachments[1].samples = VK_SAMPLE_COUNT_1_BIT;
+        attachments[1].loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
+        attachments[1].storeOp = VK_ATTACHMENT_STORE_OP_DONT_CARE;
+        attachments[1].stencilLoadOp = VK_ATTACHMENT_LOAD_OP_DONT_CARE;
+        attachments[1].stencilStoreOp = VK_ATTACHMENT_STORE_OP_DONT_CARE;
+        attachments[1].initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+        attachments[1].finalLayout = VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
+        VkAttachmentReference colorRef{0, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL};
+        VkAttachmentReference depthRef{1, VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL};
+        VkSubpassDescription subpass{};
+        subpass.pipelineBindPoint = VK_PIPELINE_BIND_POINT_GRAPHICS;
+        subpass.colorAttachmentCount = 1;
+        subpass.pColorAttachments = &colorRef;
+        subpass.pDepthStencilAttachment = &depthRef;
+        VkSubpassDependency deps[2]{};
+        // Before: the attachments' layout transitions and clears come after whatever used them last.
+        deps[0].srcSubpass = VK_SUBPASS_EXTERNAL;
+        deps[0].dstSubpass = 0;
+        deps[0].srcStageMask = VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT | VK_PIPELINE_STAGE_EARLY_FRAGMENT_TESTS_BIT |
+                               VK_PIPELINE_STAGE_LATE_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT;
+        deps[0].dstStageMask = VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT | VK_PIPELINE_STAGE_EARLY_FRAGMENT_TESTS_BIT |
+                               VK_PIPELINE_STAGE_LATE_FRAGMENT_TESTS_BIT;
+        deps[0].srcAccessMask = VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT | VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT |
+                                VK_ACCESS_TRANSFER_READ_BIT;
+        deps[0].dstAccessMask = VK_ACCESS_COLOR_ATTACHMENT_READ_BIT | VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT |
+                                VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_READ_BIT | VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT;
+        // After: the colour image is copied to the host buffer.
+        deps[1].srcSubpass = 0;
+        deps[1].dstSubpass = VK_SUBPASS_EXTERNAL;
+        deps[1].srcStageMask = VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT;
+        deps[1].dstStageMask = VK_PIPELINE_STAGE_TRANSFER_BIT;
+        deps[1].srcAccessMask = VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT;
+        deps[1].dstAccessMask = VK_ACCESS_TRANSFER_READ_BIT;
+        VkRenderPassCreateInfo rpInfo{VK_STRUCTURE_TYPE_RENDER_PASS_CREATE_INFO};
+        rpInfo.attachmentCount = 2;
+        rpInfo.pAttachments = attachments;
+        rpInfo.subpassCount = 1;
+        rpInfo.pSubpasses = &subpass;
+        rpInfo.dependencyCount = 2;
+        rpInfo.pDependencies = deps;
+        VKM_CHECK(vkCreateRenderPass(device, &rpInfo, nullptr, &renderPass_));
+
+        VkPushConstantRange range{VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0, sizeof(RenderPush)};
+        VkPipelineLayoutCreateInfo layoutInfo{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
+        layoutInfo.pushConstantRangeCount = 1;
+        layoutInfo.pPushConstantRanges = &range;
+        VKM_CHECK(vkCreatePipelineLayout(device, &layoutInfo, nullptr, &pipelineLayout_));
+
+        vert = createModule(device, "mesh.vert");
+        frag = createModule(device, "mesh.frag");
+        VkPipelineShaderStageCreateInfo stages[2]{};
+        stages[0].sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO;
+        stages[0].stage = VK_SHADER_STAGE_VERTEX_BIT;
+        stages[0].module = vert;
+        stages[0].pName = "main";
+        stages[1].sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO;
+        stages[1].stage = VK_SHADER_STAGE_FRAGMENT_BIT;
+        stages[1].module = frag;
+        stages[1].pName = "main";
+
+        VkVertexInputBindingDescription binding{0, sizeof(RenderVertex), VK_VERTEX_INPUT_RATE_VERTEX};
+        VkVertexInputAttributeDescription attributes[3] = {
+            {RENDER_LOC_POSITION, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(RenderVertex, position)},
+            {RENDER_LOC_NORMAL, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(RenderVertex, normal)},
+            {RENDER_LOC_AGE, 0, VK_FORMAT_R32_SFLOAT, offsetof(RenderVertex, age)},
+        };
+        VkPipelineVertexInputStateCreateInfo vertexInput{VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
+        vertexInput.vertexBindingDescriptionCount = 1;
+        vertexInput.pVertexBindingDescriptions = &binding;
+        vertexInput.vertexAttributeDescriptionCount = 3;
+        vertexInput.pVertexAttributeDescriptions = attributes;
+        VkPipelineInputAssemblyStateCreateInfo assembly{VK_STRUCTURE_TYPE_PIPELINE_INPUT_ASSEMBLY_STATE_CREATE_INFO};
+        assembly.topology = VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST;
+        VkPipelineViewportStateCreateInfo viewport{VK_STRUCTURE_TYPE_PIPELINE_VIEWPORT_STATE_CREATE_INFO};
+        viewport.viewportCount = 1;
+        viewport.scissorCount = 1;
+        VkPipelineRasterizationStateCreateInfo raster{VK_STRUCTURE_TYPE_PIPELINE_RASTERIZATION_STATE_CREATE_INFO};
+        raster.polygonMode = VK_POLYGON_MODE_FILL;
+        raster.cullMode = VK_CULL_MODE_NONE;  // open meshes: back faces drawn (darker, see mesh.frag)
+        // Triangles are counter-clockwise seen from outside; with the y flip in the projection that is
+        // VK_FRONT_FACE_COUNTER_CLOCKWISE in Vulkan's framebuffer coordinates.
+        raster.frontFace = VK_FRONT_FACE_COUNTER_CLOCKWISE;
+        raster.lineWidth = 1.0f;
+        VkPipelineMultisampleStateCreateInfo multisample{VK_STRUCTURE_TYPE_PIPELINE_MULTISAMPLE_STATE_CREATE_INFO};
+        multisample.rasterizationSamples = VK_SAMPLE_COUNT_1_BIT;
+        VkPipelineDepthStencilStateCreateInfo depthState{VK_STRUCTURE_TYPE_PIPELINE_DEPTH_STENCIL_STATE_CREATE_INFO};
+        depthState.depthTestEnable = VK_TRUE;
+        depthState.depthWriteEnable = VK_TRUE;
+        depthState.depthCompareOp = VK_COMPARE_OP_LESS;
+        VkPipelineColorBlendAttachmentState blendAttachment{};
+        blendAttachment.colorWriteMask =
+            VK_COLOR_COMPONENT_R_BIT | VK_COLOR_COMPONENT_G_BIT | VK_COLOR_COMPONENT_B_BIT | VK_COLOR_COMPONENT_A_BIT;
+        VkPipelineColorBlendStateCreateInfo blend{VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO};
+        blend.attachmentCount = 1;
+        blend.pAttachments = &blendAttachment;
+        VkDynamicState dynamicStates[2] = {VK_DYNAMIC_STATE_VIEWPORT, VK_DYNAMIC_STATE_SCISSOR};
+        VkPipelineDynamicStateCreateInfo dynamic{VK_STRUCTURE_TYPE_PIPELINE_DYNAMIC_STATE_CREATE_INFO};
+        dynamic.dynamicStateCount = 2;
+        dynamic.pDynamicStates = dynamicStates;
+
+        VkGraphicsPipelineCreateInfo info{VK_STRUCTURE_TYPE_GRAPHICS_PIPELINE_CREATE_INFO};
+        info.stageCount = 2;
+        info.pStages = stages;
+        info.pVertexInputState = &vertexInput;
+        info.pInputAssemblyState = &assembly;
+        info.pViewportState = &viewport;
+        info.pRasterizationState = &raster;
+        info.pMultisampleState = &multisample;
+        info.pDepthStencilState = &depthState;
+        info.pColorBlendState = &blend;
+        info.pDynamicState = &dynamic;
+        info.layout = pipelineLayout_;
+        info.renderPass = renderPass_;
+        info.subpass = 0;
+        VKM_CHECK(vkCreateGraphicsPipelines(device, VK_NULL_HANDLE, 1, &info, nullptr, &pipeline_));
+    } catch (...) {
+        if (vert) vkDestroyShaderModule(device, vert, nullptr);
+        if (frag) vkDestroyShaderModule(device, frag, nullptr);
+        release();
+        throw;
+    }
+    vkDestroyShaderModule(device, vert, nullptr);
+    vkDestroyShaderModule(device, frag, nullptr);
+}
+
+MeshRenderer::~MeshRenderer() { release(); }
+
+void MeshRenderer::release() {
+    VkDevice device = context_.device();
+    if (pipeline_) vkDestroyPipeline(device, pipeline_, nullptr);
+    if (pipelineLayout_) vkDestroyPipelineLayout(device, pipelineLayout_, nullptr);
+    if (renderPass_) vkDestroyRenderPass(device, renderPass_, nullptr);
+    pipeline_ = VK_NULL_HANDLE;
+    pipelineLayout_ = VK_NULL_HANDLE;
+    renderPass_ = VK_NULL_HANDLE;
+}
+
+Image MeshRenderer::render(const Mesh& mesh, const RenderOptions& options) {
+    checkMesh(mesh);
+    const uint32_t maxDim = context_.properties().limits.maxImageDimension2D;
+    if (options.width < 1 || options.height < 1 || uint32_t(options.width) > maxDim || uint32_t(options.height) > maxDim)
+        throw Error("image size " + std::to_string(options.width) + "x" + std::to_string(options.height) +
+                    " is outside 1.." + std::to_string(maxDim));
+    const int width = options.width, height = options.height;
+    const Camera camera = options.camera ? *options.camera : defaultCamera(mesh, width, height);
+    Eigen::Vector3f lo, hi;
+    bounds(mesh, lo, hi);
+
+    RenderPush push{};
+    Eigen::Matrix4f vp = viewProjection(camera, lo, hi, width, height);
+    std::memcpy(push.viewProj, vp.data(), sizeof(push.viewProj));  // Eigen is column-major, like GLSL
+    push.eye[0] = camera.eye.x();
+    push.eye[1] = camera.eye.y();
+    push.eye[2] = camera.eye.z();
+    push.colorMode = options.color == ColorMode::Normal ? RENDER_COLOR_NORMAL
+                     : options.color == ColorMode::Age  ? RENDER_COLOR_AGE
+                                                        : RENDER_COLOR_SHADE;
+
+    // Geometry: staged and copied to device-local buffers in the same command buffer as the draw.
+    std::vector<RenderVertex> vertices = vertexData(mesh);
+    const VkDeviceSize vertexBytes = vertices.size() * sizeof(RenderVertex);
+    const VkDeviceSize indexBytes = mesh.triangles.size() * 3 * sizeof(uint32_t);
+    vk::Buffer vertexStaging(context_, vertexBytes, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, vk::MemoryUse::Upload, "render vertices (staging)");
+    vk::Buffer indexStaging(context_, indexBytes, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, vk::MemoryUse::Upload, "render indices (staging)");
+    std::memcpy(vertexStaging.mapped(), vertices.data(), vertexBytes);
+    std::memcpy(indexStaging.mapped(), mesh.triangles.data(), indexBytes);
+    vk::Buffer vertexBuffer(context_, vertexBytes, VK_BUFFER_USAGE_VERTEX_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                            vk::MemoryUse::Device, "render vertices");
+    vk::Buffer indexBuffer(context_, indexBytes, VK_BUFFER_USAGE_INDEX_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                           vk::MemoryUse::Device, "render indices");
+    const VkDeviceSize imageBytes = VkDeviceSize(width) * VkDeviceSize(height) * 4;
+    vk::Buffer readback(context_, imageBytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT, vk::MemoryUse::Readback, "render image (readback)");
+
+    Target target(context_.device());
+    createImage(context_, width, height, kColorFormat, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
+                VK_IMAGE_ASPECT_COLOR_BIT, target.color, target.colorMemory, target.colorView);
+    createImage(context_, width, height, kDepthFormat, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT, VK_IMAGE_ASPECT_DEPTH_BIT,
+                target.depth, target.depthMemory, target.depthView);
+    VkImageView views[2] = {target.colorView, target.depthView};
+    VkFramebufferCreateInfo fbInfo{VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO};
+    fbInfo.renderPass = renderPass_;
+    fbInfo.attachmentCount = 2;
+    fbInfo.pAttachments = views;
+    fbInfo.width = uint32_t(width);
+    fbInfo.height = uint32_t(height);
+    fbInfo.layers = 1;
+    VKM_CHECK(vkCreateFramebuffer(context_.device(), &fbInfo, nullptr, &target.framebuffer));
+
+    vk::CommandRecorder recorder(context_);
+    VkCommandBuffer cmd = recorder.begin();
+    VkBufferCopy vertexCopy{0, 0, vertexBytes}, indexCopy{0, 0, indexBytes};
+    vkCmdCopyBuffer(cmd, vertexStaging.handle(), vertexBuffer.handle(), 1, &vertexCopy);
+    vkCmdCopyBuffer(cmd, indexStaging.handle(), indexBuffer.handle(), 1, &indexCopy);
+    VkMemoryBarrier toVertexInput{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+    toVertexInput.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
+    toVertexInput.dstAccessMask = VK_ACCESS_VERTEX_ATTRIBUTE_READ_BIT | VK_ACCESS_INDEX_READ_BIT;
+    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_VERTEX_INPUT_BIT, 0, 1, &toVertexInput, 0,
+                         nullptr, 0, nullptr);
+
+    VkClearValue clears[2]{};
+    for (int k = 0; k < 4; ++k) clears[0].color.float32[k] = float(kBackground[k]) / 255.0f;
+    clears[1].depthStencil = {1.0f, 0};
+    VkRenderPassBeginInfo begin{VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO};
+    begin.renderPass = renderPass_;
+    begin.framebuffer = target.framebuffer;
+    begin.renderArea = {{0, 0}, {uint32_t(width), uint32_t(height)}};
+    begin.clearValueCount = 2;
+    begin.pClearValues = clears;
+    vkCmdBeginRenderPass(cmd, &begin, VK_SUBPASS_CONTENTS_INLINE);
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline_);
+    VkViewport vpState{0.0f, 0.0f, float(width), float(height), 0.0f, 1.0f};
+    VkRect2D scissor{{0, 0}, {uint32_t(width), uint32_t(height)}};
+    vkCmdSetViewport(cmd, 0, 1, &vpState);
+    vkCmdSetScissor(cmd, 0, 1, &scissor);
+    vkCmdPushConstants(cmd, pipelineLayout_, VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0, sizeof(push), &push);
+    VkDeviceSize zero = 0;
+    VkBuffer vb = vertexBuffer.handle();
+    vkCmdBindVertexBuffers(cmd, 0, 1, &vb, &zero);
+    vkCmdBindIndexBuffer(cmd, indexBuffer.handle(), 0, VK_INDEX_TYPE_UINT32);
+    vkCmdDrawIndexed(cmd, uint32_t(mesh.triangles.size() * 3), 1, 0, 0, 0);
+    vkCmdEndRenderPass(cmd);
+
+    // The render pass left the colour image in TRANSFER_SRC_OPTIMAL, its writes visible to transfers.
+    VkBufferImageCopy region{};
+    region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+    region.imageExtent = {uint32_t(width), uint32_t(height), 1};
+    vkCmdCopyImageToBuffer(cmd, target.color, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, readback.handle(), 1, &region);
+    VkMemoryBarrier toHost{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+    toHost.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
+    toHost.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
+    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &toHost, 0, nullptr, 0, nullptr);
+    recorder.submitAndWait();
+
+    readback.invalidate();
+    Image image;
+    image.width = width;
+    image.height = height;
+    image.rgba.resize(imageBytes);
+    std::memcpy(image.rgba.data(), readback.mapped(), imageBytes);
+    return image;
+}
+
+void writePng(const std::filesystem::path& path, const Image& image) {
+    if (image.width <= 0 || image.height <= 0 || image.rgba.size() != size_t(image.width) * image.height * 4)
+        throw Error("cannot write " + path.string() + ": the image is empty or inconsistent");
+    cv::Mat bgr(image.height, image.width, CV_8UC3);
+    for (int y = 0; y < image.height; ++y) {
+        uint8_t* row = bgr.ptr<uint8_t>(y);
+        for (int x = 0; x < image.width; ++x) {
+            const uint8_t* p = image.pixel(x, y);
+            row[3 * x + 0] = p[2];
+            row[3 * x + 1] = p[1];
+            row[3 * x + 2] = p[0];
+        }
+    }
+    bool ok = false;
+    try {
+        ok = cv::imwrite(path.string(), bgr);
+    } catch (const cv::Exception& e) {
+        throw Error("cannot write " + path.string() + ": " + e.what());
+    }
+    if (!ok) throw Error("cannot write " + path.string());
+}
+
+Image renderMeshFile(const vk::Context& context, const std::filesystem::path& meshPath, const std::filesystem::path& pngPath,
+                     const RenderOptions& options) {
+    if (!std::filesystem::exists(meshPath)) throw Error("mesh file " + meshPath.string() + " does not exist");
+    Mesh mesh = readPly(meshPath);  // throws Error naming the file when it is unreadable
+    if (mesh.positions.empty() || mesh.triangles.empty())
+        throw Error("mesh file " + meshPath.string() + " is empty (" + std::to_string(mesh.positions.size()) + " vertices, " +
+                    std::to_string(mesh.triangles.size()) + " triangles): nothing to render");
+    MeshRenderer renderer(context);
+    Image image = renderer.render(mesh, options);
+    writePng(pngPath, image);
+    return image;
+}
+
+}  // namespace vkmesh::render

@@ -1,0 +1,94 @@
+// Headless, offscreen rendering of a triangle mesh with a Vulkan graphics pipeline (classic render pass +
+// framebuffer, so Vulkan 1.2 is enough): colour R8G8B8A8_UNORM + depth D32_SFLOAT, one indexed draw, the
+// image copied back to the host. Used by `vkmesh render` (see renderMeshFile) and the tests.
+#pragma once
+
+#include <Eigen/Core>
+
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "io/ply.h"
+#include "vk/context.h"
+
+namespace vkmesh::render {
+
+enum class ColorMode {
+    Shade,   // Phong (headlight + ambient) on a light grey
+    Normal,  // vertex normal mapped to RGB: n * 0.5 + 0.5
+    Age,     // warm (age 0, red) to cold (oldest, blue), normalised by the mesh's largest age
+};
+
+// Looks from `eye` at `target`, world z up, vertical field of view 60 degrees.
+struct Camera {
+    Eigen::Vector3f eye = Eigen::Vector3f::Zero();
+    Eigen::Vector3f target = Eigen::Vector3f::Zero();
+};
+
+constexpr float kVerticalFovDegrees = 60.0f;
+// Background colour (dark grey), RGBA.
+constexpr uint8_t kBackground[4] = {38, 38, 38, 255};
+
+struct RenderOptions {
+    int width = 800;
+    int height = 600;
+    std::optional<Camera> camera;  // none: defaultCamera(mesh, width, height)
+    ColorMode color = ColorMode::Shade;
+};
+
+// An RGBA8 image, row-major, top row first.
+struct Image {
+    int width = 0;
+    int height = 0;
+    std::vector<uint8_t> rgba;
+    const uint8_t* pixel(int x, int y) const { return &rgba[(static_cast<size_t>(y) * width + x) * 4]; }
+};
+
+// Parses "shade" / "normal" / "age"; throws Error naming the value otherwise.
+ColorMode parseColorMode(const std::string& text);
+// Parses "eye_x,eye_y,eye_z,target_x,target_y,target_z" (6 finite numbers, eye != target); throws Error
+// naming the value otherwise.
+Camera parseCamera(const std::string& text);
+// A three-quarter overview from outside the mesh's bounding box (azimuth 45 degrees, elevation about 35),
+// far enough for the bounding sphere to fit the view.
+Camera defaultCamera(const Mesh& mesh, int width, int height);
+
+// Column-major world -> Vulkan clip-space matrix of the camera (y down, depth 0..1), near/far from the
+// mesh bounds as seen from the eye. Exposed for tests.
+Eigen::Matrix4f viewProjection(const Camera& camera, const Eigen::Vector3f& boundsMin, const Eigen::Vector3f& boundsMax,
+                               int width, int height);
+
+// Owns the graphics pipeline (render pass, layouts, shaders); each render() creates the images of its size.
+// The Context's queue must support graphics (lavapipe's and desktop GPUs' first family do).
+class MeshRenderer {
+public:
+    explicit MeshRenderer(const vk::Context& context);
+    ~MeshRenderer();
+    MeshRenderer(const MeshRenderer&) = delete;
+    MeshRenderer& operator=(const MeshRenderer&) = delete;
+
+    // Throws Error for an empty mesh (no vertices or no triangles), an index out of range, inconsistent
+    // normals/ages, or an image size outside 1..maxImageDimension2D; Vulkan failures via VKM_CHECK.
+    Image render(const Mesh& mesh, const RenderOptions& options);
+
+private:
+    void release();
+    const vk::Context& context_;
+    VkRenderPass renderPass_ = VK_NULL_HANDLE;
+    VkPipelineLayout pipelineLayout_ = VK_NULL_HANDLE;
+    VkPipeline pipeline_ = VK_NULL_HANDLE;
+};
+
+// Writes an RGBA image as an 8-bit PNG (alpha dropped: the renderer's output is opaque). Throws Error
+// naming the path when it cannot be written.
+void writePng(const std::filesystem::path& path, const Image& image);
+
+// What `vkmesh render` does: reads the mesh (PLY), renders it and writes the PNG. Throws Error naming the
+// file for a missing, unreadable or empty mesh.
+Image renderMeshFile(const vk::Context& context, const std::filesystem::path& meshPath,
+                     const std::filesystem::path& pngPath, const RenderOptions& options);
+
+}  // namespace vkmesh::render
