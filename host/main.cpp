@@ -239,7 +239,7 @@ int commandFuse(const FuseArgs& args) {
             mesh.vertexAge.push_back(now - v.createdFrame);
         }
         mesh.triangles = std::move(exported.triangles);
-        baselineVertices = volume.extractBaselineMesh().vertices.size();
+        baselineVertices = volume.countBaselineVertices();
         // Regularity (what refinement improves): sliver triangles, and surface cubes whose type is not one of
         // the six half-cube types.
         sliverTriangleShare = triangleRegularity(mesh).sliverShare();

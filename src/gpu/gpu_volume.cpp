@@ -281,20 +281,29 @@ FrameReport GpuVolume::integrate(const DepthImage& depth, const Intrinsics& intr
     return report;
 }
 
+Counters GpuVolume::runBaselinePass(std::vector<std::pair<std::string, double>>* stageMs) {
+    VkCommandBuffer cmd = recorder_.begin();
+    timer_.reset(cmd);
+    // liveBlockCount, meshVertices, meshVerticesDropped are consecutive.
+    vkCmdFillBuffer(cmd, counters_.handle(), offsetof(Counters, liveBlockCount), 3 * sizeof(uint32_t), 0);
+    vk::memoryBarrier(cmd);
+    timer_.mark(cmd, "start");
+    baselineMesh_.record(cmd, lastPush_, counters_, config_.hashCapacity);
+    timer_.mark(cmd, "mesh_baseline");
+    recordCountersReadback(cmd);
+    recorder_.submitAndWait();
+    if (stageMs) *stageMs = timer_.read();
+    return readCounters();
+}
+
+uint32_t GpuVolume::countBaselineVertices() {
+    // The GPU counts every vertex the pass wants, whether or not it fit in the buffer.
+    return runBaselinePass(nullptr).meshVertices;
+}
+
 TriangleSoup GpuVolume::extractBaselineMesh(std::vector<std::pair<std::string, double>>* stageMs) {
     for (int attempt = 0; attempt < 2; ++attempt) {
-        VkCommandBuffer cmd = recorder_.begin();
-        timer_.reset(cmd);
-        // liveBlockCount, meshVertices, meshVerticesDropped are consecutive.
-        vkCmdFillBuffer(cmd, counters_.handle(), offsetof(Counters, liveBlockCount), 3 * sizeof(uint32_t), 0);
-        vk::memoryBarrier(cmd);
-        timer_.mark(cmd, "start");
-        baselineMesh_.record(cmd, lastPush_, counters_, config_.hashCapacity);
-        timer_.mark(cmd, "mesh_baseline");
-        recordCountersReadback(cmd);
-        recorder_.submitAndWait();
-        Counters k = readCounters();
-        if (stageMs) *stageMs = timer_.read();
+        Counters k = runBaselinePass(stageMs);
         if (k.meshVerticesDropped == 0) {
             TriangleSoup soup;
             soup.vertices.resize(k.meshVertices);

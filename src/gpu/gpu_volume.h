@@ -99,6 +99,8 @@ public:
     // Marching cubes over every block, each triangle with its own 3 vertices. Never truncated: if the
     // mesh buffer was too small it is grown to the exact size the GPU counted and the pass re-run.
     TriangleSoup extractBaselineMesh(std::vector<std::pair<std::string, double>>* stageMs = nullptr);
+    // How many vertices the baseline mesh of the current TSDF has (3 per triangle), without downloading it.
+    uint32_t countBaselineVertices();
 
     // The shared-vertex mesh, compacted on the GPU. Never truncated (buffers grow to the exact counts).
     ExportedMesh exportMesh(std::vector<std::pair<std::string, double>>* stageMs = nullptr);
@@ -118,6 +120,7 @@ public:
 private:
     vk::Buffer makeBuffer(VkDeviceSize size, VkBufferUsageFlags extraUsage, const std::string& name, uint32_t binding);
     void recordCountersReadback(VkCommandBuffer cmd);
+    Counters runBaselinePass(std::vector<std::pair<std::string, double>>* stageMs);
     void resetMeshState();
     void setParam(uint32_t VolumeParamsGpu::*field, uint32_t value);
 

@@ -136,6 +136,7 @@ TEST_F(GpuTest, SharedMeshIsTheWeldedBaseline) {
     integrateRoom(volume, 6);
     gpu::ExportedMesh shared = volume.exportMesh();
     gpu::TriangleSoup baseline = volume.extractBaselineMesh();
+    EXPECT_EQ(volume.countBaselineVertices(), baseline.vertices.size());
     // Same triangles, and exactly one vertex per distinct baseline position: every vertex shared.
     EXPECT_EQ(canonicalTriangles(soupOf(shared)), canonicalTriangles(baseline.vertices));
     std::set<std::array<float, 3>> distinct;
