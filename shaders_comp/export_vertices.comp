@@ -21,7 +21,8 @@ void main() {
     base = subgroupBroadcastFirst(base) + offset;
     if (live) {
         vertexRemap[v] = base;
-        exportVertices[base] = vertices[v];
+        // Counted either way: the host grows the buffer and re-runs when exportVertices > capacity.
+        if (base < params.exportVertexCapacity) exportVertices[base] = vertices[v];
     }
     ADD_COUNTER(exportUnreferenced, unreferenced ? 1u : 0u);
 }

@@ -50,6 +50,10 @@ void retype(uint id) {
     uint count = triangleCountOf(type);
     if (count == 0u) {
         if (chunk != 0u) {
+            // Released chunks go back holding no triangle, so a chunk's words alone say which of its
+            // triangles exist (the delta passes read them without the cube state).
+            uint base = (chunk - 1u) * CHUNK_WORDS;
+            for (uint t = 0u; t < TRIANGLES_PER_CHUNK; ++t) chunkTriangles[base + 3u * t] = INVALID_INDEX;
             uint at = atomicAdd(counters.releaseCount, 1u);
             if (at < params.chunkCapacity) chunkRelease[at] = chunk - 1u;
             chunk = 0u;
@@ -84,6 +88,7 @@ void retype(uint id) {
                 }
                 ++created;
             }
+            for (uint t = count; t < TRIANGLES_PER_CHUNK; ++t) chunkTriangles[base + 3u * t] = INVALID_INDEX;
         }
     }
     cubeState[id] = type | (incomplete ? CUBE_INCOMPLETE : 0u) | (chunk << CUBE_CHUNK_SHIFT);

@@ -126,7 +126,8 @@ struct VolumeParamsGpu {
     uint refine;            // 1: Hamming-distance refinement of cube types (docs/REFINEMENT.md)
     float refineEpsilon;    // metres: only corners with |sdf| below it may be flipped by refinement
     uint vertexUpdate;      // VERTEX_UPDATE_*: how vertices are moved each frame
-    uint pad0, pad1, pad2;
+    uint exportVertexCapacity; // Vertex entries of the export buffer (export_vertices counts what does not fit)
+    uint pad1, pad2;
 };
 VKM_CONST VERTEX_UPDATE_AUTO = 0u;     // whichever of the two visits fewer entries this frame
 VKM_CONST VERTEX_UPDATE_HEAP = 1u;     // scan the heap (update_heap_vertices)
@@ -198,10 +199,60 @@ struct Counters {
     uint exportVertices;        // compaction: vertices written
     uint exportTriangles;       //  ... triangles wanted
     uint exportUnreferenced;    //  ... allocated vertices with refcount 0 (0 unless GC fell behind)
-    uint pad;
+    // VkDrawIndexedIndirectCommand of the compacted mesh (finish_export): a renderer draws it with
+    // vkCmdDrawIndexedIndirect straight from this buffer. indexCount = 0 when an export buffer overflowed.
+    uint drawIndexed[5];
 };
 VKM_CONST COUNTERS_PER_FRAME_OFFSET = 144u;  // byte offset of validPixels
 VKM_CONST COUNTERS_PER_FRAME_SIZE = 112u;    // 28 per-frame uints
+
+// ---- mesh deltas (docs/DELTAS.md) ---------------------------------------------------------------
+// The delta passes have their own descriptor set: the shared one is full (lavapipe allows 32 storage
+// buffers per stage). They compare the vertex heap and the triangle chunks with shadow copies of the
+// last frame's, list what differs, and update the shadows of what they listed.
+VKM_CONST DELTA_BINDING_COUNTERS = 0u;          // Counters (read: the heaps' high-water marks)
+VKM_CONST DELTA_BINDING_VERTICES = 1u;          // the vertex heap
+VKM_CONST DELTA_BINDING_PREV_VERTICES = 2u;     // its shadow: the heap as last reported
+VKM_CONST DELTA_BINDING_CHUNKS = 3u;            // the triangle chunks
+VKM_CONST DELTA_BINDING_PREV_CHUNKS = 4u;       // their shadow
+VKM_CONST DELTA_BINDING_STATE = 5u;             // DeltaState (also indirect-dispatch arguments)
+VKM_CONST DELTA_BINDING_VERTEX_RECORDS = 6u;    // DeltaVertexRecord list
+VKM_CONST DELTA_BINDING_TRIANGLE_RECORDS = 7u;  // DeltaTriangleRecord list
+VKM_CONST DELTA_BINDING_COUNT = 8u;
+
+// A record's first word: the vertex or triangle id in the low 30 bits, the kind in the top 2.
+// Vertex id = its heap index; triangle id = chunk * TRIANGLES_PER_CHUNK + slot. Both are stable while
+// the vertex/triangle lives, and reused after it is removed: ADDED gives an id new content (a new
+// vertex or triangle, possibly replacing one removed in the same frame).
+VKM_CONST DELTA_ADDED = 0u;
+VKM_CONST DELTA_CHANGED = 1u;                   // vertices only: position or normal moved
+VKM_CONST DELTA_REMOVED = 2u;
+VKM_CONST DELTA_KIND_SHIFT = 30u;
+VKM_CONST DELTA_ID_MASK = 0x3FFFFFFFu;
+
+struct DeltaState {
+    uint vertexDispatch[4];     // over [0, vertexScan), WG_LIST per group
+    uint triangleDispatch[4];   // over [0, triangleScan)
+    uint vertexScan;            // heap entries compared: the most ever used (high water survives a rebuild)
+    uint triangleScan;          // triangle slots compared
+    uint vertexRecords;         // records wanted this pass (may exceed the capacity: the host grows and re-runs)
+    uint triangleRecords;
+    uint vertexRecordCapacity;  // set by the host
+    uint triangleRecordCapacity;
+    uint pad0, pad1;
+};
+
+struct DeltaVertexRecord {
+    uint idKind;
+    float px, py, pz;
+    float nx, ny, nz;
+    uint createdFrame;
+};
+
+struct DeltaTriangleRecord {
+    uint idKind;
+    uint v0, v1, v2;            // vertex ids (undefined for REMOVED)
+};
 
 // Push constants of every compute stage: the current frame's camera. Rigid transforms are stored as
 // the 3 rows of [R | t] (x' = row.x*x + row.y*y + row.z*z + row.w), the order the CPU reference uses too.

@@ -1,11 +1,12 @@
 #version 450
-// Mesh renderer, vertex stage: world-space position, normal and normalised age passed through.
+// Mesh renderer, vertex stage: world-space position and normal passed through, the vertex's age
+// (frames since it was created) normalised for the colormap.
 #extension GL_GOOGLE_include_directive : require
 #include "mesh_render.h"
 
 layout(location = RENDER_LOC_POSITION) in vec3 inPosition;
 layout(location = RENDER_LOC_NORMAL) in vec3 inNormal;
-layout(location = RENDER_LOC_AGE) in float inAge;
+layout(location = RENDER_LOC_CREATED) in uint inCreated;
 
 layout(location = 0) out vec3 worldPos;
 layout(location = 1) out vec3 worldNormal;
@@ -14,6 +15,6 @@ layout(location = 2) out float age;
 void main() {
     worldPos = inPosition;
     worldNormal = inNormal;
-    age = inAge;
+    age = inCreated <= pc.newestFrame ? float(pc.newestFrame - inCreated) * pc.ageScale : 0.0;
     gl_Position = pc.viewProj * vec4(inPosition, 1.0);
 }

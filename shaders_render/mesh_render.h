@@ -7,10 +7,12 @@
 #define RENDER_COLOR_NORMAL 1u
 #define RENDER_COLOR_AGE 2u
 
-// Vertex input locations (one interleaved binding: position, normal, normalised age).
+// Vertex input locations. One interleaved binding in vkmesh's own Vertex layout (shaders_comp/
+// shared_layout.h: position at 0, normal at 16, createdFrame at 28, stride 32), so the renderer draws the
+// GPU mesh buffers as they are and host meshes are packed the same way.
 #define RENDER_LOC_POSITION 0
 #define RENDER_LOC_NORMAL 1
-#define RENDER_LOC_AGE 2
+#define RENDER_LOC_CREATED 2
 
 #ifdef __cplusplus
 #include <cstdint>
@@ -19,7 +21,9 @@ struct RenderPush {
     float viewProj[16];   // column-major, world -> Vulkan clip space
     float eye[4];         // xyz: camera position (headlight), w unused
     uint32_t colorMode;   // RENDER_COLOR_*
-    uint32_t pad[3];
+    uint32_t newestFrame; // age of a vertex = newestFrame - createdFrame (0 if created later)
+    float ageScale;       // normalised age = age * ageScale (1 / the largest age shown)
+    uint32_t pad;
 };
 static_assert(sizeof(RenderPush) == 96, "push constant layout");
 }  // namespace vkmesh::render
@@ -28,6 +32,8 @@ layout(push_constant) uniform RenderPush {
     mat4 viewProj;
     vec4 eye;
     uint colorMode;
+    uint newestFrame;
+    float ageScale;
 } pc;
 #endif
 

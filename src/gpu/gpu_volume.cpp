@@ -20,6 +20,8 @@ uint32_t nextPowerOfTwo(uint32_t v) {
     return p;
 }
 
+constexpr uint32_t kInitialDeltaRecords = 1u << 14;
+
 std::vector<VkDescriptorType> descriptorTypes() {
     std::vector<VkDescriptorType> types(BINDING_COUNT, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER);
     types[BINDING_PARAMS] = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER;
@@ -71,6 +73,8 @@ GpuVolumeConfig resolved(GpuVolumeConfig c) {
     if (c.chunkCapacity < 64 || c.chunkCapacity >= (1u << (32 - CUBE_CHUNK_SHIFT)) - 1)
         throw Error("triangle chunk capacity " + std::to_string(c.chunkCapacity) + " must be in [64, 2^23 - 1)");
     c.meshVertexCapacity = std::max(c.meshVertexCapacity, 1024u);
+    if (c.meshMode != MeshMode::Incremental && (c.publishMesh || c.trackDeltas))
+        throw Error("publishing the mesh and mesh deltas need the incremental mesh mode");
     return c;
 }
 
@@ -127,8 +131,9 @@ GpuVolume::GpuVolume(const vk::Context& context, const GpuVolumeConfig& config)
     vertexRemap_ = makeBuffer(VkDeviceSize(c.vertexCapacity) * 4, 0, "vertex remap", BINDING_VERTEX_REMAP);
     retypeMask_ = makeBuffer(VkDeviceSize(c.blockCapacity) * MASK_WORDS * 4, 0, "retype masks", BINDING_RETYPE_MASK);
     retypeList_ = makeBuffer(VkDeviceSize(c.retypeCapacity) * 4, 0, "retype list", BINDING_RETYPE_LIST);
-    exportVertices_ = makeBuffer(1024 * sizeof(Vertex), 0, "export vertices", BINDING_EXPORT_VERTICES);
-    exportIndices_ = makeBuffer(1024 * 12, 0, "export indices", BINDING_EXPORT_INDICES);
+    exportVertices_ = makeBuffer(1024 * sizeof(Vertex), VK_BUFFER_USAGE_VERTEX_BUFFER_BIT, "export vertices", BINDING_EXPORT_VERTICES);
+    exportIndices_ = makeBuffer(1024 * 12, VK_BUFFER_USAGE_INDEX_BUFFER_BIT, "export indices", BINDING_EXPORT_INDICES);
+    exportVertexCapacity_ = exportTriangleCapacity_ = 1024;
     depthStaging_ = vk::Buffer(context, depth_.size(), VK_BUFFER_USAGE_TRANSFER_SRC_BIT, vk::MemoryUse::Upload, "depth staging");
     countersReadback_ = vk::Buffer(context, sizeof(Counters), VK_BUFFER_USAGE_TRANSFER_DST_BIT, vk::MemoryUse::Readback, "counters readback");
 
@@ -150,6 +155,7 @@ GpuVolume::GpuVolume(const vk::Context& context, const GpuVolumeConfig& config)
     gp.refine = c.refine ? 1u : 0u;
     gp.refineEpsilon = c.refineEpsilonVoxels * c.params.voxelSize;
     gp.vertexUpdate = c.vertexUpdate;
+    gp.exportVertexCapacity = exportVertexCapacity_;
     vk::uploadToBuffer(context, params_, &gp, sizeof(gp));
     auto tables = packMarchingCubesTables();
     vk::uploadToBuffer(context, mcTables_, tables.data(), tables.size() * 4);
@@ -168,6 +174,35 @@ GpuVolume::GpuVolume(const vk::Context& context, const GpuVolumeConfig& config)
     vk::memoryBarrier(cmd);
     recorder_.submitAndWait();
     resetMeshState();
+
+    if (c.trackDeltas) {
+        std::vector<VkDescriptorType> types(DELTA_BINDING_COUNT, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER);
+        deltaLayout_.emplace(context, types, 0);
+        deltaStage_.emplace(context, *deltaLayout_);
+        auto deltaBuffer = [&](VkDeviceSize size, VkBufferUsageFlags usage, const char* name, uint32_t binding) {
+            vk::Buffer b(context, size, kStorage | usage, vk::MemoryUse::Device, name);
+            deltaLayout_->bind(binding, b);
+            return b;
+        };
+        prevVertices_ = deltaBuffer(vertices_.size(), 0, "vertex heap shadow", DELTA_BINDING_PREV_VERTICES);
+        prevChunks_ = deltaBuffer(chunkTriangles_.size(), 0, "triangle chunk shadow", DELTA_BINDING_PREV_CHUNKS);
+        deltaState_ = deltaBuffer(sizeof(DeltaState), VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT, "delta state", DELTA_BINDING_STATE);
+        deltaVertexRecords_ = deltaBuffer(kInitialDeltaRecords * sizeof(DeltaVertexRecord), 0, "vertex delta records", DELTA_BINDING_VERTEX_RECORDS);
+        deltaTriangleRecords_ = deltaBuffer(kInitialDeltaRecords * sizeof(DeltaTriangleRecord), 0, "triangle delta records", DELTA_BINDING_TRIANGLE_RECORDS);
+        deltaLayout_->bind(DELTA_BINDING_COUNTERS, counters_);
+        deltaLayout_->bind(DELTA_BINDING_VERTICES, vertices_);
+        deltaLayout_->bind(DELTA_BINDING_CHUNKS, chunkTriangles_);
+        deltaStateReadback_ = vk::Buffer(context, sizeof(DeltaState), VK_BUFFER_USAGE_TRANSFER_DST_BIT, vk::MemoryUse::Readback, "delta state readback");
+        DeltaState state{};
+        state.vertexRecordCapacity = state.triangleRecordCapacity = kInitialDeltaRecords;
+        vk::uploadToBuffer(context, deltaState_, &state, sizeof(state));
+        // The shadows start as an empty mesh: every vertex dead, every triangle slot empty.
+        cmd = recorder_.begin();
+        vkCmdFillBuffer(cmd, prevVertices_.handle(), 0, VK_WHOLE_SIZE, 0xFFFFFFFFu);
+        vkCmdFillBuffer(cmd, prevChunks_.handle(), 0, VK_WHOLE_SIZE, INVALID_INDEX);
+        vk::memoryBarrier(cmd);
+        recorder_.submitAndWait();
+    }
 }
 
 void GpuVolume::resetMeshState() {
@@ -178,6 +213,7 @@ void GpuVolume::resetMeshState() {
     vkCmdFillBuffer(cmd, meshStamps_.handle(), 0, VK_WHOLE_SIZE, 0);
     vkCmdFillBuffer(cmd, retypeMask_.handle(), 0, VK_WHOLE_SIZE, 0);
     vkCmdFillBuffer(cmd, vertices_.handle(), 0, VK_WHOLE_SIZE, 0xFFFFFFFFu);   // refcount DEAD everywhere
+    vkCmdFillBuffer(cmd, chunkTriangles_.handle(), 0, VK_WHOLE_SIZE, INVALID_INDEX);   // every triangle slot empty
     vk::memoryBarrier(cmd);
     recorder_.submitAndWait();
     // Free stacks popped from the top: index 0 first.
@@ -213,7 +249,8 @@ void GpuVolume::recordCountersReadback(VkCommandBuffer cmd) {
     vk::memoryBarrier(cmd);
 }
 
-FrameReport GpuVolume::integrate(const DepthImage& depth, const Intrinsics& intrinsics, const Pose& cameraToWorld) {
+FrameReport GpuVolume::integrate(const DepthImage& depth, const Intrinsics& intrinsics, const Pose& cameraToWorld,
+                                 const vk::SubmitSync& sync) {
     if (depth.width != config_.imageWidth || depth.height != config_.imageHeight ||
         depth.meters.size() != size_t(depth.width) * depth.height)
         throw Error("depth image is " + std::to_string(depth.width) + "x" + std::to_string(depth.height) +
@@ -226,8 +263,18 @@ FrameReport GpuVolume::integrate(const DepthImage& depth, const Intrinsics& intr
     FramePush push = makeFramePush(intrinsics, cameraToWorld, config_.params, ++frameNumber_);
     lastPush_ = push;
 
+    if (config_.publishMesh) {
+        // Room for last frame's mesh plus what one frame can plausibly add; a frame that adds more is
+        // re-exported below after growing the buffers.
+        Counters last = readCounters();
+        ensureExportCapacity(last.verticesInUse + last.verticesInUse / 8 + 4096, last.liveTriangles + last.liveTriangles / 8 + 8192);
+    }
     VkCommandBuffer cmd = recorder_.begin();
     timer_.reset(cmd);
+    // Execution dependency on everything submitted before (an application's draws reading the last
+    // frame's mesh buffers on this queue): this frame overwrites them.
+    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_ALL_COMMANDS_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT | VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+                         0, 0, nullptr, 0, nullptr, 0, nullptr);
     VkBufferCopy region{0, 0, depthStaging_.size()};
     vkCmdCopyBuffer(cmd, depthStaging_.handle(), depth_.handle(), 1, &region);
     vkCmdFillBuffer(cmd, counters_.handle(), COUNTERS_PER_FRAME_OFFSET, COUNTERS_PER_FRAME_SIZE, 0);
@@ -242,13 +289,29 @@ FrameReport GpuVolume::integrate(const DepthImage& depth, const Intrinsics& intr
         timer_.mark(cmd, "mesh_mark");
         incrementalMesh_.recordMesh(cmd, push, counters_, &timer_, config_.lockFree);
     }
+    if (config_.publishMesh) {
+        recordExport(cmd);
+        timer_.mark(cmd, "export");
+    }
+    if (config_.trackDeltas) {
+        recordDeltas(cmd);
+        timer_.mark(cmd, "deltas");
+    }
     recordCountersReadback(cmd);
-    recorder_.submitAndWait();
+    recorder_.submitAndWait(sync);
 
     FrameReport report;
     countersReadback_.invalidate();
     std::memcpy(&report.counters, countersReadback_.mapped(), sizeof(Counters));
     report.stageMs = timer_.read();
+    if (config_.publishMesh) {
+        meshPublished_ = true;
+        if (!exportFits(report.counters)) report.counters = runExport(nullptr);   // grows to the exact counts
+    }
+    if (config_.trackDeltas) {
+        report.delta = collectDeltas();
+        report.delta.frame = frameNumber_;
+    }
     const Counters& k = report.counters;
     if (k.hashFull)
         report.warnings.push_back(std::to_string(k.hashFull) + " block insertions found no free hash slot within " +
@@ -331,44 +394,138 @@ TriangleSoup GpuVolume::extractBaselineMesh(std::vector<std::pair<std::string, d
     throw Error("baseline mesh extraction did not fit after growing its buffer");
 }
 
-ExportedMesh GpuVolume::exportMesh(std::vector<std::pair<std::string, double>>* stageMs) {
-    if (config_.meshMode != MeshMode::Incremental) throw Error("exportMesh needs the incremental mesh mode");
+void GpuVolume::ensureExportCapacity(uint32_t vertices, uint32_t triangles) {
+    // Grown by a quarter more than asked, so a slowly growing mesh reallocates rarely.
+    if (exportVertexCapacity_ < vertices) {
+        exportVertexCapacity_ = vertices + vertices / 4;
+        exportVertices_ = makeBuffer(VkDeviceSize(exportVertexCapacity_) * sizeof(Vertex), VK_BUFFER_USAGE_VERTEX_BUFFER_BIT,
+                                     "export vertices", BINDING_EXPORT_VERTICES);
+        setParam(&VolumeParamsGpu::exportVertexCapacity, exportVertexCapacity_);
+    }
+    if (exportTriangleCapacity_ < triangles) {
+        exportTriangleCapacity_ = triangles + triangles / 4;
+        exportIndices_ = makeBuffer(VkDeviceSize(exportTriangleCapacity_) * 12, VK_BUFFER_USAGE_INDEX_BUFFER_BIT, "export indices",
+                                    BINDING_EXPORT_INDICES);
+        setParam(&VolumeParamsGpu::exportTriangleCapacity, exportTriangleCapacity_);
+    }
+}
+
+void GpuVolume::recordExport(VkCommandBuffer cmd) {
+    vkCmdFillBuffer(cmd, counters_.handle(), offsetof(Counters, liveBlockCount), sizeof(uint32_t), 0);
+    vkCmdFillBuffer(cmd, counters_.handle(), offsetof(Counters, exportVertices), 3 * sizeof(uint32_t), 0);
+    vk::memoryBarrier(cmd);
+    baselineMesh_.recordCollect(cmd, lastPush_, config_.hashCapacity);
+    exportMesh_.record(cmd, lastPush_, counters_, config_.vertexCapacity);
+}
+
+bool GpuVolume::exportFits(const Counters& k) const {
+    return k.exportVertices <= exportVertexCapacity_ && k.exportTriangles <= exportTriangleCapacity_;
+}
+
+Counters GpuVolume::runExport(std::vector<std::pair<std::string, double>>* stageMs) {
+    Counters k = readCounters();
+    uint32_t wantVertices = k.verticesInUse, wantTriangles = k.liveTriangles;
     for (int attempt = 0; attempt < 2; ++attempt) {
-        Counters before = readCounters();
-        // Size the export buffers for what the counters say is alive.
-        if (exportVertices_.size() < VkDeviceSize(before.verticesInUse) * sizeof(Vertex))
-            exportVertices_ = makeBuffer(VkDeviceSize(before.verticesInUse) * sizeof(Vertex), 0, "export vertices", BINDING_EXPORT_VERTICES);
-        uint32_t triangleCapacity = uint32_t(exportIndices_.size() / 12);
-        if (triangleCapacity < before.liveTriangles) {
-            triangleCapacity = before.liveTriangles;
-            exportIndices_ = makeBuffer(VkDeviceSize(triangleCapacity) * 12, 0, "export indices", BINDING_EXPORT_INDICES);
-            setParam(&VolumeParamsGpu::exportTriangleCapacity, triangleCapacity);
-        }
+        ensureExportCapacity(wantVertices, wantTriangles);
         VkCommandBuffer cmd = recorder_.begin();
         timer_.reset(cmd);
-        vkCmdFillBuffer(cmd, counters_.handle(), offsetof(Counters, liveBlockCount), sizeof(uint32_t), 0);
-        vkCmdFillBuffer(cmd, counters_.handle(), offsetof(Counters, exportVertices), 3 * sizeof(uint32_t), 0);
-        vk::memoryBarrier(cmd);
         timer_.mark(cmd, "start");
-        baselineMesh_.recordCollect(cmd, lastPush_, config_.hashCapacity);
-        exportMesh_.record(cmd, lastPush_, counters_, config_.vertexCapacity);
+        recordExport(cmd);
         timer_.mark(cmd, "export");
         recordCountersReadback(cmd);
         recorder_.submitAndWait();
         if (stageMs) *stageMs = timer_.read();
-        Counters k = readCounters();
-        if (k.exportTriangles > triangleCapacity) continue;   // cannot happen if liveTriangles is right; grow and retry
-        ExportedMesh out;
-        out.unreferencedVertices = k.exportUnreferenced;
-        out.vertices.resize(k.exportVertices);
-        out.triangles.resize(k.exportTriangles);
-        if (k.exportVertices)
-            vk::downloadFromBuffer(context_, exportVertices_, out.vertices.data(), out.vertices.size() * sizeof(Vertex));
-        if (k.exportTriangles)
-            vk::downloadFromBuffer(context_, exportIndices_, out.triangles.data(), out.triangles.size() * 12);
-        return out;
+        k = readCounters();
+        meshPublished_ = true;
+        if (exportFits(k)) return k;
+        // Cannot happen if the live counts are right; grow to what was counted and retry.
+        wantVertices = k.exportVertices;
+        wantTriangles = k.exportTriangles;
     }
     throw Error("mesh export did not fit after growing its buffers");
+}
+
+ExportedMesh GpuVolume::exportMesh(std::vector<std::pair<std::string, double>>* stageMs) {
+    if (config_.meshMode != MeshMode::Incremental) throw Error("exportMesh needs the incremental mesh mode");
+    Counters k = runExport(stageMs);
+    ExportedMesh out;
+    out.unreferencedVertices = k.exportUnreferenced;
+    out.vertices.resize(k.exportVertices);
+    out.triangles.resize(k.exportTriangles);
+    if (k.exportVertices)
+        vk::downloadFromBuffer(context_, exportVertices_, out.vertices.data(), out.vertices.size() * sizeof(Vertex));
+    if (k.exportTriangles)
+        vk::downloadFromBuffer(context_, exportIndices_, out.triangles.data(), out.triangles.size() * 12);
+    return out;
+}
+
+MeshBuffers GpuVolume::meshBuffers() const {
+    MeshBuffers b;
+    if (!meshPublished_) return b;
+    Counters k = readCounters();
+    b.vertices = exportVertices_.handle();
+    b.indices = exportIndices_.handle();
+    b.drawIndirect = counters_.handle();
+    b.drawIndirectOffset = offsetof(Counters, drawIndexed);
+    b.vertexCount = std::min(k.exportVertices, exportVertexCapacity_);
+    b.triangleCount = k.drawIndexed[0] / 3;
+    b.frame = frameNumber_;
+    return b;
+}
+
+void recordMeshReadBarrier(VkCommandBuffer cmd) {
+    VkMemoryBarrier barrier{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+    barrier.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_TRANSFER_WRITE_BIT;
+    barrier.dstAccessMask = VK_ACCESS_INDIRECT_COMMAND_READ_BIT | VK_ACCESS_INDEX_READ_BIT | VK_ACCESS_VERTEX_ATTRIBUTE_READ_BIT |
+                            VK_ACCESS_SHADER_READ_BIT;
+    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT,
+                         VK_PIPELINE_STAGE_DRAW_INDIRECT_BIT | VK_PIPELINE_STAGE_VERTEX_INPUT_BIT | VK_PIPELINE_STAGE_VERTEX_SHADER_BIT,
+                         0, 1, &barrier, 0, nullptr, 0, nullptr);
+}
+
+void GpuVolume::recordDeltas(VkCommandBuffer cmd) {
+    deltaStage_->record(cmd, deltaState_);
+    VkBufferCopy region{0, 0, sizeof(DeltaState)};
+    vkCmdCopyBuffer(cmd, deltaState_.handle(), deltaStateReadback_.handle(), 1, &region);
+    vk::memoryBarrier(cmd);
+}
+
+MeshDelta GpuVolume::collectDeltas() {
+    MeshDelta delta;
+    // Each pass lists what fits and updates the shadows of only what it listed, so a re-run after growing
+    // the lists finds exactly the rest. The number of records is bounded by the heaps: 3 passes suffice.
+    for (int pass = 0; pass < 3; ++pass) {
+        DeltaState state{};
+        deltaStateReadback_.invalidate();
+        std::memcpy(&state, deltaStateReadback_.mapped(), sizeof(state));
+        uint32_t nv = std::min(state.vertexRecords, state.vertexRecordCapacity);
+        uint32_t nt = std::min(state.triangleRecords, state.triangleRecordCapacity);
+        size_t v0 = delta.vertices.size(), t0 = delta.triangles.size();
+        delta.vertices.resize(v0 + nv);
+        delta.triangles.resize(t0 + nt);
+        if (nv) vk::downloadFromBuffer(context_, deltaVertexRecords_, &delta.vertices[v0], nv * sizeof(DeltaVertexRecord));
+        if (nt) vk::downloadFromBuffer(context_, deltaTriangleRecords_, &delta.triangles[t0], nt * sizeof(DeltaTriangleRecord));
+        if (state.vertexRecords <= state.vertexRecordCapacity && state.triangleRecords <= state.triangleRecordCapacity) return delta;
+        // Grow the lists that overflowed to what was missing, with headroom, and run the passes again.
+        if (state.vertexRecords > state.vertexRecordCapacity) {
+            state.vertexRecordCapacity = state.vertexRecords + state.vertexRecords / 2;
+            deltaVertexRecords_ = vk::Buffer(context_, VkDeviceSize(state.vertexRecordCapacity) * sizeof(DeltaVertexRecord), kStorage,
+                                             vk::MemoryUse::Device, "vertex delta records");
+            deltaLayout_->bind(DELTA_BINDING_VERTEX_RECORDS, deltaVertexRecords_);
+        }
+        if (state.triangleRecords > state.triangleRecordCapacity) {
+            state.triangleRecordCapacity = state.triangleRecords + state.triangleRecords / 2;
+            deltaTriangleRecords_ = vk::Buffer(context_, VkDeviceSize(state.triangleRecordCapacity) * sizeof(DeltaTriangleRecord), kStorage,
+                                               vk::MemoryUse::Device, "triangle delta records");
+            deltaLayout_->bind(DELTA_BINDING_TRIANGLE_RECORDS, deltaTriangleRecords_);
+        }
+        vk::uploadToBuffer(context_, deltaState_, &state.vertexRecordCapacity, 2 * sizeof(uint32_t),
+                           offsetof(DeltaState, vertexRecordCapacity));
+        VkCommandBuffer cmd = recorder_.begin();
+        recordDeltas(cmd);
+        recorder_.submitAndWait();
+    }
+    throw Error("mesh deltas did not fit after growing their lists");
 }
 
 void GpuVolume::rebuildMesh() {
@@ -390,7 +547,10 @@ void GpuVolume::rebuildMesh() {
         incrementalMesh_.recordMesh(cmd, lastPush_, counters_, nullptr, config_.lockFree);
         recordCountersReadback(cmd);
         recorder_.submitAndWait();
-        if (readCounters().retypeDeferred == 0) return;
+        if (readCounters().retypeDeferred == 0) {
+            if (config_.publishMesh) runExport(nullptr);   // the published buffers show the rebuilt mesh
+            return;
+        }
     }
     throw Error("mesh rebuild did not finish in " + std::to_string(maxPasses) + " passes");
 }
@@ -474,8 +634,9 @@ std::vector<PoolInfo> GpuVolume::pools() const {
                                 &cubeState_, &edgeVertexX_, &edgeVertexY_, &edgeVertexZ_, &meshStamps_, &dirtyList_, &vertices_, &vertexOwner_, &vertexFree_, &gcCandidates_,
                                 &chunkTriangles_, &chunkFree_, &chunkRelease_, &exportVertices_, &exportIndices_, &vertexRemap_,
                                 &retypeMask_, &retypeList_,
-                                &depthStaging_, &countersReadback_})
-        out.push_back({b->name(), size_t(b->size())});
+                                &depthStaging_, &countersReadback_, &prevVertices_, &prevChunks_, &deltaState_,
+                                &deltaVertexRecords_, &deltaTriangleRecords_, &deltaStateReadback_})
+        if (b->handle()) out.push_back({b->name(), size_t(b->size())});
     return out;
 }
 

@@ -8,10 +8,12 @@
 
 #include <array>
 #include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "core/mesh_delta.h"
 #include "core/types.h"
 #include "gpu/layout.h"
 #include "gpu/stages.h"
@@ -45,6 +47,12 @@ struct GpuVolumeConfig {
     float refineEpsilonVoxels = 0.5f;    // corners within this distance of the surface may be flipped
     bool lockFree = false;               // the paper's lock-free claim: 4 parity-class passes, no slot atomics
     uint32_t vertexUpdate = VERTEX_UPDATE_AUTO;   // how vertices are moved (both ways give the same mesh)
+    // Compact the mesh on the GPU at the end of every integrate(), into draw-ready buffers (meshBuffers()):
+    // what a renderer embedding vkmesh needs. Incremental mode only.
+    bool publishMesh = false;
+    // Report every frame's mesh changes (FrameReport::delta, docs/DELTAS.md). Incremental mode only; costs
+    // a shadow copy of the vertex heap and the triangle chunks, and one pass over each per frame.
+    bool trackDeltas = false;
     int imageWidth = 640, imageHeight = 480;
 };
 
@@ -54,7 +62,32 @@ struct FrameReport {
     std::vector<std::pair<std::string, double>> stageMs;
     // Human-readable capacity problems of this frame (empty when none): hash full, pool exhausted, ...
     std::vector<std::string> warnings;
+    MeshDelta delta;   // this frame's mesh changes when GpuVolumeConfig::trackDeltas (else empty)
 };
+
+// The compacted mesh in GPU buffers, for a renderer to draw without a copy through the host
+// (GpuVolumeConfig::publishMesh, or after exportMesh()). Handles stay valid until the next integrate(),
+// exportMesh() or rebuildMesh(), which may reallocate them when the mesh outgrows them: query again after
+// each. Synchronisation contract: see recordMeshReadBarrier() and api/reconstructor.h.
+struct MeshBuffers {
+    VkBuffer vertices = VK_NULL_HANDLE;   // Vertex[vertexCount], stride 32: position (3 x float) at 0,
+                                          // normal (3 x float) at 16, createdFrame (uint) at 28
+    VkBuffer indices = VK_NULL_HANDLE;    // uint32 triangle list, 3 per triangle
+    VkBuffer drawIndirect = VK_NULL_HANDLE;   // a VkDrawIndexedIndirectCommand at drawIndirectOffset
+    VkDeviceSize drawIndirectOffset = 0;
+    uint32_t vertexCount = 0;
+    uint32_t triangleCount = 0;
+    uint32_t frame = 0;                   // frame number the mesh is from (createdFrame <= frame)
+    static constexpr uint32_t kStride = sizeof(Vertex);
+    static constexpr uint32_t kPositionOffset = 0;
+    static constexpr uint32_t kNormalOffset = 16;
+    static constexpr uint32_t kCreatedFrameOffset = 28;
+};
+
+// Records the barrier that makes vkmesh's writes of the mesh buffers (compute shaders, transfers of any
+// earlier submission on the same queue) visible to vertex input, index reads, indirect draws and vertex
+// shaders. An application drawing from MeshBuffers records it before the draw in its own command buffer.
+void recordMeshReadBarrier(VkCommandBuffer cmd);
 
 // The TSDF of one block as downloaded (tests, snapshots).
 struct BlockSnapshot {
@@ -94,7 +127,10 @@ public:
     GpuVolume(const vk::Context& context, const GpuVolumeConfig& config);
 
     // Fuses one depth image (metres, 0 = none) seen from `cameraToWorld`. One submission.
-    FrameReport integrate(const DepthImage& depth, const Intrinsics& intrinsics, const Pose& cameraToWorld);
+    // `sync`: semaphores the frame's submission waits on / signals (an application's draws of the last
+    // frame's MeshBuffers on another queue); integrate() returns once the GPU has finished the frame.
+    FrameReport integrate(const DepthImage& depth, const Intrinsics& intrinsics, const Pose& cameraToWorld,
+                          const vk::SubmitSync& sync = {});
 
     // Marching cubes over every block, each triangle with its own 3 vertices. Never truncated: if the
     // mesh buffer was too small it is grown to the exact size the GPU counted and the pass re-run.
@@ -107,6 +143,8 @@ public:
     // Throws away the mesh state (not the TSDF) and rebuilds it from scratch over every block: the
     // reference an incremental mesh must equal.
     void rebuildMesh();
+    // The last compacted mesh (publishMesh, or the last exportMesh()); empty handles before any.
+    MeshBuffers meshBuffers() const;
     MeshStateSnapshot downloadMeshState() const;
     // How many cubes carry triangles of each MC type (the stored, possibly refined, type).
     std::array<uint64_t, 256> surfaceCubeTypes() const;
@@ -123,6 +161,17 @@ private:
     Counters runBaselinePass(std::vector<std::pair<std::string, double>>* stageMs);
     void resetMeshState();
     void setParam(uint32_t VolumeParamsGpu::*field, uint32_t value);
+    // Export buffers hold at least this many vertices and triangles (grown with headroom, params updated).
+    void ensureExportCapacity(uint32_t vertices, uint32_t triangles);
+    void recordExport(VkCommandBuffer cmd);
+    bool exportFits(const Counters& k) const;
+    // Compacts the mesh in its own submission, growing the buffers until it fits; returns the counters.
+    Counters runExport(std::vector<std::pair<std::string, double>>* stageMs);
+    // Records the delta passes and the copy of their state to the host.
+    void recordDeltas(VkCommandBuffer cmd);
+    // After a submission with recordDeltas: downloads the records, growing the lists and re-running the
+    // passes until everything fitted.
+    MeshDelta collectDeltas();
 
     const vk::Context& context_;
     GpuVolumeConfig config_;
@@ -132,6 +181,12 @@ private:
     vk::Buffer cubeState_, edgeVertexX_, edgeVertexY_, edgeVertexZ_, meshStamps_, dirtyList_, vertices_, vertexOwner_, vertexFree_, gcCandidates_,
         chunkTriangles_, chunkFree_, chunkRelease_, exportVertices_, exportIndices_, vertexRemap_, retypeMask_, retypeList_;
     vk::Buffer depthStaging_, countersReadback_;
+    // Mesh deltas (trackDeltas only).
+    std::optional<vk::BindingLayout> deltaLayout_;
+    std::optional<MeshDeltaStage> deltaStage_;
+    vk::Buffer prevVertices_, prevChunks_, deltaState_, deltaVertexRecords_, deltaTriangleRecords_, deltaStateReadback_;
+    uint32_t exportVertexCapacity_ = 0, exportTriangleCapacity_ = 0;
+    bool meshPublished_ = false;
     AllocateBlocksStage allocate_;
     FuseDepthStage fuse_;
     BaselineMeshStage baselineMesh_;

@@ -128,13 +128,30 @@ void IncrementalMeshStage::recordMesh(VkCommandBuffer cmd, const FramePush& push
 }
 
 ExportMeshStage::ExportMeshStage(const vk::Context& context, const vk::BindingLayout& layout)
-    : vertices_(context, layout, "export_vertices"), triangles_(context, layout, "export_triangles") {}
+    : vertices_(context, layout, "export_vertices"),
+      triangles_(context, layout, "export_triangles"),
+      finish_(context, layout, "finish_export") {}
 
 void ExportMeshStage::record(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters,
                              uint32_t vertexCapacity) const {
     vertices_.dispatch(cmd, &push, (vertexCapacity + WG_LIST - 1) / WG_LIST);
     vk::memoryBarrier(cmd);
     triangles_.dispatchIndirect(cmd, &push, counters, offsetof(Counters, listDispatch));
+    vk::memoryBarrier(cmd);
+    finish_.dispatch(cmd, &push, 1);
+    vk::memoryBarrier(cmd);
+}
+
+MeshDeltaStage::MeshDeltaStage(const vk::Context& context, const vk::BindingLayout& deltaLayout)
+    : plan_(context, deltaLayout, "plan_deltas"),
+      vertices_(context, deltaLayout, "diff_vertices"),
+      triangles_(context, deltaLayout, "diff_triangles") {}
+
+void MeshDeltaStage::record(VkCommandBuffer cmd, const vk::Buffer& deltaState) const {
+    plan_.dispatch(cmd, nullptr, 1);
+    vk::memoryBarrier(cmd);
+    vertices_.dispatchIndirect(cmd, nullptr, deltaState, offsetof(DeltaState, vertexDispatch));
+    triangles_.dispatchIndirect(cmd, nullptr, deltaState, offsetof(DeltaState, triangleDispatch));
     vk::memoryBarrier(cmd);
 }
 

@@ -68,7 +68,8 @@ private:
         commitFree_;
 };
 
-// Compaction of the shared-vertex mesh into dense vertex and index buffers.
+// Compaction of the shared-vertex mesh into dense vertex and index buffers (export_vertices,
+// export_triangles), and the indirect draw command of the result (finish_export).
 class ExportMeshStage {
 public:
     ExportMeshStage(const vk::Context& context, const vk::BindingLayout& layout);
@@ -76,7 +77,19 @@ public:
     void record(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters, uint32_t vertexCapacity) const;
 
 private:
-    vk::ComputePipeline vertices_, triangles_;
+    vk::ComputePipeline vertices_, triangles_, finish_;
+};
+
+// Mesh deltas (docs/DELTAS.md): what changed in the vertex heap and the triangle chunks since the last
+// report, by comparison with shadow copies (plan_deltas, diff_vertices, diff_triangles). Its own binding
+// layout (DELTA_BINDING_*), no push constants.
+class MeshDeltaStage {
+public:
+    MeshDeltaStage(const vk::Context& context, const vk::BindingLayout& deltaLayout);
+    void record(VkCommandBuffer cmd, const vk::Buffer& deltaState) const;
+
+private:
+    vk::ComputePipeline plan_, vertices_, triangles_;
 };
 
 }  // namespace vkmesh::gpu

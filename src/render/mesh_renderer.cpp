@@ -30,12 +30,7 @@ namespace {
 constexpr VkFormat kColorFormat = VK_FORMAT_R8G8B8A8_UNORM;
 constexpr VkFormat kDepthFormat = VK_FORMAT_D32_SFLOAT;
 
-// The interleaved vertex the shaders read (RENDER_LOC_*).
-struct RenderVertex {
-    float position[3];
-    float normal[3];
-    float age;  // 0 (newest) .. 1 (oldest in the mesh)
-};
+using gpu::Vertex;   // the vertex layout the shaders read (RENDER_LOC_*), vkmesh's own
 
 std::string trim(const std::string& s) {
     size_t a = s.find_first_not_of(" \t");
@@ -131,7 +126,9 @@ void checkMesh(const Mesh& mesh) {
         if (!p.allFinite()) throw Error("the mesh has a vertex position that is not finite");
 }
 
-std::vector<RenderVertex> vertexData(const Mesh& mesh) {
+// Packs a host mesh into vkmesh's Vertex layout; ages become creation frames counted back from the
+// largest age (*newestFrame).
+std::vector<Vertex> vertexData(const Mesh& mesh, uint32_t* newestFrame) {
     const size_t n = mesh.positions.size();
     std::vector<Eigen::Vector3f> normals = mesh.normals;
     if (normals.empty()) {  // area-weighted face normals
@@ -145,15 +142,34 @@ std::vector<RenderVertex> vertexData(const Mesh& mesh) {
     }
     uint32_t maxAge = 0;
     for (uint32_t a : mesh.vertexAge) maxAge = std::max(maxAge, a);
-    std::vector<RenderVertex> out(n);
+    *newestFrame = maxAge;
+    std::vector<Vertex> out(n);
     for (size_t i = 0; i < n; ++i) {
-        for (int k = 0; k < 3; ++k) {
-            out[i].position[k] = mesh.positions[i][k];
-            out[i].normal[k] = normals[i].allFinite() ? normals[i][k] : 0.0f;
-        }
-        out[i].age = (mesh.vertexAge.empty() || maxAge == 0) ? 0.0f : float(mesh.vertexAge[i]) / float(maxAge);
+        const Eigen::Vector3f& p = mesh.positions[i];
+        Eigen::Vector3f nn = normals[i].allFinite() ? normals[i] : Eigen::Vector3f::Zero();
+        out[i] = Vertex{p.x(), p.y(), p.z(), 0u, nn.x(), nn.y(), nn.z(), mesh.vertexAge.empty() ? maxAge : maxAge - mesh.vertexAge[i]};
     }
     return out;
+}
+
+RenderPush makePush(const Camera& camera, const Eigen::Vector3f& lo, const Eigen::Vector3f& hi, int width, int height,
+                    ColorMode color, uint32_t newestFrame, uint32_t largestAge) {
+    RenderPush push{};
+    Eigen::Matrix4f vp = viewProjection(camera, lo, hi, width, height);
+    std::memcpy(push.viewProj, vp.data(), sizeof(push.viewProj));  // Eigen is column-major, like GLSL
+    push.eye[0] = camera.eye.x();
+    push.eye[1] = camera.eye.y();
+    push.eye[2] = camera.eye.z();
+    push.colorMode = color == ColorMode::Normal ? RENDER_COLOR_NORMAL : color == ColorMode::Age ? RENDER_COLOR_AGE : RENDER_COLOR_SHADE;
+    push.newestFrame = newestFrame;
+    push.ageScale = largestAge ? 1.0f / float(largestAge) : 0.0f;
+    return push;
+}
+
+void checkImageSize(const vk::Context& context, int width, int height) {
+    const uint32_t maxDim = context.properties().limits.maxImageDimension2D;
+    if (width < 1 || height < 1 || uint32_t(width) > maxDim || uint32_t(height) > maxDim)
+        throw Error("image size " + std::to_string(width) + "x" + std::to_string(height) + " is outside 1.." + std::to_string(maxDim));
 }
 
 }  // namespace
@@ -197,6 +213,21 @@ Camera defaultCamera(const Mesh& mesh, int width, int height) {
     if (mesh.positions.empty()) throw Error("the mesh is empty: no default camera");
     Eigen::Vector3f lo, hi;
     bounds(mesh, lo, hi);
+    return defaultCamera(lo, hi, width, height);
+}
+
+Camera sensorCamera(const Pose& cameraToWorld, const Intrinsics& intrinsics) {
+    Eigen::Matrix3f r = cameraToWorld.block<3, 3>(0, 0).cast<float>();
+    Camera c;
+    c.eye = cameraToWorld.block<3, 1>(0, 3).cast<float>();
+    c.target = c.eye + r.col(2);
+    c.up = -r.col(1);
+    if (intrinsics.height > 0 && intrinsics.fy != 0)
+        c.verticalFovDegrees = 2.0f * std::atan(0.5f * float(intrinsics.height) / std::abs(intrinsics.fy)) * 180.0f / std::numbers::pi_v<float>;
+    return c;
+}
+
+Camera defaultCamera(const Eigen::Vector3f& lo, const Eigen::Vector3f& hi, int width, int height) {
     Eigen::Vector3f center = 0.5f * (lo + hi);
     float radius = std::max(0.5f * (hi - lo).norm(), 1e-3f);
     const float halfV = kVerticalFovDegrees * 0.5f * std::numbers::pi_v<float> / 180.0f;
@@ -214,8 +245,8 @@ Eigen::Matrix4f viewProjection(const Camera& camera, const Eigen::Vector3f& boun
     Eigen::Vector3f f = camera.target - camera.eye;
     if (f.norm() <= 0) throw Error("camera eye and target are the same point");
     f.normalize();
-    Eigen::Vector3f up(0, 0, 1);
-    if (f.cross(up).norm() < 1e-4f) up = Eigen::Vector3f(0, 1, 0);  // looking straight up or down
+    Eigen::Vector3f up = camera.up.norm() > 0 ? camera.up.normalized() : Eigen::Vector3f(0, 0, 1);
+    if (f.cross(up).norm() < 1e-4f) up = std::abs(f.y()) < 0.9f ? Eigen::Vector3f(0, 1, 0) : Eigen::Vector3f(1, 0, 0);  // up along the view
     Eigen::Vector3f s = f.cross(up).normalized();
     Eigen::Vector3f u = s.cross(f);
     Eigen::Matrix4f view = Eigen::Matrix4f::Identity();
@@ -238,7 +269,9 @@ Eigen::Matrix4f viewProjection(const Camera& camera, const Eigen::Vector3f& boun
     float farZ = dMax > 0 ? dMax * 1.01f + 1e-4f : 1.0f;
     float nearZ = std::max(dMin * 0.99f, farZ * 1e-4f);
 
-    const float t = std::tan(kVerticalFovDegrees * 0.5f * std::numbers::pi_v<float> / 180.0f);
+    if (!(camera.verticalFovDegrees > 0.0f && camera.verticalFovDegrees < 180.0f))
+        throw Error("camera field of view " + std::to_string(camera.verticalFovDegrees) + " degrees is outside (0, 180)");
+    const float t = std::tan(camera.verticalFovDegrees * 0.5f * std::numbers::pi_v<float> / 180.0f);
     const float aspect = float(width) / float(height);
     Eigen::Matrix4f proj = Eigen::Matrix4f::Zero();
     proj(0, 0) = 1.0f / (t * aspect);
@@ -334,12 +367,14 @@ MeshRenderer::MeshRenderer(const vk::Context& context) : context_(context) {
         stages[1].module = frag;
         stages[1].pName = "main";
 
-        VkVertexInputBindingDescription binding{0, sizeof(RenderVertex), VK_VERTEX_INPUT_RATE_VERTEX};
+        VkVertexInputBindingDescription binding{0, sizeof(Vertex), VK_VERTEX_INPUT_RATE_VERTEX};
         VkVertexInputAttributeDescription attributes[3] = {
-            {RENDER_LOC_POSITION, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(RenderVertex, position)},
-            {RENDER_LOC_NORMAL, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(RenderVertex, normal)},
-            {RENDER_LOC_AGE, 0, VK_FORMAT_R32_SFLOAT, offsetof(RenderVertex, age)},
+            {RENDER_LOC_POSITION, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(Vertex, px)},
+            {RENDER_LOC_NORMAL, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(Vertex, nx)},
+            {RENDER_LOC_CREATED, 0, VK_FORMAT_R32_UINT, offsetof(Vertex, createdFrame)},
         };
+        static_assert(offsetof(Vertex, px) == gpu::MeshBuffers::kPositionOffset && offsetof(Vertex, nx) == gpu::MeshBuffers::kNormalOffset &&
+                      offsetof(Vertex, createdFrame) == gpu::MeshBuffers::kCreatedFrameOffset);
         VkPipelineVertexInputStateCreateInfo vertexInput{VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
         vertexInput.vertexBindingDescriptionCount = 1;
         vertexInput.pVertexBindingDescriptions = &binding;
@@ -413,28 +448,17 @@ void MeshRenderer::release() {
 
 Image MeshRenderer::render(const Mesh& mesh, const RenderOptions& options) {
     checkMesh(mesh);
-    const uint32_t maxDim = context_.properties().limits.maxImageDimension2D;
-    if (options.width < 1 || options.height < 1 || uint32_t(options.width) > maxDim || uint32_t(options.height) > maxDim)
-        throw Error("image size " + std::to_string(options.width) + "x" + std::to_string(options.height) +
-                    " is outside 1.." + std::to_string(maxDim));
+    checkImageSize(context_, options.width, options.height);
     const int width = options.width, height = options.height;
     const Camera camera = options.camera ? *options.camera : defaultCamera(mesh, width, height);
     Eigen::Vector3f lo, hi;
     bounds(mesh, lo, hi);
-
-    RenderPush push{};
-    Eigen::Matrix4f vp = viewProjection(camera, lo, hi, width, height);
-    std::memcpy(push.viewProj, vp.data(), sizeof(push.viewProj));  // Eigen is column-major, like GLSL
-    push.eye[0] = camera.eye.x();
-    push.eye[1] = camera.eye.y();
-    push.eye[2] = camera.eye.z();
-    push.colorMode = options.color == ColorMode::Normal ? RENDER_COLOR_NORMAL
-                     : options.color == ColorMode::Age  ? RENDER_COLOR_AGE
-                                                        : RENDER_COLOR_SHADE;
+    uint32_t newestFrame = 0;
+    std::vector<Vertex> vertices = vertexData(mesh, &newestFrame);
+    RenderPush push = makePush(camera, lo, hi, width, height, options.color, newestFrame, newestFrame);
 
     // Geometry: staged and copied to device-local buffers in the same command buffer as the draw.
-    std::vector<RenderVertex> vertices = vertexData(mesh);
-    const VkDeviceSize vertexBytes = vertices.size() * sizeof(RenderVertex);
+    const VkDeviceSize vertexBytes = vertices.size() * sizeof(Vertex);
     const VkDeviceSize indexBytes = mesh.triangles.size() * 3 * sizeof(uint32_t);
     vk::Buffer vertexStaging(context_, vertexBytes, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, vk::MemoryUse::Upload, "render vertices (staging)");
     vk::Buffer indexStaging(context_, indexBytes, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, vk::MemoryUse::Upload, "render indices (staging)");
@@ -444,6 +468,43 @@ Image MeshRenderer::render(const Mesh& mesh, const RenderOptions& options) {
                             vk::MemoryUse::Device, "render vertices");
     vk::Buffer indexBuffer(context_, indexBytes, VK_BUFFER_USAGE_INDEX_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                            vk::MemoryUse::Device, "render indices");
+    Geometry geometry;
+    geometry.vertices = vertexBuffer.handle();
+    geometry.indices = indexBuffer.handle();
+    geometry.indexCount = uint32_t(mesh.triangles.size() * 3);
+    auto upload = [&](VkCommandBuffer cmd) {
+        VkBufferCopy vertexCopy{0, 0, vertexBytes}, indexCopy{0, 0, indexBytes};
+        vkCmdCopyBuffer(cmd, vertexStaging.handle(), vertexBuffer.handle(), 1, &vertexCopy);
+        vkCmdCopyBuffer(cmd, indexStaging.handle(), indexBuffer.handle(), 1, &indexCopy);
+        VkMemoryBarrier toVertexInput{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+        toVertexInput.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
+        toVertexInput.dstAccessMask = VK_ACCESS_VERTEX_ATTRIBUTE_READ_BIT | VK_ACCESS_INDEX_READ_BIT;
+        vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_VERTEX_INPUT_BIT, 0, 1, &toVertexInput, 0,
+                             nullptr, 0, nullptr);
+    };
+    return draw(geometry, push, width, height, upload, {});
+}
+
+Image MeshRenderer::render(const gpu::MeshBuffers& mesh, const Eigen::Vector3f& boundsMin, const Eigen::Vector3f& boundsMax,
+                           const RenderOptions& options, const vk::SubmitSync& sync) {
+    if (!mesh.vertices || !mesh.indices || !mesh.drawIndirect)
+        throw Error("no mesh buffers to render: nothing has been integrated and published yet");
+    if (!boundsMin.allFinite() || !boundsMax.allFinite() || (boundsMax - boundsMin).minCoeff() < 0.0f)
+        throw Error("render: the scene bounds are empty or not finite");
+    checkImageSize(context_, options.width, options.height);
+    const int width = options.width, height = options.height;
+    const Camera camera = options.camera ? *options.camera : defaultCamera(boundsMin, boundsMax, width, height);
+    RenderPush push = makePush(camera, boundsMin, boundsMax, width, height, options.color, mesh.frame, std::max(mesh.frame, 2u) - 1);
+    Geometry geometry;
+    geometry.vertices = mesh.vertices;
+    geometry.indices = mesh.indices;
+    geometry.indirect = mesh.drawIndirect;
+    geometry.indirectOffset = mesh.drawIndirectOffset;
+    return draw(geometry, push, width, height, [](VkCommandBuffer cmd) { gpu::recordMeshReadBarrier(cmd); }, sync);
+}
+
+Image MeshRenderer::draw(const Geometry& geometry, const RenderPush& push, int width, int height,
+                         const std::function<void(VkCommandBuffer)>& prelude, const vk::SubmitSync& sync) {
     const VkDeviceSize imageBytes = VkDeviceSize(width) * VkDeviceSize(height) * 4;
     vk::Buffer readback(context_, imageBytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT, vk::MemoryUse::Readback, "render image (readback)");
 
@@ -464,14 +525,7 @@ Image MeshRenderer::render(const Mesh& mesh, const RenderOptions& options) {
 
     vk::CommandRecorder recorder(context_);
     VkCommandBuffer cmd = recorder.begin();
-    VkBufferCopy vertexCopy{0, 0, vertexBytes}, indexCopy{0, 0, indexBytes};
-    vkCmdCopyBuffer(cmd, vertexStaging.handle(), vertexBuffer.handle(), 1, &vertexCopy);
-    vkCmdCopyBuffer(cmd, indexStaging.handle(), indexBuffer.handle(), 1, &indexCopy);
-    VkMemoryBarrier toVertexInput{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
-    toVertexInput.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
-    toVertexInput.dstAccessMask = VK_ACCESS_VERTEX_ATTRIBUTE_READ_BIT | VK_ACCESS_INDEX_READ_BIT;
-    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_VERTEX_INPUT_BIT, 0, 1, &toVertexInput, 0,
-                         nullptr, 0, nullptr);
+    prelude(cmd);
 
     VkClearValue clears[2]{};
     for (int k = 0; k < 4; ++k) clears[0].color.float32[k] = float(kBackground[k]) / 255.0f;
@@ -490,10 +544,12 @@ Image MeshRenderer::render(const Mesh& mesh, const RenderOptions& options) {
     vkCmdSetScissor(cmd, 0, 1, &scissor);
     vkCmdPushConstants(cmd, pipelineLayout_, VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0, sizeof(push), &push);
     VkDeviceSize zero = 0;
-    VkBuffer vb = vertexBuffer.handle();
-    vkCmdBindVertexBuffers(cmd, 0, 1, &vb, &zero);
-    vkCmdBindIndexBuffer(cmd, indexBuffer.handle(), 0, VK_INDEX_TYPE_UINT32);
-    vkCmdDrawIndexed(cmd, uint32_t(mesh.triangles.size() * 3), 1, 0, 0, 0);
+    vkCmdBindVertexBuffers(cmd, 0, 1, &geometry.vertices, &zero);
+    vkCmdBindIndexBuffer(cmd, geometry.indices, 0, VK_INDEX_TYPE_UINT32);
+    if (geometry.indirect)
+        vkCmdDrawIndexedIndirect(cmd, geometry.indirect, geometry.indirectOffset, 1, 0);
+    else
+        vkCmdDrawIndexed(cmd, geometry.indexCount, 1, 0, 0, 0);
     vkCmdEndRenderPass(cmd);
 
     // The render pass left the colour image in TRANSFER_SRC_OPTIMAL, its writes visible to transfers.
@@ -505,7 +561,7 @@ Image MeshRenderer::render(const Mesh& mesh, const RenderOptions& options) {
     toHost.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
     toHost.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
     vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &toHost, 0, nullptr, 0, nullptr);
-    recorder.submitAndWait();
+    recorder.submitAndWait(sync);
 
     readback.invalidate();
     Image image;

@@ -40,9 +40,17 @@ VkCommandBuffer CommandRecorder::begin() {
     return cmd_;
 }
 
-void CommandRecorder::submitAndWait() {
+void CommandRecorder::submitAndWait(const SubmitSync& sync) {
     check(vkEndCommandBuffer(cmd_), "vkEndCommandBuffer");
+    if (sync.wait.size() != sync.waitStages.size())
+        throw Error("SubmitSync: " + std::to_string(sync.wait.size()) + " wait semaphores but " +
+                    std::to_string(sync.waitStages.size()) + " wait stages");
     VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};
+    submit.waitSemaphoreCount = uint32_t(sync.wait.size());
+    submit.pWaitSemaphores = sync.wait.data();
+    submit.pWaitDstStageMask = sync.waitStages.data();
+    submit.signalSemaphoreCount = uint32_t(sync.signal.size());
+    submit.pSignalSemaphores = sync.signal.data();
     submit.commandBufferCount = 1;
     submit.pCommandBuffers = &cmd_;
     check(vkResetFences(context_.device(), 1, &fence_), "vkResetFences");

@@ -18,6 +18,14 @@ namespace vkmesh::vk {
 // compute/transfer barrier between them costs nothing that a finer one would save.
 void memoryBarrier(VkCommandBuffer cmd);
 
+// Semaphores a submission waits on (each at its stage) and signals: how vkmesh's frame work is ordered
+// against an application's own submissions (see api/reconstructor.h).
+struct SubmitSync {
+    std::vector<VkSemaphore> wait;
+    std::vector<VkPipelineStageFlags> waitStages;   // one per wait semaphore
+    std::vector<VkSemaphore> signal;
+};
+
 // A command buffer that is recorded, submitted, and waited for, again and again.
 class CommandRecorder {
 public:
@@ -27,7 +35,7 @@ public:
     CommandRecorder& operator=(const CommandRecorder&) = delete;
 
     VkCommandBuffer begin();
-    void submitAndWait();
+    void submitAndWait(const SubmitSync& sync = {});
 
 private:
     const Context& context_;

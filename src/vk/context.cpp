@@ -214,16 +214,7 @@ Context::Context(const ContextOptions& options) {
         }
         physical_ = devices[chosen];
         info_ = infos[chosen];
-        vkGetPhysicalDeviceProperties(physical_, &properties_);
-        vkGetPhysicalDeviceMemoryProperties(physical_, &memoryProperties_);
         queueFamily_ = *computeQueueFamily(physical_);
-        {
-            uint32_t n = 0;
-            vkGetPhysicalDeviceQueueFamilyProperties(physical_, &n, nullptr);
-            std::vector<VkQueueFamilyProperties> families(n);
-            vkGetPhysicalDeviceQueueFamilyProperties(physical_, &n, families.data());
-            timestampValidBits_ = families[queueFamily_].timestampValidBits;
-        }
 
         float priority = 1.0f;
         VkDeviceQueueCreateInfo queueInfo{VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};
@@ -231,30 +222,91 @@ Context::Context(const ContextOptions& options) {
         queueInfo.queueCount = 1;
         queueInfo.pQueuePriorities = &priority;
         VkPhysicalDeviceVulkan12Features f12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
-        f12.shaderBufferInt64Atomics = VK_TRUE;
         VkPhysicalDeviceFeatures2 features{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2};
         features.pNext = &f12;
-        features.features.shaderInt64 = VK_TRUE;
+        enableRequiredFeatures(features, f12);
         VkDeviceCreateInfo deviceInfo{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO};
         deviceInfo.pNext = &features;
         deviceInfo.queueCreateInfoCount = 1;
         deviceInfo.pQueueCreateInfos = &queueInfo;
         check(vkCreateDevice(physical_, &deviceInfo, nullptr, &device_), "vkCreateDevice");
-        vkGetDeviceQueue(device_, queueFamily_, 0, &queue_);
-
-        VkCommandPoolCreateInfo poolInfo{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
-        poolInfo.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
-        poolInfo.queueFamilyIndex = queueFamily_;
-        check(vkCreateCommandPool(device_, &poolInfo, nullptr, &commandPool_), "vkCreateCommandPool");
+        initDeviceState(0);
     } catch (...) {
         release();
         throw;
     }
 }
 
+Context::Context(const ExternalDevice& external) {
+    ownsDevice_ = false;
+    if (!external.instance || !external.physicalDevice || !external.device)
+        throw Error("ExternalDevice: instance, physicalDevice and device must all be set");
+    instance_ = external.instance;
+    physical_ = external.physicalDevice;
+    device_ = external.device;
+    try {
+        info_ = describe(physical_, 0);
+        if (!info_.suitable)
+            throw Error("The application's device (" + info_.name + ") cannot run vkmesh: " + info_.whyNot);
+        uint32_t n = 0;
+        vkGetPhysicalDeviceQueueFamilyProperties(physical_, &n, nullptr);
+        std::vector<VkQueueFamilyProperties> families(n);
+        vkGetPhysicalDeviceQueueFamilyProperties(physical_, &n, families.data());
+        if (external.queueFamily >= n || !(families[external.queueFamily].queueFlags & VK_QUEUE_COMPUTE_BIT))
+            throw Error("ExternalDevice: queue family " + std::to_string(external.queueFamily) + " of " + info_.name +
+                        " does not exist or cannot run compute shaders");
+        if (external.queueIndex >= families[external.queueFamily].queueCount)
+            throw Error("ExternalDevice: queue family " + std::to_string(external.queueFamily) + " has " +
+                        std::to_string(families[external.queueFamily].queueCount) + " queues, no index " +
+                        std::to_string(external.queueIndex));
+        queueFamily_ = external.queueFamily;
+        initDeviceState(external.queueIndex);
+    } catch (...) {
+        release();
+        throw;
+    }
+}
+
+void Context::initDeviceState(uint32_t queueIndex) {
+    vkGetPhysicalDeviceProperties(physical_, &properties_);
+    vkGetPhysicalDeviceMemoryProperties(physical_, &memoryProperties_);
+    uint32_t n = 0;
+    vkGetPhysicalDeviceQueueFamilyProperties(physical_, &n, nullptr);
+    std::vector<VkQueueFamilyProperties> families(n);
+    vkGetPhysicalDeviceQueueFamilyProperties(physical_, &n, families.data());
+    timestampValidBits_ = families[queueFamily_].timestampValidBits;
+    vkGetDeviceQueue(device_, queueFamily_, queueIndex, &queue_);
+    VkCommandPoolCreateInfo poolInfo{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
+    poolInfo.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
+    poolInfo.queueFamilyIndex = queueFamily_;
+    check(vkCreateCommandPool(device_, &poolInfo, nullptr, &commandPool_), "vkCreateCommandPool");
+}
+
+void Context::enableRequiredFeatures(VkPhysicalDeviceFeatures2& features, VkPhysicalDeviceVulkan12Features& f12) {
+    features.features.shaderInt64 = VK_TRUE;
+    f12.shaderBufferInt64Atomics = VK_TRUE;
+}
+
+DeviceInfo Context::describeDevice(VkPhysicalDevice device) { return describe(device, 0); }
+
+uint32_t Context::chooseQueueFamily(VkPhysicalDevice device) {
+    auto family = computeQueueFamily(device);
+    if (!family) throw Error("the device has no compute queue family");
+    return *family;
+}
+
 Context::~Context() { release(); }
 
 void Context::release() {
+    if (!ownsDevice_) {
+        // The application's objects: wait for vkmesh's own work only, destroy only what vkmesh created.
+        if (device_ && queue_) vkQueueWaitIdle(queue_);
+        if (device_ && commandPool_) vkDestroyCommandPool(device_, commandPool_, nullptr);
+        commandPool_ = VK_NULL_HANDLE;
+        device_ = VK_NULL_HANDLE;
+        instance_ = VK_NULL_HANDLE;
+        return;
+    }
     if (device_) {
         vkDeviceWaitIdle(device_);
         if (commandPool_) vkDestroyCommandPool(device_, commandPool_, nullptr);

@@ -27,15 +27,39 @@ struct DeviceInfo {
     std::string whyNot;       // what is missing when not suitable
 };
 
+// An application's own Vulkan objects, for running vkmesh on them instead of creating its own
+// (api/reconstructor.h). The application keeps owning them and destroys them after vkmesh. The device
+// must have been created with the features in enableRequiredFeatures() and a queue of `queueFamily`
+// that supports compute (and graphics, for vkmesh's renderer). vkmesh submits to that queue from the
+// thread that calls it: the application must not submit to the same VkQueue concurrently.
+struct ExternalDevice {
+    VkInstance instance = VK_NULL_HANDLE;
+    VkPhysicalDevice physicalDevice = VK_NULL_HANDLE;
+    VkDevice device = VK_NULL_HANDLE;
+    uint32_t queueFamily = 0;
+    uint32_t queueIndex = 0;
+};
+
 class Context {
 public:
     explicit Context(const ContextOptions& options = {});
+    // Runs on the application's device; creates only a command pool. Throws Error when the physical
+    // device lacks what vkmesh needs or the queue family cannot compute.
+    explicit Context(const ExternalDevice& external);
     ~Context();
     Context(const Context&) = delete;
     Context& operator=(const Context&) = delete;
 
     // Lists the physical devices and whether vkmesh can run on each.
     static std::vector<DeviceInfo> listDevices();
+    // Sets the features vkmesh needs in an application's VkDeviceCreateInfo chain (features.pNext must
+    // reach f12): shaderInt64 and shaderBufferInt64Atomics. Vulkan 1.2 instance and device required.
+    static void enableRequiredFeatures(VkPhysicalDeviceFeatures2& features, VkPhysicalDeviceVulkan12Features& f12);
+    // Whether the physical device can run vkmesh (DeviceInfo::whyNot says what is missing).
+    static DeviceInfo describeDevice(VkPhysicalDevice device);
+    // A compute queue family of the device, preferring one that also does graphics; throws if none.
+    static uint32_t chooseQueueFamily(VkPhysicalDevice device);
+    bool ownsDevice() const { return ownsDevice_; }
 
     VkInstance instance() const { return instance_; }
     VkPhysicalDevice physicalDevice() const { return physical_; }
@@ -60,7 +84,8 @@ public:
     size_t validationMessageCount() const;
 
 private:
-    void release();  // destroys the Vulkan objects (also on a failed construction)
+    void release();  // destroys the Vulkan objects it owns (also on a failed construction)
+    void initDeviceState(uint32_t queueIndex);   // queue, properties, command pool of the chosen device
     static VKAPI_ATTR VkBool32 VKAPI_CALL debugCallback(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
                                                         VkDebugUtilsMessageTypeFlagsEXT types,
                                                         const VkDebugUtilsMessengerCallbackDataEXT* data,
@@ -78,6 +103,7 @@ private:
     uint32_t timestampValidBits_ = 0;
     DeviceInfo info_;
     bool validation_ = false;
+    bool ownsDevice_ = true;
 
     mutable std::mutex messagesMutex_;
     std::vector<std::string> messages_;

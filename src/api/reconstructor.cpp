@@ -1,0 +1,44 @@
+#include "api/reconstructor.h"
+
+namespace vkmesh {
+
+namespace {
+ReconstructorOptions checked(ReconstructorOptions options) {
+    if (options.volume.meshMode != gpu::MeshMode::Incremental)
+        throw Error("Reconstructor keeps the incremental mesh: options.volume.meshMode must be Incremental");
+    options.volume.publishMesh = true;
+    options.volume.trackDeltas = options.trackDeltas;
+    return options;
+}
+}  // namespace
+
+Reconstructor::Reconstructor(const ReconstructorOptions& options)
+    : context_(std::make_unique<vk::Context>(options.device)), options_(checked(options)) {}
+
+Reconstructor::Reconstructor(const vk::ExternalDevice& device, const ReconstructorOptions& options)
+    : context_(std::make_unique<vk::Context>(device)), options_(checked(options)) {}
+
+// The volume (its buffers) goes before the context (its command pool, and the device when owned).
+Reconstructor::~Reconstructor() { volume_.reset(); }
+
+gpu::FrameReport Reconstructor::integrate(const DepthImage& depth, const Intrinsics& intrinsics, const Pose& cameraToWorld,
+                                          const vk::SubmitSync& sync) {
+    if (!volume_) {
+        if (depth.width <= 0 || depth.height <= 0) throw Error("the first depth image is empty");
+        gpu::GpuVolumeConfig config = options_.volume;
+        config.imageWidth = depth.width;
+        config.imageHeight = depth.height;
+        volume_ = std::make_unique<gpu::GpuVolume>(*context_, config);
+    }
+    gpu::FrameReport report = volume_->integrate(depth, intrinsics, cameraToWorld, sync);
+    lastDelta_ = report.delta;
+    return report;
+}
+
+gpu::MeshBuffers Reconstructor::meshBuffers() const { return volume_ ? volume_->meshBuffers() : gpu::MeshBuffers{}; }
+
+gpu::ExportedMesh Reconstructor::downloadMesh() { return volume_ ? volume_->exportMesh() : gpu::ExportedMesh{}; }
+
+uint32_t Reconstructor::framesIntegrated() const { return volume_ ? volume_->framesIntegrated() : 0; }
+
+}  // namespace vkmesh

@@ -1,0 +1,88 @@
+// vkmesh's embedding API: one object that fuses depth frames into the TSDF and keeps the persistent
+// mesh in GPU buffers that the application draws directly.
+//
+//   vkmesh::Reconstructor rec(vkmesh::vk::ExternalDevice{instance, physicalDevice, device, queueFamily});
+//   for each frame:
+//       rec.integrate(depth, intrinsics, cameraToWorld);     // returns when the GPU has finished the frame
+//       vkmesh::gpu::MeshBuffers mesh = rec.meshBuffers();    // handles may change from frame to frame
+//       // in the application's command buffer, on the same queue family:
+//       vkmesh::Reconstructor::recordMeshReadBarrier(cmd);
+//       vkCmdBindVertexBuffers(cmd, 0, 1, &mesh.vertices, &zero);      // stride MeshBuffers::kStride
+//       vkCmdBindIndexBuffer(cmd, mesh.indices, 0, VK_INDEX_TYPE_UINT32);
+//       vkCmdDrawIndexedIndirect(cmd, mesh.drawIndirect, mesh.drawIndirectOffset, 1, 0);
+//
+// Synchronisation contract (checked by the tests with synchronisation validation on):
+//  1. Before the application reads the mesh buffers: integrate() has returned (vkmesh waited for its own
+//     submission), and the application's command buffer records recordMeshReadBarrier() before the
+//     reads. That barrier covers vkmesh's earlier submissions to the same queue; for another queue of the
+//     same family, pass a semaphore in `sync.signal` and wait on it at VK_PIPELINE_STAGE_VERTEX_INPUT_BIT.
+//  2. Before the next integrate(): the application's reads of the buffers must be ordered before it:
+//     either they were submitted to the same queue earlier (vkmesh's frame starts with an execution
+//     barrier after all prior commands), or the application waited for them (fence), or it passes a
+//     semaphore its reads signalled in `sync.wait` (with its stage in `sync.waitStages`).
+//  3. The buffers belong to vkmesh: never write them; their handles are valid until the next call to
+//     integrate(), downloadMesh() or the destructor.
+// All calls come from one thread at a time; vkmesh submits to the queue it was given, so the application
+// must not submit to that same VkQueue from another thread during a call.
+#pragma once
+
+#include <memory>
+
+#include "core/mesh_delta.h"
+#include "core/types.h"
+#include "gpu/gpu_volume.h"
+#include "vk/commands.h"
+#include "vk/context.h"
+
+namespace vkmesh {
+
+struct ReconstructorOptions {
+    // Voxel size, truncation, capacities, ... (GpuVolumeConfig). The image size is taken from the first
+    // frame; publishMesh is always on; the mesh mode must be Incremental.
+    gpu::GpuVolumeConfig volume;
+    // Report each frame's mesh changes (lastDelta(), docs/DELTAS.md).
+    bool trackDeltas = false;
+    // For the constructor that creates its own Vulkan device: which device, validation layer.
+    vk::ContextOptions device;
+};
+
+class Reconstructor {
+public:
+    // Creates its own Vulkan instance and device (the first suitable device unless options.device says).
+    explicit Reconstructor(const ReconstructorOptions& options = {});
+    // Runs on the application's instance, device and queue family (see vk::ExternalDevice for the
+    // features the device must have enabled). Throws Error naming what is missing.
+    explicit Reconstructor(const vk::ExternalDevice& device, const ReconstructorOptions& options = {});
+    ~Reconstructor();
+    Reconstructor(const Reconstructor&) = delete;
+    Reconstructor& operator=(const Reconstructor&) = delete;
+
+    // Fuses one depth image (metres, 0 = no measurement) seen from `cameraToWorld`, updates the mesh and
+    // compacts it into meshBuffers(). All frames must have the size of the first. Capacity problems are
+    // in the report's warnings (nothing already fused is lost). See the contract above for `sync`.
+    gpu::FrameReport integrate(const DepthImage& depth, const Intrinsics& intrinsics, const Pose& cameraToWorld,
+                               const vk::SubmitSync& sync = {});
+
+    // The compacted mesh of the last frame (empty handles before the first).
+    gpu::MeshBuffers meshBuffers() const;
+    // The barrier an application records before reading meshBuffers() (contract, point 1).
+    static void recordMeshReadBarrier(VkCommandBuffer cmd) { gpu::recordMeshReadBarrier(cmd); }
+
+    // The mesh copied to the host (for saving it; a renderer does not need this).
+    gpu::ExportedMesh downloadMesh();
+    // The last frame's changes (trackDeltas), empty otherwise.
+    const MeshDelta& lastDelta() const { return lastDelta_; }
+    uint32_t framesIntegrated() const;
+
+    const vk::Context& context() const { return *context_; }
+    // The data structure itself, for what the facade does not cover; nullptr before the first frame.
+    gpu::GpuVolume* volume() { return volume_.get(); }
+
+private:
+    std::unique_ptr<vk::Context> context_;
+    ReconstructorOptions options_;
+    std::unique_ptr<gpu::GpuVolume> volume_;
+    MeshDelta lastDelta_;
+};
+
+}  // namespace vkmesh
