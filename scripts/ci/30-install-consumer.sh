@@ -1,0 +1,43 @@
+#!/usr/bin/env bash
+# CI job: vkmesh as an installed package. Builds the library without tests, `cmake --install`s it into a
+# temporary prefix, checks what was installed (no tests, no paths into this checkout), then builds
+# examples/consumer against it with find_package(vkmesh) and runs it on lavapipe with validation on.
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+scripts/install_deps.sh
+
+src="$PWD"
+prefix="$(mktemp -d /tmp/vkmesh-install.XXXXXX)"
+trap 'rm -rf "$prefix"' EXIT
+jobs="$(nproc)"
+
+cmake -S . -B build-install -DCMAKE_BUILD_TYPE=Release -DVKMESH_BUILD_TESTS=OFF >/dev/null
+cmake --build build-install -j"$jobs"
+cmake --install build-install --prefix "$prefix"
+
+echo "30-install-consumer: checking the installed tree in $prefix"
+# Tests must never be installed (tests/ has no install rules; this catches one added by mistake).
+if grep -E '/(test_[^/]*|tests/[^/]*|libgtest[^/]*)$' build-install/install_manifest.txt; then
+  echo "error: the install step installed test files (above)" >&2
+  exit 1
+fi
+# The package must be relocatable: no text file (CMake files, headers) may name this checkout or its build
+# directories. Binaries are skipped (-I).
+if grep -rIl -F -e "$src" "$prefix"; then
+  echo "error: installed files (above) hold absolute paths into the source/build tree $src:" >&2
+  grep -rIn -F -e "$src" "$prefix" | head -20 >&2
+  exit 1
+fi
+for f in include/vkmesh/vkmesh.h include/vkmesh/shared_layout.h bin/vkmesh; do
+  [[ -e "$prefix/$f" ]] || { echo "error: $f was not installed" >&2; exit 1; }
+done
+config="$(find "$prefix" -name vkmeshConfig.cmake)"
+[[ -n "$config" ]] || { echo "error: vkmeshConfig.cmake was not installed" >&2; exit 1; }
+
+# The consumer sees the package only through CMAKE_PREFIX_PATH, never this source tree.
+rm -rf build-consumer
+cmake -S examples/consumer -B build-consumer -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH="$prefix" >/dev/null
+cmake --build build-consumer -j"$jobs"
+VKMESH_VALIDATION=1 build-consumer/vkmesh_consumer
+"$prefix/bin/vkmesh" --help >/dev/null
+echo "30-install-consumer: OK"

@@ -1,0 +1,18 @@
+// The one header a program using vkmesh needs (installed as include/vkmesh/vkmesh.h; with
+// find_package(vkmesh) and vkmesh::vkmesh linked, `#include <vkmesh.h>`). It pulls in the public pieces:
+//   vk::Context                   Vulkan instance/device (validation with VKMESH_VALIDATION=1)
+//   gpu::GpuVolume                the TSDF volume: integrate depth frames, export the mesh
+//   render::MeshRenderer          offscreen pictures of a mesh
+//   Dataset, readPly/writePly     depth sequences on disk (TUM, ICL-NUIM, Redwood, 7-Scenes), meshes
+//   synth::SyntheticScene         synthetic depth with exact ground truth
+// The other installed headers (core/, cpu/, eval/, ...) are the internals these include, or tools;
+// they may change between versions.
+#pragma once
+
+#include "core/types.h"
+#include "gpu/gpu_volume.h"
+#include "io/dataset.h"
+#include "io/ply.h"
+#include "render/mesh_renderer.h"
+#include "synth/synthetic_scene.h"
+#include "vk/context.h"
