@@ -1,5 +1,6 @@
 // The one header a program using vkmesh needs (installed as include/vkmesh/vkmesh.h; with
 // find_package(vkmesh) and vkmesh::vkmesh linked, `#include <vkmesh.h>`). It pulls in the public pieces:
+//   Reconstructor                 the embedding API: fuse frames, draw the mesh from its GPU buffers
 //   vk::Context                   Vulkan instance/device (validation with VKMESH_VALIDATION=1)
 //   gpu::GpuVolume                the TSDF volume: integrate depth frames, export the mesh
 //   render::MeshRenderer          offscreen pictures of a mesh
@@ -9,8 +10,11 @@
 // they may change between versions.
 #pragma once
 
+#include "api/reconstructor.h"
+#include "core/mesh_delta.h"
 #include "core/types.h"
 #include "gpu/gpu_volume.h"
+#include "io/delta_stream.h"
 #include "io/dataset.h"
 #include "io/ply.h"
 #include "render/mesh_renderer.h"
