@@ -20,8 +20,6 @@ uint32_t nextPowerOfTwo(uint32_t v) {
     return p;
 }
 
-constexpr uint32_t kInitialDeltaRecords = 1u << 14;
-
 std::vector<VkDescriptorType> descriptorTypes() {
     std::vector<VkDescriptorType> types(BINDING_COUNT, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER);
     types[BINDING_PARAMS] = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER;
@@ -67,6 +65,7 @@ GpuVolumeConfig resolved(GpuVolumeConfig c) {
     if (c.meshMode == MeshMode::Baseline) c.vertexCapacity = c.chunkCapacity = 1024;   // unused: keep them small
     if (!(c.refineEpsilonVoxels >= 0.0f && c.refineEpsilonVoxels <= 1.0f))
         throw Error("refinement epsilon " + std::to_string(c.refineEpsilonVoxels) + " voxels must be in [0, 1]");
+    if (c.deltaRecordCapacity == 0) throw Error("delta record capacity must be at least 1");
     if (c.retypeCapacity < 1024) throw Error("retype capacity " + std::to_string(c.retypeCapacity) + " must be >= 1024");
     if (c.vertexCapacity < 64 || c.vertexCapacity >= CLAIMED_SLOT)
         throw Error("vertex capacity " + std::to_string(c.vertexCapacity) + " must be in [64, 2^32 - 2)");
@@ -187,14 +186,14 @@ GpuVolume::GpuVolume(const vk::Context& context, const GpuVolumeConfig& config)
         prevVertices_ = deltaBuffer(vertices_.size(), 0, "vertex heap shadow", DELTA_BINDING_PREV_VERTICES);
         prevChunks_ = deltaBuffer(chunkTriangles_.size(), 0, "triangle chunk shadow", DELTA_BINDING_PREV_CHUNKS);
         deltaState_ = deltaBuffer(sizeof(DeltaState), VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT, "delta state", DELTA_BINDING_STATE);
-        deltaVertexRecords_ = deltaBuffer(kInitialDeltaRecords * sizeof(DeltaVertexRecord), 0, "vertex delta records", DELTA_BINDING_VERTEX_RECORDS);
-        deltaTriangleRecords_ = deltaBuffer(kInitialDeltaRecords * sizeof(DeltaTriangleRecord), 0, "triangle delta records", DELTA_BINDING_TRIANGLE_RECORDS);
+        deltaVertexRecords_ = deltaBuffer(c.deltaRecordCapacity * sizeof(DeltaVertexRecord), 0, "vertex delta records", DELTA_BINDING_VERTEX_RECORDS);
+        deltaTriangleRecords_ = deltaBuffer(c.deltaRecordCapacity * sizeof(DeltaTriangleRecord), 0, "triangle delta records", DELTA_BINDING_TRIANGLE_RECORDS);
         deltaLayout_->bind(DELTA_BINDING_COUNTERS, counters_);
         deltaLayout_->bind(DELTA_BINDING_VERTICES, vertices_);
         deltaLayout_->bind(DELTA_BINDING_CHUNKS, chunkTriangles_);
         deltaStateReadback_ = vk::Buffer(context, sizeof(DeltaState), VK_BUFFER_USAGE_TRANSFER_DST_BIT, vk::MemoryUse::Readback, "delta state readback");
         DeltaState state{};
-        state.vertexRecordCapacity = state.triangleRecordCapacity = kInitialDeltaRecords;
+        state.vertexRecordCapacity = state.triangleRecordCapacity = c.deltaRecordCapacity;
         vk::uploadToBuffer(context, deltaState_, &state, sizeof(state));
         // The shadows start as an empty mesh: every vertex dead, every triangle slot empty.
         cmd = recorder_.begin();

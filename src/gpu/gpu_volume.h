@@ -53,6 +53,7 @@ struct GpuVolumeConfig {
     // Report every frame's mesh changes (FrameReport::delta, docs/DELTAS.md). Incremental mode only; costs
     // a shadow copy of the vertex heap and the triangle chunks, and one pass over each per frame.
     bool trackDeltas = false;
+    uint32_t deltaRecordCapacity = 1u << 14;   // initial size of each delta record list (grown on demand)
     int imageWidth = 640, imageHeight = 480;
 };
 

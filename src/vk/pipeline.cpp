@@ -87,7 +87,8 @@ ComputePipeline::ComputePipeline(const Context& context, const BindingLayout& la
     VkSpecializationInfo spec{1, &entry, sizeof(uint32_t), specialization ? &*specialization : nullptr};
     if (specialization) {
         info.stage.pSpecializationInfo = &spec;
-        name_ += "[" + std::to_string(*specialization) + "]";
+        // Appended piece by piece: GCC 12 warns falsely (-Wrestrict) on "[" + std::string + "]".
+        name_.append("[").append(std::to_string(*specialization)).append("]");
     }
     info.layout = layout.pipelineLayout();
     VkResult r = vkCreateComputePipelines(context.device(), VK_NULL_HANDLE, 1, &info, nullptr, &pipeline_);

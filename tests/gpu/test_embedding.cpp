@@ -1,0 +1,293 @@
+// The embedding API (api/reconstructor.h): vkmesh on a device the application created and owns, the mesh
+// drawn straight from vkmesh's GPU buffers (zero copy), under the validation layer with synchronisation
+// validation on. The application side here is raw Vulkan, as a renderer embedding vkmesh would write it.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "api/reconstructor.h"
+#include "core/mesh_analysis.h"
+#include "gpu_fixture.h"
+#include "render/mesh_renderer.h"
+#include "synth/synthetic_scene.h"
+#include "test_support.h"
+#include "vk/buffer.h"
+#include "vk/check.h"
+#include "vk/commands.h"
+
+namespace vkmesh {
+namespace {
+
+constexpr int kWidth = 160, kHeight = 120;
+
+// What an application owns: instance (with the validation layer and a messenger of its own), device,
+// queue family. vkmesh only borrows them.
+class AppDevice {
+public:
+    AppDevice() {
+        VkApplicationInfo app{VK_STRUCTURE_TYPE_APPLICATION_INFO};
+        app.pApplicationName = "vkmesh embedding test";
+        app.apiVersion = VK_API_VERSION_1_2;
+        const char* layers[] = {"VK_LAYER_KHRONOS_validation"};
+        const char* extensions[] = {VK_EXT_DEBUG_UTILS_EXTENSION_NAME, VK_EXT_VALIDATION_FEATURES_EXTENSION_NAME};
+        VkValidationFeatureEnableEXT enables[] = {VK_VALIDATION_FEATURE_ENABLE_SYNCHRONIZATION_VALIDATION_EXT};
+        VkValidationFeaturesEXT features{VK_STRUCTURE_TYPE_VALIDATION_FEATURES_EXT};
+        features.enabledValidationFeatureCount = 1;
+        features.pEnabledValidationFeatures = enables;
+        VkInstanceCreateInfo info{VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO};
+        info.pNext = &features;
+        info.pApplicationInfo = &app;
+        info.enabledLayerCount = 1;
+        info.ppEnabledLayerNames = layers;
+        info.enabledExtensionCount = 2;
+        info.ppEnabledExtensionNames = extensions;
+        vk::check(vkCreateInstance(&info, nullptr, &instance), "vkCreateInstance");
+
+        VkDebugUtilsMessengerCreateInfoEXT messengerInfo{VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CREATE_INFO_EXT};
+        messengerInfo.messageSeverity = VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT;
+        messengerInfo.messageType = VK_DEBUG_UTILS_MESSAGE_TYPE_GENERAL_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT |
+                                    VK_DEBUG_UTILS_MESSAGE_TYPE_PERFORMANCE_BIT_EXT;
+        messengerInfo.pfnUserCallback = &AppDevice::onMessage;
+        messengerInfo.pUserData = this;
+        auto create = reinterpret_cast<PFN_vkCreateDebugUtilsMessengerEXT>(vkGetInstanceProcAddr(instance, "vkCreateDebugUtilsMessengerEXT"));
+        vk::check(create(instance, &messengerInfo, nullptr, &messenger), "vkCreateDebugUtilsMessengerEXT");
+
+        uint32_t n = 0;
+        vkEnumeratePhysicalDevices(instance, &n, nullptr);
+        std::vector<VkPhysicalDevice> devices(n);
+        vkEnumeratePhysicalDevices(instance, &n, devices.data());
+        for (VkPhysicalDevice d : devices)
+            if (vk::Context::describeDevice(d).suitable) {
+                physical = d;
+                break;
+            }
+        if (!physical) throw Error("no Vulkan device can run vkmesh");
+        queueFamily = vk::Context::chooseQueueFamily(physical);
+        float priority = 1.0f;
+        VkDeviceQueueCreateInfo queueInfo{VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};
+        queueInfo.queueFamilyIndex = queueFamily;
+        queueInfo.queueCount = 1;
+        queueInfo.pQueuePriorities = &priority;
+        VkPhysicalDeviceVulkan12Features f12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
+        VkPhysicalDeviceFeatures2 deviceFeatures{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2};
+        deviceFeatures.pNext = &f12;
+        vk::Context::enableRequiredFeatures(deviceFeatures, f12);
+        VkDeviceCreateInfo deviceInfo{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO};
+        deviceInfo.pNext = &deviceFeatures;
+        deviceInfo.queueCreateInfoCount = 1;
+        deviceInfo.pQueueCreateInfos = &queueInfo;
+        vk::check(vkCreateDevice(physical, &deviceInfo, nullptr, &device), "vkCreateDevice");
+    }
+    ~AppDevice() {
+        vkDestroyDevice(device, nullptr);
+        auto destroy = reinterpret_cast<PFN_vkDestroyDebugUtilsMessengerEXT>(vkGetInstanceProcAddr(instance, "vkDestroyDebugUtilsMessengerEXT"));
+        destroy(instance, messenger, nullptr);
+        vkDestroyInstance(instance, nullptr);
+    }
+    vk::ExternalDevice external() const { return {instance, physical, device, queueFamily, 0}; }
+    std::vector<std::string> takeMessages() {
+        std::lock_guard<std::mutex> lock(mutex);
+        return std::exchange(messages, {});
+    }
+
+    VkInstance instance = VK_NULL_HANDLE;
+    VkDebugUtilsMessengerEXT messenger = VK_NULL_HANDLE;
+    VkPhysicalDevice physical = VK_NULL_HANDLE;
+    VkDevice device = VK_NULL_HANDLE;
+    uint32_t queueFamily = 0;
+
+private:
+    static VKAPI_ATTR VkBool32 VKAPI_CALL onMessage(VkDebugUtilsMessageSeverityFlagBitsEXT, VkDebugUtilsMessageTypeFlagsEXT,
+                                                    const VkDebugUtilsMessengerCallbackDataEXT* data, void* user) {
+        auto* self = static_cast<AppDevice*>(user);
+        std::lock_guard<std::mutex> lock(self->mutex);
+        self->messages.push_back(data && data->pMessage ? data->pMessage : "");
+        return VK_FALSE;
+    }
+    std::mutex mutex;
+    std::vector<std::string> messages;
+};
+
+ReconstructorOptions smallRoomOptions() {
+    ReconstructorOptions o;
+    o.volume.params.voxelSize = 0.05f;
+    o.volume.params.maxDepth = 6.0f;
+    o.volume.blockCapacity = 4096;
+    o.volume.vertexCapacity = 1u << 17;
+    o.volume.chunkCapacity = 1u << 17;
+    return o;
+}
+
+struct Frame {
+    DepthImage depth;
+    Intrinsics intrinsics;
+    Pose pose;
+};
+
+std::vector<Frame> roomFrames(size_t count) {
+    static const synth::SyntheticScene scene = synth::SyntheticScene::defaultRoom();
+    Intrinsics intr = synth::kinectIntrinsics(kWidth, kHeight);
+    auto poses = synth::cameraPath(24);
+    std::vector<Frame> frames;
+    for (size_t i = 0; i < count; ++i) frames.push_back({scene.renderDepth(intr, poses[i % poses.size()], {}), intr, poses[i % poses.size()]});
+    return frames;
+}
+
+// The host copy of the mesh, as a Mesh the renderer draws through its upload path.
+Mesh toMesh(const gpu::ExportedMesh& exported) {
+    Mesh mesh;
+    for (const auto& v : exported.vertices) {
+        mesh.positions.emplace_back(v.px, v.py, v.pz);
+        mesh.normals.emplace_back(v.nx, v.ny, v.nz);
+    }
+    mesh.triangles = exported.triangles;
+    return mesh;
+}
+
+// Reads the VkDrawIndexedIndirectCommand the way an application could: a copy on the device.
+VkDrawIndexedIndirectCommand readDrawCommand(const vk::Context& context, const gpu::MeshBuffers& mesh) {
+    vk::Buffer host(context, sizeof(VkDrawIndexedIndirectCommand), VK_BUFFER_USAGE_TRANSFER_DST_BIT, vk::MemoryUse::Readback, "draw command");
+    vk::CommandRecorder recorder(context);
+    VkCommandBuffer cmd = recorder.begin();
+    VkMemoryBarrier toTransfer{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+    toTransfer.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_TRANSFER_WRITE_BIT;
+    toTransfer.dstAccessMask = VK_ACCESS_TRANSFER_READ_BIT;
+    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT, 0, 1,
+                         &toTransfer, 0, nullptr, 0, nullptr);
+    VkBufferCopy region{mesh.drawIndirectOffset, 0, sizeof(VkDrawIndexedIndirectCommand)};
+    vkCmdCopyBuffer(cmd, mesh.drawIndirect, host.handle(), 1, &region);
+    VkMemoryBarrier toHost{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+    toHost.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
+    toHost.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
+    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &toHost, 0, nullptr, 0, nullptr);
+    recorder.submitAndWait();
+    host.invalidate();
+    VkDrawIndexedIndirectCommand out{};
+    std::memcpy(&out, host.mapped(), sizeof(out));
+    return out;
+}
+
+size_t differingPixels(const render::Image& a, const render::Image& b) {
+    size_t n = 0;
+    for (size_t i = 0; i + 3 < a.rgba.size(); i += 4)
+        n += std::memcmp(&a.rgba[i], &b.rgba[i], 3) != 0;
+    return n;
+}
+
+size_t coveredPixels(const render::Image& image) {
+    size_t n = 0;
+    for (int y = 0; y < image.height; ++y)
+        for (int x = 0; x < image.width; ++x) {
+            const uint8_t* p = image.pixel(x, y);
+            n += !(p[0] == render::kBackground[0] && p[1] == render::kBackground[1] && p[2] == render::kBackground[2]);
+        }
+    return n;
+}
+
+TEST(Embedding, AppOwnedDeviceDrawsTheMeshFromVkmeshBuffers) {
+    AppDevice app;
+    {
+        Reconstructor reconstructor(app.external(), smallRoomOptions());
+        EXPECT_FALSE(reconstructor.context().ownsDevice());
+        EXPECT_EQ(reconstructor.meshBuffers().vertices, VkBuffer(VK_NULL_HANDLE)) << "no mesh before the first frame";
+        // The application's renderer, on the same device and queue family.
+        vk::Context renderContext(app.external());
+        render::MeshRenderer renderer(renderContext);
+        render::RenderOptions view;
+        view.width = 160;
+        view.height = 120;
+
+        size_t frameIndex = 0;
+        uint32_t lastTriangles = 0;
+        for (const Frame& f : roomFrames(8)) {
+            gpu::FrameReport report = reconstructor.integrate(f.depth, f.intrinsics, f.pose);
+            EXPECT_TRUE(report.warnings.empty());
+            ++frameIndex;
+            gpu::MeshBuffers buffers = reconstructor.meshBuffers();
+            ASSERT_NE(buffers.vertices, VkBuffer(VK_NULL_HANDLE));
+            EXPECT_EQ(buffers.frame, frameIndex);
+            // The indirect command the GPU wrote matches the counts, and the counts match a host download.
+            VkDrawIndexedIndirectCommand draw = readDrawCommand(renderContext, buffers);
+            EXPECT_EQ(draw.indexCount, 3 * buffers.triangleCount);
+            EXPECT_EQ(draw.instanceCount, 1u);
+            EXPECT_GT(buffers.triangleCount, lastTriangles / 2) << "frame " << frameIndex;
+            lastTriangles = buffers.triangleCount;
+
+            if (frameIndex % 4 != 0) continue;
+            // Zero copy: the picture drawn from vkmesh's buffers equals the one drawn from a host copy
+            // uploaded by the renderer (same vertices, same order, same indices). The host copy also
+            // gives the test its view (an application would know its scene's extent).
+            gpu::ExportedMesh host = reconstructor.downloadMesh();
+            EXPECT_EQ(host.triangles.size(), buffers.triangleCount);
+            EXPECT_EQ(host.vertices.size(), buffers.vertexCount);
+            Mesh hostMesh = toMesh(host);
+            Eigen::Vector3f lo = hostMesh.positions[0], hi = lo;
+            for (const auto& p : hostMesh.positions) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+            view.camera = render::defaultCamera(lo, hi, view.width, view.height);
+            buffers = reconstructor.meshBuffers();   // downloadMesh() may have reallocated them
+            render::Image fromGpu = renderer.render(buffers, lo, hi, view);
+            render::Image fromHost = renderer.render(hostMesh, view);
+            EXPECT_GT(coveredPixels(fromGpu), size_t(view.width * view.height / 25)) << "frame " << frameIndex;
+            EXPECT_EQ(differingPixels(fromGpu, fromHost), 0u) << "frame " << frameIndex;
+        }
+        EXPECT_GT(lastTriangles, 1000u);
+    }
+    // Everything vkmesh created is gone; the application's device is still usable and nobody complained.
+    EXPECT_EQ(vkDeviceWaitIdle(app.device), VK_SUCCESS);
+    auto messages = app.takeMessages();
+    EXPECT_TRUE(messages.empty()) << messages.size() << " validation messages, first: " << messages.front();
+}
+
+TEST(Embedding, ExternalDeviceErrorsNameWhatIsWrong) {
+    vk::ExternalDevice none;
+    try {
+        vk::Context context(none);
+        FAIL() << "an empty ExternalDevice was accepted";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("instance, physicalDevice and device"), std::string::npos) << e.what();
+    }
+    AppDevice app;
+    vk::ExternalDevice badFamily = app.external();
+    badFamily.queueFamily = 99;
+    try {
+        Reconstructor reconstructor(badFamily);
+        FAIL() << "queue family 99 was accepted";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("queue family 99"), std::string::npos) << e.what();
+    }
+    EXPECT_TRUE(app.takeMessages().empty());
+}
+
+class OwnDevice : public test::GpuTest {};
+
+TEST_F(OwnDevice, PublishedMeshEqualsTheExportAndSurvivesARebuild) {
+    gpu::GpuVolumeConfig config = smallRoomOptions().volume;
+    config.imageWidth = kWidth;
+    config.imageHeight = kHeight;
+    config.publishMesh = true;
+    gpu::GpuVolume volume(context(), config);
+    for (const Frame& f : roomFrames(6)) volume.integrate(f.depth, f.intrinsics, f.pose);
+    gpu::MeshBuffers published = volume.meshBuffers();
+    gpu::ExportedMesh exported = volume.exportMesh();
+    EXPECT_EQ(published.triangleCount, exported.triangles.size());
+    EXPECT_EQ(published.vertexCount, exported.vertices.size());
+    auto before = canonicalTriangles(toMesh(exported));
+    volume.rebuildMesh();
+    gpu::MeshBuffers rebuilt = volume.meshBuffers();
+    EXPECT_EQ(rebuilt.triangleCount, published.triangleCount);
+    EXPECT_EQ(readDrawCommand(context(), rebuilt).indexCount, 3 * rebuilt.triangleCount);
+    EXPECT_EQ(countTriangleMismatches(before, canonicalTriangles(toMesh(volume.exportMesh()))), 0u);
+}
+
+TEST_F(OwnDevice, PublishingNeedsTheIncrementalMesh) {
+    gpu::GpuVolumeConfig config;
+    config.meshMode = gpu::MeshMode::Baseline;
+    config.publishMesh = true;
+    EXPECT_THROW(gpu::GpuVolume(context(), config), Error);
+}
+
+}  // namespace
+}  // namespace vkmesh
