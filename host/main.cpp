@@ -16,11 +16,15 @@
 #include <cstdio>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <map>
 #include <numeric>
 #include <optional>
 
 #include "core/mesh_analysis.h"
+#include "core/mesh_delta.h"
+#include "io/delta_stream.h"
+#include "render/mesh_renderer.h"
 #include "eval_command.h"
 #include "render_command.h"
 #include "core/refinement.h"
@@ -140,6 +144,12 @@ struct FuseArgs {
     int device = -1;
     bool validation = false;
     bool quiet = false;
+    // Pictures while fusing (drawn from the GPU mesh buffers) and the mesh-delta stream.
+    uint32_t renderEvery = 0;
+    std::string renderDir;
+    std::string renderView = "sensor";
+    std::string renderColor = "shade";
+    std::string deltasPath;
 };
 
 int commandFuse(const FuseArgs& args) {
@@ -165,7 +175,27 @@ int commandFuse(const FuseArgs& args) {
     config.chunkCapacity = args.chunks;
     config.imageWidth = intrinsics.width;
     config.imageHeight = intrinsics.height;
+    const bool rendering = args.renderEvery > 0;
+    if ((rendering || !args.deltasPath.empty()) && config.meshMode != gpu::MeshMode::Incremental)
+        throw Error("--render-every and --deltas need --mode incremental (the baseline keeps no mesh between frames)");
+    if (rendering && args.renderDir.empty()) throw Error("--render-every needs --render-dir");
+    config.publishMesh = rendering;
+    config.trackDeltas = !args.deltasPath.empty();
     gpu::GpuVolume volume(context, config);
+    std::optional<render::MeshRenderer> renderer;
+    render::RenderOptions renderOptions;
+    if (rendering) {
+        std::filesystem::create_directories(args.renderDir);
+        renderer.emplace(context);
+        renderOptions.width = intrinsics.width;
+        renderOptions.height = intrinsics.height;
+        renderOptions.color = render::parseColorMode(args.renderColor);
+    }
+    std::optional<DeltaStreamWriter> deltaStream;
+    if (!args.deltasPath.empty()) deltaStream.emplace(args.deltasPath);
+    size_t picturesWritten = 0;
+    // Near/far planes of the sensor view: everything the sensor can see lies within maxDepth of a camera.
+    Eigen::Vector3f seenMin = Eigen::Vector3f::Constant(std::numeric_limits<float>::max()), seenMax = -seenMin;
 
     const bool tty = isatty(STDERR_FILENO);
     std::map<std::string, std::vector<double>> stageMs, perFrame;
@@ -212,6 +242,29 @@ int commandFuse(const FuseArgs& args) {
         poolExhausted += report.counters.poolExhausted;
         touchedOverflow += report.counters.touchedCount > volume.config().touchedCapacity;
         for (const auto& w : report.warnings) warn("frame " + std::to_string(i) + ": " + w);
+        if (deltaStream) deltaStream->write(report.delta);
+        if (rendering) {
+            const Pose& pose = dataset->frame(i).cameraToWorld;
+            Eigen::Vector3f eye = pose.block<3, 1>(0, 3).cast<float>();
+            seenMin = seenMin.cwiseMin(eye - Eigen::Vector3f::Constant(args.data.maxDepth));
+            seenMax = seenMax.cwiseMax(eye + Eigen::Vector3f::Constant(args.data.maxDepth));
+        }
+        if (rendering && integrated % args.renderEvery == 0 && volume.meshBuffers().triangleCount > 0) {
+            Eigen::Vector3f lo = seenMin, hi = seenMax;
+            if (args.renderView == "sensor") {
+                renderOptions.camera = render::sensorCamera(dataset->frame(i).cameraToWorld, intrinsics);
+            } else {
+                // The overview frames the mesh built so far, so its bounds are read (one small download).
+                gpu::ExportedMesh sofar = volume.exportMesh();
+                lo = Eigen::Vector3f::Constant(std::numeric_limits<float>::max()), hi = -lo;
+                for (const auto& v : sofar.vertices) lo = lo.cwiseMin(Eigen::Vector3f(v.px, v.py, v.pz)), hi = hi.cwiseMax(Eigen::Vector3f(v.px, v.py, v.pz));
+                renderOptions.camera = render::defaultCamera(lo, hi, renderOptions.width, renderOptions.height);
+            }
+            char name[32];
+            std::snprintf(name, sizeof(name), "frame_%06zu.png", i);
+            render::writePng(std::filesystem::path(args.renderDir) / name, renderer->render(volume.meshBuffers(), lo, hi, renderOptions));
+            ++picturesWritten;
+        }
         if (!args.quiet && (tty || (i + 1) % 50 == 0 || i + 1 == dataset->size())) {
             std::fprintf(stderr, "%sframe %zu/%zu  blocks %u  %.1f ms/frame%s", tty ? "\r" : "", i + 1, dataset->size(),
                          report.counters.blocksInUse, frameWallMs.back(), tty ? "   " : "\n");
@@ -338,7 +391,27 @@ int commandFuse(const FuseArgs& args) {
               << "  GPU per frame (median): allocate " << median("allocate") << " ms, fuse " << median("fuse") << " ms, mesh "
               << median("mesh_total") << " ms; "
               << "wall " << statsOf(frameWallMs)["median"].get<double>() << " ms/frame\n";
+    if (rendering) std::cout << "  " << picturesWritten << " pictures (" << args.renderView << " view) -> " << args.renderDir << "\n";
+    if (deltaStream) std::cout << "  mesh deltas: " << deltaStream->bytesWritten() << " bytes -> " << args.deltasPath << "\n";
     if (!warnings.empty()) std::cout << "  " << warnings.size() << " warnings (see stderr)\n";
+    return 0;
+}
+
+// `vkmesh deltas`: what a remote viewer does with the stream: apply every frame, write the mesh it holds.
+int commandDeltas(const std::string& streamPath, const std::string& output, uint32_t untilFrame) {
+    MeshReplica replica;
+    size_t frames = 0, records = 0;
+    readDeltaStream(streamPath, [&](const MeshDelta& d) {
+        if (untilFrame && d.frame > untilFrame) return;
+        replica.apply(d);
+        ++frames;
+        records += d.vertices.size() + d.triangles.size();
+    });
+    Mesh mesh = replica.toMesh();
+    if (!output.empty()) writePly(output, mesh);
+    std::cout << "vkmesh deltas: " << frames << " frames, " << records << " records from " << streamPath << " -> mesh at frame "
+              << replica.lastFrame() << ": " << mesh.positions.size() << " vertices, " << mesh.triangles.size() << " triangles"
+              << (output.empty() ? "" : " -> " + output) << "\n";
     return 0;
 }
 
@@ -399,6 +472,21 @@ int main(int argc, char** argv) {
     fuse->add_option("--device", fuseArgs.device, "Vulkan device index (see `vkmesh devices`)");
     fuse->add_flag("--validation", fuseArgs.validation, "enable the Khronos validation layer (or VKMESH_VALIDATION=1)");
     fuse->add_flag("-q,--quiet", fuseArgs.quiet, "no progress line");
+    fuse->add_option("--render-every", fuseArgs.renderEvery, "write a picture of the mesh every N frames (drawn from the GPU buffers)")
+        ->check(CLI::PositiveNumber);
+    fuse->add_option("--render-dir", fuseArgs.renderDir, "folder for the --render-every pictures (frame_NNNNNN.png)");
+    fuse->add_option("--render-view", fuseArgs.renderView, "sensor: from the frame's camera; overview: framing the mesh so far")
+        ->check(CLI::IsMember({"sensor", "overview"}));
+    fuse->add_option("--render-color", fuseArgs.renderColor, "shade, normal or age (warm = new, cold = old)")
+        ->check(CLI::IsMember({"shade", "normal", "age"}));
+    fuse->add_option("--deltas", fuseArgs.deltasPath, "write every frame's mesh changes to this stream file (docs/DELTAS.md)");
+
+    auto* deltas = app.add_subcommand("deltas", "replay a mesh-delta stream as a remote viewer would and write the mesh it ends with");
+    std::string deltasIn, deltasOut;
+    uint32_t deltasUntil = 0;
+    deltas->add_option("STREAM", deltasIn, "stream written by fuse --deltas")->required();
+    deltas->add_option("-o,--output", deltasOut, "PLY mesh to write");
+    deltas->add_option("--until-frame", deltasUntil, "stop after this frame number (0 = all)");
 
     auto runEval = vkmesh::addEvalCommand(app);
     auto runRender = vkmesh::addRenderCommand(app);
@@ -416,6 +504,7 @@ int main(int argc, char** argv) {
         if (app.got_subcommand("fuse")) return commandFuse(fuseArgs);
         if (app.got_subcommand("eval")) return runEval();
         if (app.got_subcommand("render")) return runRender();
+        if (app.got_subcommand("deltas")) return commandDeltas(deltasIn, deltasOut, deltasUntil);
     } catch (const vkmesh::Error& e) {
         std::cerr << "vkmesh: error: " << e.what() << "\n";
         return 2;

@@ -95,6 +95,56 @@ TEST(Cli, ObjOutputByExtension) {
     fs::remove_all(out);
 }
 
+TEST(Cli, RenderEveryWritesPicturesFromTheSensorView) {
+    fs::path out = test::makeTempDir("cli_render_every");
+    CliRun r = runCli("fuse " + smallSequence().string() + " -o " + (out / "mesh.ply").string() + " --voxel 0.05 --render-every 2 " +
+                      "--render-dir " + (out / "png").string() + " --render-color age -q --validation");
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_EQ(r.err.find("validation"), std::string::npos) << r.err;
+    for (const char* name : {"frame_000001.png", "frame_000003.png", "frame_000005.png"}) {
+        cv::Mat image = cv::imread((out / "png" / name).string(), cv::IMREAD_COLOR);
+        ASSERT_FALSE(image.empty()) << name;
+        EXPECT_EQ(image.cols, 160);
+        EXPECT_EQ(image.rows, 120);
+        // The sensor looks at the room: most of the picture is mesh, not background.
+        int covered = 0;
+        for (int y = 0; y < image.rows; ++y)
+            for (int x = 0; x < image.cols; ++x) {
+                cv::Vec3b p = image.at<cv::Vec3b>(y, x);
+                covered += !(p[0] == 38 && p[1] == 38 && p[2] == 38);
+            }
+        EXPECT_GT(covered, image.cols * image.rows / 2) << name;
+    }
+    EXPECT_FALSE(fs::exists(out / "png" / "frame_000000.png"));
+    CliRun missingDir = runCli("fuse " + smallSequence().string() + " -o " + (out / "m.ply").string() + " --render-every 2 -q");
+    EXPECT_NE(missingDir.exitCode, 0);
+    EXPECT_NE(missingDir.err.find("--render-dir"), std::string::npos) << missingDir.err;
+    fs::remove_all(out);
+}
+
+TEST(Cli, DeltaStreamReplaysToTheSameMesh) {
+    fs::path out = test::makeTempDir("cli_deltas");
+    CliRun r = runCli("fuse " + smallSequence().string() + " -o " + (out / "mesh.ply").string() + " --voxel 0.05 --deltas " +
+                      (out / "mesh.deltas").string() + " -q --validation");
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    CliRun replay = runCli("deltas " + (out / "mesh.deltas").string() + " -o " + (out / "replay.ply").string());
+    ASSERT_EQ(replay.exitCode, 0) << replay.err;
+    Mesh fused = readPly(out / "mesh.ply"), replayed = readPly(out / "replay.ply");
+    EXPECT_EQ(replayed.positions.size(), fused.positions.size());
+    ASSERT_EQ(replayed.triangles.size(), fused.triangles.size());
+    EXPECT_GT(fused.triangles.size(), 1000u);
+    // Same vertices in the same order (both dense by heap index), hence the same triangles.
+    EXPECT_EQ(replayed.positions, fused.positions);
+    CliRun partial = runCli("deltas " + (out / "mesh.deltas").string() + " --until-frame 2");
+    EXPECT_EQ(partial.exitCode, 0) << partial.err;
+    EXPECT_NE(partial.out.find("mesh at frame 2"), std::string::npos) << partial.out;
+    CliRun baseline = runCli("fuse " + smallSequence().string() + " -o " + (out / "b.ply").string() + " --mode baseline --deltas " +
+                             (out / "b.deltas").string() + " -q");
+    EXPECT_NE(baseline.exitCode, 0);
+    EXPECT_NE(baseline.err.find("--mode incremental"), std::string::npos) << baseline.err;
+    fs::remove_all(out);
+}
+
 TEST(Cli, FramesJsonListsPosesAndIntrinsics) {
     fs::path out = test::makeTempDir("cli_frames");
     CliRun r = runCli("frames " + smallSequence().string() + " -o " + (out / "frames.json").string() + " --frames 4");
