@@ -17,99 +17,13 @@
 #include "vk/buffer.h"
 #include "vk/check.h"
 #include "vk/commands.h"
+#include "../../host/embed_example/app_device.h"
 
 namespace vkmesh {
 namespace {
 
 constexpr int kWidth = 160, kHeight = 120;
-
-// What an application owns: instance (with the validation layer and a messenger of its own), device,
-// queue family. vkmesh only borrows them.
-class AppDevice {
-public:
-    AppDevice() {
-        VkApplicationInfo app{VK_STRUCTURE_TYPE_APPLICATION_INFO};
-        app.pApplicationName = "vkmesh embedding test";
-        app.apiVersion = VK_API_VERSION_1_2;
-        const char* layers[] = {"VK_LAYER_KHRONOS_validation"};
-        const char* extensions[] = {VK_EXT_DEBUG_UTILS_EXTENSION_NAME, VK_EXT_VALIDATION_FEATURES_EXTENSION_NAME};
-        VkValidationFeatureEnableEXT enables[] = {VK_VALIDATION_FEATURE_ENABLE_SYNCHRONIZATION_VALIDATION_EXT};
-        VkValidationFeaturesEXT features{VK_STRUCTURE_TYPE_VALIDATION_FEATURES_EXT};
-        features.enabledValidationFeatureCount = 1;
-        features.pEnabledValidationFeatures = enables;
-        VkInstanceCreateInfo info{VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO};
-        info.pNext = &features;
-        info.pApplicationInfo = &app;
-        info.enabledLayerCount = 1;
-        info.ppEnabledLayerNames = layers;
-        info.enabledExtensionCount = 2;
-        info.ppEnabledExtensionNames = extensions;
-        vk::check(vkCreateInstance(&info, nullptr, &instance), "vkCreateInstance");
-
-        VkDebugUtilsMessengerCreateInfoEXT messengerInfo{VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CREATE_INFO_EXT};
-        messengerInfo.messageSeverity = VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT;
-        messengerInfo.messageType = VK_DEBUG_UTILS_MESSAGE_TYPE_GENERAL_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT |
-                                    VK_DEBUG_UTILS_MESSAGE_TYPE_PERFORMANCE_BIT_EXT;
-        messengerInfo.pfnUserCallback = &AppDevice::onMessage;
-        messengerInfo.pUserData = this;
-        auto create = reinterpret_cast<PFN_vkCreateDebugUtilsMessengerEXT>(vkGetInstanceProcAddr(instance, "vkCreateDebugUtilsMessengerEXT"));
-        vk::check(create(instance, &messengerInfo, nullptr, &messenger), "vkCreateDebugUtilsMessengerEXT");
-
-        uint32_t n = 0;
-        vkEnumeratePhysicalDevices(instance, &n, nullptr);
-        std::vector<VkPhysicalDevice> devices(n);
-        vkEnumeratePhysicalDevices(instance, &n, devices.data());
-        for (VkPhysicalDevice d : devices)
-            if (vk::Context::describeDevice(d).suitable) {
-                physical = d;
-                break;
-            }
-        if (!physical) throw Error("no Vulkan device can run vkmesh");
-        queueFamily = vk::Context::chooseQueueFamily(physical);
-        float priority = 1.0f;
-        VkDeviceQueueCreateInfo queueInfo{VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};
-        queueInfo.queueFamilyIndex = queueFamily;
-        queueInfo.queueCount = 1;
-        queueInfo.pQueuePriorities = &priority;
-        VkPhysicalDeviceVulkan12Features f12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
-        VkPhysicalDeviceFeatures2 deviceFeatures{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2};
-        deviceFeatures.pNext = &f12;
-        vk::Context::enableRequiredFeatures(deviceFeatures, f12);
-        VkDeviceCreateInfo deviceInfo{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO};
-        deviceInfo.pNext = &deviceFeatures;
-        deviceInfo.queueCreateInfoCount = 1;
-        deviceInfo.pQueueCreateInfos = &queueInfo;
-        vk::check(vkCreateDevice(physical, &deviceInfo, nullptr, &device), "vkCreateDevice");
-    }
-    ~AppDevice() {
-        vkDestroyDevice(device, nullptr);
-        auto destroy = reinterpret_cast<PFN_vkDestroyDebugUtilsMessengerEXT>(vkGetInstanceProcAddr(instance, "vkDestroyDebugUtilsMessengerEXT"));
-        destroy(instance, messenger, nullptr);
-        vkDestroyInstance(instance, nullptr);
-    }
-    vk::ExternalDevice external() const { return {instance, physical, device, queueFamily, 0}; }
-    std::vector<std::string> takeMessages() {
-        std::lock_guard<std::mutex> lock(mutex);
-        return std::exchange(messages, {});
-    }
-
-    VkInstance instance = VK_NULL_HANDLE;
-    VkDebugUtilsMessengerEXT messenger = VK_NULL_HANDLE;
-    VkPhysicalDevice physical = VK_NULL_HANDLE;
-    VkDevice device = VK_NULL_HANDLE;
-    uint32_t queueFamily = 0;
-
-private:
-    static VKAPI_ATTR VkBool32 VKAPI_CALL onMessage(VkDebugUtilsMessageSeverityFlagBitsEXT, VkDebugUtilsMessageTypeFlagsEXT,
-                                                    const VkDebugUtilsMessengerCallbackDataEXT* data, void* user) {
-        auto* self = static_cast<AppDevice*>(user);
-        std::lock_guard<std::mutex> lock(self->mutex);
-        self->messages.push_back(data && data->pMessage ? data->pMessage : "");
-        return VK_FALSE;
-    }
-    std::mutex mutex;
-    std::vector<std::string> messages;
-};
+using example::AppDevice;
 
 ReconstructorOptions smallRoomOptions() {
     ReconstructorOptions o;
@@ -188,7 +102,7 @@ size_t coveredPixels(const render::Image& image) {
 }
 
 TEST(Embedding, AppOwnedDeviceDrawsTheMeshFromVkmeshBuffers) {
-    AppDevice app;
+    AppDevice app(true);
     {
         Reconstructor reconstructor(app.external(), smallRoomOptions());
         EXPECT_FALSE(reconstructor.context().ownsDevice());
@@ -249,7 +163,7 @@ TEST(Embedding, ExternalDeviceErrorsNameWhatIsWrong) {
     } catch (const Error& e) {
         EXPECT_NE(std::string(e.what()).find("instance, physicalDevice and device"), std::string::npos) << e.what();
     }
-    AppDevice app;
+    AppDevice app(true);
     vk::ExternalDevice badFamily = app.external();
     badFamily.queueFamily = 99;
     try {
