@@ -16,7 +16,7 @@ namespace vkmesh {
 struct Mesh {
     std::vector<Eigen::Vector3f> positions;
     std::vector<Eigen::Vector3f> normals;          // empty, or one per vertex
-    std::vector<uint32_t> vertexAge;               // empty, or one per vertex (frame a vertex was last updated)
+    std::vector<uint32_t> vertexAge;               // empty, or one per vertex: frames since the vertex was created
     std::vector<std::array<uint32_t, 3>> triangles;  // vertex indices, counter-clockwise seen from outside
 };
 
