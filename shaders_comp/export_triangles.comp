@@ -1,23 +1,27 @@
 #version 460
-// Export, pass 2: every live triangle of every cube of the listed blocks, with its vertices' dense
-// indices, into one index buffer. One workgroup per block.
+// Export, pass 2: every live triangle, with its vertices' dense indices, into one index buffer. One
+// invocation per triangle slot of the chunks below their high water: a slot holds a triangle when its
+// first index is valid (mesh_triangulate keeps released chunks and unused slots empty), so neither the
+// cubes nor the hash need to be visited.
 #extension GL_GOOGLE_include_directive : require
 #include "common.glsl"
 
-layout(local_size_x = WG_BLOCK) in;
+layout(local_size_x = WG_LIST) in;
 
 void main() {
-    uint block = blockList[gl_WorkGroupID.x];
-    for (uint k = 0u; k < VOXELS_PER_INVOCATION; ++k) {
-        uint state = cubeState[block * VOXELS_PER_BLOCK + gl_LocalInvocationIndex + k * WG_BLOCK];
-        uint chunk = state >> CUBE_CHUNK_SHIFT;
-        uint count = chunk == 0u ? 0u : (mcTables[state & CUBE_TYPE_MASK] >> 16);
-        for (uint t = 0u; t < count; ++t) {
-            uint base = (chunk - 1u) * CHUNK_WORDS + 3u * t;
-            if (chunkTriangles[base] == INVALID_INDEX) continue;
-            uint at = atomicAdd(counters.exportTriangles, 1u);
-            if (at >= params.exportTriangleCapacity) continue;   // counted: the host grows the buffer and re-runs
-            for (uint j = 0u; j < 3u; ++j) exportIndices[3u * at + j] = vertexRemap[chunkTriangles[base + j]];
-        }
+    uint slot = gl_GlobalInvocationID.x;
+    bool live = false;
+    uint base = 0u;
+    if (slot < min(counters.chunkHighWater, params.chunkCapacity) * TRIANGLES_PER_CHUNK) {
+        base = (slot / TRIANGLES_PER_CHUNK) * CHUNK_WORDS + 3u * (slot % TRIANGLES_PER_CHUNK);
+        live = chunkTriangles[base] != INVALID_INDEX;
     }
+    uint offset = subgroupExclusiveAdd(live ? 1u : 0u);
+    uint total = subgroupAdd(live ? 1u : 0u);
+    uint first = 0u;
+    if (subgroupElect() && total != 0u) first = atomicAdd(counters.exportTriangles, total);
+    uint at = subgroupBroadcastFirst(first) + offset;
+    // Counted either way: the host grows the buffer and re-runs when exportTriangles > capacity.
+    if (live && at < params.exportTriangleCapacity)
+        for (uint j = 0u; j < 3u; ++j) exportIndices[3u * at + j] = vertexRemap[chunkTriangles[base + j]];
 }

@@ -9,7 +9,7 @@ layout(local_size_x = WG_LIST) in;
 void main() {
     uint v = gl_GlobalInvocationID.x;
     bool live = false, unreferenced = false;
-    if (v < params.vertexCapacity) {
+    if (v < min(counters.vertexHighWater, params.vertexCapacity)) {
         uint refs = vertices[v].refcount;
         live = refs != DEAD_REFCOUNT && refs > 0u;
         unreferenced = refs == 0u;

@@ -202,6 +202,8 @@ struct Counters {
     // VkDrawIndexedIndirectCommand of the compacted mesh (finish_export): a renderer draws it with
     // vkCmdDrawIndexedIndirect straight from this buffer. indexCount = 0 when an export buffer overflowed.
     uint drawIndexed[5];
+    uint exportDispatch[4];     // export_vertices: over the vertex heap up to its high water (plan_export)
+    uint exportTriangleDispatch[4]; // export_triangles: over the triangle slots of the chunks up to their high water
 };
 VKM_CONST COUNTERS_PER_FRAME_OFFSET = 144u;  // byte offset of validPixels
 VKM_CONST COUNTERS_PER_FRAME_SIZE = 112u;    // 28 per-frame uints

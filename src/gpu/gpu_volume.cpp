@@ -410,11 +410,9 @@ void GpuVolume::ensureExportCapacity(uint32_t vertices, uint32_t triangles) {
 }
 
 void GpuVolume::recordExport(VkCommandBuffer cmd) {
-    vkCmdFillBuffer(cmd, counters_.handle(), offsetof(Counters, liveBlockCount), sizeof(uint32_t), 0);
     vkCmdFillBuffer(cmd, counters_.handle(), offsetof(Counters, exportVertices), 3 * sizeof(uint32_t), 0);
     vk::memoryBarrier(cmd);
-    baselineMesh_.recordCollect(cmd, lastPush_, config_.hashCapacity);
-    exportMesh_.record(cmd, lastPush_, counters_, config_.vertexCapacity);
+    exportMesh_.record(cmd, lastPush_, counters_);
 }
 
 bool GpuVolume::exportFits(const Counters& k) const {

@@ -21,7 +21,7 @@ static_assert(offsetof(Counters, exportUnreferenced) == offsetof(Counters, expor
 static_assert(offsetof(Counters, validPixels) == COUNTERS_PER_FRAME_OFFSET);
 static_assert(offsetof(Counters, freeTop) == COUNTERS_PER_FRAME_OFFSET + COUNTERS_PER_FRAME_SIZE,
               "per-frame counters are one contiguous range, cleared with one fill");
-static_assert(offsetof(Counters, drawIndexed) % 4 == 0 && sizeof(Counters) == 336);
+static_assert(offsetof(Counters, drawIndexed) % 4 == 0 && sizeof(Counters) == 368);
 static_assert(sizeof(DeltaState) == 64 && sizeof(DeltaVertexRecord) == 32 && sizeof(DeltaTriangleRecord) == 16);
 static_assert(sizeof(FramePush) == 128, "push constants: 128 bytes is all lavapipe guarantees");
 static_assert(VOXELS_PER_BLOCK == BLOCK_SIDE * BLOCK_SIDE * BLOCK_SIDE);

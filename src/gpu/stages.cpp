@@ -128,15 +128,17 @@ void IncrementalMeshStage::recordMesh(VkCommandBuffer cmd, const FramePush& push
 }
 
 ExportMeshStage::ExportMeshStage(const vk::Context& context, const vk::BindingLayout& layout)
-    : vertices_(context, layout, "export_vertices"),
+    : plan_(context, layout, "plan_export"),
+      vertices_(context, layout, "export_vertices"),
       triangles_(context, layout, "export_triangles"),
       finish_(context, layout, "finish_export") {}
 
-void ExportMeshStage::record(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters,
-                             uint32_t vertexCapacity) const {
-    vertices_.dispatch(cmd, &push, (vertexCapacity + WG_LIST - 1) / WG_LIST);
+void ExportMeshStage::record(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters) const {
+    plan_.dispatch(cmd, &push, 1);
     vk::memoryBarrier(cmd);
-    triangles_.dispatchIndirect(cmd, &push, counters, offsetof(Counters, listDispatch));
+    vertices_.dispatchIndirect(cmd, &push, counters, offsetof(Counters, exportDispatch));
+    vk::memoryBarrier(cmd);
+    triangles_.dispatchIndirect(cmd, &push, counters, offsetof(Counters, exportTriangleDispatch));
     vk::memoryBarrier(cmd);
     finish_.dispatch(cmd, &push, 1);
     vk::memoryBarrier(cmd);

@@ -68,16 +68,16 @@ private:
         commitFree_;
 };
 
-// Compaction of the shared-vertex mesh into dense vertex and index buffers (export_vertices,
-// export_triangles), and the indirect draw command of the result (finish_export).
+// Compaction of the shared-vertex mesh into dense vertex and index buffers (plan_export, export_vertices,
+// export_triangles; each over the used part of its heap), and the indirect draw command of the result
+// (finish_export).
 class ExportMeshStage {
 public:
     ExportMeshStage(const vk::Context& context, const vk::BindingLayout& layout);
-    // Needs the live block list (BaselineMeshStage::recordCollect) for the triangle pass.
-    void record(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters, uint32_t vertexCapacity) const;
+    void record(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters) const;
 
 private:
-    vk::ComputePipeline vertices_, triangles_, finish_;
+    vk::ComputePipeline plan_, vertices_, triangles_, finish_;
 };
 
 // Mesh deltas (docs/DELTAS.md): what changed in the vertex heap and the triangle chunks since the last

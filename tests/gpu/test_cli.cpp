@@ -9,6 +9,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "core/mesh_analysis.h"
 #include "io/ply.h"
 #include "test_support.h"
 
@@ -133,8 +134,8 @@ TEST(Cli, DeltaStreamReplaysToTheSameMesh) {
     EXPECT_EQ(replayed.positions.size(), fused.positions.size());
     ASSERT_EQ(replayed.triangles.size(), fused.triangles.size());
     EXPECT_GT(fused.triangles.size(), 1000u);
-    // Same vertices in the same order (both dense by heap index), hence the same triangles.
-    EXPECT_EQ(replayed.positions, fused.positions);
+    // The same triangles, vertex bits and all (the order of the export is not specified).
+    EXPECT_EQ(countTriangleMismatches(canonicalTriangles(replayed), canonicalTriangles(fused), 0), 0u);
     CliRun partial = runCli("deltas " + (out / "mesh.deltas").string() + " --until-frame 2");
     EXPECT_EQ(partial.exitCode, 0) << partial.err;
     EXPECT_NE(partial.out.find("mesh at frame 2"), std::string::npos) << partial.out;
