@@ -77,6 +77,79 @@ GpuVolumeConfig resolved(GpuVolumeConfig c) {
     return c;
 }
 
+// The largest device-local heap: where vkmesh's buffers live.
+uint64_t deviceLocalHeapBytes(const vk::Context& context) {
+    VkPhysicalDeviceMemoryProperties props{};
+    vkGetPhysicalDeviceMemoryProperties(context.physicalDevice(), &props);
+    uint64_t best = 0;
+    for (uint32_t i = 0; i < props.memoryHeapCount; ++i)
+        if (props.memoryHeaps[i].flags & VK_MEMORY_HEAP_DEVICE_LOCAL_BIT) best = std::max<uint64_t>(best, props.memoryHeaps[i].size);
+    return best;
+}
+
+std::string mib(uint64_t bytes) { return std::to_string((bytes + (1u << 20) - 1) >> 20) + " MiB"; }
+
+}  // namespace
+
+void checkCapacities(const GpuVolumeConfig& c, uint64_t maxBufferBytes, uint64_t deviceMemoryBytes, const std::string& deviceName) {
+    struct Planned {
+        const char* buffer;
+        uint64_t bytesPerUnit;
+        uint64_t units;
+        const char* setting;   // what sizes it: config field (CLI option)
+    };
+    const bool mesh = c.meshMode == MeshMode::Incremental;
+    const uint64_t hashSlots = c.hashCapacity ? c.hashCapacity : std::max<uint64_t>(2ull * c.blockCapacity, 1024);
+    std::vector<Planned> planned = {
+        {"voxel sdf", 4ull * VOXELS_PER_BLOCK, c.blockCapacity, "blockCapacity (--blocks)"},
+        {"voxel weight", 4ull * VOXELS_PER_BLOCK, c.blockCapacity, "blockCapacity (--blocks)"},
+        {"hash keys", 8, hashSlots, "hashCapacity (2 x blockCapacity by default, --blocks)"},
+        {"depth image", 4, uint64_t(c.imageWidth) * uint64_t(c.imageHeight), "the image size"},
+    };
+    if (mesh) {
+        planned.push_back({"cube state", 4ull * VOXELS_PER_BLOCK, c.blockCapacity, "blockCapacity (--blocks)"});
+        for (const char* axis : {"edge vertex slots x", "edge vertex slots y", "edge vertex slots z"})
+            planned.push_back({axis, 4ull * VOXELS_PER_BLOCK, c.blockCapacity, "blockCapacity (--blocks)"});
+        planned.push_back({"vertex heap", sizeof(Vertex), c.vertexCapacity, "vertexCapacity (--vertices)"});
+        planned.push_back({"triangle chunks", 4ull * CHUNK_WORDS, c.chunkCapacity, "chunkCapacity (--chunks)"});
+        planned.push_back({"retype list", 4, c.retypeCapacity, "retypeCapacity"});
+        if (c.trackDeltas) {
+            planned.push_back({"vertex heap shadow", sizeof(Vertex), c.vertexCapacity, "vertexCapacity (--vertices)"});
+            planned.push_back({"triangle chunk shadow", 4ull * CHUNK_WORDS, c.chunkCapacity, "chunkCapacity (--chunks)"});
+        }
+    }
+    uint64_t total = 0;
+    for (const Planned& p : planned) {
+        const uint64_t bytes = p.bytesPerUnit * p.units;
+        total += bytes;
+        if (bytes > maxBufferBytes)
+            throw Error(std::string("buffer '") + p.buffer + "' would need " + mib(bytes) + " but one storage buffer may hold at most " +
+                        mib(maxBufferBytes) + " on " + deviceName + ": lower " + p.setting + " to at most " +
+                        std::to_string(maxBufferBytes / p.bytesPerUnit) + " (currently " + std::to_string(p.units) +
+                        "), or use a larger voxel size to need fewer");
+    }
+    // The rest (lists, masks, stamps, exports) is small next to these; 10 % covers it.
+    const uint64_t needed = total + total / 10;
+    if (deviceMemoryBytes && needed > deviceMemoryBytes) {
+        std::string biggest;
+        std::sort(planned.begin(), planned.end(),
+                  [](const Planned& a, const Planned& b) { return a.bytesPerUnit * a.units > b.bytesPerUnit * b.units; });
+        for (size_t i = 0; i < std::min<size_t>(3, planned.size()); ++i)
+            biggest += std::string(i ? ", " : "") + planned[i].buffer + " " + mib(planned[i].bytesPerUnit * planned[i].units) + " (" +
+                       planned[i].setting + ")";
+        throw Error("these capacities need about " + mib(needed) + " of device memory but " + deviceName + " has " +
+                    mib(deviceMemoryBytes) + " (largest device-local heap); the largest buffers: " + biggest +
+                    ". Lower them, or choose another device (--device)");
+    }
+}
+
+namespace {
+// The resolved configuration, checked against the device before any buffer is created.
+GpuVolumeConfig checkedFor(const vk::Context& context, const GpuVolumeConfig& config) {
+    GpuVolumeConfig c = resolved(config);
+    checkCapacities(c, context.maxStorageBufferRange(), deviceLocalHeapBytes(context), context.info().name);
+    return c;
+}
 }  // namespace
 
 vk::Buffer GpuVolume::makeBuffer(VkDeviceSize size, VkBufferUsageFlags extraUsage, const std::string& name, uint32_t binding) {
@@ -87,7 +160,7 @@ vk::Buffer GpuVolume::makeBuffer(VkDeviceSize size, VkBufferUsageFlags extraUsag
 
 GpuVolume::GpuVolume(const vk::Context& context, const GpuVolumeConfig& config)
     : context_(context),
-      config_(resolved(config)),
+      config_(checkedFor(context, config)),
       layout_(context, descriptorTypes(), sizeof(FramePush)),
       allocate_(context, layout_),
       fuse_(context, layout_),

@@ -123,6 +123,13 @@ struct PoolInfo {
     size_t bytes;
 };
 
+// Checks, before anything is allocated, that every buffer the configuration implies fits in one storage
+// buffer binding (maxBufferBytes: maxStorageBufferRange) and that all of them fit in the device's largest
+// device-local memory heap. Throws Error naming the buffer, the setting that sizes it (config field and CLI
+// option) and the largest value that fits. Called by the GpuVolume constructor; exposed for tests.
+void checkCapacities(const GpuVolumeConfig& config, uint64_t maxBufferBytes, uint64_t deviceMemoryBytes,
+                     const std::string& deviceName);
+
 class GpuVolume {
 public:
     GpuVolume(const vk::Context& context, const GpuVolumeConfig& config);
