@@ -71,6 +71,11 @@ GpuVolumeConfig resolved(GpuVolumeConfig c) {
     if (c.chunkCapacity < 64 || c.chunkCapacity >= (1u << (32 - CUBE_CHUNK_SHIFT)) - 1)
         throw Error("triangle chunk capacity " + std::to_string(c.chunkCapacity) + " must be in [64, 2^23 - 1)");
     c.meshVertexCapacity = std::max(c.meshVertexCapacity, 1024u);
+    if (!(c.keepRadius >= 0.0f)) throw Error("keep radius " + std::to_string(c.keepRadius) + " m must be >= 0 (0 = off)");
+    if (c.recycle && (c.recycleAfterFrames == 0 || !(c.starveWeight > 0.0f)))
+        throw Error("recycling needs recycleAfterFrames >= 1 and a starve weight > 0");
+    if (!(c.hashRebuildTombstoneFraction > 0.0f && c.hashRebuildTombstoneFraction <= 1.0f))
+        throw Error("hash rebuild tombstone fraction must be in (0, 1]");
     return c;
 }
 
@@ -91,6 +96,7 @@ GpuVolume::GpuVolume(const vk::Context& context, const GpuVolumeConfig& config)
       baselineMesh_(context, layout_),
       incrementalMesh_(context, layout_),
       exportMesh_(context, layout_),
+      recycle_(context, layout_),
       recorder_(context),
       timer_(context) {
     const GpuVolumeConfig& c = config_;
@@ -150,6 +156,9 @@ GpuVolume::GpuVolume(const vk::Context& context, const GpuVolumeConfig& config)
     gp.refine = c.refine ? 1u : 0u;
     gp.refineEpsilon = c.refineEpsilonVoxels * c.params.voxelSize;
     gp.vertexUpdate = c.vertexUpdate;
+    gp.keepRadius = c.keepRadius;
+    gp.starveAfterFrames = c.recycle ? c.recycleAfterFrames : 0u;
+    gp.starveWeight = c.starveWeight;
     vk::uploadToBuffer(context, params_, &gp, sizeof(gp));
     auto tables = packMarchingCubesTables();
     vk::uploadToBuffer(context, mcTables_, tables.data(), tables.size() * 4);
@@ -226,6 +235,17 @@ FrameReport GpuVolume::integrate(const DepthImage& depth, const Intrinsics& intr
     FramePush push = makeFramePush(intrinsics, cameraToWorld, config_.params, ++frameNumber_);
     lastPush_ = push;
 
+    const bool recycling = this->recycling();
+    // Tombstones of freed keys make probes longer and are never reused by insertions: past the threshold
+    // (read from the previous frame's counters) the table is rebuilt before this frame allocates.
+    const bool rebuildHash = recycling && double(readCounters().hashTombstones) >
+                                              double(config_.hashRebuildTombstoneFraction) * config_.hashCapacity;
+    auto collectLiveBlocks = [&](VkCommandBuffer cmd) {
+        vkCmdFillBuffer(cmd, counters_.handle(), offsetof(Counters, liveBlockCount), sizeof(uint32_t), 0);
+        vk::memoryBarrier(cmd);
+        baselineMesh_.recordCollect(cmd, push, config_.hashCapacity);
+    };
+
     VkCommandBuffer cmd = recorder_.begin();
     timer_.reset(cmd);
     VkBufferCopy region{0, 0, depthStaging_.size()};
@@ -233,14 +253,30 @@ FrameReport GpuVolume::integrate(const DepthImage& depth, const Intrinsics& intr
     vkCmdFillBuffer(cmd, counters_.handle(), COUNTERS_PER_FRAME_OFFSET, COUNTERS_PER_FRAME_SIZE, 0);
     vk::memoryBarrier(cmd);
     timer_.mark(cmd, "start");
+    if (rebuildHash) {
+        collectLiveBlocks(cmd);
+        recycle_.recordRebuildHash(cmd, push, hashKeys_, hashValues_, config_.blockCapacity);
+        timer_.mark(cmd, "rehash");
+    }
     allocate_.record(cmd, push, counters_, uint32_t(config_.params.allocationStride));
     timer_.mark(cmd, "allocate");
     fuse_.record(cmd, push, counters_);
     timer_.mark(cmd, "fuse");
-    if (config_.meshMode == MeshMode::Incremental) {
+    const bool incremental = config_.meshMode == MeshMode::Incremental;
+    if (incremental) {
         incrementalMesh_.recordMarkTouched(cmd, push, counters_);
         timer_.mark(cmd, "mesh_mark");
-        incrementalMesh_.recordMesh(cmd, push, counters_, &timer_, config_.lockFree);
+    }
+    if (recycling) {
+        collectLiveBlocks(cmd);
+        recycle_.recordRetire(cmd, push, counters_);
+        timer_.mark(cmd, "recycle_retire");
+    }
+    if (incremental) incrementalMesh_.recordMesh(cmd, push, counters_, &timer_, config_.lockFree);
+    if (recycling) {
+        // The live block list is still the one collected above: the mesh passes do not touch the hash.
+        recycle_.recordFree(cmd, push, counters_);
+        timer_.mark(cmd, "recycle_free");
     }
     recordCountersReadback(cmd);
     recorder_.submitAndWait();
@@ -275,6 +311,13 @@ FrameReport GpuVolume::integrate(const DepthImage& depth, const Intrinsics& intr
     if (k.candidateCount > config_.vertexCapacity)
         report.warnings.push_back(std::to_string(k.candidateCount - config_.vertexCapacity) +
                                   " garbage-collection candidates did not fit in their list; those vertices stay allocated until re-meshed");
+    if (k.recycleDeferred)
+        report.warnings.push_back(std::to_string(k.recycleDeferred) + " empty blocks were not freed because they still owned mesh "
+                                  "vertices or triangles (garbage collection fell behind); retried next frame");
+    if (k.rehashLost)
+        report.warnings.push_back("hash rebuild could not re-insert " + std::to_string(k.rehashLost) + " live blocks within " +
+                                  std::to_string(HASH_MAX_PROBES) + " probes (hash capacity " + std::to_string(config_.hashCapacity) +
+                                  "); their memory is lost until the volume is recreated: raise the hash capacity");
     if (k.rayTruncated)
         report.warnings.push_back(std::to_string(k.rayTruncated) + " pixels' truncation bands crossed more than " +
                                   std::to_string(RAY_MAX_BLOCKS) + " blocks and were cut");
@@ -460,6 +503,7 @@ std::vector<BlockSnapshot> GpuVolume::downloadBlocks() const {
         uint32_t b = values[s];
         BlockSnapshot snap;
         snap.coord = Eigen::Vector3i(coords[4 * b], coords[4 * b + 1], coords[4 * b + 2]);
+        snap.index = b;
         snap.sdf.assign(sdf.begin() + size_t(b) * VOXELS_PER_BLOCK, sdf.begin() + size_t(b + 1) * VOXELS_PER_BLOCK);
         snap.weight.assign(weight.begin() + size_t(b) * VOXELS_PER_BLOCK, weight.begin() + size_t(b + 1) * VOXELS_PER_BLOCK);
         out.push_back(std::move(snap));

@@ -45,6 +45,16 @@ struct GpuVolumeConfig {
     float refineEpsilonVoxels = 0.5f;    // corners within this distance of the surface may be flipped
     bool lockFree = false;               // the paper's lock-free claim: 4 parity-class passes, no slot atomics
     uint32_t vertexUpdate = VERTEX_UPDATE_AUTO;   // how vertices are moved (both ways give the same mesh)
+    // Bounded maps for long runs (docs/MESH.md, "Recycling blocks"). Off by default: then no recycling pass
+    // is recorded and a run is bit-identical to one without these settings.
+    float keepRadius = 0.0f;             // metres; > 0: blocks whose centre is farther from the camera are not
+                                         // allocated, and those already in the map are freed (with their mesh)
+    bool recycle = false;                // starve blocks idle for recycleAfterFrames and free them once empty
+    uint32_t recycleAfterFrames = 100;   // frames without a touch before a block starves
+    float starveWeight = 4.0f;           // weight an idle block's corners lose per frame (max weight 255: ~64 frames)
+    // The hash table is rebuilt on the GPU (tombstones dropped) before a frame when the tombstones of freed keys
+    // exceed this fraction of its slots.
+    float hashRebuildTombstoneFraction = 0.125f;
     int imageWidth = 640, imageHeight = 480;
 };
 
@@ -59,6 +69,7 @@ struct FrameReport {
 // The TSDF of one block as downloaded (tests, snapshots).
 struct BlockSnapshot {
     Eigen::Vector3i coord;
+    uint32_t index = 0;               // its block in the pool
     std::vector<float> sdf, weight;   // VOXELS_PER_BLOCK each, x fastest
 };
 
@@ -115,6 +126,7 @@ public:
     Counters readCounters() const;
     std::vector<PoolInfo> pools() const;
     const GpuVolumeConfig& config() const { return config_; }
+    bool recycling() const { return config_.keepRadius > 0.0f || config_.recycle; }
     uint32_t framesIntegrated() const { return frameNumber_; }
 
 private:
@@ -137,6 +149,7 @@ private:
     BaselineMeshStage baselineMesh_;
     IncrementalMeshStage incrementalMesh_;
     ExportMeshStage exportMesh_;
+    RecycleStage recycle_;
     vk::CommandRecorder recorder_;
     vk::StageTimer timer_;
     uint32_t frameNumber_ = 0;

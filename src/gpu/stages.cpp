@@ -127,6 +127,40 @@ void IncrementalMeshStage::recordMesh(VkCommandBuffer cmd, const FramePush& push
     mark("mesh_gc");
 }
 
+RecycleStage::RecycleStage(const vk::Context& context, const vk::BindingLayout& layout)
+    : retire_(context, layout, "recycle_retire"),
+      free_(context, layout, "recycle_free"),
+      commitFree_(context, layout, "commit_recycle"),
+      save_(context, layout, "rehash_save"),
+      insert_(context, layout, "rehash_insert"),
+      commitRehash_(context, layout, "commit_rehash") {}
+
+void RecycleStage::recordRetire(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters) const {
+    retire_.dispatchIndirect(cmd, &push, counters, offsetof(Counters, listDispatch));
+    vk::memoryBarrier(cmd);
+}
+
+void RecycleStage::recordFree(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters) const {
+    free_.dispatchIndirect(cmd, &push, counters, offsetof(Counters, listDispatch));
+    vk::memoryBarrier(cmd);
+    commitFree_.dispatch(cmd, &push, 1);
+    vk::memoryBarrier(cmd);
+}
+
+void RecycleStage::recordRebuildHash(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& hashKeys,
+                                     const vk::Buffer& hashValues, uint32_t blockCapacity) const {
+    const uint32_t groups = (blockCapacity + WG_LIST - 1) / WG_LIST;
+    save_.dispatch(cmd, &push, groups);
+    vk::memoryBarrier(cmd);
+    vkCmdFillBuffer(cmd, hashKeys.handle(), 0, VK_WHOLE_SIZE, 0xFFFFFFFFu);   // KEY_EMPTY
+    vkCmdFillBuffer(cmd, hashValues.handle(), 0, VK_WHOLE_SIZE, NO_BLOCK);
+    vk::memoryBarrier(cmd);
+    insert_.dispatch(cmd, &push, groups);
+    vk::memoryBarrier(cmd);
+    commitRehash_.dispatch(cmd, &push, 1);
+    vk::memoryBarrier(cmd);
+}
+
 ExportMeshStage::ExportMeshStage(const vk::Context& context, const vk::BindingLayout& layout)
     : vertices_(context, layout, "export_vertices"), triangles_(context, layout, "export_triangles") {}
 

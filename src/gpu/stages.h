@@ -68,6 +68,24 @@ private:
         commitFree_;
 };
 
+// Bounded maps (docs/MESH.md, "Recycling blocks"). Phase 1 (recordRetire, after fusion and mark_dirty,
+// before the mesh passes) zeroes the weights of blocks beyond the keep radius and decays those of idle
+// blocks, marking the cubes that read corners which stop being observed; phase 2 (recordFree, after the
+// mesh passes) frees the blocks left with no weight and no mesh state. Both run over the live block list
+// (BaselineMeshStage::recordCollect). recordRebuildHash drops the tombstones freed keys leave in the hash.
+class RecycleStage {
+public:
+    RecycleStage(const vk::Context& context, const vk::BindingLayout& layout);
+    void recordRetire(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters) const;
+    void recordFree(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters) const;
+    // Needs the live block list; clears the table and re-inserts every live block (one CAS each).
+    void recordRebuildHash(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& hashKeys,
+                           const vk::Buffer& hashValues, uint32_t blockCapacity) const;
+
+private:
+    vk::ComputePipeline retire_, free_, commitFree_, save_, insert_, commitRehash_;
+};
+
 // Compaction of the shared-vertex mesh into dense vertex and index buffers.
 class ExportMeshStage {
 public:
