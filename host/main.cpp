@@ -5,6 +5,7 @@
 //   vkmesh frames DATASET -o f.json     the frames (paths, poses, intrinsics) fuse would use, for peers
 //   vkmesh eval MESH --gt GT.ply        accuracy, completeness, precision/recall/F-score against ground truth
 //   vkmesh render MESH -o view.png      render a mesh offscreen (Vulkan graphics pipeline) to a PNG
+//   vkmesh soak -o soak.csv             long synthetic run with revisits: hash/pool/heap occupancy per frame
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
@@ -23,6 +24,7 @@
 #include "core/mesh_analysis.h"
 #include "eval_command.h"
 #include "render_command.h"
+#include "soak_command.h"
 #include "core/refinement.h"
 #include "gpu/gpu_volume.h"
 #include "io/dataset.h"
@@ -136,6 +138,11 @@ struct FuseArgs {
     uint32_t blocks = 16384;
     uint32_t vertices = gpu::GpuVolumeConfig{}.vertexCapacity;
     uint32_t chunks = gpu::GpuVolumeConfig{}.chunkCapacity;
+    uint32_t hashSlots = 0;   // 0: twice the block capacity, rounded up to a power of two
+    float keepRadius = 0.0f;
+    bool recycle = false;
+    uint32_t recycleAfter = gpu::GpuVolumeConfig{}.recycleAfterFrames;
+    float starveWeight = gpu::GpuVolumeConfig{}.starveWeight;
     int allocStride = VolumeParams{}.allocationStride;
     int device = -1;
     bool validation = false;
@@ -163,6 +170,11 @@ int commandFuse(const FuseArgs& args) {
     config.meshMode = args.mode == "baseline" ? gpu::MeshMode::Baseline : gpu::MeshMode::Incremental;
     config.vertexCapacity = args.vertices;
     config.chunkCapacity = args.chunks;
+    config.hashCapacity = args.hashSlots;
+    config.keepRadius = args.keepRadius;
+    config.recycle = args.recycle;
+    config.recycleAfterFrames = args.recycleAfter;
+    config.starveWeight = args.starveWeight;
     config.imageWidth = intrinsics.width;
     config.imageHeight = intrinsics.height;
     gpu::GpuVolume volume(context, config);
@@ -172,6 +184,8 @@ int commandFuse(const FuseArgs& args) {
     std::vector<double> frameWallMs;
     size_t integrated = 0, skipped = 0;
     uint64_t hashFull = 0, poolExhausted = 0, touchedOverflow = 0;
+    // Every other capacity event and the recycling counts, summed over the frames (the --stats JSON).
+    std::map<std::string, uint64_t> events;
     std::vector<std::string> warnings;
     auto warn = [&](const std::string& w) {
         if (warnings.size() < 1000) warnings.push_back(w);
@@ -211,6 +225,23 @@ int commandFuse(const FuseArgs& args) {
         hashFull += report.counters.hashFull;
         poolExhausted += report.counters.poolExhausted;
         touchedOverflow += report.counters.touchedCount > volume.config().touchedCapacity;
+        const gpu::Counters& c = report.counters;
+        for (const auto& [name, value] :
+             {std::pair<const char*, uint32_t>{"vertex_heap_exhausted", c.vertexExhausted},
+              {"chunk_heap_exhausted", c.chunkExhausted},
+              {"triangles_not_built", c.trianglesInvalid},
+              {"retype_deferred", c.retypeDeferred},
+              {"gc_candidates_dropped", c.candidateCount > volume.config().vertexCapacity ? c.candidateCount - volume.config().vertexCapacity : 0u},
+              {"out_of_range", c.outOfRange},
+              {"ray_truncated", c.rayTruncated},
+              {"outside_keep_radius", c.outsideRadius},
+              {"blocks_retired", c.blocksRetired},
+              {"blocks_starved", c.blocksStarved},
+              {"blocks_freed", c.blocksFreed},
+              {"recycle_deferred", c.recycleDeferred},
+              {"hash_rebuilds", c.hashRebuilt},
+              {"rehash_lost", c.rehashLost}})
+            events[name] += value;
         for (const auto& w : report.warnings) warn("frame " + std::to_string(i) + ": " + w);
         if (!args.quiet && (tty || (i + 1) % 50 == 0 || i + 1 == dataset->size())) {
             std::fprintf(stderr, "%sframe %zu/%zu  blocks %u  %.1f ms/frame%s", tty ? "\r" : "", i + 1, dataset->size(),
@@ -279,7 +310,10 @@ int commandFuse(const FuseArgs& args) {
     stats["allocation_stride"] = args.allocStride;
     stats["max_depth"] = args.data.maxDepth;
     stats["blocks"] = {{"in_use", k.blocksInUse}, {"capacity", volume.config().blockCapacity},
-                       {"hash_capacity", volume.config().hashCapacity}};
+                       {"hash_capacity", volume.config().hashCapacity}, {"hash_entries", k.hashEntries},
+                       {"hash_tombstones", k.hashTombstones}};
+    stats["recycling"] = {{"keep_radius", args.keepRadius}, {"recycle", args.recycle},
+                          {"recycle_after_frames", args.recycleAfter}, {"starve_weight", args.starveWeight}};
     stats["mesh"] = {{"vertices", mesh.positions.size()},
                      {"triangles", mesh.triangles.size()},
                      {"path", out.string()},
@@ -321,8 +355,10 @@ int commandFuse(const FuseArgs& args) {
     for (const auto& p : volume.pools()) pools[p.name] = p.bytes, total += p.bytes;
     stats["gpu_pool_bytes"] = pools;
     stats["gpu_bytes_total"] = total;
-    stats["capacity_events"] = {{"hash_full", hashFull}, {"pool_exhausted", poolExhausted},
-                                {"frames_touching_more_than_capacity", touchedOverflow}};
+    json capacityEvents = {{"hash_full", hashFull}, {"pool_exhausted", poolExhausted},
+                           {"frames_touching_more_than_capacity", touchedOverflow}};
+    for (const auto& [name, total] : events) capacityEvents[name] = total;
+    stats["capacity_events"] = capacityEvents;
     stats["warnings"] = warnings;
     if (!args.statsPath.empty()) {
         std::ofstream file(args.statsPath);
@@ -387,6 +423,18 @@ int main(int argc, char** argv) {
     fuse->add_flag("--lock-free", fuseArgs.lockFree, "claim edge vertices in 4 parity-class passes without atomics (paper's lock-free)");
     fuse->add_option("--vertices", fuseArgs.vertices, "vertex heap capacity")->check(CLI::PositiveNumber);
     fuse->add_option("--chunks", fuseArgs.chunks, "triangle chunk heap capacity (5 triangles each)")->check(CLI::PositiveNumber);
+    fuse->add_option("--hash-slots", fuseArgs.hashSlots, "spatial hash capacity, a power of two (0 = 2x --blocks)");
+    fuse->add_option("--keep-radius", fuseArgs.keepRadius,
+                     "bounded map: keep only blocks within R metres of the camera; farther ones are not allocated and are "
+                     "freed with their mesh (0 = off, the default)")
+        ->check(CLI::NonNegativeNumber);
+    fuse->add_flag("--recycle", fuseArgs.recycle,
+                   "bounded map: blocks not seen for --recycle-after frames lose --starve-weight per frame and are freed "
+                   "(with their mesh) once empty (off by default)");
+    fuse->add_option("--recycle-after", fuseArgs.recycleAfter, "frames without a touch before a block starves")
+        ->check(CLI::PositiveNumber);
+    fuse->add_option("--starve-weight", fuseArgs.starveWeight, "weight a starving block's corners lose per frame")
+        ->check(CLI::PositiveNumber);
     fuse->add_option("--voxel", fuseArgs.voxel, "voxel (cube) size in metres");
     fuse->add_option("--trunc", fuseArgs.truncVoxels, "truncation distance in voxels");
     fuse->add_option("--max-weight", fuseArgs.maxWeight, "cap of the TSDF weight");
@@ -402,6 +450,7 @@ int main(int argc, char** argv) {
 
     auto runEval = vkmesh::addEvalCommand(app);
     auto runRender = vkmesh::addRenderCommand(app);
+    auto runSoak = vkmesh::addSoakCommand(app);
 
     try {
         app.parse(argc, argv);
@@ -416,6 +465,7 @@ int main(int argc, char** argv) {
         if (app.got_subcommand("fuse")) return commandFuse(fuseArgs);
         if (app.got_subcommand("eval")) return runEval();
         if (app.got_subcommand("render")) return runRender();
+        if (app.got_subcommand("soak")) return runSoak();
     } catch (const vkmesh::Error& e) {
         std::cerr << "vkmesh: error: " << e.what() << "\n";
         return 2;
