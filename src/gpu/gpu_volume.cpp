@@ -263,12 +263,14 @@ FrameReport GpuVolume::integrate(const DepthImage& depth, const Intrinsics& intr
     fuse_.record(cmd, push, counters_);
     timer_.mark(cmd, "fuse");
     const bool incremental = config_.meshMode == MeshMode::Incremental;
+    const bool retryPending = incremental && retryPending_;
     if (incremental) {
         incrementalMesh_.recordMarkTouched(cmd, push, counters_);
         timer_.mark(cmd, "mesh_mark");
     }
+    if (recycling || retryPending) collectLiveBlocks(cmd);
+    if (retryPending) incrementalMesh_.recordMarkPending(cmd, push, config_.blockCapacity);
     if (recycling) {
-        collectLiveBlocks(cmd);
         recycle_.recordRetire(cmd, push, counters_);
         timer_.mark(cmd, "recycle_retire");
     }
@@ -286,6 +288,9 @@ FrameReport GpuVolume::integrate(const DepthImage& depth, const Intrinsics& intr
     std::memcpy(&report.counters, countersReadback_.mapped(), sizeof(Counters));
     report.stageMs = timer_.read();
     const Counters& k = report.counters;
+    // Cubes deferred by a full retype list are left for the next frame's retry; INCOMPLETE cubes are retried
+    // once after a growth (while the heap stays full they wait for their block to be dirty again).
+    if (retryPending) retryPending_ = k.retypeDeferred > 0;
     if (k.hashFull)
         report.warnings.push_back(std::to_string(k.hashFull) + " block insertions found no free hash slot within " +
                                   std::to_string(HASH_MAX_PROBES) + " probes (hash capacity " +
@@ -436,6 +441,72 @@ void GpuVolume::rebuildMesh() {
         if (readCounters().retypeDeferred == 0) return;
     }
     throw Error("mesh rebuild did not finish in " + std::to_string(maxPasses) + " passes");
+}
+
+void GpuVolume::growMeshHeaps(uint32_t vertexCapacity, uint32_t chunkCapacity) {
+    if (config_.meshMode != MeshMode::Incremental) throw Error("growMeshHeaps needs the incremental mesh mode");
+    const uint32_t oldVertices = config_.vertexCapacity, oldChunks = config_.chunkCapacity;
+    vertexCapacity = std::max(vertexCapacity, oldVertices);
+    chunkCapacity = std::max(chunkCapacity, oldChunks);
+    if (vertexCapacity == oldVertices && chunkCapacity == oldChunks) return;
+    if (vertexCapacity >= CLAIMED_SLOT) throw Error("vertex capacity " + std::to_string(vertexCapacity) + " must be < 2^32 - 2");
+    if (chunkCapacity >= (1u << (32 - CUBE_CHUNK_SHIFT)) - 1)
+        throw Error("triangle chunk capacity " + std::to_string(chunkCapacity) + " must be < 2^23 - 1");
+    for (VkDeviceSize bytes : {VkDeviceSize(vertexCapacity) * sizeof(Vertex), VkDeviceSize(chunkCapacity) * CHUNK_WORDS * 4})
+        if (bytes > context_.maxStorageBufferRange())
+            throw Error("a mesh heap of " + std::to_string(bytes) + " bytes exceeds one storage buffer on this device (" +
+                        std::to_string(context_.maxStorageBufferRange()) + " bytes)");
+    Counters k{};
+    vk::downloadFromBuffer(context_, counters_, &k, sizeof(k));
+    // The free stacks (entries [0, top) are free indices, popped from the top): the new indices go UNDER the
+    // old entries, highest first, so that holes and old indices are reused before any new one and new ones are
+    // handed out in ascending order. That keeps every live vertex below the high water, which
+    // update_heap_vertices relies on.
+    auto growStack = [&](vk::Buffer& stack, uint32_t top, uint32_t oldCapacity, uint32_t newCapacity, const char* name, uint32_t binding) {
+        const uint32_t added = newCapacity - oldCapacity;
+        std::vector<uint32_t> entries(top + added);
+        for (uint32_t i = 0; i < added; ++i) entries[i] = newCapacity - 1 - i;
+        if (top) vk::downloadFromBuffer(context_, stack, entries.data() + added, VkDeviceSize(top) * 4);
+        stack = makeBuffer(VkDeviceSize(newCapacity) * 4, 0, name, binding);
+        vk::uploadToBuffer(context_, stack, entries.data(), VkDeviceSize(entries.size()) * 4);
+    };
+    // Heap contents are copied on the GPU; the old buffers live until the copy is done.
+    std::vector<vk::Buffer> old;
+    VkCommandBuffer cmd = recorder_.begin();
+    auto growCopy = [&](vk::Buffer& buffer, VkDeviceSize newSize, const char* name, uint32_t binding) {
+        old.push_back(std::move(buffer));
+        buffer = makeBuffer(newSize, 0, name, binding);
+        VkBufferCopy region{0, 0, old.back().size()};
+        vkCmdCopyBuffer(cmd, old.back().handle(), buffer.handle(), 1, &region);
+        return old.back().size();
+    };
+    if (vertexCapacity > oldVertices) {
+        VkDeviceSize kept = growCopy(vertices_, VkDeviceSize(vertexCapacity) * sizeof(Vertex), "vertex heap", BINDING_VERTICES);
+        vkCmdFillBuffer(cmd, vertices_.handle(), kept, VK_WHOLE_SIZE, 0xFFFFFFFFu);   // new entries: refcount DEAD
+        growCopy(vertexOwner_, VkDeviceSize(vertexCapacity) * 4, "vertex owners", BINDING_VERTEX_OWNER);
+        gcCandidates_ = makeBuffer(VkDeviceSize(vertexCapacity) * 4, 0, "GC candidates", BINDING_GC_CANDIDATES);
+        vertexRemap_ = makeBuffer(VkDeviceSize(vertexCapacity) * 4, 0, "vertex remap", BINDING_VERTEX_REMAP);
+    }
+    if (chunkCapacity > oldChunks) {
+        growCopy(chunkTriangles_, VkDeviceSize(chunkCapacity) * CHUNK_WORDS * 4, "triangle chunks", BINDING_CHUNK_TRIANGLES);
+        chunkRelease_ = makeBuffer(VkDeviceSize(chunkCapacity) * 4, 0, "chunk release list", BINDING_CHUNK_RELEASE);
+    }
+    vk::memoryBarrier(cmd);
+    recorder_.submitAndWait();
+    old.clear();
+    if (vertexCapacity > oldVertices) growStack(vertexFree_, k.vertexFreeTop, oldVertices, vertexCapacity, "vertex free stack", BINDING_VERTEX_FREE);
+    if (chunkCapacity > oldChunks) growStack(chunkFree_, k.chunkFreeTop, oldChunks, chunkCapacity, "chunk free stack", BINDING_CHUNK_FREE);
+    k.vertexFreeTop += vertexCapacity - oldVertices;
+    k.chunkFreeTop += chunkCapacity - oldChunks;
+    vk::uploadToBuffer(context_, counters_, &k, sizeof(k));
+    config_.vertexCapacity = vertexCapacity;
+    config_.chunkCapacity = chunkCapacity;
+    setParam(&VolumeParamsGpu::vertexCapacity, vertexCapacity);
+    setParam(&VolumeParamsGpu::chunkCapacity, chunkCapacity);
+    VkCommandBuffer readback = recorder_.begin();
+    recordCountersReadback(readback);
+    recorder_.submitAndWait();
+    retryPending_ = true;
 }
 
 MeshStateSnapshot GpuVolume::downloadMeshState() const {

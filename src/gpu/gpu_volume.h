@@ -119,6 +119,10 @@ public:
     // reference an incremental mesh must equal.
     void rebuildMesh();
     MeshStateSnapshot downloadMeshState() const;
+    // Grows the vertex heap and the triangle-chunk heap between frames (never shrinks; the mesh is kept: the
+    // heaps are copied and the new entries pushed on the free stacks). The next frame also re-meshes every
+    // cube left INCOMPLETE while a heap was full, so the missing triangles appear at once.
+    void growMeshHeaps(uint32_t vertexCapacity, uint32_t chunkCapacity);
     // How many cubes carry triangles of each MC type (the stored, possibly refined, type).
     std::array<uint64_t, 256> surfaceCubeTypes() const;
 
@@ -153,6 +157,7 @@ private:
     vk::CommandRecorder recorder_;
     vk::StageTimer timer_;
     uint32_t frameNumber_ = 0;
+    bool retryPending_ = false;   // next frame: dirty every block with retype bits left (see growMeshHeaps)
     FramePush lastPush_{};
 };
 

@@ -56,6 +56,7 @@ void BaselineMeshStage::record(VkCommandBuffer cmd, const FramePush& push, const
 IncrementalMeshStage::IncrementalMeshStage(const vk::Context& context, const vk::BindingLayout& layout)
     : markDirty_(context, layout, "mark_dirty"),
       markAllDirty_(context, layout, "mark_all_dirty"),
+      markPending_(context, layout, "mark_pending_dirty"),
       plan_(context, layout, "plan_mesh"),
       collect_(context, layout, "collect_retype"),
       planRetype_(context, layout, "plan_retype"),
@@ -82,6 +83,11 @@ void IncrementalMeshStage::recordMarkTouched(VkCommandBuffer cmd, const FramePus
 
 void IncrementalMeshStage::recordMarkAll(VkCommandBuffer cmd, const FramePush& push, uint32_t blockCapacity) const {
     markAllDirty_.dispatch(cmd, &push, (blockCapacity + WG_LIST - 1) / WG_LIST);
+    vk::memoryBarrier(cmd);
+}
+
+void IncrementalMeshStage::recordMarkPending(VkCommandBuffer cmd, const FramePush& push, uint32_t blockCapacity) const {
+    markPending_.dispatch(cmd, &push, (blockCapacity + WG_LIST - 1) / WG_LIST);
     vk::memoryBarrier(cmd);
 }
 

@@ -58,12 +58,15 @@ public:
     void recordMarkTouched(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters) const;
     // Dirty = every block listed by collect_blocks (record BaselineMeshStage::recordCollect first).
     void recordMarkAll(VkCommandBuffer cmd, const FramePush& push, uint32_t blockCapacity) const;
+    // Also dirty: every listed block with retype bits left over (INCOMPLETE cubes, deferred cubes). After
+    // mark_dirty; needs the live block list.
+    void recordMarkPending(VkCommandBuffer cmd, const FramePush& push, uint32_t blockCapacity) const;
     // lockFree: the claim pass runs as 4 dispatches by cube parity class, without atomics on edge slots.
     void recordMesh(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters, vk::StageTimer* timer,
                     bool lockFree) const;
 
 private:
-    vk::ComputePipeline markDirty_, markAllDirty_, plan_, collect_, planRetype_, claim_, claimClass0_, claimClass1_,
+    vk::ComputePipeline markDirty_, markAllDirty_, markPending_, plan_, collect_, planRetype_, claim_, claimClass0_, claimClass1_,
         claimClass2_, claimClass3_, commitVertices_, update_, updateNew_, updateHeap_, triangulate_, commitChunks_, freeVertices_, freeChunks_,
         commitFree_;
 };
