@@ -20,6 +20,7 @@ struct SoakArgs {
     std::string output, summaryPath;
     size_t frames = 3000;
     size_t laps = 6;
+    size_t rooms = 1;
     int width = 160, height = 120;
     float voxel = 0.05f;
     float maxDepth = 5.0f;
@@ -58,6 +59,9 @@ int runSoak(const SoakArgs& a) {
     const size_t framesPerLap = a.frames / a.laps;
     // One lap of the room's orbit, driven `laps` times: every later lap revisits the poses of the first.
     const std::vector<Pose> lap = synth::cameraPath(framesPerLap, synth::PathKind::Orbit);
+    // With several rooms, lap l is driven in copy l % rooms of the room, kRoomSpacing metres along x: the same
+    // depth images fused at another place, so the world is larger than any keep radius and is still revisited.
+    constexpr double kRoomSpacing = 8.0;   // the room spans under 5 m along x
 
     std::ofstream csv(a.output);
     if (!csv) throw Error("cannot write " + a.output);
@@ -73,8 +77,10 @@ int runSoak(const SoakArgs& a) {
         options.seed = uint32_t(i + 1);
         const Pose& pose = lap[i % framesPerLap];
         DepthImage depth = scene.renderDepth(intrinsics, pose, options);
+        Pose placed = pose;
+        placed(0, 3) += kRoomSpacing * double((i / framesPerLap) % a.rooms);
         auto t0 = std::chrono::steady_clock::now();
-        gpu::FrameReport r = volume.integrate(depth, intrinsics, pose);
+        gpu::FrameReport r = volume.integrate(depth, intrinsics, placed);
         const double wallMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
         double gpuMs = 0;
         for (const auto& [name, ms] : r.stageMs) gpuMs += ms;
@@ -102,7 +108,7 @@ int runSoak(const SoakArgs& a) {
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
     std::cout << "vkmesh soak: " << framesPerLap * a.laps << " frames (" << a.laps << " laps of " << framesPerLap << "), "
-              << a.width << "x" << a.height << ", voxel " << a.voxel << " m, keep radius "
+              << a.rooms << " room(s), " << a.width << "x" << a.height << ", voxel " << a.voxel << " m, keep radius "
               << (a.keepRadius > 0 ? std::to_string(a.keepRadius) + " m" : std::string("off")) << ", recycling "
               << (a.recycle ? "on" : "off") << ", " << seconds << " s\n"
               << "  high water per lap: hash entries / tombstones / blocks / vertices / chunks / triangles\n";
@@ -116,7 +122,7 @@ int runSoak(const SoakArgs& a) {
     }
     std::cout << "  blocks freed " << freed << ", hash rebuilds " << rebuilds << ", warnings " << warnings << "\n";
     if (!a.summaryPath.empty()) {
-        nlohmann::json s = {{"frames", framesPerLap * a.laps}, {"laps", a.laps}, {"width", a.width}, {"height", a.height},
+        nlohmann::json s = {{"frames", framesPerLap * a.laps}, {"laps", a.laps}, {"rooms", a.rooms}, {"width", a.width}, {"height", a.height},
                             {"voxel", a.voxel}, {"keep_radius", a.keepRadius}, {"recycle", a.recycle},
                             {"recycle_after_frames", a.recycleAfter}, {"starve_weight", a.starveWeight},
                             {"block_capacity", volume.config().blockCapacity}, {"hash_capacity", volume.config().hashCapacity},
@@ -139,6 +145,9 @@ std::function<int()> addSoakCommand(CLI::App& app) {
     cmd->add_option("--summary", args->summaryPath, "also write the per-lap high-water marks as JSON");
     cmd->add_option("--frames", args->frames, "frames in all")->check(CLI::PositiveNumber);
     cmd->add_option("--laps", args->laps, "times the camera drives its loop around the room")->check(CLI::PositiveNumber);
+    cmd->add_option("--rooms", args->rooms, "copies of the room, 8 m apart; lap l is driven in copy l % N (a world "
+                                             "larger than the keep radius, still revisited)")
+        ->check(CLI::PositiveNumber);
     cmd->add_option("--width", args->width, "image width")->check(CLI::Range(16, 4096));
     cmd->add_option("--height", args->height, "image height")->check(CLI::Range(16, 4096));
     cmd->add_option("--voxel", args->voxel, "voxel size in metres");
