@@ -58,7 +58,9 @@ def main():
     except ImportError:
         print("matplotlib is not installed: table only", file=sys.stderr)
         return 0
-    fig, axes = plt.subplots(1, len(COLUMNS), figsize=(4.2 * len(COLUMNS), 3.6))
+    fig, grid = plt.subplots(2, 3, figsize=(13, 7))
+    axes = grid.flatten()
+    axes[-1].axis("off")
     for ax, (key, name) in zip(axes, COLUMNS):
         for label, data in runs:
             ax.plot(data["frame"], data[key], label=label, linewidth=1)
