@@ -222,7 +222,6 @@ TEST_F(GpuTest, ExhaustedChunkHeapIsReportedAndFilledInAfterGrowth) { heapExhaus
 // The CLI prints the warnings and its --stats JSON carries the counts.
 TEST_F(GpuTest, CliReportsCapacityEvents) {
     auto dir = test::makeTempDir("capacity_cli");
-    synth::SyntheticScene::defaultRoom();
     auto synthRun = test::runCli("synth " + (dir / "seq").string() + " --frames 3 --width 160 --height 120");
     ASSERT_EQ(synthRun.exitCode, 0) << synthRun.err;
     auto run = test::runCli("fuse " + (dir / "seq").string() + " -o " + (dir / "mesh.ply").string() + " --stats " +

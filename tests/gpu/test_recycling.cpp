@@ -4,7 +4,9 @@
 // remaining TSDF, and against the heap invariants, frame after frame, with the validation layer on.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <cstring>
 #include <iostream>
 #include <map>
@@ -172,6 +174,28 @@ TEST_F(GpuTest, RecyclingIsOffByDefault) {
         EXPECT_EQ(r.counters.hashTombstones, 0u);
         EXPECT_EQ(r.counters.hashEntries, r.counters.blocksInUse);
     }
+}
+
+// `vkmesh soak` writes one CSV row per frame with the occupancy columns, and `fuse --keep-radius --recycle`
+// reports what recycling did in its --stats JSON.
+TEST_F(GpuTest, CliSoakAndFuseWithBoundedMaps) {
+    auto dir = test::makeTempDir("recycling_cli");
+    auto soak = test::runCli("soak -o " + (dir / "soak.csv").string() + " --frames 40 --laps 2 --rooms 2 --keep-radius 2 --recycle");
+    ASSERT_EQ(soak.exitCode, 0) << soak.err;
+    const std::string csv = test::readText(dir / "soak.csv");
+    EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 41);
+    EXPECT_EQ(csv.rfind("frame,lap,hash_entries,hash_tombstones,hash_rebuilt,blocks_in_use,vertices_in_use,chunks_in_use", 0), 0u);
+    EXPECT_NE(soak.out.find("high water per lap"), std::string::npos) << soak.out;
+    auto synthRun = test::runCli("synth " + (dir / "seq").string() + " --frames 12 --width 160 --height 120");
+    ASSERT_EQ(synthRun.exitCode, 0) << synthRun.err;
+    auto fuse = test::runCli("fuse " + (dir / "seq").string() + " -o " + (dir / "mesh.ply").string() + " --stats " +
+                             (dir / "stats.json").string() + " --voxel 0.04 --keep-radius 1.5 --recycle --recycle-after 3 -q");
+    ASSERT_EQ(fuse.exitCode, 0) << fuse.err;
+    const std::string stats = test::readText(dir / "stats.json");
+    for (const char* key : {"\"keep_radius\": 1.5", "\"blocks_freed\"", "\"blocks_retired\"", "\"blocks_starved\"",
+                            "\"hash_tombstones\"", "\"outside_keep_radius\""})
+        EXPECT_NE(stats.find(key), std::string::npos) << key;
+    std::filesystem::remove_all(dir);
 }
 
 }  // namespace
