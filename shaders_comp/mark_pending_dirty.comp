@@ -1,8 +1,8 @@
 #version 460
-// Incremental mesh, after mark_dirty, only in a frame that follows a heap growth (GpuVolume::growMeshHeaps)
-// or a frame whose retype list overflowed: every live block (collect_blocks) that still has retype bits set
-// (INCOMPLETE cubes waiting for heap room, or cubes deferred by a full retype list) becomes dirty, so those
-// cubes are rebuilt now instead of whenever the camera next touches their block.
+// Incremental mesh, after mark_dirty, only in the frame after a heap growth (GpuVolume::growMeshHeaps), and
+// in the next ones while that retry overflows the retype list: every live block (collect_blocks) that still
+// has retype bits set (INCOMPLETE cubes waiting for heap room, or cubes deferred by a full retype list)
+// becomes dirty, so those cubes are rebuilt now instead of whenever the camera next touches their block.
 #extension GL_GOOGLE_include_directive : require
 #include "common.glsl"
 

@@ -161,6 +161,14 @@ TEST_F(GpuTest, RadiusAndStarvationTogether) {
     EXPECT_GT(t.retired + t.starved, 0u);
 }
 
+// The paper's lock-free claims (4 parity-class passes) free the same blocks and keep the same invariants.
+TEST_F(GpuTest, RecyclingWithLockFreeClaims) {
+    auto config = recyclingConfig(2.2f, true);
+    config.lockFree = true;
+    RunTotals t = runAndCompare(context(), config, 24, 24);
+    EXPECT_GT(t.freed, 0u);
+}
+
 // Off by default: no recycling counter moves and the hash keeps no tombstones.
 TEST_F(GpuTest, RecyclingIsOffByDefault) {
     static const synth::SyntheticScene scene = synth::SyntheticScene::defaultRoom();
