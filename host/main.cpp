@@ -143,6 +143,7 @@ struct FuseArgs {
     bool recycle = false;
     uint32_t recycleAfter = gpu::GpuVolumeConfig{}.recycleAfterFrames;
     float starveWeight = gpu::GpuVolumeConfig{}.starveWeight;
+    bool growHeaps = false;
     int allocStride = VolumeParams{}.allocationStride;
     int device = -1;
     bool validation = false;
@@ -186,6 +187,7 @@ int commandFuse(const FuseArgs& args) {
     uint64_t hashFull = 0, poolExhausted = 0, touchedOverflow = 0;
     // Every other capacity event and the recycling counts, summed over the frames (the --stats JSON).
     std::map<std::string, uint64_t> events;
+    bool grownSinceLastFrame = false;   // --grow-heaps: the heaps grew and no frame has re-meshed since
     std::vector<std::string> warnings;
     auto warn = [&](const std::string& w) {
         if (warnings.size() < 1000) warnings.push_back(w);
@@ -210,6 +212,7 @@ int commandFuse(const FuseArgs& args) {
         }
         auto t0 = std::chrono::steady_clock::now();
         gpu::FrameReport report = volume.integrate(depth, intrinsics, dataset->frame(i).cameraToWorld);
+        grownSinceLastFrame = false;
         frameWallMs.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
         ++integrated;
         double meshMs = 0;
@@ -243,6 +246,25 @@ int commandFuse(const FuseArgs& args) {
               {"rehash_lost", c.rehashLost}})
             events[name] += value;
         for (const auto& w : report.warnings) warn("frame " + std::to_string(i) + ": " + w);
+        if (args.growHeaps && config.meshMode == gpu::MeshMode::Incremental && (c.vertexExhausted || c.chunkExhausted)) {
+            // Grow the heap that ran out by what the frame could not get, at least doubling it, within what one
+            // storage buffer may hold; the next frame re-meshes the cubes left incomplete.
+            const gpu::GpuVolumeConfig& now = volume.config();
+            auto grown = [&](uint32_t capacity, uint32_t missing, uint64_t bytesEach) {
+                if (!missing) return capacity;
+                const uint64_t wanted = std::max<uint64_t>(2ull * capacity, uint64_t(capacity) + 2ull * missing);
+                return uint32_t(std::min<uint64_t>(wanted, context.maxStorageBufferRange() / bytesEach));
+            };
+            const uint32_t vertices = grown(now.vertexCapacity, c.vertexExhausted, sizeof(gpu::Vertex));
+            const uint32_t chunks = grown(now.chunkCapacity, c.chunkExhausted, gpu::CHUNK_WORDS * 4);
+            if (vertices > now.vertexCapacity || chunks > now.chunkCapacity) {
+                volume.growMeshHeaps(vertices, chunks);
+                grownSinceLastFrame = true;
+                warn("frame " + std::to_string(i) + ": mesh heaps grown to " + std::to_string(vertices) + " vertices, " +
+                     std::to_string(chunks) + " triangle chunks");
+                ++events["heap_growths"];
+            }
+        }
         if (!args.quiet && (tty || (i + 1) % 50 == 0 || i + 1 == dataset->size())) {
             std::fprintf(stderr, "%sframe %zu/%zu  blocks %u  %.1f ms/frame%s", tty ? "\r" : "", i + 1, dataset->size(),
                          report.counters.blocksInUse, frameWallMs.back(), tty ? "   " : "\n");
@@ -250,6 +272,12 @@ int commandFuse(const FuseArgs& args) {
     }
     if (tty && !args.quiet) std::cerr << "\n";
     if (integrated == 0) throw Error("none of the " + std::to_string(dataset->size()) + " frames could be fused");
+    if (grownSinceLastFrame) {
+        // The heaps grew after the last frame: no frame is left to re-mesh the incomplete cubes, so the mesh is
+        // rebuilt from the TSDF (vertex ages restart at the last frame).
+        volume.rebuildMesh();
+        warn("mesh rebuilt after the last frame's heap growth (vertex ages restart)");
+    }
     const double fuseSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
     // The mesh: the persistent shared-vertex mesh compacted on the GPU, or the baseline soup. The baseline's
@@ -435,6 +463,9 @@ int main(int argc, char** argv) {
         ->check(CLI::PositiveNumber);
     fuse->add_option("--starve-weight", fuseArgs.starveWeight, "weight a starving block's corners lose per frame")
         ->check(CLI::PositiveNumber);
+    fuse->add_flag("--grow-heaps", fuseArgs.growHeaps,
+                   "when the vertex or triangle-chunk heap runs out, double it before the next frame (up to one storage "
+                   "buffer) and re-mesh the cubes left incomplete; without it a full heap leaves triangles out, with a warning");
     fuse->add_option("--voxel", fuseArgs.voxel, "voxel (cube) size in metres");
     fuse->add_option("--trunc", fuseArgs.truncVoxels, "truncation distance in voxels");
     fuse->add_option("--max-weight", fuseArgs.maxWeight, "cap of the TSDF weight");

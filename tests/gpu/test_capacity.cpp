@@ -12,6 +12,7 @@
 #include "core/mesh_analysis.h"
 #include "cpu/reference_volume.h"
 #include "gpu/gpu_volume.h"
+#include "io/ply.h"
 #include "gpu_fixture.h"
 #include "mesh_checks.h"
 #include "synth/synthetic_scene.h"
@@ -233,6 +234,16 @@ TEST_F(GpuTest, CliReportsCapacityEvents) {
     for (const char* key : {"\"pool_exhausted\"", "\"vertex_heap_exhausted\"", "\"chunk_heap_exhausted\"", "\"triangles_not_built\"",
                             "\"hash_full\"", "\"blocks_freed\""})
         EXPECT_NE(stats.find(key), std::string::npos) << key;
+    // With --grow-heaps the full heaps are grown and the final mesh is complete: the same as with ample heaps.
+    auto grown = test::runCli("fuse " + (dir / "seq").string() + " -o " + (dir / "grown.ply").string() + " --stats " +
+                              (dir / "grown.json").string() + " --voxel 0.04 --vertices 256 --chunks 256 --grow-heaps -q");
+    ASSERT_EQ(grown.exitCode, 0) << grown.err;
+    EXPECT_NE(grown.err.find("mesh heaps grown to"), std::string::npos) << grown.err;
+    auto ample = test::runCli("fuse " + (dir / "seq").string() + " -o " + (dir / "ample.ply").string() + " --voxel 0.04 -q");
+    ASSERT_EQ(ample.exitCode, 0) << ample.err;
+    Mesh a = readPly(dir / "grown.ply"), b = readPly(dir / "ample.ply");
+    EXPECT_EQ(a.positions.size(), b.positions.size());
+    EXPECT_EQ(canonicalTriangles(a), canonicalTriangles(b));
     std::filesystem::remove_all(dir);
 }
 
