@@ -5,6 +5,7 @@
 //   vkmesh frames DATASET -o f.json     the frames (paths, poses, intrinsics) fuse would use, for peers
 //   vkmesh eval MESH --gt GT.ply        accuracy, completeness, precision/recall/F-score against ground truth
 //   vkmesh render MESH -o view.png      render a mesh offscreen (Vulkan graphics pipeline) to a PNG
+//   vkmesh soak -o soak.csv             long synthetic run with revisits: hash/pool/heap occupancy per frame
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
@@ -27,6 +28,7 @@
 #include "render/mesh_renderer.h"
 #include "eval_command.h"
 #include "render_command.h"
+#include "soak_command.h"
 #include "core/refinement.h"
 #include "gpu/gpu_volume.h"
 #include "io/dataset.h"
@@ -140,6 +142,12 @@ struct FuseArgs {
     uint32_t blocks = 16384;
     uint32_t vertices = gpu::GpuVolumeConfig{}.vertexCapacity;
     uint32_t chunks = gpu::GpuVolumeConfig{}.chunkCapacity;
+    uint32_t hashSlots = 0;   // 0: twice the block capacity, rounded up to a power of two
+    float keepRadius = 0.0f;
+    bool recycle = false;
+    uint32_t recycleAfter = gpu::GpuVolumeConfig{}.recycleAfterFrames;
+    float starveWeight = gpu::GpuVolumeConfig{}.starveWeight;
+    bool growHeaps = false;
     int allocStride = VolumeParams{}.allocationStride;
     int device = -1;
     bool validation = false;
@@ -173,6 +181,11 @@ int commandFuse(const FuseArgs& args) {
     config.meshMode = args.mode == "baseline" ? gpu::MeshMode::Baseline : gpu::MeshMode::Incremental;
     config.vertexCapacity = args.vertices;
     config.chunkCapacity = args.chunks;
+    config.hashCapacity = args.hashSlots;
+    config.keepRadius = args.keepRadius;
+    config.recycle = args.recycle;
+    config.recycleAfterFrames = args.recycleAfter;
+    config.starveWeight = args.starveWeight;
     config.imageWidth = intrinsics.width;
     config.imageHeight = intrinsics.height;
     const bool rendering = args.renderEvery > 0;
@@ -202,6 +215,9 @@ int commandFuse(const FuseArgs& args) {
     std::vector<double> frameWallMs;
     size_t integrated = 0, skipped = 0;
     uint64_t hashFull = 0, poolExhausted = 0, touchedOverflow = 0;
+    // Every other capacity event and the recycling counts, summed over the frames (the --stats JSON).
+    std::map<std::string, uint64_t> events;
+    bool grownSinceLastFrame = false;   // --grow-heaps: the heaps grew and no frame has re-meshed since
     std::vector<std::string> warnings;
     auto warn = [&](const std::string& w) {
         if (warnings.size() < 1000) warnings.push_back(w);
@@ -226,6 +242,7 @@ int commandFuse(const FuseArgs& args) {
         }
         auto t0 = std::chrono::steady_clock::now();
         gpu::FrameReport report = volume.integrate(depth, intrinsics, dataset->frame(i).cameraToWorld);
+        grownSinceLastFrame = false;
         frameWallMs.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
         ++integrated;
         double meshMs = 0;
@@ -241,7 +258,43 @@ int commandFuse(const FuseArgs& args) {
         hashFull += report.counters.hashFull;
         poolExhausted += report.counters.poolExhausted;
         touchedOverflow += report.counters.touchedCount > volume.config().touchedCapacity;
+        const gpu::Counters& c = report.counters;
+        for (const auto& [name, value] :
+             {std::pair<const char*, uint32_t>{"vertex_heap_exhausted", c.vertexExhausted},
+              {"chunk_heap_exhausted", c.chunkExhausted},
+              {"triangles_not_built", c.trianglesInvalid},
+              {"retype_deferred", c.retypeDeferred},
+              {"gc_candidates_dropped", c.candidateCount > volume.config().vertexCapacity ? c.candidateCount - volume.config().vertexCapacity : 0u},
+              {"out_of_range", c.outOfRange},
+              {"ray_truncated", c.rayTruncated},
+              {"outside_keep_radius", c.outsideRadius},
+              {"blocks_retired", c.blocksRetired},
+              {"blocks_starved", c.blocksStarved},
+              {"blocks_freed", c.blocksFreed},
+              {"recycle_deferred", c.recycleDeferred},
+              {"hash_rebuilds", c.hashRebuilt},
+              {"rehash_lost", c.rehashLost}})
+            events[name] += value;
         for (const auto& w : report.warnings) warn("frame " + std::to_string(i) + ": " + w);
+        if (args.growHeaps && config.meshMode == gpu::MeshMode::Incremental && (c.vertexExhausted || c.chunkExhausted)) {
+            // Grow the heap that ran out by what the frame could not get, at least doubling it, within what one
+            // storage buffer may hold; the next frame re-meshes the cubes left incomplete.
+            const gpu::GpuVolumeConfig& now = volume.config();
+            auto grown = [&](uint32_t capacity, uint32_t missing, uint64_t bytesEach) {
+                if (!missing) return capacity;
+                const uint64_t wanted = std::max<uint64_t>(2ull * capacity, uint64_t(capacity) + 2ull * missing);
+                return uint32_t(std::min<uint64_t>(wanted, context.maxStorageBufferRange() / bytesEach));
+            };
+            const uint32_t vertices = grown(now.vertexCapacity, c.vertexExhausted, sizeof(gpu::Vertex));
+            const uint32_t chunks = grown(now.chunkCapacity, c.chunkExhausted, gpu::CHUNK_WORDS * 4);
+            if (vertices > now.vertexCapacity || chunks > now.chunkCapacity) {
+                volume.growMeshHeaps(vertices, chunks);
+                grownSinceLastFrame = true;
+                warn("frame " + std::to_string(i) + ": mesh heaps grown to " + std::to_string(vertices) + " vertices, " +
+                     std::to_string(chunks) + " triangle chunks");
+                ++events["heap_growths"];
+            }
+        }
         if (deltaStream) deltaStream->write(report.delta);
         if (rendering) {
             const Pose& pose = dataset->frame(i).cameraToWorld;
@@ -272,6 +325,12 @@ int commandFuse(const FuseArgs& args) {
     }
     if (tty && !args.quiet) std::cerr << "\n";
     if (integrated == 0) throw Error("none of the " + std::to_string(dataset->size()) + " frames could be fused");
+    if (grownSinceLastFrame) {
+        // The heaps grew after the last frame: no frame is left to re-mesh the incomplete cubes, so the mesh is
+        // rebuilt from the TSDF (vertex ages restart at the last frame).
+        volume.rebuildMesh();
+        warn("mesh rebuilt after the last frame's heap growth (vertex ages restart)");
+    }
     const double fuseSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
     // The mesh: the persistent shared-vertex mesh compacted on the GPU, or the baseline soup. The baseline's
@@ -332,7 +391,10 @@ int commandFuse(const FuseArgs& args) {
     stats["allocation_stride"] = args.allocStride;
     stats["max_depth"] = args.data.maxDepth;
     stats["blocks"] = {{"in_use", k.blocksInUse}, {"capacity", volume.config().blockCapacity},
-                       {"hash_capacity", volume.config().hashCapacity}};
+                       {"hash_capacity", volume.config().hashCapacity}, {"hash_entries", k.hashEntries},
+                       {"hash_tombstones", k.hashTombstones}};
+    stats["recycling"] = {{"keep_radius", args.keepRadius}, {"recycle", args.recycle},
+                          {"recycle_after_frames", args.recycleAfter}, {"starve_weight", args.starveWeight}};
     stats["mesh"] = {{"vertices", mesh.positions.size()},
                      {"triangles", mesh.triangles.size()},
                      {"path", out.string()},
@@ -374,8 +436,10 @@ int commandFuse(const FuseArgs& args) {
     for (const auto& p : volume.pools()) pools[p.name] = p.bytes, total += p.bytes;
     stats["gpu_pool_bytes"] = pools;
     stats["gpu_bytes_total"] = total;
-    stats["capacity_events"] = {{"hash_full", hashFull}, {"pool_exhausted", poolExhausted},
-                                {"frames_touching_more_than_capacity", touchedOverflow}};
+    json capacityEvents = {{"hash_full", hashFull}, {"pool_exhausted", poolExhausted},
+                           {"frames_touching_more_than_capacity", touchedOverflow}};
+    for (const auto& [name, total] : events) capacityEvents[name] = total;
+    stats["capacity_events"] = capacityEvents;
     stats["warnings"] = warnings;
     if (!args.statsPath.empty()) {
         std::ofstream file(args.statsPath);
@@ -460,6 +524,21 @@ int main(int argc, char** argv) {
     fuse->add_flag("--lock-free", fuseArgs.lockFree, "claim edge vertices in 4 parity-class passes without atomics (paper's lock-free)");
     fuse->add_option("--vertices", fuseArgs.vertices, "vertex heap capacity")->check(CLI::PositiveNumber);
     fuse->add_option("--chunks", fuseArgs.chunks, "triangle chunk heap capacity (5 triangles each)")->check(CLI::PositiveNumber);
+    fuse->add_option("--hash-slots", fuseArgs.hashSlots, "spatial hash capacity, a power of two (0 = 2x --blocks)");
+    fuse->add_option("--keep-radius", fuseArgs.keepRadius,
+                     "bounded map: keep only blocks within R metres of the camera; farther ones are not allocated and are "
+                     "freed with their mesh (0 = off, the default)")
+        ->check(CLI::NonNegativeNumber);
+    fuse->add_flag("--recycle", fuseArgs.recycle,
+                   "bounded map: blocks not seen for --recycle-after frames lose --starve-weight per frame and are freed "
+                   "(with their mesh) once empty (off by default)");
+    fuse->add_option("--recycle-after", fuseArgs.recycleAfter, "frames without a touch before a block starves")
+        ->check(CLI::PositiveNumber);
+    fuse->add_option("--starve-weight", fuseArgs.starveWeight, "weight a starving block's corners lose per frame")
+        ->check(CLI::PositiveNumber);
+    fuse->add_flag("--grow-heaps", fuseArgs.growHeaps,
+                   "when the vertex or triangle-chunk heap runs out, double it before the next frame (up to one storage "
+                   "buffer) and re-mesh the cubes left incomplete; without it a full heap leaves triangles out, with a warning");
     fuse->add_option("--voxel", fuseArgs.voxel, "voxel (cube) size in metres");
     fuse->add_option("--trunc", fuseArgs.truncVoxels, "truncation distance in voxels");
     fuse->add_option("--max-weight", fuseArgs.maxWeight, "cap of the TSDF weight");
@@ -490,6 +569,7 @@ int main(int argc, char** argv) {
 
     auto runEval = vkmesh::addEvalCommand(app);
     auto runRender = vkmesh::addRenderCommand(app);
+    auto runSoak = vkmesh::addSoakCommand(app);
 
     try {
         app.parse(argc, argv);
@@ -505,6 +585,7 @@ int main(int argc, char** argv) {
         if (app.got_subcommand("eval")) return runEval();
         if (app.got_subcommand("render")) return runRender();
         if (app.got_subcommand("deltas")) return commandDeltas(deltasIn, deltasOut, deltasUntil);
+        if (app.got_subcommand("soak")) return runSoak();
     } catch (const vkmesh::Error& e) {
         std::cerr << "vkmesh: error: " << e.what() << "\n";
         return 2;

@@ -8,7 +8,7 @@
 
 layout(local_size_x = WG_PIXELS_X, local_size_y = WG_PIXELS_Y) in;
 
-uint requests = 0u, found = 0u, inserted = 0u, full = 0u, outOfRange = 0u;
+uint requests = 0u, found = 0u, inserted = 0u, full = 0u, outOfRange = 0u, outsideRadius = 0u;
 
 // Claims `cell`'s key without waiting on anyone: one compare-and-swap per probed slot. A slot that
 // already holds the key needs no atomic (keys are never removed during this dispatch, so a plain read
@@ -31,6 +31,9 @@ uint insertKey(ivec3 cell) {
 void touchBlock(ivec3 cell) {
     ++requests;
     if (!blockCoordInRange(cell)) { ++outOfRange; return; }
+    // Bounded maps: blocks beyond the keep radius are not allocated (the recycling passes free those
+    // the camera has left behind), so the map stays a ball around the camera.
+    if (blockOutsideKeepRadius(cell)) { ++outsideRadius; return; }
     uint slot = insertKey(cell);
     if (slot == NO_BLOCK) return;
     // The first invocation to stamp the slot with this frame's number lists it, so each block appears
@@ -97,5 +100,6 @@ void main() {
     ADD_COUNTER(blocksInserted, inserted);
     ADD_COUNTER(hashFull, full);
     ADD_COUNTER(outOfRange, outOfRange);
+    ADD_COUNTER(outsideRadius, outsideRadius);
     ADD_COUNTER(rayTruncated, truncated);
 }

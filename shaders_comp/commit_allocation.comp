@@ -11,4 +11,5 @@ void main() {
     counters.poolExhausted = counters.allocRequests - granted;
     counters.freeTop -= granted;
     counters.blocksInUse += granted;
+    counters.hashEntries += counters.blocksInserted;
 }

@@ -84,6 +84,18 @@ uint findSlot(ivec3 c) {
     return NO_BLOCK;
 }
 
+// Whether a block lies beyond the keep radius around the camera (its centre farther than keepRadius):
+// such blocks are neither allocated nor kept. The CPU reference (src/cpu/reference_volume.cpp) repeats
+// these float operations in this order.
+bool blockOutsideKeepRadius(ivec3 c) {
+    if (params.keepRadius <= 0.0) return false;
+    float blockSize = params.voxelSize * float(BLOCK_SIDE);
+    precise vec3 centre = (vec3(c) + 0.5) * blockSize;
+    precise vec3 d = centre - vec3(frame.cameraToWorld[0].w, frame.cameraToWorld[1].w, frame.cameraToWorld[2].w);
+    precise float distance2 = d.x * d.x + d.y * d.y + d.z * d.z;
+    return distance2 > params.keepRadius * params.keepRadius;
+}
+
 // Block index of a block coordinate, or NO_BLOCK when it is not allocated.
 uint findBlock(ivec3 c) {
     uint slot = findSlot(c);
@@ -110,6 +122,24 @@ uint edgeCompSwap(uint slot, uint expected, uint v) {
     if (a == 0u) return atomicCompSwap(edgeVertexX[c], expected, v);
     if (a == 1u) return atomicCompSwap(edgeVertexY[c], expected, v);
     return atomicCompSwap(edgeVertexZ[c], expected, v);
+}
+
+// When a TSDF corner's sign or observed state (weight >= minMeshWeight) flips, the 8 cubes around it may
+// change MC type: their bits are set in their block's retype mask, and the mesh passes retype only those
+// cubes (docs/MESH.md). Cubes at -x/-y/-z of the block's low faces belong to the blocks behind, looked up
+// here, per corner: few corners flip, and a workgroup-wide table would cost a barrier (expensive on
+// lavapipe). Used by fusion and by block recycling (which zeroes or decays weights).
+void markCornerRetype(uint block, uint local) {
+    uvec3 l = uvec3(local % BLOCK_SIDE, (local / BLOCK_SIDE) % BLOCK_SIDE, local / (BLOCK_SIDE * BLOCK_SIDE));
+    for (uint o = 0u; o < 8u; ++o) {
+        uvec3 off = uvec3(o & 1u, (o >> 1) & 1u, (o >> 2) & 1u);
+        uvec3 under = uvec3(lessThan(l, off));   // 1 on an axis where the cube lies in the block behind
+        uint b = any(bvec3(under)) ? findBlock(blockCoords[block].xyz - ivec3(under)) : block;
+        if (b == NO_BLOCK) continue;
+        uvec3 c = (l + uvec3(BLOCK_SIDE) - off) % BLOCK_SIDE;
+        uint cube = (c.z * BLOCK_SIDE + c.y) * BLOCK_SIDE + c.x;
+        atomicOr(retypeMask[b * MASK_WORDS + cube / 32u], 1u << (cube % 32u));
+    }
 }
 
 // ---- grid positions --------------------------------------------------------------------------------

@@ -28,10 +28,15 @@ VKM_CONST VOXELS_PER_BLOCK = 512u;         // BLOCK_SIDE^3
 VKM_CONST KEY_BITS = 21u;
 VKM_CONST KEY_BIAS = 1048576u;             // 2^20: coordinates in [-2^20, 2^20) are representable
 VKM_CONST KEY_AXIS_MASK = 2097151u;        // 2^21 - 1
+// KEY_TOMBSTONE marks the slot of a removed key (block recycling): lookups probe past it, insertions do
+// not reuse it (so a key's probe sequence never changes under a concurrent lookup); the table is rebuilt
+// on the GPU when tombstones pile up (docs/MESH.md, "Recycling blocks").
 #ifdef __cplusplus
 inline constexpr uint64_t KEY_EMPTY = ~uint64_t(0);
+inline constexpr uint64_t KEY_TOMBSTONE = ~uint64_t(0) - 1;
 #else
 const uint64_t KEY_EMPTY = ~uint64_t(0u);
+const uint64_t KEY_TOMBSTONE = ~uint64_t(0u) - uint64_t(1u);
 #endif
 
 // Values stored beside each key: a block index into the pool, or NO_BLOCK while the key holds no block
@@ -126,8 +131,12 @@ struct VolumeParamsGpu {
     uint refine;            // 1: Hamming-distance refinement of cube types (docs/REFINEMENT.md)
     float refineEpsilon;    // metres: only corners with |sdf| below it may be flipped by refinement
     uint vertexUpdate;      // VERTEX_UPDATE_*: how vertices are moved each frame
+    // Bounded maps (docs/MESH.md, "Recycling blocks"); both 0 = off, and then no recycling pass runs.
+    float keepRadius;       // metres: blocks whose centre is farther from the camera are not allocated, and freed
+    uint starveAfterFrames; // blocks not touched for this many frames lose starveWeight per frame; freed at 0
+    float starveWeight;
     uint exportVertexCapacity; // Vertex entries of the export buffer (export_vertices counts what does not fit)
-    uint pad1, pad2;
+    uint pad0, pad1, pad2;
 };
 VKM_CONST VERTEX_UPDATE_AUTO = 0u;     // whichever of the two visits fewer entries this frame
 VKM_CONST VERTEX_UPDATE_HEAP = 1u;     // scan the heap (update_heap_vertices)
@@ -182,7 +191,15 @@ struct Counters {
     uint trianglesInvalid;      // triangles not built because an edge had no vertex (heap exhausted)
     uint retypeCount;           // cubes listed for retyping this pass
     uint retypeDeferred;        // cubes that did not fit in the retype list (their bits stay for the next pass)
-    uint framePad;
+    // Recycling (docs/MESH.md, "Recycling blocks"): all 0 unless keepRadius or starveAfterFrames is set.
+    uint outsideRadius;         // block visits of allocate_blocks beyond keepRadius (not allocated)
+    uint blocksStarved;         // idle blocks whose weights decayed this frame
+    uint blocksRetired;         // blocks beyond keepRadius whose weights were zeroed this frame
+    uint blocksFreed;           // blocks returned to the pool (hash key -> tombstone)
+    uint recycleDeferred;       // empty blocks not freed because they still owned mesh state (retried next frame)
+    uint hashRebuilt;           // 1 when the hash table was rebuilt (tombstones dropped) at the start of the frame
+    uint rehashLost;            // live blocks the rebuild could not re-insert within HASH_MAX_PROBES (must be 0)
+    uint framePad0, framePad1;
     // --- persistent across frames ---
     uint freeTop;               // blocks on the free list
     uint blocksInUse;           // blocks handed out of the pool
@@ -199,14 +216,17 @@ struct Counters {
     uint exportVertices;        // compaction: vertices written
     uint exportTriangles;       //  ... triangles wanted
     uint exportUnreferenced;    //  ... allocated vertices with refcount 0 (0 unless GC fell behind)
+    uint hashEntries;           // hash slots holding a key (with or without a block), tombstones excluded
+    uint hashTombstones;        // hash slots of removed keys (0 again after a rebuild)
     // VkDrawIndexedIndirectCommand of the compacted mesh (finish_export): a renderer draws it with
     // vkCmdDrawIndexedIndirect straight from this buffer. indexCount = 0 when an export buffer overflowed.
     uint drawIndexed[5];
     uint exportDispatch[4];     // export_vertices: over the vertex heap up to its high water (plan_export)
     uint exportTriangleDispatch[4]; // export_triangles: over the triangle slots of the chunks up to their high water
+    uint persistentPad0, persistentPad1;   // the struct stays a multiple of 16 bytes
 };
 VKM_CONST COUNTERS_PER_FRAME_OFFSET = 144u;  // byte offset of validPixels
-VKM_CONST COUNTERS_PER_FRAME_SIZE = 112u;    // 28 per-frame uints
+VKM_CONST COUNTERS_PER_FRAME_SIZE = 144u;    // 36 per-frame uints
 
 // ---- mesh deltas (docs/DELTAS.md) ---------------------------------------------------------------
 // The delta passes have their own descriptor set: the shared one is full (lavapipe allows 32 storage

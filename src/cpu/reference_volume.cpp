@@ -70,6 +70,25 @@ void ReferenceVolume::setRefinement(bool refine, float refineEpsilon) {
     refineEpsilon_ = refineEpsilon < 0.0f ? defaultRefineEpsilon(params_.voxelSize) : refineEpsilon;
 }
 
+void ReferenceVolume::setRecycling(float keepRadius, uint32_t starveAfterFrames, float starveWeight) {
+    keepRadius_ = keepRadius;
+    starveAfterFrames_ = starveAfterFrames;
+    starveWeight_ = starveWeight;
+}
+
+// blockOutsideKeepRadius of common.glsl, the same float operations in the same order.
+bool ReferenceVolume::outsideKeepRadius(const BlockCoord& c, const float cameraToWorld[3][4]) const {
+    if (!(keepRadius_ > 0.0f)) return false;
+    const float blockSize = params_.voxelSize * float(BLOCK_SIDE);
+    float distance2 = 0.0f;
+    for (int k = 0; k < 3; ++k) {
+        const float centre = (float(c[k]) + 0.5f) * blockSize;
+        const float d = centre - cameraToWorld[k][3];
+        distance2 = k == 0 ? d * d : distance2 + d * d;
+    }
+    return distance2 > keepRadius_ * keepRadius_;
+}
+
 size_t ReferenceVolume::retypeCubeCount() const {
     size_t n = 0;
     for (const auto& [coord, mask] : retypeCubes_) n += mask.count();
@@ -99,6 +118,7 @@ std::vector<BlockCoord> ReferenceVolume::blocksTouchedBy(const DepthImage& depth
             bool complete = walkBand(a, b, [&](const BlockCoord& c) {
                 ++local.blockRequests;
                 if (!inKeyRange(c)) return;
+                if (outsideKeepRadius(c, push.cameraToWorld)) { ++local.outsideRadius; return; }
                 if (seen.insert(c).second) order.push_back(c);
             });
             if (!complete) ++local.rayTruncated;
@@ -151,6 +171,27 @@ ReferenceFrameStats ReferenceVolume::integrate(const DepthImage& depth, const In
         }
     }
     lastTouched_ = std::move(touched);
+
+    // Recycling (recycle_retire.comp, then recycle_free.comp after the mesh passes).
+    ++frame_;
+    if (keepRadius_ > 0.0f || starveAfterFrames_ > 0) {
+        for (const BlockCoord& c : lastTouched_) lastTouchedFrame_[c] = frame_;
+        for (auto it = blocks_.begin(); it != blocks_.end();) {
+            const bool retire = outsideKeepRadius(it->first, push.cameraToWorld);
+            const bool starve = !retire && starveAfterFrames_ > 0 && frame_ - lastTouchedFrame_[it->first] >= starveAfterFrames_;
+            if (!retire && !starve) { ++it; continue; }
+            ++(retire ? stats.blocksRetired : stats.blocksStarved);
+            bool empty = true;
+            for (float& w : it->second.weight) {
+                w = retire ? 0.0f : std::max(w - starveWeight_, 0.0f);
+                empty = empty && w == 0.0f;
+            }
+            if (!empty) { ++it; continue; }
+            ++stats.blocksFreed;
+            lastTouchedFrame_.erase(it->first);
+            it = blocks_.erase(it);
+        }
+    }
 
     // The 8 cubes around every flipped corner, in the blocks that exist now.
     retypeCubes_.clear();

@@ -31,6 +31,10 @@ struct ReferenceFrameStats {
     uint32_t touchedCount = 0;
     uint32_t updatedVoxels = 0;
     uint32_t rayTruncated = 0;
+    uint32_t outsideRadius = 0;    // recycling (setRecycling): block visits beyond the keep radius
+    uint32_t blocksStarved = 0;
+    uint32_t blocksRetired = 0;
+    uint32_t blocksFreed = 0;
 };
 
 // Which cubes the incremental mesh re-evaluates after a frame (docs/MESH.md, docs/REFINEMENT.md): per block,
@@ -51,6 +55,13 @@ public:
     float refineEpsilon() const { return refineEpsilon_; }
     float minMeshWeight() const { return minMeshWeight_; }
     const VolumeParams& params() const { return params_; }
+
+    // Bounded maps, the rules of the GPU's recycling passes (shaders_comp/recycle_*.comp, docs/MESH.md): blocks
+    // whose centre is farther than keepRadius metres from the camera (> 0) are not allocated, and existing ones
+    // have their weights zeroed; blocks not touched for starveAfterFrames frames (> 0) lose starveWeight per
+    // corner per frame; either kind is removed once all its weights are 0. Applied at the end of integrate().
+    // (lastFlipped() and retypeCubes() do not include the corners recycling changes.)
+    void setRecycling(float keepRadius, uint32_t starveAfterFrames, float starveWeight);
 
     ReferenceFrameStats integrate(const DepthImage& depth, const Intrinsics& intrinsics, const Pose& cameraToWorld);
 
@@ -88,6 +99,12 @@ private:
     bool refine_ = false;
     float refineEpsilon_ = 0.0f;
     std::map<BlockCoord, ReferenceBlock> blocks_;
+    bool outsideKeepRadius(const BlockCoord& c, const float cameraToWorld[3][4]) const;
+    float keepRadius_ = 0.0f;
+    uint32_t starveAfterFrames_ = 0;
+    float starveWeight_ = 0.0f;
+    uint32_t frame_ = 0;                             // integrate() calls so far (the GPU's frame number)
+    std::map<BlockCoord, uint32_t> lastTouchedFrame_;   // the GPU's hash stamp of each block
     std::vector<BlockCoord> lastTouched_;
     std::vector<std::array<int, 3>> lastFlipped_;
     std::map<BlockCoord, CubeMask> retypeCubes_;

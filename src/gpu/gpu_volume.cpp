@@ -74,6 +74,11 @@ GpuVolumeConfig resolved(GpuVolumeConfig c) {
     c.meshVertexCapacity = std::max(c.meshVertexCapacity, 1024u);
     if (c.meshMode != MeshMode::Incremental && (c.publishMesh || c.trackDeltas))
         throw Error("publishing the mesh and mesh deltas need the incremental mesh mode");
+    if (!(c.keepRadius >= 0.0f)) throw Error("keep radius " + std::to_string(c.keepRadius) + " m must be >= 0 (0 = off)");
+    if (c.recycle && (c.recycleAfterFrames == 0 || !(c.starveWeight > 0.0f)))
+        throw Error("recycling needs recycleAfterFrames >= 1 and a starve weight > 0");
+    if (!(c.hashRebuildTombstoneFraction > 0.0f && c.hashRebuildTombstoneFraction <= 1.0f))
+        throw Error("hash rebuild tombstone fraction must be in (0, 1]");
     return c;
 }
 
@@ -167,6 +172,7 @@ GpuVolume::GpuVolume(const vk::Context& context, const GpuVolumeConfig& config)
       baselineMesh_(context, layout_),
       incrementalMesh_(context, layout_),
       exportMesh_(context, layout_),
+      recycle_(context, layout_),
       recorder_(context),
       timer_(context) {
     const GpuVolumeConfig& c = config_;
@@ -228,6 +234,9 @@ GpuVolume::GpuVolume(const vk::Context& context, const GpuVolumeConfig& config)
     gp.refineEpsilon = c.refineEpsilonVoxels * c.params.voxelSize;
     gp.vertexUpdate = c.vertexUpdate;
     gp.exportVertexCapacity = exportVertexCapacity_;
+    gp.keepRadius = c.keepRadius;
+    gp.starveAfterFrames = c.recycle ? c.recycleAfterFrames : 0u;
+    gp.starveWeight = c.starveWeight;
     vk::uploadToBuffer(context, params_, &gp, sizeof(gp));
     auto tables = packMarchingCubesTables();
     vk::uploadToBuffer(context, mcTables_, tables.data(), tables.size() * 4);
@@ -341,6 +350,17 @@ FrameReport GpuVolume::integrate(const DepthImage& depth, const Intrinsics& intr
         Counters last = readCounters();
         ensureExportCapacity(last.verticesInUse + last.verticesInUse / 8 + 4096, last.liveTriangles + last.liveTriangles / 8 + 8192);
     }
+    const bool recycling = this->recycling();
+    // Tombstones of freed keys make probes longer and are never reused by insertions: past the threshold
+    // (read from the previous frame's counters) the table is rebuilt before this frame allocates.
+    const bool rebuildHash = recycling && double(readCounters().hashTombstones) >
+                                              double(config_.hashRebuildTombstoneFraction) * config_.hashCapacity;
+    auto collectLiveBlocks = [&](VkCommandBuffer cmd) {
+        vkCmdFillBuffer(cmd, counters_.handle(), offsetof(Counters, liveBlockCount), sizeof(uint32_t), 0);
+        vk::memoryBarrier(cmd);
+        baselineMesh_.recordCollect(cmd, push, config_.hashCapacity);
+    };
+
     VkCommandBuffer cmd = recorder_.begin();
     timer_.reset(cmd);
     // Execution dependency on everything submitted before (an application's draws reading the last
@@ -352,14 +372,32 @@ FrameReport GpuVolume::integrate(const DepthImage& depth, const Intrinsics& intr
     vkCmdFillBuffer(cmd, counters_.handle(), COUNTERS_PER_FRAME_OFFSET, COUNTERS_PER_FRAME_SIZE, 0);
     vk::memoryBarrier(cmd);
     timer_.mark(cmd, "start");
+    if (rebuildHash) {
+        collectLiveBlocks(cmd);
+        recycle_.recordRebuildHash(cmd, push, hashKeys_, hashValues_, config_.blockCapacity);
+        timer_.mark(cmd, "rehash");
+    }
     allocate_.record(cmd, push, counters_, uint32_t(config_.params.allocationStride));
     timer_.mark(cmd, "allocate");
     fuse_.record(cmd, push, counters_);
     timer_.mark(cmd, "fuse");
-    if (config_.meshMode == MeshMode::Incremental) {
+    const bool incremental = config_.meshMode == MeshMode::Incremental;
+    const bool retryPending = incremental && retryPending_;
+    if (incremental) {
         incrementalMesh_.recordMarkTouched(cmd, push, counters_);
         timer_.mark(cmd, "mesh_mark");
-        incrementalMesh_.recordMesh(cmd, push, counters_, &timer_, config_.lockFree);
+    }
+    if (recycling || retryPending) collectLiveBlocks(cmd);
+    if (retryPending) incrementalMesh_.recordMarkPending(cmd, push, config_.blockCapacity);
+    if (recycling) {
+        recycle_.recordRetire(cmd, push, counters_);
+        timer_.mark(cmd, "recycle_retire");
+    }
+    if (incremental) incrementalMesh_.recordMesh(cmd, push, counters_, &timer_, config_.lockFree);
+    if (recycling) {
+        // The live block list is still the one collected above: the mesh passes do not touch the hash.
+        recycle_.recordFree(cmd, push, counters_);
+        timer_.mark(cmd, "recycle_free");
     }
     if (config_.publishMesh) {
         recordExport(cmd);
@@ -385,6 +423,9 @@ FrameReport GpuVolume::integrate(const DepthImage& depth, const Intrinsics& intr
         report.delta.frame = frameNumber_;
     }
     const Counters& k = report.counters;
+    // Cubes deferred by a full retype list are left for the next frame's retry; INCOMPLETE cubes are retried
+    // once after a growth (while the heap stays full they wait for their block to be dirty again).
+    if (retryPending) retryPending_ = k.retypeDeferred > 0;
     if (k.hashFull)
         report.warnings.push_back(std::to_string(k.hashFull) + " block insertions found no free hash slot within " +
                                   std::to_string(HASH_MAX_PROBES) + " probes (hash capacity " +
@@ -410,6 +451,13 @@ FrameReport GpuVolume::integrate(const DepthImage& depth, const Intrinsics& intr
     if (k.candidateCount > config_.vertexCapacity)
         report.warnings.push_back(std::to_string(k.candidateCount - config_.vertexCapacity) +
                                   " garbage-collection candidates did not fit in their list; those vertices stay allocated until re-meshed");
+    if (k.recycleDeferred)
+        report.warnings.push_back(std::to_string(k.recycleDeferred) + " empty blocks were not freed because they still owned mesh "
+                                  "vertices or triangles (garbage collection fell behind); retried next frame");
+    if (k.rehashLost)
+        report.warnings.push_back("hash rebuild could not re-insert " + std::to_string(k.rehashLost) + " live blocks within " +
+                                  std::to_string(HASH_MAX_PROBES) + " probes (hash capacity " + std::to_string(config_.hashCapacity) +
+                                  "); their memory is lost until the volume is recreated: raise the hash capacity");
     if (k.rayTruncated)
         report.warnings.push_back(std::to_string(k.rayTruncated) + " pixels' truncation bands crossed more than " +
                                   std::to_string(RAY_MAX_BLOCKS) + " blocks and were cut");
@@ -625,6 +673,91 @@ void GpuVolume::rebuildMesh() {
     throw Error("mesh rebuild did not finish in " + std::to_string(maxPasses) + " passes");
 }
 
+void GpuVolume::growMeshHeaps(uint32_t vertexCapacity, uint32_t chunkCapacity) {
+    if (config_.meshMode != MeshMode::Incremental) throw Error("growMeshHeaps needs the incremental mesh mode");
+    const uint32_t oldVertices = config_.vertexCapacity, oldChunks = config_.chunkCapacity;
+    vertexCapacity = std::max(vertexCapacity, oldVertices);
+    chunkCapacity = std::max(chunkCapacity, oldChunks);
+    if (vertexCapacity == oldVertices && chunkCapacity == oldChunks) return;
+    if (vertexCapacity >= CLAIMED_SLOT) throw Error("vertex capacity " + std::to_string(vertexCapacity) + " must be < 2^32 - 2");
+    if (chunkCapacity >= (1u << (32 - CUBE_CHUNK_SHIFT)) - 1)
+        throw Error("triangle chunk capacity " + std::to_string(chunkCapacity) + " must be < 2^23 - 1");
+    for (VkDeviceSize bytes : {VkDeviceSize(vertexCapacity) * sizeof(Vertex), VkDeviceSize(chunkCapacity) * CHUNK_WORDS * 4})
+        if (bytes > context_.maxStorageBufferRange())
+            throw Error("a mesh heap of " + std::to_string(bytes) + " bytes exceeds one storage buffer on this device (" +
+                        std::to_string(context_.maxStorageBufferRange()) + " bytes)");
+    Counters k{};
+    vk::downloadFromBuffer(context_, counters_, &k, sizeof(k));
+    // The free stacks (entries [0, top) are free indices, popped from the top): the new indices go UNDER the
+    // old entries, highest first, so that holes and old indices are reused before any new one and new ones are
+    // handed out in ascending order. That keeps every live vertex below the high water, which
+    // update_heap_vertices relies on.
+    auto growStack = [&](vk::Buffer& stack, uint32_t top, uint32_t oldCapacity, uint32_t newCapacity, const char* name, uint32_t binding) {
+        const uint32_t added = newCapacity - oldCapacity;
+        std::vector<uint32_t> entries(top + added);
+        for (uint32_t i = 0; i < added; ++i) entries[i] = newCapacity - 1 - i;
+        if (top) vk::downloadFromBuffer(context_, stack, entries.data() + added, VkDeviceSize(top) * 4);
+        stack = makeBuffer(VkDeviceSize(newCapacity) * 4, 0, name, binding);
+        vk::uploadToBuffer(context_, stack, entries.data(), VkDeviceSize(entries.size()) * 4);
+    };
+    // Heap contents are copied on the GPU; the old buffers live until the copy is done.
+    std::vector<vk::Buffer> old;
+    VkCommandBuffer cmd = recorder_.begin();
+    auto growCopy = [&](vk::Buffer& buffer, VkDeviceSize newSize, const char* name, uint32_t binding) {
+        old.push_back(std::move(buffer));
+        buffer = makeBuffer(newSize, 0, name, binding);
+        VkBufferCopy region{0, 0, old.back().size()};
+        vkCmdCopyBuffer(cmd, old.back().handle(), buffer.handle(), 1, &region);
+        return old.back().size();
+    };
+    if (vertexCapacity > oldVertices) {
+        VkDeviceSize kept = growCopy(vertices_, VkDeviceSize(vertexCapacity) * sizeof(Vertex), "vertex heap", BINDING_VERTICES);
+        vkCmdFillBuffer(cmd, vertices_.handle(), kept, VK_WHOLE_SIZE, 0xFFFFFFFFu);   // new entries: refcount DEAD
+        growCopy(vertexOwner_, VkDeviceSize(vertexCapacity) * 4, "vertex owners", BINDING_VERTEX_OWNER);
+        gcCandidates_ = makeBuffer(VkDeviceSize(vertexCapacity) * 4, 0, "GC candidates", BINDING_GC_CANDIDATES);
+        vertexRemap_ = makeBuffer(VkDeviceSize(vertexCapacity) * 4, 0, "vertex remap", BINDING_VERTEX_REMAP);
+    }
+    if (chunkCapacity > oldChunks) {
+        VkDeviceSize kept = growCopy(chunkTriangles_, VkDeviceSize(chunkCapacity) * CHUNK_WORDS * 4, "triangle chunks", BINDING_CHUNK_TRIANGLES);
+        vkCmdFillBuffer(cmd, chunkTriangles_.handle(), kept, VK_WHOLE_SIZE, INVALID_INDEX);   // new chunks: no triangle
+        chunkRelease_ = makeBuffer(VkDeviceSize(chunkCapacity) * 4, 0, "chunk release list", BINDING_CHUNK_RELEASE);
+    }
+    if (deltaLayout_) {
+        // The delta passes read the heaps through their own set, and their shadows grow with the heaps
+        // (new entries: dead vertices, empty triangle slots, as the heaps' new entries are).
+        auto growShadow = [&](vk::Buffer& shadow, VkDeviceSize newSize, uint32_t fill, const char* name, uint32_t binding) {
+            old.push_back(std::move(shadow));
+            shadow = vk::Buffer(context_, newSize, kStorage, vk::MemoryUse::Device, name);
+            deltaLayout_->bind(binding, shadow);
+            VkBufferCopy region{0, 0, old.back().size()};
+            vkCmdCopyBuffer(cmd, old.back().handle(), shadow.handle(), 1, &region);
+            vkCmdFillBuffer(cmd, shadow.handle(), old.back().size(), VK_WHOLE_SIZE, fill);
+        };
+        if (vertexCapacity > oldVertices)
+            growShadow(prevVertices_, vertices_.size(), 0xFFFFFFFFu, "vertex heap shadow", DELTA_BINDING_PREV_VERTICES);
+        if (chunkCapacity > oldChunks)
+            growShadow(prevChunks_, chunkTriangles_.size(), INVALID_INDEX, "triangle chunk shadow", DELTA_BINDING_PREV_CHUNKS);
+        deltaLayout_->bind(DELTA_BINDING_VERTICES, vertices_);
+        deltaLayout_->bind(DELTA_BINDING_CHUNKS, chunkTriangles_);
+    }
+    vk::memoryBarrier(cmd);
+    recorder_.submitAndWait();
+    old.clear();
+    if (vertexCapacity > oldVertices) growStack(vertexFree_, k.vertexFreeTop, oldVertices, vertexCapacity, "vertex free stack", BINDING_VERTEX_FREE);
+    if (chunkCapacity > oldChunks) growStack(chunkFree_, k.chunkFreeTop, oldChunks, chunkCapacity, "chunk free stack", BINDING_CHUNK_FREE);
+    k.vertexFreeTop += vertexCapacity - oldVertices;
+    k.chunkFreeTop += chunkCapacity - oldChunks;
+    vk::uploadToBuffer(context_, counters_, &k, sizeof(k));
+    config_.vertexCapacity = vertexCapacity;
+    config_.chunkCapacity = chunkCapacity;
+    setParam(&VolumeParamsGpu::vertexCapacity, vertexCapacity);
+    setParam(&VolumeParamsGpu::chunkCapacity, chunkCapacity);
+    VkCommandBuffer readback = recorder_.begin();
+    recordCountersReadback(readback);
+    recorder_.submitAndWait();
+    retryPending_ = true;
+}
+
 MeshStateSnapshot GpuVolume::downloadMeshState() const {
     const GpuVolumeConfig& c = config_;
     MeshStateSnapshot s;
@@ -690,6 +823,7 @@ std::vector<BlockSnapshot> GpuVolume::downloadBlocks() const {
         uint32_t b = values[s];
         BlockSnapshot snap;
         snap.coord = Eigen::Vector3i(coords[4 * b], coords[4 * b + 1], coords[4 * b + 2]);
+        snap.index = b;
         snap.sdf.assign(sdf.begin() + size_t(b) * VOXELS_PER_BLOCK, sdf.begin() + size_t(b + 1) * VOXELS_PER_BLOCK);
         snap.weight.assign(weight.begin() + size_t(b) * VOXELS_PER_BLOCK, weight.begin() + size_t(b + 1) * VOXELS_PER_BLOCK);
         out.push_back(std::move(snap));

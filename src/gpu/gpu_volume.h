@@ -54,6 +54,16 @@ struct GpuVolumeConfig {
     // a shadow copy of the vertex heap and the triangle chunks, and one pass over each per frame.
     bool trackDeltas = false;
     uint32_t deltaRecordCapacity = 1u << 14;   // initial size of each delta record list (grown on demand)
+    // Bounded maps for long runs (docs/MESH.md, "Recycling blocks"). Off by default: then no recycling pass
+    // is recorded and a run is bit-identical to one without these settings.
+    float keepRadius = 0.0f;             // metres; > 0: blocks whose centre is farther from the camera are not
+                                         // allocated, and those already in the map are freed (with their mesh)
+    bool recycle = false;                // starve blocks idle for recycleAfterFrames and free them once empty
+    uint32_t recycleAfterFrames = 100;   // frames without a touch before a block starves
+    float starveWeight = 4.0f;           // weight an idle block's corners lose per frame (max weight 255: ~64 frames)
+    // The hash table is rebuilt on the GPU (tombstones dropped) before a frame when the tombstones of freed keys
+    // exceed this fraction of its slots.
+    float hashRebuildTombstoneFraction = 0.125f;
     int imageWidth = 640, imageHeight = 480;
 };
 
@@ -93,6 +103,7 @@ void recordMeshReadBarrier(VkCommandBuffer cmd);
 // The TSDF of one block as downloaded (tests, snapshots).
 struct BlockSnapshot {
     Eigen::Vector3i coord;
+    uint32_t index = 0;               // its block in the pool
     std::vector<float> sdf, weight;   // VOXELS_PER_BLOCK each, x fastest
 };
 
@@ -154,6 +165,10 @@ public:
     // The last compacted mesh (publishMesh, or the last exportMesh()); empty handles before any.
     MeshBuffers meshBuffers() const;
     MeshStateSnapshot downloadMeshState() const;
+    // Grows the vertex heap and the triangle-chunk heap between frames (never shrinks; the mesh is kept: the
+    // heaps are copied and the new entries pushed on the free stacks). The next frame also re-meshes every
+    // cube left INCOMPLETE while a heap was full, so the missing triangles appear at once.
+    void growMeshHeaps(uint32_t vertexCapacity, uint32_t chunkCapacity);
     // How many cubes carry triangles of each MC type (the stored, possibly refined, type).
     std::array<uint64_t, 256> surfaceCubeTypes() const;
 
@@ -161,6 +176,7 @@ public:
     Counters readCounters() const;
     std::vector<PoolInfo> pools() const;
     const GpuVolumeConfig& config() const { return config_; }
+    bool recycling() const { return config_.keepRadius > 0.0f || config_.recycle; }
     uint32_t framesIntegrated() const { return frameNumber_; }
 
 private:
@@ -200,9 +216,11 @@ private:
     BaselineMeshStage baselineMesh_;
     IncrementalMeshStage incrementalMesh_;
     ExportMeshStage exportMesh_;
+    RecycleStage recycle_;
     vk::CommandRecorder recorder_;
     vk::StageTimer timer_;
     uint32_t frameNumber_ = 0;
+    bool retryPending_ = false;   // next frame: dirty every block with retype bits left (see growMeshHeaps)
     FramePush lastPush_{};
 };
 

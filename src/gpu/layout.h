@@ -7,7 +7,7 @@
 
 namespace vkmesh::gpu {
 
-static_assert(sizeof(VolumeParamsGpu) == 80, "VolumeParamsGpu: std140 layout of 20 scalars");
+static_assert(sizeof(VolumeParamsGpu) == 96, "VolumeParamsGpu: std140 layout of 24 scalars");
 static_assert(sizeof(Counters) % 16 == 0);
 static_assert(offsetof(Counters, assignDispatch) == 0 && offsetof(Counters, blockDispatch) == 16 &&
               offsetof(Counters, listDispatch) == 32 && offsetof(Counters, collectDispatch) == 48 &&
@@ -21,7 +21,7 @@ static_assert(offsetof(Counters, exportUnreferenced) == offsetof(Counters, expor
 static_assert(offsetof(Counters, validPixels) == COUNTERS_PER_FRAME_OFFSET);
 static_assert(offsetof(Counters, freeTop) == COUNTERS_PER_FRAME_OFFSET + COUNTERS_PER_FRAME_SIZE,
               "per-frame counters are one contiguous range, cleared with one fill");
-static_assert(offsetof(Counters, drawIndexed) % 4 == 0 && sizeof(Counters) == 368);
+static_assert(offsetof(Counters, drawIndexed) % 4 == 0 && sizeof(Counters) == 416);
 static_assert(sizeof(DeltaState) == 64 && sizeof(DeltaVertexRecord) == 32 && sizeof(DeltaTriangleRecord) == 16);
 static_assert(sizeof(FramePush) == 128, "push constants: 128 bytes is all lavapipe guarantees");
 static_assert(VOXELS_PER_BLOCK == BLOCK_SIDE * BLOCK_SIDE * BLOCK_SIDE);

@@ -56,6 +56,7 @@ void BaselineMeshStage::record(VkCommandBuffer cmd, const FramePush& push, const
 IncrementalMeshStage::IncrementalMeshStage(const vk::Context& context, const vk::BindingLayout& layout)
     : markDirty_(context, layout, "mark_dirty"),
       markAllDirty_(context, layout, "mark_all_dirty"),
+      markPending_(context, layout, "mark_pending_dirty"),
       plan_(context, layout, "plan_mesh"),
       collect_(context, layout, "collect_retype"),
       planRetype_(context, layout, "plan_retype"),
@@ -82,6 +83,11 @@ void IncrementalMeshStage::recordMarkTouched(VkCommandBuffer cmd, const FramePus
 
 void IncrementalMeshStage::recordMarkAll(VkCommandBuffer cmd, const FramePush& push, uint32_t blockCapacity) const {
     markAllDirty_.dispatch(cmd, &push, (blockCapacity + WG_LIST - 1) / WG_LIST);
+    vk::memoryBarrier(cmd);
+}
+
+void IncrementalMeshStage::recordMarkPending(VkCommandBuffer cmd, const FramePush& push, uint32_t blockCapacity) const {
+    markPending_.dispatch(cmd, &push, (blockCapacity + WG_LIST - 1) / WG_LIST);
     vk::memoryBarrier(cmd);
 }
 
@@ -125,6 +131,40 @@ void IncrementalMeshStage::recordMesh(VkCommandBuffer cmd, const FramePush& push
     commitFree_.dispatch(cmd, &push, 1);
     vk::memoryBarrier(cmd);
     mark("mesh_gc");
+}
+
+RecycleStage::RecycleStage(const vk::Context& context, const vk::BindingLayout& layout)
+    : retire_(context, layout, "recycle_retire"),
+      free_(context, layout, "recycle_free"),
+      commitFree_(context, layout, "commit_recycle"),
+      save_(context, layout, "rehash_save"),
+      insert_(context, layout, "rehash_insert"),
+      commitRehash_(context, layout, "commit_rehash") {}
+
+void RecycleStage::recordRetire(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters) const {
+    retire_.dispatchIndirect(cmd, &push, counters, offsetof(Counters, listDispatch));
+    vk::memoryBarrier(cmd);
+}
+
+void RecycleStage::recordFree(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters) const {
+    free_.dispatchIndirect(cmd, &push, counters, offsetof(Counters, listDispatch));
+    vk::memoryBarrier(cmd);
+    commitFree_.dispatch(cmd, &push, 1);
+    vk::memoryBarrier(cmd);
+}
+
+void RecycleStage::recordRebuildHash(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& hashKeys,
+                                     const vk::Buffer& hashValues, uint32_t blockCapacity) const {
+    const uint32_t groups = (blockCapacity + WG_LIST - 1) / WG_LIST;
+    save_.dispatch(cmd, &push, groups);
+    vk::memoryBarrier(cmd);
+    vkCmdFillBuffer(cmd, hashKeys.handle(), 0, VK_WHOLE_SIZE, 0xFFFFFFFFu);   // KEY_EMPTY
+    vkCmdFillBuffer(cmd, hashValues.handle(), 0, VK_WHOLE_SIZE, NO_BLOCK);
+    vk::memoryBarrier(cmd);
+    insert_.dispatch(cmd, &push, groups);
+    vk::memoryBarrier(cmd);
+    commitRehash_.dispatch(cmd, &push, 1);
+    vk::memoryBarrier(cmd);
 }
 
 ExportMeshStage::ExportMeshStage(const vk::Context& context, const vk::BindingLayout& layout)

@@ -58,14 +58,35 @@ public:
     void recordMarkTouched(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters) const;
     // Dirty = every block listed by collect_blocks (record BaselineMeshStage::recordCollect first).
     void recordMarkAll(VkCommandBuffer cmd, const FramePush& push, uint32_t blockCapacity) const;
+    // Also dirty: every listed block with retype bits left over (INCOMPLETE cubes, deferred cubes). After
+    // mark_dirty; needs the live block list.
+    void recordMarkPending(VkCommandBuffer cmd, const FramePush& push, uint32_t blockCapacity) const;
     // lockFree: the claim pass runs as 4 dispatches by cube parity class, without atomics on edge slots.
     void recordMesh(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters, vk::StageTimer* timer,
                     bool lockFree) const;
 
 private:
-    vk::ComputePipeline markDirty_, markAllDirty_, plan_, collect_, planRetype_, claim_, claimClass0_, claimClass1_,
+    vk::ComputePipeline markDirty_, markAllDirty_, markPending_, plan_, collect_, planRetype_, claim_, claimClass0_, claimClass1_,
         claimClass2_, claimClass3_, commitVertices_, update_, updateNew_, updateHeap_, triangulate_, commitChunks_, freeVertices_, freeChunks_,
         commitFree_;
+};
+
+// Bounded maps (docs/MESH.md, "Recycling blocks"). Phase 1 (recordRetire, after fusion and mark_dirty,
+// before the mesh passes) zeroes the weights of blocks beyond the keep radius and decays those of idle
+// blocks, marking the cubes that read corners which stop being observed; phase 2 (recordFree, after the
+// mesh passes) frees the blocks left with no weight and no mesh state. Both run over the live block list
+// (BaselineMeshStage::recordCollect). recordRebuildHash drops the tombstones freed keys leave in the hash.
+class RecycleStage {
+public:
+    RecycleStage(const vk::Context& context, const vk::BindingLayout& layout);
+    void recordRetire(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters) const;
+    void recordFree(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters) const;
+    // Needs the live block list; clears the table and re-inserts every live block (one CAS each).
+    void recordRebuildHash(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& hashKeys,
+                           const vk::Buffer& hashValues, uint32_t blockCapacity) const;
+
+private:
+    vk::ComputePipeline retire_, free_, commitFree_, save_, insert_, commitRehash_;
 };
 
 // Compaction of the shared-vertex mesh into dense vertex and index buffers (plan_export, export_vertices,

@@ -14,6 +14,7 @@
 #include "cpu/reference_volume.h"
 #include "gpu/gpu_volume.h"
 #include "gpu_fixture.h"
+#include "mesh_checks.h"
 #include "synth/synthetic_scene.h"
 #include "test_support.h"
 
@@ -21,6 +22,8 @@ namespace vkmesh {
 namespace {
 
 using test::GpuTest;
+using test::checkInvariants;
+using test::soupOf;
 
 constexpr int kWidth = 160, kHeight = 120;
 
@@ -52,51 +55,6 @@ void integrateRoom(gpu::GpuVolume& volume, size_t frames, synth::PathKind path =
         gpu::FrameReport r = volume.integrate(scene.renderDepth(intr, pose, options), intr, pose);
         if (reports) reports->push_back(r);
     }
-}
-
-std::vector<Eigen::Vector3f> soupOf(const gpu::ExportedMesh& mesh) {
-    std::vector<Eigen::Vector3f> soup;
-    for (const auto& t : mesh.triangles)
-        for (uint32_t v : t) soup.emplace_back(mesh.vertices[v].px, mesh.vertices[v].py, mesh.vertices[v].pz);
-    return soup;
-}
-
-// Checks every invariant of docs/MESH.md on the raw GPU state; returns the problems found.
-std::vector<std::string> checkInvariants(const gpu::MeshStateSnapshot& s, const gpu::GpuVolumeConfig& config) {
-    std::vector<std::string> problems;
-    auto fail = [&](const std::string& p) { if (problems.size() < 10) problems.push_back(p); };
-    std::vector<uint32_t> uses(s.vertices.size(), 0);
-    for (const auto& t : s.liveTriangles)
-        for (uint32_t v : t) {
-            if (v >= s.vertices.size()) { fail("triangle uses vertex " + std::to_string(v) + " out of range"); continue; }
-            ++uses[v];
-        }
-    uint32_t live = 0;
-    for (uint32_t v = 0; v < s.vertices.size(); ++v) {
-        uint32_t refs = s.vertices[v].refcount;
-        if (refs == gpu::DEAD_REFCOUNT) {
-            if (uses[v]) fail("free vertex " + std::to_string(v) + " used by " + std::to_string(uses[v]) + " triangles");
-            continue;
-        }
-        ++live;
-        if (refs != uses[v]) fail("vertex " + std::to_string(v) + " refcount " + std::to_string(refs) + " but " + std::to_string(uses[v]) + " triangles");
-        if (refs == 0) fail("vertex " + std::to_string(v) + " alive without triangles");
-        if (s.vertexOwner[v] >= s.edgeVertex.size() || s.edgeVertex[s.vertexOwner[v]] != v)
-            fail("vertex " + std::to_string(v) + "'s owner slot does not point back");
-    }
-    for (size_t slot = 0; slot < s.edgeVertex.size(); ++slot) {
-        uint32_t v = s.edgeVertex[slot];
-        if (v == gpu::EMPTY_SLOT) continue;
-        if (v >= s.vertices.size() || s.vertices[v].refcount == gpu::DEAD_REFCOUNT || s.vertexOwner[v] != slot)
-            fail("edge slot " + std::to_string(slot) + " holds " + std::to_string(v) + ", not a live vertex it owns");
-    }
-    const gpu::Counters& k = s.counters;
-    if (live != k.verticesInUse) fail("verticesInUse " + std::to_string(k.verticesInUse) + " but " + std::to_string(live) + " live");
-    if (k.vertexFreeTop + k.verticesInUse != config.vertexCapacity) fail("vertex heap: free + in use != capacity");
-    if (k.chunkFreeTop + k.chunksInUse != config.chunkCapacity) fail("chunk heap: free + in use != capacity");
-    if (k.liveTriangles != s.liveTriangles.size())
-        fail("liveTriangles " + std::to_string(k.liveTriangles) + " but " + std::to_string(s.liveTriangles.size()) + " found");
-    return problems;
 }
 
 Mesh toMesh(const gpu::ExportedMesh& e) {
