@@ -55,6 +55,7 @@ protected:
             EXPECT_EQ(report.delta.frame, volume.framesIntegrated());
             replica.apply(report.delta);
             for (int k = 0; k < 3; ++k) kinds_[k] += report.delta.count(DeltaKind(k));
+            exhausted_ += report.counters.vertexExhausted + report.counters.chunkExhausted;
             if (deltas) deltas->push_back(report.delta);
             expectSameMesh(volume, replica, "frame " + std::to_string(i + 1));
         }
@@ -70,6 +71,7 @@ protected:
     }
 
     size_t kinds_[3] = {0, 0, 0};
+    uint64_t exhausted_ = 0;
 };
 
 TEST_F(MeshDeltas, ReplicaFollowsTheMeshFrameByFrame) {
@@ -89,6 +91,20 @@ TEST_F(MeshDeltas, RecordListsGrowWithoutLosingChanges) {
     MeshReplica replica;
     integrateAndCheck(volume, replica, 0, 3);
     EXPECT_GT(kinds_[uint32_t(DeltaKind::Added)], 64u * 10);
+}
+
+TEST_F(MeshDeltas, FollowHeapExhaustionGrowthAndRecycling) {
+    gpu::GpuVolumeConfig config = deltaConfig();
+    config.vertexCapacity = 1024;   // exhausted on the first frames: triangles missing, then added after growth
+    config.chunkCapacity = 512;
+    config.keepRadius = 2.0f;       // blocks leave the map with their triangles: removals
+    gpu::GpuVolume volume(context(), config);
+    MeshReplica replica;
+    integrateAndCheck(volume, replica, 0, 2);
+    EXPECT_GT(exhausted_, 0u) << "the heaps must run out";
+    volume.growMeshHeaps(1u << 17, 1u << 17);
+    integrateAndCheck(volume, replica, 2, 6);
+    EXPECT_GT(kinds_[uint32_t(DeltaKind::Removed)], 0u);
 }
 
 TEST_F(MeshDeltas, ARebuildIsReportedAsADelta) {
