@@ -32,7 +32,11 @@ sanitize="-fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame
 echo "sanitize: building build-asan (clang, $sanitize)"
 cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ \
   -DCMAKE_CXX_FLAGS="$sanitize" -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined" >/dev/null
-cmake --build build-asan -j"$jobs"
+# Only what is run below: the CLI, every CPU test program and the GPU programs of the selected tests
+# (the render and refinement programs are left out to keep the job's build short on 2 cores).
+targets=(vkmesh_cli test_fusion test_incremental_mesh test_cli)
+for f in tests/cpu/test_*.cpp; do targets+=("$(basename "$f" .cpp)"); done
+cmake --build build-asan -j"$jobs" --target "${targets[@]}"
 echo "sanitize: build-asan built after $((SECONDS - start)) s"
 
 # GPU tests under ASan are slow on lavapipe; these cover the GPU paths that handle host memory the most:
@@ -45,7 +49,11 @@ echo "sanitize: running the CPU tests and the selected GPU tests"
 (
   cd build-asan
   ctest --output-on-failure -j"$jobs" -L '^cpu$'
-  ctest --output-on-failure -j"$jobs" -L '^gpu$' -R "^($gpu_tests|$cli_tests)"
+  # detect_leaks=0 for the GPU tests only: LeakSanitizer reports ~35-250 KB per process allocated from
+  # "<unknown module>" frames, i.e. by lavapipe/LLVM code that the Vulkan loader has dlclose()d by exit;
+  # no frame is in vkmesh, and an unloaded module cannot be matched by a suppression. The CPU tests above
+  # keep leak detection on.
+  ASAN_OPTIONS="$ASAN_OPTIONS:detect_leaks=0" ctest --output-on-failure -j"$jobs" -L '^gpu$' -R "^($gpu_tests|$cli_tests)"
 )
 echo "sanitize: tests passed after $((SECONDS - start)) s"
 
