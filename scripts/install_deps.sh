@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages vkmesh needs to build, test and run on lavapipe (software Vulkan).
 # Installs only what is missing; uses sudo when not root. Pass --bench to add Open3D for the peer
-# benchmark.
+# benchmark, --sanitize to add clang with its sanitizer and libFuzzer runtimes (libclang-rt-14-dev holds
+# libclang_rt.fuzzer/asan/ubsan) and llvm-symbolizer for readable reports (scripts/ci/10-sanitize-fuzz.sh).
 set -euo pipefail
 
 packages=(
@@ -9,9 +10,13 @@ packages=(
   libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers vulkan-tools glslang-tools spirv-tools
   libeigen3-dev libopencv-core-dev libopencv-imgcodecs-dev libcli11-dev nlohmann-json3-dev libgtest-dev
 )
-if [[ "${1:-}" == "--bench" ]]; then
-  packages+=(python3-open3d python3-numpy)
-fi
+for arg in "$@"; do
+  case "$arg" in
+    --bench) packages+=(python3-open3d python3-numpy) ;;
+    --sanitize) packages+=(clang libclang-rt-14-dev llvm-14) ;;
+    *) echo "install_deps.sh: unknown option $arg" >&2; exit 2 ;;
+  esac
+done
 
 missing=()
 for p in "${packages[@]}"; do

@@ -1,4 +1,5 @@
 #include "io/dataset.h"
+#include "io/parsers.h"
 
 #include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
@@ -8,6 +9,9 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <cstring>
+#include <iterator>
+#include <limits>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -51,6 +55,7 @@ std::string fmtTime(double t) {
 
 // "file:line" for messages; the whole path so that the user can open it straight away.
 std::string at(const fs::path& file, size_t line) { return file.string() + ":" + std::to_string(line); }
+std::string at(const std::string& source, size_t line) { return source + ":" + std::to_string(line); }
 
 std::vector<std::string> splitWhitespace(const std::string& line) {
     std::vector<std::string> out;
@@ -88,9 +93,7 @@ struct TextLine {
 
 // The non-blank, non-comment lines of a text file. Blank lines (a trailing newline, CRLF endings) are
 // harmless and skipped; '#' starts a comment line as in the TUM files.
-std::vector<TextLine> readDataLines(const fs::path& file) {
-    std::ifstream in(file);
-    if (!in) throw Error("cannot open " + file.string());
+std::vector<TextLine> readDataLines(std::istream& in, const std::string& source) {
     std::vector<TextLine> out;
     std::string line;
     for (size_t n = 1; std::getline(in, line); ++n) {
@@ -99,8 +102,14 @@ std::vector<TextLine> readDataLines(const fs::path& file) {
         if (first == std::string::npos || line[first] == '#') continue;
         out.push_back({n, splitWhitespace(line)});
     }
-    if (in.bad()) throw Error("error while reading " + file.string());
+    if (in.bad()) throw Error("error while reading " + source);
     return out;
+}
+
+std::ifstream openText(const fs::path& file) {
+    std::ifstream in(file);
+    if (!in) throw Error("cannot open " + file.string());
+    return in;
 }
 
 // True if `word` occurs in `name` not preceded by a letter and not followed by a digit: "tum_fr1_rpy" and
@@ -157,17 +166,11 @@ std::string describeType(const cv::Mat& m) {
 cv::Mat readRawDepth(const fs::path& file) {
     std::error_code ec;
     if (!fs::is_regular_file(file, ec)) throw Error("depth image " + file.string() + " does not exist");
-    cv::Mat img;
-    try {
-        img = cv::imread(file.string(), cv::IMREAD_UNCHANGED);
-    } catch (const cv::Exception& e) {
-        throw Error("cannot decode depth image " + file.string() + ": " + e.what());
-    }
-    if (img.empty()) throw Error("cannot decode depth image " + file.string() + " (unreadable or corrupt)");
-    if (img.type() != CV_16UC1)
-        throw Error("depth image " + file.string() + " is " + describeType(img) + " (" + std::to_string(img.cols) +
-                    "x" + std::to_string(img.rows) + "); expected 16-bit unsigned, 1 channel");
-    return img;
+    std::ifstream in(file, std::ios::binary);
+    if (!in) throw Error("cannot open depth image " + file.string());
+    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (in.bad()) throw Error("error while reading depth image " + file.string());
+    return io::decodeDepthPng(bytes, file.string());
 }
 
 // ---------------------------------------------------------------------------------------------------
@@ -188,6 +191,258 @@ Pose poseFromQuaternion(double tx, double ty, double tz, double qx, double qy, d
     T.topRightCorner<3, 1>() = Eigen::Vector3d(tx, ty, tz);
     return T;
 }
+
+}  // namespace
+
+// =====================================================================================================
+// The parsers on text and bytes (io/parsers.h); the layout readers below open the files and call these.
+
+namespace io {
+
+std::vector<TimedPose> parseTrajectory(std::istream& in, const std::string& source) {
+    std::vector<TimedPose> out;
+    for (const auto& l : readDataLines(in, source)) {
+        if (l.tokens.size() != 8)
+            throw Error(at(source, l.number) + ": expected 8 values 'timestamp tx ty tz qx qy qz qw', got " +
+                        std::to_string(l.tokens.size()));
+        double v[8];
+        for (int k = 0; k < 8; ++k) {
+            if (!parseNumber(l.tokens[k], v[k]))
+                throw Error(at(source, l.number) + ": '" + l.tokens[k] + "' is not a number");
+            if (!std::isfinite(v[k]))
+                throw Error(at(source, l.number) + ": value '" + l.tokens[k] + "' is not finite");
+        }
+        std::string where = at(source, l.number);
+        Pose T = poseFromQuaternion(v[1], v[2], v[3], v[4], v[5], v[6], v[7], where);
+        validatePose(T, where);
+        out.push_back({v[0], l.number, T});
+    }
+    return out;
+}
+
+std::vector<TimedPath> parseDepthList(std::istream& in, const std::string& source, const fs::path& folder) {
+    std::vector<TimedPath> out;
+    for (const auto& l : readDataLines(in, source)) {
+        double t;
+        if (l.tokens.size() != 2 || !parseNumber(l.tokens[0], t))
+            throw Error(at(source, l.number) + ": expected 'timestamp path', got '" + joined(l.tokens) + "'");
+        if (!std::isfinite(t)) throw Error(at(source, l.number) + ": timestamp " + l.tokens[0] + " is not finite");
+        out.push_back({t, l.number, folder / l.tokens[1]});
+    }
+    return out;
+}
+
+// Pairs "timestamp path" side by side, in either order (TUM's associate.py writes rgb first, ICL-NUIM
+// depth first); the depth pair is the one whose path mentions "depth".
+std::vector<TimedPath> parseAssociations(std::istream& in, const std::string& source, const fs::path& folder) {
+    std::vector<TimedPath> out;
+    for (const auto& l : readDataLines(in, source)) {
+        bool found = false;
+        for (size_t i = 0; i + 1 < l.tokens.size(); ++i) {
+            double t;
+            if (parseNumber(l.tokens[i], t) && lower(l.tokens[i + 1]).find("depth") != std::string::npos) {
+                if (!std::isfinite(t)) throw Error(at(source, l.number) + ": timestamp " + l.tokens[i] + " is not finite");
+                out.push_back({t, l.number, folder / l.tokens[i + 1]});
+                found = true;
+                break;
+            }
+        }
+        if (!found) throw Error(at(source, l.number) + ": no 'timestamp depth/...png' pair on this line");
+    }
+    return out;
+}
+
+// Blocks of five lines: "id id frame" then the camera-to-world matrix, one row per line.
+std::vector<IndexedPose> parseRedwoodLog(std::istream& in, const std::string& source) {
+    std::vector<TextLine> lines = readDataLines(in, source);
+    std::vector<IndexedPose> out;
+    for (size_t i = 0; i < lines.size(); i += 5) {
+        const TextLine& h = lines[i];
+        long long ids[3];
+        if (h.tokens.size() != 3 || !parseInteger(h.tokens[0], ids[0]) || !parseInteger(h.tokens[1], ids[1]) ||
+            !parseInteger(h.tokens[2], ids[2]))
+            throw Error(at(source, h.number) + ": expected a block header of 3 integers 'id id frame', got '" +
+                        joined(h.tokens) + "'");
+        if (i + 5 > lines.size())
+            throw Error(at(source, h.number) + ": the file ends inside the 4x4 matrix of frame " + std::to_string(ids[0]));
+        Pose T;
+        for (int r = 0; r < 4; ++r) {
+            const TextLine& l = lines[i + 1 + r];
+            if (l.tokens.size() != 4)
+                throw Error(at(source, l.number) + ": expected 4 numbers (row " + std::to_string(r + 1) +
+                            " of a 4x4 matrix), got " + std::to_string(l.tokens.size()));
+            for (int c = 0; c < 4; ++c)
+                if (!parseNumber(l.tokens[c], T(r, c)))
+                    throw Error(at(source, l.number) + ": '" + l.tokens[c] + "' is not a number");
+        }
+        validatePose(T, at(source, lines[i + 1].number) + " (frame " + std::to_string(ids[0]) + ")");
+        out.push_back({ids[0], h.number, T});
+    }
+    return out;
+}
+
+std::vector<double> parseNumbers(std::istream& in, const std::string& source, size_t count, const std::string& what) {
+    std::vector<double> out;
+    for (const auto& l : readDataLines(in, source))
+        for (const auto& tok : l.tokens) {
+            double v;
+            if (!parseNumber(tok, v)) throw Error(at(source, l.number) + ": '" + tok + "' is not a number");
+            if (out.size() == count)
+                throw Error(at(source, l.number) + ": more than " + std::to_string(count) + " numbers; expected " +
+                            std::to_string(count) + " (" + what + ")");
+            out.push_back(v);
+        }
+    if (out.size() != count)
+        throw Error(source + ": found " + std::to_string(out.size()) + " numbers; expected " + std::to_string(count) +
+                    " (" + what + ")");
+    return out;
+}
+
+CameraJson parseCameraJson(std::istream& in, const std::string& source) {
+    nlohmann::json j;
+    try {
+        j = nlohmann::json::parse(in);
+    } catch (const nlohmann::json::exception& e) {
+        throw Error(source + ": not valid JSON: " + e.what());
+    }
+    if (!j.is_object()) throw Error(source + ": expected a JSON object with fx, fy, cx, cy, depth_scale");
+    // A value quoted in a message: short, and never throwing on odd content.
+    auto quote = [](const nlohmann::json& v) {
+        std::string s = v.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+        return s.size() > 60 ? s.substr(0, 57) + "..." : s;
+    };
+    auto get = [&](const char* key) -> std::optional<double> {
+        auto it = j.find(key);
+        if (it == j.end()) return std::nullopt;
+        if (!it->is_number()) throw Error(source + ": \"" + key + "\" is " + quote(*it) + "; expected a number");
+        double v = it->get<double>();
+        if (!std::isfinite(v)) throw Error(source + ": \"" + key + "\" = " + fmt(v) + " is not finite");
+        return v;
+    };
+    auto getSize = [&](const char* key) -> std::optional<int> {
+        auto it = j.find(key);
+        if (it == j.end()) return std::nullopt;
+        // Compared as doubles first: a huge or negative integer must not wrap when converted.
+        if (!it->is_number_integer() || it->get<double>() < 1 || it->get<double>() > kMaxDepthImageSide)
+            throw Error(source + ": \"" + key + "\" is " + quote(*it) + "; expected an image size in pixels (1.." +
+                        std::to_string(kMaxDepthImageSide) + ")");
+        return static_cast<int>(it->get<long long>());
+    };
+    CameraJson c;
+    c.fx = get("fx");
+    c.fy = get("fy");
+    c.cx = get("cx");
+    c.cy = get("cy");
+    c.depthScale = get("depth_scale");
+    c.width = getSize("width");
+    c.height = getSize("height");
+    static const char* known[] = {"fx", "fy", "cx", "cy", "depth_scale", "width", "height"};
+    for (const auto& item : j.items())
+        if (std::find_if(std::begin(known), std::end(known), [&](const char* k) { return item.key() == k; }) ==
+            std::end(known))
+            c.ignoredKeys.push_back(quote(item.key()));
+    // A file with none of the keys (another tool's format, e.g. Open3D's "intrinsic_matrix", or every key
+    // misspelt) would otherwise be ignored in silence and the layout's default calibration used.
+    if (!c.fx && !c.fy && !c.cx && !c.cy && !c.depthScale && !c.width && !c.height) {
+        std::string found;
+        for (const auto& k : c.ignoredKeys) found += (found.empty() ? "" : ", ") + k;
+        throw Error(source + ": holds none of the keys fx, fy, cx, cy, depth_scale, width, height" +
+                    (found.empty() ? std::string(" (it is empty)") : " (found " + found + ")"));
+    }
+    if ((c.fx && *c.fx == 0) || (c.fy && *c.fy == 0))
+        throw Error(source + ": focal length " + std::string(c.fx && *c.fx == 0 ? "\"fx\"" : "\"fy\"") +
+                    " = 0; it must be non-zero");
+    // A negative fx mirrors the image left-right; no supported layout uses one. (A negative fy is ICL-NUIM's
+    // convention, checked against the layout in Dataset::open.)
+    if (c.fx && *c.fx < 0) throw Error(source + ": focal length \"fx\" = " + fmt(*c.fx) + " is negative; it must be positive");
+    if (c.depthScale && *c.depthScale <= 0)
+        throw Error(source + ": \"depth_scale\" = " + fmt(*c.depthScale) + "; it must be positive");
+    return c;
+}
+
+namespace {
+
+std::string describePng(int bitDepth, int colorType) {
+    std::string kind;
+    switch (colorType) {
+        case 0: kind = "grayscale, 1 channel"; break;
+        case 2: kind = "RGB, 3 channels"; break;
+        case 3: kind = "palette colour, 3 channels"; break;
+        case 4: kind = "grayscale + alpha, 2 channels"; break;
+        case 6: kind = "RGBA, 4 channels"; break;
+        default: kind = "unknown colour type " + std::to_string(colorType); break;
+    }
+    return std::to_string(bitDepth) + "-bit " + kind;
+}
+
+}  // namespace
+
+cv::Mat decodeDepthPng(std::string_view bytes, const std::string& source) {
+    static const unsigned char signature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+    if (bytes.size() < 8 || std::memcmp(bytes.data(), signature, 8) != 0)
+        throw Error("depth image " + source + " is not a PNG file" +
+                    (bytes.empty() ? std::string(" (it is empty)") : std::string(" (no PNG signature)")));
+    // The header chunk (IHDR) must come first: length at byte 8, type at 12, then width, height, bit depth,
+    // colour type. Checked here, before the decoder allocates anything.
+    if (bytes.size() < 8 + 8 + 13 || std::memcmp(bytes.data() + 12, "IHDR", 4) != 0)
+        throw Error("depth image " + source + " is truncated or corrupt (no PNG header chunk; " +
+                    std::to_string(bytes.size()) + " bytes)");
+    auto be32 = [&](size_t o) {
+        return uint32_t(uint8_t(bytes[o])) << 24 | uint32_t(uint8_t(bytes[o + 1])) << 16 |
+               uint32_t(uint8_t(bytes[o + 2])) << 8 | uint32_t(uint8_t(bytes[o + 3]));
+    };
+    const uint32_t w = be32(16), h = be32(20);
+    const int bitDepth = uint8_t(bytes[24]), colorType = uint8_t(bytes[25]);
+    const std::string size = std::to_string(w) + "x" + std::to_string(h);
+    if (w == 0 || h == 0) throw Error("depth image " + source + " is corrupt: its header says " + size + " pixels");
+    if (w > kMaxDepthImageSide || h > kMaxDepthImageSide || uint64_t(w) * h > kMaxDepthImagePixels)
+        throw Error("depth image " + source + " claims " + size + " pixels, more than vkmesh accepts (" +
+                    std::to_string(kMaxDepthImageSide) + " per side, " + std::to_string(kMaxDepthImagePixels >> 20) +
+                    " Mpixel); the file is corrupt or not a depth image");
+    if (bitDepth != 16 || colorType != 0)
+        throw Error("depth image " + source + " is " + describePng(bitDepth, colorType) + " (" + size +
+                    "); expected 16-bit unsigned, 1 channel (a 16-bit grayscale PNG)");
+    if (bytes.size() > size_t(std::numeric_limits<int>::max()))
+        throw Error("depth image " + source + " is " + std::to_string(bytes.size()) + " bytes, too large to be a depth image");
+    cv::Mat img;
+    try {
+        const cv::Mat buffer(1, int(bytes.size()), CV_8U, const_cast<char*>(bytes.data()));
+        img = cv::imdecode(buffer, cv::IMREAD_UNCHANGED);
+    } catch (const cv::Exception& e) {
+        throw Error("cannot decode depth image " + source + ": " + e.what());
+    }
+    if (img.empty()) throw Error("cannot decode depth image " + source + " (truncated or corrupt)");
+    if (img.type() != CV_16UC1)
+        throw Error("depth image " + source + " is " + describeType(img) + " (" + std::to_string(img.cols) + "x" +
+                    std::to_string(img.rows) + "); expected 16-bit unsigned, 1 channel");
+    if (img.cols != int(w) || img.rows != int(h))
+        throw Error("depth image " + source + " decodes to " + std::to_string(img.cols) + "x" + std::to_string(img.rows) +
+                    " but its header says " + size);
+    return img;
+}
+
+DepthImage rawDepthToMeters(const cv::Mat& raw, double depthScale, std::optional<uint16_t> invalidRaw, float maxDepth) {
+    DepthImage out;
+    out.width = raw.cols;
+    out.height = raw.rows;
+    out.meters.resize(static_cast<size_t>(raw.cols) * raw.rows);
+    const uint16_t invalid = invalidRaw.value_or(0);
+    for (int y = 0; y < raw.rows; ++y) {
+        const uint16_t* row = raw.ptr<uint16_t>(y);
+        float* dst = out.meters.data() + static_cast<size_t>(y) * raw.cols;
+        for (int x = 0; x < raw.cols; ++x) {
+            uint16_t v = row[x];
+            float m = (v == 0 || v == invalid) ? 0.0f : static_cast<float>(v / depthScale);
+            if (maxDepth > 0 && m > maxDepth) m = 0.0f;
+            dst[x] = m;
+        }
+    }
+    return out;
+}
+
+}  // namespace io
+
+namespace {
 
 // ---------------------------------------------------------------------------------------------------
 // What a layout reader hands back to Dataset::open before the common steps (calibration overrides,
@@ -237,59 +492,27 @@ struct Stamped {
     Pose pose;      // groundtruth entries only
 };
 
-// depth.txt: "timestamp path" per line.
+std::vector<Stamped> stamped(const std::vector<io::TimedPath>& v) {
+    std::vector<Stamped> out;
+    out.reserve(v.size());
+    for (const auto& e : v) out.push_back({e.timestamp, e.line, e.path, Pose::Identity()});
+    return out;
+}
+
 std::vector<Stamped> readDepthList(const fs::path& folder, const fs::path& file) {
-    std::vector<Stamped> out;
-    for (const auto& l : readDataLines(file)) {
-        double t;
-        if (l.tokens.size() != 2 || !parseNumber(l.tokens[0], t))
-            throw Error(at(file, l.number) + ": expected 'timestamp path', got '" + joined(l.tokens) + "'");
-        if (!std::isfinite(t)) throw Error(at(file, l.number) + ": timestamp " + l.tokens[0] + " is not finite");
-        out.push_back({t, l.number, folder / l.tokens[1], Pose::Identity()});
-    }
-    return out;
+    std::ifstream in = openText(file);
+    return stamped(io::parseDepthList(in, file.string(), folder));
 }
 
-// associations.txt (only read when depth.txt is missing): pairs "timestamp path" side by side, in
-// either order (TUM's associate.py writes rgb first, ICL-NUIM depth first); the depth pair is the one
-// whose path mentions "depth".
 std::vector<Stamped> readAssociations(const fs::path& folder, const fs::path& file) {
-    std::vector<Stamped> out;
-    for (const auto& l : readDataLines(file)) {
-        bool found = false;
-        for (size_t i = 0; i + 1 < l.tokens.size(); ++i) {
-            double t;
-            if (parseNumber(l.tokens[i], t) && lower(l.tokens[i + 1]).find("depth") != std::string::npos) {
-                if (!std::isfinite(t)) throw Error(at(file, l.number) + ": timestamp " + l.tokens[i] + " is not finite");
-                out.push_back({t, l.number, folder / l.tokens[i + 1], Pose::Identity()});
-                found = true;
-                break;
-            }
-        }
-        if (!found) throw Error(at(file, l.number) + ": no 'timestamp depth/...png' pair on this line");
-    }
-    return out;
+    std::ifstream in = openText(file);
+    return stamped(io::parseAssociations(in, file.string(), folder));
 }
 
-// groundtruth.txt: "timestamp tx ty tz qx qy qz qw" per line, camera-to-world.
 std::vector<Stamped> readGroundtruth(const fs::path& file) {
+    std::ifstream in = openText(file);
     std::vector<Stamped> out;
-    for (const auto& l : readDataLines(file)) {
-        if (l.tokens.size() != 8)
-            throw Error(at(file, l.number) + ": expected 8 values 'timestamp tx ty tz qx qy qz qw', got " +
-                        std::to_string(l.tokens.size()));
-        double v[8];
-        for (int k = 0; k < 8; ++k) {
-            if (!parseNumber(l.tokens[k], v[k]))
-                throw Error(at(file, l.number) + ": '" + l.tokens[k] + "' is not a number");
-            if (!std::isfinite(v[k]))
-                throw Error(at(file, l.number) + ": value '" + l.tokens[k] + "' is not finite");
-        }
-        std::string where = at(file, l.number);
-        Pose T = poseFromQuaternion(v[1], v[2], v[3], v[4], v[5], v[6], v[7], where);
-        validatePose(T, where);
-        out.push_back({v[0], l.number, {}, T});
-    }
+    for (auto& p : io::parseTrajectory(in, file.string())) out.push_back({p.timestamp, p.line, {}, p.cameraToWorld});
     return out;
 }
 
@@ -414,21 +637,6 @@ std::vector<fs::path> filesWithExtension(const fs::path& dir, const std::string&
     return out;
 }
 
-// Reads the rows of a 4x4 matrix from four consecutive data lines.
-Pose readMatrixRows(const fs::path& file, const std::vector<TextLine>& lines, size_t first) {
-    Pose T;
-    for (int r = 0; r < 4; ++r) {
-        const TextLine& l = lines[first + r];
-        if (l.tokens.size() != 4)
-            throw Error(at(file, l.number) + ": expected 4 numbers (row " + std::to_string(r + 1) +
-                        " of a 4x4 matrix), got " + std::to_string(l.tokens.size()));
-        for (int c = 0; c < 4; ++c)
-            if (!parseNumber(l.tokens[c], T(r, c)))
-                throw Error(at(file, l.number) + ": '" + l.tokens[c] + "' is not a number");
-    }
-    return T;
-}
-
 Layout readRedwood(const fs::path& folder, const fs::path& logFile) {
     Layout layout;
     layout.kind = DatasetKind::Redwood;
@@ -440,22 +648,13 @@ Layout readRedwood(const fs::path& folder, const fs::path& logFile) {
 
     // Blocks of five lines: "id id frame" then the camera-to-world matrix. The first id is the 0-based
     // index of the depth image (in name order) the pose belongs to.
-    std::vector<TextLine> lines = readDataLines(logFile);
+    std::ifstream logIn = openText(logFile);
     std::map<long long, std::pair<Pose, size_t>> poses;  // id -> pose, line of its header
     size_t duplicates = 0;
-    for (size_t i = 0; i < lines.size(); i += 5) {
-        const TextLine& h = lines[i];
-        long long ids[3];
-        if (h.tokens.size() != 3 || !parseInteger(h.tokens[0], ids[0]) || !parseInteger(h.tokens[1], ids[1]) ||
-            !parseInteger(h.tokens[2], ids[2]))
-            throw Error(at(logFile, h.number) + ": expected a block header of 3 integers 'id id frame'");
-        if (i + 5 > lines.size())
-            throw Error(at(logFile, h.number) + ": the file ends inside the 4x4 matrix of frame " + std::to_string(ids[0]));
-        Pose T = readMatrixRows(logFile, lines, i + 1);
-        validatePose(T, at(logFile, lines[i + 1].number) + " (frame " + std::to_string(ids[0]) + ")");
-        if (!poses.emplace(ids[0], std::make_pair(T, h.number)).second) {
+    for (const io::IndexedPose& p : io::parseRedwoodLog(logIn, logFile.string())) {
+        if (!poses.emplace(p.id, std::make_pair(p.cameraToWorld, p.line)).second) {
             if (duplicates++ < kMaxFrameWarnings)
-                layout.warnings.push_back(at(logFile, h.number) + ": frame " + std::to_string(ids[0]) +
+                layout.warnings.push_back(at(logFile, p.line) + ": frame " + std::to_string(p.id) +
                                           " appears again; kept the first pose");
         }
     }
@@ -515,22 +714,9 @@ std::vector<SevenScenesFrame> listSevenScenesFrames(const fs::path& dir) {
     return out;
 }
 
-// All the numbers of a small text file, which must hold exactly `count` of them (a 4x4 pose, a 3x3 K).
 std::vector<double> readNumbers(const fs::path& file, size_t count, const std::string& what) {
-    std::vector<double> out;
-    for (const auto& l : readDataLines(file))
-        for (const auto& tok : l.tokens) {
-            double v;
-            if (!parseNumber(tok, v)) throw Error(at(file, l.number) + ": '" + tok + "' is not a number");
-            if (out.size() == count)
-                throw Error(at(file, l.number) + ": more than " + std::to_string(count) + " numbers; expected " +
-                            std::to_string(count) + " (" + what + ")");
-            out.push_back(v);
-        }
-    if (out.size() != count)
-        throw Error(file.string() + ": found " + std::to_string(out.size()) + " numbers; expected " +
-                    std::to_string(count) + " (" + what + ")");
-    return out;
+    std::ifstream in = openText(file);
+    return io::parseNumbers(in, file.string(), count, what);
 }
 
 Layout readSevenScenes(const fs::path& folder, const std::vector<SevenScenesFrame>& images) {
@@ -548,8 +734,8 @@ Layout readSevenScenes(const fs::path& folder, const std::vector<SevenScenesFram
         std::vector<double> K = readNumbers(kFile, 9, "a 3x3 camera matrix");
         for (double v : K)
             if (!std::isfinite(v)) throw Error(kFile.string() + ": value " + fmt(v) + " is not finite");
-        if (K[0] == 0 || K[4] == 0)
-            throw Error(kFile.string() + ": focal length fx=" + fmt(K[0]) + " fy=" + fmt(K[4]) + " must be non-zero");
+        if (K[0] <= 0 || K[4] <= 0)
+            throw Error(kFile.string() + ": focal length fx=" + fmt(K[0]) + " fy=" + fmt(K[4]) + " must be positive");
         layout.intrinsics = {float(K[0]), float(K[4]), float(K[2]), float(K[5]), 0, 0};
         break;
     }
@@ -608,37 +794,9 @@ LayoutFiles scanLayout(const fs::path& dir) {
 // ---------------------------------------------------------------------------------------------------
 // camera.json: {"fx":..,"fy":..,"cx":..,"cy":..,"depth_scale":..}, every key optional
 
-struct CameraJson {
-    std::optional<double> fx, fy, cx, cy, depthScale;
-    bool hasAllIntrinsics() const { return fx && fy && cx && cy; }
-};
-
-CameraJson readCameraJson(const fs::path& file) {
-    std::ifstream in(file);
-    if (!in) throw Error("cannot open " + file.string());
-    nlohmann::json j;
-    try {
-        j = nlohmann::json::parse(in);
-    } catch (const nlohmann::json::exception& e) {
-        throw Error(file.string() + ": not valid JSON: " + e.what());
-    }
-    if (!j.is_object()) throw Error(file.string() + ": expected a JSON object with fx, fy, cx, cy, depth_scale");
-    auto get = [&](const char* key) -> std::optional<double> {
-        auto it = j.find(key);
-        if (it == j.end()) return std::nullopt;
-        if (!it->is_number())
-            throw Error(file.string() + ": \"" + key + "\" is " + it->dump() + "; expected a number");
-        double v = it->get<double>();
-        if (!std::isfinite(v)) throw Error(file.string() + ": \"" + key + "\" = " + fmt(v) + " is not finite");
-        return v;
-    };
-    CameraJson c{get("fx"), get("fy"), get("cx"), get("cy"), get("depth_scale")};
-    if ((c.fx && *c.fx == 0) || (c.fy && *c.fy == 0))
-        throw Error(file.string() + ": focal length " + std::string(c.fx && *c.fx == 0 ? "\"fx\"" : "\"fy\"") +
-                    " = 0; it must be non-zero");
-    if (c.depthScale && *c.depthScale <= 0)
-        throw Error(file.string() + ": \"depth_scale\" = " + fmt(*c.depthScale) + "; it must be positive");
-    return c;
+io::CameraJson readCameraJson(const fs::path& file) {
+    std::ifstream in = openText(file);
+    return io::parseCameraJson(in, file.string());
 }
 
 void checkIntrinsics(const Intrinsics& k, const std::string& source) {
@@ -648,6 +806,9 @@ void checkIntrinsics(const Intrinsics& k, const std::string& source) {
     };
     check("fx", k.fx, true);
     check("fy", k.fy, true);
+    // A negative fx mirrors the image left-right; no supported layout uses one. A negative fy is ICL-NUIM's
+    // convention (image y up) and is checked against the layout in Dataset::open.
+    if (k.fx < 0) throw Error(source + ": fx = " + fmt(k.fx) + " is negative; it must be positive");
     check("cx", k.cx, false);
     check("cy", k.cy, false);
 }
@@ -779,8 +940,16 @@ std::unique_ptr<Dataset> Dataset::open(const fs::path& folderIn, const DatasetOp
     double scale = layout.depthScale;
     bool guessed = !layout.intrinsicsWarning.empty();
     fs::path cameraJson = folder / "camera.json";
+    std::optional<io::CameraJson> camera;
     if (fs::is_regular_file(cameraJson, ec)) {
-        CameraJson c = readCameraJson(cameraJson);
+        camera = readCameraJson(cameraJson);
+        const io::CameraJson& c = *camera;
+        if (!c.ignoredKeys.empty()) {
+            std::string keys;
+            for (const auto& key : c.ignoredKeys) keys += (keys.empty() ? "" : ", ") + key;
+            ds->warnings_.push_back(cameraJson.string() + ": ignored unknown keys " + keys +
+                                    " (known: fx, fy, cx, cy, depth_scale, width, height)");
+        }
         if (c.fx) k.fx = float(*c.fx);
         if (c.fy) k.fy = float(*c.fy);
         if (c.cx) k.cx = float(*c.cx);
@@ -797,6 +966,12 @@ std::unique_ptr<Dataset> Dataset::open(const fs::path& folderIn, const DatasetOp
     }
     if (options.depthScale) scale = *options.depthScale;
     if (guessed) ds->warnings_.push_back(layout.intrinsicsWarning);
+    // A negative fy flips the image vertically: right for ICL-NUIM's poses (its default has one), a mirrored
+    // reconstruction anywhere else.
+    if (k.fy < 0 && layout.kind != DatasetKind::ICLNUIM)
+        throw Error(std::string(options.intrinsics ? "--intrinsics" : cameraJson.string()) + ": fy = " + fmt(k.fy) +
+                    " is negative, which mirrors the " + toString(layout.kind) +
+                    " reconstruction upside down (only ICL-NUIM's poses use a negative fy); give a positive fy");
     ds->depthScale_ = scale;
 
     // --- frames ---
@@ -814,6 +989,20 @@ std::unique_ptr<Dataset> Dataset::open(const fs::path& folderIn, const DatasetOp
     cv::Mat first = readRawDepth(ds->frames_.front().depthPath);
     k.width = first.cols;
     k.height = first.rows;
+    const std::string firstName = ds->frames_.front().depthPath.string();
+    // A calibration that states its image size must match the images: fusing 320x240 images with 640x480
+    // intrinsics gives a plausible-looking but wrong mesh.
+    if (camera && ((camera->width && *camera->width != k.width) || (camera->height && *camera->height != k.height)))
+        throw Error(cameraJson.string() + ": calibration for " +
+                    (camera->width ? std::to_string(*camera->width) : std::string("?")) + "x" +
+                    (camera->height ? std::to_string(*camera->height) : std::string("?")) + " images, but depth image " +
+                    firstName + " (frame 0) is " + std::to_string(k.width) + "x" + std::to_string(k.height));
+    // Without a stated size, a principal point outside the image is the sign of the same mistake; only a
+    // warning, since nothing says which of the two is wrong (and tiny test images use default intrinsics).
+    if (k.cx < 0 || k.cx > k.width || k.cy < 0 || k.cy > k.height)
+        ds->warnings_.push_back("principal point cx=" + fmt(k.cx) + " cy=" + fmt(k.cy) + " lies outside the " +
+                                std::to_string(k.width) + "x" + std::to_string(k.height) + " depth images (" +
+                                firstName + "): are the intrinsics for another image size?");
     ds->intrinsics_ = k;
     return ds;
 }
@@ -832,23 +1021,7 @@ DepthImage Dataset::loadDepth(size_t i) const {
         throw Error("depth image " + f.depthPath.string() + " is " + std::to_string(raw.cols) + "x" +
                     std::to_string(raw.rows) + " but frame 0 (" + frames_.front().depthPath.filename().string() +
                     ") is " + std::to_string(intrinsics_.width) + "x" + std::to_string(intrinsics_.height));
-
-    DepthImage out;
-    out.width = raw.cols;
-    out.height = raw.rows;
-    out.meters.resize(static_cast<size_t>(raw.cols) * raw.rows);
-    const uint16_t invalid = invalidRaw_.value_or(0);
-    for (int y = 0; y < raw.rows; ++y) {
-        const uint16_t* row = raw.ptr<uint16_t>(y);
-        float* dst = out.meters.data() + static_cast<size_t>(y) * raw.cols;
-        for (int x = 0; x < raw.cols; ++x) {
-            uint16_t v = row[x];
-            float m = (v == 0 || v == invalid) ? 0.0f : static_cast<float>(v / depthScale_);
-            if (maxDepth_ > 0 && m > maxDepth_) m = 0.0f;
-            dst[x] = m;
-        }
-    }
-    return out;
+    return io::rawDepthToMeters(raw, depthScale_, invalidRaw_, maxDepth_);
 }
 
 }  // namespace vkmesh

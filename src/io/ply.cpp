@@ -104,6 +104,43 @@ size_t scalarSize(Scalar s) {
 
 bool isInteger(Scalar s) { return s != Scalar::F32 && s != Scalar::F64; }
 
+const char* scalarName(Scalar s) {
+    switch (s) {
+        case Scalar::I8: return "char";
+        case Scalar::U8: return "uchar";
+        case Scalar::I16: return "short";
+        case Scalar::U16: return "ushort";
+        case Scalar::I32: return "int";
+        case Scalar::U32: return "uint";
+        case Scalar::F32: return "float";
+        case Scalar::F64: return "double";
+    }
+    return "?";
+}
+
+// Whether an ascii value can be stored in the declared type: binary values always can, but an ascii file
+// may hold "1e300" or "2.5" where the header promises a uchar list count, which must not reach a cast.
+bool fitsScalar(Scalar s, double v) {
+    if (!isInteger(s)) return true;  // float values: range handled where they are used
+    if (!std::isfinite(v) || v != std::floor(v)) return false;
+    switch (s) {
+        case Scalar::I8: return v >= -128 && v <= 127;
+        case Scalar::U8: return v >= 0 && v <= 255;
+        case Scalar::I16: return v >= -32768 && v <= 32767;
+        case Scalar::U16: return v >= 0 && v <= 65535;
+        case Scalar::I32: return v >= -2147483648.0 && v <= 2147483647.0;
+        case Scalar::U32: return v >= 0 && v <= 4294967295.0;
+        default: return true;
+    }
+}
+
+// double -> float without undefined behaviour: out-of-range values become +-infinity as in IEEE arithmetic.
+float toFloat(double v) {
+    if (v > double(std::numeric_limits<float>::max())) return std::numeric_limits<float>::infinity();
+    if (v < -double(std::numeric_limits<float>::max())) return -std::numeric_limits<float>::infinity();
+    return float(v);
+}
+
 enum class Role { Skip, X, Y, Z, NX, NY, NZ, Age, Indices };
 
 struct Property {
@@ -142,7 +179,9 @@ public:
         : path_(path), body_(body), format_(format) {}
 
     // `what` says where we are, for the error message.
-    double read(Scalar type, const char* what) { return format_ == Format::Ascii ? readAscii(what) : readBinary(type, what); }
+    double read(Scalar type, const char* what) {
+        return format_ == Format::Ascii ? readAscii(type, what) : readBinary(type, what);
+    }
 
 private:
     template <typename T>
@@ -173,7 +212,7 @@ private:
         return 0.0;
     }
 
-    double readAscii(const char* what) {
+    double readAscii(Scalar type, const char* what) {
         while (pos_ < body_.size() && std::isspace(static_cast<unsigned char>(body_[pos_]))) ++pos_;
         if (pos_ >= body_.size()) fail(path_, std::string("truncated: the data ends before ") + what);
         size_t end = pos_;
@@ -186,6 +225,8 @@ private:
         auto r = std::from_chars(num.data(), num.data() + num.size(), v);
         if (r.ec != std::errc() || r.ptr != num.data() + num.size())
             fail(path_, "corrupt: '" + std::string(tok) + "' is not a number (in " + what + ")");
+        if (!fitsScalar(type, v))
+            fail(path_, "corrupt: '" + std::string(tok) + "' is not a valid " + scalarName(type) + " (in " + what + ")");
         return v;
     }
 
@@ -263,6 +304,10 @@ Mesh readPly(const std::filesystem::path& path) {
         data.assign(std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>());
         if (f.bad()) fail(path, "read error");
     }
+    return parsePly(data, path);
+}
+
+Mesh parsePly(std::string_view data, const std::filesystem::path& path) {
 
     // --- header
     size_t pos = 0;
@@ -270,7 +315,7 @@ Mesh readPly(const std::filesystem::path& path) {
         if (pos >= data.size()) return false;
         size_t nl = data.find('\n', pos);
         if (nl == std::string::npos) fail(path, "truncated header: it ends before the 'end_header' line");
-        line = std::string_view(data).substr(pos, nl - pos);
+        line = data.substr(pos, nl - pos);
         if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
         pos = nl + 1;
         return true;
@@ -380,9 +425,12 @@ Mesh readPly(const std::filesystem::path& path) {
     if (keepNormals) mesh.normals.resize(nv, Eigen::Vector3f::Zero());
     if (hasAge) mesh.vertexAge.resize(nv, 0);
 
-    BodyReader in(path, std::string_view(data).substr(std::min(pos, data.size())), *format);
+    BodyReader in(path, data.substr(std::min(pos, data.size())), *format);
     std::vector<uint32_t> poly;
     for (const Element& e : elements) {
+        // An element without properties has no data to read, whatever its count (up to 2^64-1 in a
+        // corrupt header, which the loop below would otherwise spin through).
+        if (e.props.empty()) continue;
         const bool isVertex = &e == vertexElem;
         const std::string whatEntry = "element '" + e.name + "'";
         for (uint64_t i = 0; i < e.count; ++i) {
@@ -410,12 +458,19 @@ Mesh readPly(const std::filesystem::path& path) {
                 const double v = in.read(p.type, whatEntry.c_str());
                 if (!isVertex) continue;
                 switch (p.role) {
-                    case Role::X: mesh.positions[i].x() = float(v); break;
-                    case Role::Y: mesh.positions[i].y() = float(v); break;
-                    case Role::Z: mesh.positions[i].z() = float(v); break;
-                    case Role::NX: if (keepNormals) mesh.normals[i].x() = float(v); break;
-                    case Role::NY: if (keepNormals) mesh.normals[i].y() = float(v); break;
-                    case Role::NZ: if (keepNormals) mesh.normals[i].z() = float(v); break;
+                    case Role::X: case Role::Y: case Role::Z: {
+                        // A vertex at infinity or NaN poisons every distance and bounding box computed from the
+                        // mesh (eval, render); reject it rather than give silently wrong numbers.
+                        const float f = toFloat(v);
+                        if (!std::isfinite(f))
+                            fail(path, "corrupt: vertex " + std::to_string(i) + " has coordinate " + p.name + " = " +
+                                           numberText(v) + " (not a finite float)");
+                        mesh.positions[i][p.role == Role::X ? 0 : p.role == Role::Y ? 1 : 2] = f;
+                        break;
+                    }
+                    case Role::NX: if (keepNormals) mesh.normals[i].x() = toFloat(v); break;
+                    case Role::NY: if (keepNormals) mesh.normals[i].y() = toFloat(v); break;
+                    case Role::NZ: if (keepNormals) mesh.normals[i].z() = toFloat(v); break;
                     case Role::Age:
                         if (v < 0 || v > double(std::numeric_limits<uint32_t>::max()))
                             fail(path, "corrupt: vertex " + std::to_string(i) + " has age " + numberText(v));

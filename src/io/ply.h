@@ -8,6 +8,7 @@
 #include <array>
 #include <cstdint>
 #include <filesystem>
+#include <string_view>
 #include <vector>
 
 namespace vkmesh {
@@ -32,6 +33,10 @@ void writePly(const std::filesystem::path& path, const Mesh& mesh);
 // empty `triangles`. Normals are kept only when all three are present. Throws Error naming the file for a
 // missing, corrupt, truncated or unsupported file.
 Mesh readPly(const std::filesystem::path& path);
+
+// readPly on the file's bytes already in memory; `path` only names the source in messages (for the fuzz
+// target and tests).
+Mesh parsePly(std::string_view data, const std::filesystem::path& path);
 
 // Writes Wavefront OBJ: `v x y z`, `vn nx ny nz` when normals are present, `f a b c` (or `a//a ...`) with
 // 1-based indices. Ages are not stored. Throws Error as writePly.

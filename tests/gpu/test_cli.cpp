@@ -222,5 +222,56 @@ TEST(Cli, NonOrthonormalPoseIsAClearError) {
     fs::remove_all(seq);
 }
 
+// Hostile input through the program (issue 5): a bad calibration or frame 0 is exit code 2 with a message
+// naming the file and the value, before any GPU work; a bad later frame is a warning and the frame skipped.
+TEST(Cli, HostileDatasetsAreClearErrors) {
+    fs::path seq = copyOfSmallSequence("cli_hostile");
+    const std::string json = readText(seq / "camera.json");
+    // camera.json for another image size than the 160x120 frames.
+    {
+        auto j = nlohmann::json::parse(json);
+        j["width"] = 320;
+        j["height"] = 240;
+        std::ofstream(seq / "camera.json") << j.dump();
+        CliRun r = runCli("fuse " + seq.string() + " -o /tmp/vkmesh_never.ply -q");
+        EXPECT_EQ(r.exitCode, 2);
+        for (const char* needle : {"camera.json", "320x240", "160x120", "000000.png"})
+            EXPECT_NE(r.err.find(needle), std::string::npos) << needle << ": " << r.err;
+    }
+    // A negative focal length.
+    {
+        auto j = nlohmann::json::parse(json);
+        j["fx"] = -100.5;
+        std::ofstream(seq / "camera.json") << j.dump();
+        CliRun r = runCli("fuse " + seq.string() + " -o /tmp/vkmesh_never.ply -q");
+        EXPECT_EQ(r.exitCode, 2);
+        EXPECT_NE(r.err.find("camera.json: focal length \"fx\" = -100.5"), std::string::npos) << r.err;
+    }
+    std::ofstream(seq / "camera.json") << json;
+    // Frame 0 an 8-bit PNG: the dataset is rejected, naming the file and its type.
+    {
+        fs::path f0 = seq / "depth" / "000000.png";
+        fs::copy_file(f0, seq / "frame0.bak");
+        cv::imwrite(f0.string(), cv::Mat(120, 160, CV_8UC1, cv::Scalar(9)));
+        CliRun r = runCli("fuse " + seq.string() + " -o /tmp/vkmesh_never.ply -q");
+        EXPECT_EQ(r.exitCode, 2);
+        EXPECT_NE(r.err.find("000000.png is 8-bit grayscale"), std::string::npos) << r.err;
+        fs::copy_file(seq / "frame0.bak", f0, fs::copy_options::overwrite_existing);
+    }
+    // A later frame of another size: warned about and skipped, the rest fused.
+    {
+        cv::imwrite((seq / "depth" / "000003.png").string(), cv::Mat(60, 80, CV_16UC1, cv::Scalar(5000)));
+        fs::path out = test::makeTempDir("cli_hostile_out");
+        CliRun r = runCli("fuse " + seq.string() + " -o " + (out / "m.ply").string() + " --stats " +
+                          (out / "s.json").string() + " --voxel 0.05 -q");
+        ASSERT_EQ(r.exitCode, 0) << r.err;
+        EXPECT_NE(r.err.find("000003.png is 80x60 but frame 0"), std::string::npos) << r.err;
+        auto stats = nlohmann::json::parse(readText(out / "s.json"));
+        EXPECT_EQ(stats["frames"]["skipped"], 1);
+        fs::remove_all(out);
+    }
+    fs::remove_all(seq);
+}
+
 }  // namespace
 }  // namespace vkmesh

@@ -1,6 +1,9 @@
 #include "test_support.h"
 
 #include <Eigen/Geometry>
+#include <gtest/gtest.h>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 
 #include <sys/wait.h>
 
@@ -39,6 +42,46 @@ std::string readText(const std::filesystem::path& path) {
     std::stringstream text;
     text << file.rdbuf();
     return text.str();
+}
+
+void writeBytes(const std::filesystem::path& path, const std::string& bytes) {
+    if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path());
+    std::ofstream out(path, std::ios::binary | std::ios::trunc);
+    out.write(bytes.data(), std::streamsize(bytes.size()));
+    if (!out) throw std::runtime_error("test support: cannot write " + path.string());
+}
+
+void writePng(const std::filesystem::path& path, int w, int h, int cvType, double value) {
+    if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path());
+    cv::Mat m(h, w, cvType, cv::Scalar::all(value));
+    if (!cv::imwrite(path.string(), m)) throw std::runtime_error("test support: cannot write " + path.string());
+}
+
+std::filesystem::path makeMinimalTum(const std::string& name, int frames, int w, int h) {
+    const std::filesystem::path dir = makeTempDir("hostile") / name;
+    std::string depth = "# timestamp filename\n", gt = "# timestamp tx ty tz qx qy qz qw\n";
+    for (int i = 0; i < frames; ++i) {
+        const std::string t = std::to_string(i + 1);
+        writePng(dir / "depth" / (std::to_string(i) + ".png"), w, h, CV_16UC1, 5000);
+        depth += t + " depth/" + std::to_string(i) + ".png\n";
+        gt += t + " " + std::to_string(i) + " 0 0 0 0 0 1\n";
+    }
+    writeBytes(dir / "depth.txt", depth);
+    writeBytes(dir / "groundtruth.txt", gt);
+    return dir;
+}
+
+std::string errorMessageOf(const std::function<void()>& f) {
+    try {
+        f();
+    } catch (const Error& e) {
+        return e.what();
+    } catch (const std::exception& e) {
+        ADD_FAILURE() << "threw a non-vkmesh exception: " << e.what();
+        return e.what();
+    }
+    ADD_FAILURE() << "did not throw";
+    return {};
 }
 
 CliRun runCli(const std::string& args) {

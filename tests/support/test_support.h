@@ -4,6 +4,7 @@
 #include <Eigen/Core>
 
 #include <filesystem>
+#include <functional>
 #include <vector>
 
 #include "core/types.h"
@@ -28,6 +29,23 @@ struct CliRun {
 CliRun runCli(const std::string& args);
 
 std::string readText(const std::filesystem::path& path);
+
+// Writes `bytes` to `path` as is (binary), creating the parent folders: broken input for the
+// hostile-input tests (truncated files, garbage, empty files).
+void writeBytes(const std::filesystem::path& path, const std::string& bytes);
+
+// Writes a w x h PNG of OpenCV type `cvType` (CV_16UC1 for a valid depth image; CV_8UC1, CV_16UC3, ...
+// for wrong ones) with every sample `value`, creating the parent folders.
+void writePng(const std::filesystem::path& path, int w, int h, int cvType, double value);
+
+// A minimal valid TUM RGB-D sequence in a folder named "<name>" under a fresh temp dir: `frames` depth
+// frames of w x h (1 m everywhere) at t = 1, 2, ..., listed in depth.txt as depth/<i>.png, and an identity
+// pose translated by i along x at each t in groundtruth.txt. Tests break one of its files.
+std::filesystem::path makeMinimalTum(const std::string& name, int frames = 3, int w = 8, int h = 6);
+
+// The message of the vkmesh::Error `f` throws; records a test failure (and returns what it has) if `f`
+// throws nothing or another exception.
+std::string errorMessageOf(const std::function<void()>& f);
 
 // A camera at `eye` looking at `target`: x right, y down, z forward, world z up; a proper rotation.
 Pose lookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& target);

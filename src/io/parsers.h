@@ -1,0 +1,85 @@
+// The parsers behind Dataset::open, on in-memory text and bytes rather than on files in a folder, so that
+// the fuzz targets (fuzz/) and the hostile-input tests can drive each one directly. Dataset::open opens the
+// files and calls these; the behaviour and the messages are the same either way.
+//
+// Every function throws vkmesh::Error whose message starts with `source` (the file's path as given, with
+// ":line" where a line is at fault) and names the offending value. Nothing else may escape: any other
+// exception, crash or sanitizer report on any input is a bug (the fuzzers check exactly that).
+#pragma once
+
+#include "core/types.h"
+
+#include <opencv2/core.hpp>
+
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <istream>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace vkmesh::io {
+
+struct TimedPose {
+    double timestamp;
+    size_t line;  // 1-based line in the source
+    Pose cameraToWorld;
+};
+
+struct TimedPath {
+    double timestamp;
+    size_t line;
+    std::filesystem::path path;  // folder / the listed relative path
+};
+
+struct IndexedPose {
+    long long id;  // the first id of a Redwood block header: the depth image's 0-based index
+    size_t line;   // line of the block header
+    Pose cameraToWorld;
+};
+
+// TUM groundtruth.txt and ICL-NUIM's *.gt.freiburg: "timestamp tx ty tz qx qy qz qw" per line, '#' comments.
+// Every pose is validated (finite, quaternion norm about 1, rigid). Order and duplicates are left as written.
+std::vector<TimedPose> parseTrajectory(std::istream& in, const std::string& source);
+
+// TUM depth.txt: "timestamp path" per line.
+std::vector<TimedPath> parseDepthList(std::istream& in, const std::string& source, const std::filesystem::path& folder);
+
+// associations.txt: "timestamp path" pairs side by side; the depth pair is the one whose path names "depth".
+std::vector<TimedPath> parseAssociations(std::istream& in, const std::string& source,
+                                         const std::filesystem::path& folder);
+
+// Redwood / Zhou-Koltun *.log: blocks of "id id frame" + a 4x4 camera-to-world matrix, each validated.
+std::vector<IndexedPose> parseRedwoodLog(std::istream& in, const std::string& source);
+
+// All the numbers of a small text file, which must hold exactly `count` of them (a 7-Scenes 4x4 pose, a
+// 3x3 camera matrix); `what` names the expected content for the message.
+std::vector<double> parseNumbers(std::istream& in, const std::string& source, size_t count, const std::string& what);
+
+// camera.json: {"fx","fy","cx","cy","depth_scale","width","height"}, every key optional but at least one of
+// the calibration keys present. Unknown keys are returned in `ignoredKeys` (the caller warns).
+struct CameraJson {
+    std::optional<double> fx, fy, cx, cy, depthScale;
+    std::optional<int> width, height;  // the image size the calibration is for, when the file says
+    std::vector<std::string> ignoredKeys;
+    bool hasAllIntrinsics() const { return fx && fy && cx && cy; }
+};
+CameraJson parseCameraJson(std::istream& in, const std::string& source);
+
+// Largest depth image accepted, checked on the PNG header before decoding so that a corrupt or hostile
+// header cannot make the decoder allocate gigabytes: 16384 per side and 64 Mpixel in all, 30 times the
+// largest depth sensor vkmesh knows of.
+constexpr uint32_t kMaxDepthImageSide = 16384;
+constexpr uint64_t kMaxDepthImagePixels = uint64_t(1) << 26;
+
+// Decodes a depth PNG held in memory into raw uint16 samples (CV_16UC1). Throws Error naming `source` if
+// the bytes are not a PNG, the header is not 16-bit single-channel (grayscale), the image is empty or
+// larger than the limits above, or the data is corrupt or truncated.
+cv::Mat decodeDepthPng(std::string_view bytes, const std::string& source);
+
+// Raw samples to metres: 0 and `invalidRaw` mean "no measurement"; samples beyond maxDepth (> 0) become 0.
+DepthImage rawDepthToMeters(const cv::Mat& raw, double depthScale, std::optional<uint16_t> invalidRaw, float maxDepth);
+
+}  // namespace vkmesh::io
