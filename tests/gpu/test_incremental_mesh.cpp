@@ -28,14 +28,7 @@ using test::soupOf;
 constexpr int kWidth = 160, kHeight = 120;
 
 gpu::GpuVolumeConfig meshConfig() {
-    gpu::GpuVolumeConfig c;
-    c.params.voxelSize = 0.04f;
-    c.params.maxDepth = 6.0f;
-    c.blockCapacity = 4096;
-    c.vertexCapacity = 1u << 17;
-    c.chunkCapacity = 1u << 17;
-    c.imageWidth = kWidth;
-    c.imageHeight = kHeight;
+    gpu::GpuVolumeConfig c = test::smallRoomConfig();
     // Refinement depends on each cube's history, so a from-scratch rebuild (no history) and the baseline
     // (no refinement) are only comparable without it; the refinement tests turn it on.
     c.refine = false;

@@ -10,6 +10,7 @@
 #include "core/mesh_delta.h"
 #include "gpu/gpu_volume.h"
 #include "gpu_fixture.h"
+#include "mesh_checks.h"
 #include "io/delta_stream.h"
 #include "synth/synthetic_scene.h"
 #include "test_support.h"
@@ -20,14 +21,7 @@ namespace {
 constexpr int kWidth = 160, kHeight = 120;
 
 gpu::GpuVolumeConfig deltaConfig() {
-    gpu::GpuVolumeConfig c;
-    c.params.voxelSize = 0.04f;
-    c.params.maxDepth = 6.0f;
-    c.blockCapacity = 4096;
-    c.vertexCapacity = 1u << 17;
-    c.chunkCapacity = 1u << 17;
-    c.imageWidth = kWidth;
-    c.imageHeight = kHeight;
+    gpu::GpuVolumeConfig c = test::smallRoomConfig();
     c.trackDeltas = true;
     return c;
 }

@@ -30,14 +30,7 @@ using test::soupOf;
 constexpr int kWidth = 160, kHeight = 120;
 
 gpu::GpuVolumeConfig recyclingConfig(float keepRadius, bool recycle) {
-    gpu::GpuVolumeConfig c;
-    c.params.voxelSize = 0.04f;
-    c.params.maxDepth = 6.0f;
-    c.blockCapacity = 4096;
-    c.vertexCapacity = 1u << 17;
-    c.chunkCapacity = 1u << 17;
-    c.imageWidth = kWidth;
-    c.imageHeight = kHeight;
+    gpu::GpuVolumeConfig c = test::smallRoomConfig();
     c.keepRadius = keepRadius;
     c.recycle = recycle;
     c.recycleAfterFrames = 4;   // short, so that a 36-frame run starves and frees blocks

@@ -11,6 +11,20 @@
 
 namespace vkmesh::test {
 
+// The volume most GPU mesh tests use: the synthetic room at 160 x 120, 4 cm voxels, heaps roomy enough
+// that nothing runs out unless a test shrinks them.
+inline gpu::GpuVolumeConfig smallRoomConfig() {
+    gpu::GpuVolumeConfig c;
+    c.params.voxelSize = 0.04f;
+    c.params.maxDepth = 6.0f;
+    c.blockCapacity = 4096;
+    c.vertexCapacity = 1u << 17;
+    c.chunkCapacity = 1u << 17;
+    c.imageWidth = 160;
+    c.imageHeight = 120;
+    return c;
+}
+
 inline std::vector<Eigen::Vector3f> soupOf(const gpu::ExportedMesh& mesh) {
     std::vector<Eigen::Vector3f> soup;
     for (const auto& t : mesh.triangles)
