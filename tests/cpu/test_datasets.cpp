@@ -40,19 +40,7 @@ void writeDepth(const fs::path& file, const std::function<uint16_t(int, int)>& v
 // A raw depth ramp that differs per frame, so a test can tell frames apart.
 uint16_t ramp(int frame, int x, int y) { return static_cast<uint16_t>(1000 + 100 * frame + 10 * x + y); }
 
-// The error message of `f`, or a failure if it does not throw vkmesh::Error.
-std::string errorOf(const std::function<void()>& f) {
-    try {
-        f();
-    } catch (const Error& e) {
-        return e.what();
-    } catch (const std::exception& e) {
-        ADD_FAILURE() << "threw a non-vkmesh exception: " << e.what();
-        return e.what();
-    }
-    ADD_FAILURE() << "did not throw";
-    return {};
-}
+using test::errorMessageOf;
 
 bool anyContains(const std::vector<std::string>& lines, const std::string& needle) {
     return std::any_of(lines.begin(), lines.end(), [&](const std::string& l) { return l.find(needle) != std::string::npos; });
@@ -279,7 +267,7 @@ TEST(DatasetTum, AssociationsTxtIsUsedOnlyWithoutDepthTxt) {
 TEST(DatasetTum, NoPoseForAnyFrameIsFatal) {
     TumFixture f = makeTum();
     writeText(f.dir / "groundtruth.txt", "50.0 0 0 0 0 0 0 1\n51.0 0 0 0 0 0 0 1\n");
-    std::string msg = errorOf([&] { Dataset::open(f.dir); });
+    std::string msg = errorMessageOf([&] { Dataset::open(f.dir); });
     EXPECT_NE(msg.find("groundtruth.txt"), std::string::npos) << msg;
     EXPECT_NE(msg.find("depth.txt"), std::string::npos) << msg;
 }
@@ -379,18 +367,18 @@ TEST(DatasetRedwood, ReadsLogAndMillimetreDepth) {
 TEST(DatasetRedwood, MalformedLogNamesFileAndLine) {
     auto dir = makeRedwood({0, 1});
     writeText(dir / "livingroom1-traj.log", logBlock(0, redwoodPose(0)) + "1 1 2\n1 0 0 0\n0 1 0\n0 0 1 0\n0 0 0 1\n");
-    std::string msg = errorOf([&] { Dataset::open(dir); });
+    std::string msg = errorMessageOf([&] { Dataset::open(dir); });
     EXPECT_NE(msg.find("livingroom1-traj.log:8"), std::string::npos) << msg;
 
     writeText(dir / "livingroom1-traj.log", logBlock(0, redwoodPose(0)) + "1 1 2\n1 0 0 0\n");
-    msg = errorOf([&] { Dataset::open(dir); });
+    msg = errorMessageOf([&] { Dataset::open(dir); });
     EXPECT_NE(msg.find("livingroom1-traj.log:6"), std::string::npos) << msg;
 
     // A scaled rotation is not a rigid pose.
     Pose bad = redwoodPose(1);
     bad.topLeftCorner<3, 3>() *= 1.1;
     writeText(dir / "livingroom1-traj.log", logBlock(0, redwoodPose(0)) + logBlock(1, bad));
-    msg = errorOf([&] { Dataset::open(dir); });
+    msg = errorMessageOf([&] { Dataset::open(dir); });
     EXPECT_NE(msg.find("livingroom1-traj.log:7"), std::string::npos) << msg;
     EXPECT_NE(msg.find("orthonormal"), std::string::npos) << msg;
 }
@@ -461,11 +449,11 @@ TEST(DatasetSevenScenes, CameraIntrinsicsFileAndSceneFolder) {
     EXPECT_FLOAT_EQ(Dataset::open(seq)->intrinsics().fx, 532.5f);
 
     // The scene folder itself holds sequences, not frames: the error says which to pass.
-    std::string msg = errorOf([&] { Dataset::open(scene); });
+    std::string msg = errorMessageOf([&] { Dataset::open(scene); });
     EXPECT_NE(msg.find("seq-02"), std::string::npos) << msg;
 
     writeText(scene / "camera-intrinsics.txt", "532.5 0 320.5\n0 531.0 240.5\n");
-    msg = errorOf([&] { Dataset::open(seq); });
+    msg = errorMessageOf([&] { Dataset::open(seq); });
     EXPECT_NE(msg.find("camera-intrinsics.txt"), std::string::npos) << msg;
 }
 
@@ -487,7 +475,7 @@ TEST(DatasetSevenScenes, BadPosesNameTheFile) {
     for (const Case& c : cases) {
         auto dir = makeSevenScenes(base / c.name, 2,
                                    [&](int i) { return i == 1 ? c.text : matrixText(Pose::Identity()); });
-        std::string msg = errorOf([&] { Dataset::open(dir); });
+        std::string msg = errorMessageOf([&] { Dataset::open(dir); });
         EXPECT_NE(msg.find("frame-000001.pose.txt"), std::string::npos) << c.name << ": " << msg;
         EXPECT_NE(msg.find(c.needle), std::string::npos) << c.name << ": " << msg;
     }
@@ -497,16 +485,16 @@ TEST(DatasetSevenScenes, BadPosesNameTheFile) {
 
 TEST(DatasetErrors, MissingFolderAndUnknownLayout) {
     auto base = test::makeTempDir("err");
-    std::string msg = errorOf([&] { Dataset::open(base / "nope"); });
+    std::string msg = errorMessageOf([&] { Dataset::open(base / "nope"); });
     EXPECT_NE(msg.find((base / "nope").string()), std::string::npos) << msg;
 
     writeText(base / "file.txt", "x");
-    msg = errorOf([&] { Dataset::open(base / "file.txt"); });
+    msg = errorMessageOf([&] { Dataset::open(base / "file.txt"); });
     EXPECT_NE(msg.find("file.txt"), std::string::npos) << msg;
 
     fs::create_directories(base / "empty");
     writeText(base / "empty" / "groundtruth.txt", "1 0 0 0 0 0 0 1\n");
-    msg = errorOf([&] { Dataset::open(base / "empty"); });
+    msg = errorMessageOf([&] { Dataset::open(base / "empty"); });
     for (const char* looked : {"empty", "depth.txt", "groundtruth.txt", ".log", "frame-NNNNNN.depth.png"})
         EXPECT_NE(msg.find(looked), std::string::npos) << looked << ": " << msg;
 }
@@ -514,7 +502,7 @@ TEST(DatasetErrors, MissingFolderAndUnknownLayout) {
 TEST(DatasetErrors, DepthTxtWithoutGroundtruth) {
     TumFixture f = makeTum();
     fs::remove(f.dir / "groundtruth.txt");
-    std::string msg = errorOf([&] { Dataset::open(f.dir); });
+    std::string msg = errorMessageOf([&] { Dataset::open(f.dir); });
     EXPECT_NE(msg.find("groundtruth.txt"), std::string::npos) << msg;
 }
 
@@ -535,7 +523,7 @@ TEST(DatasetErrors, MalformedIndexLinesNameFileAndLine) {
     for (const Case& c : cases) {
         TumFixture f = makeTum();
         writeText(f.dir / c.file, c.text);
-        std::string msg = errorOf([&] { Dataset::open(f.dir); });
+        std::string msg = errorMessageOf([&] { Dataset::open(f.dir); });
         EXPECT_NE(msg.find(c.needle), std::string::npos) << c.file << " '" << c.text << "': " << msg;
     }
     // A quaternion rounded in print (norm 0.9) is accepted and normalised; norm 0.3 is a corrupt line.
@@ -544,7 +532,7 @@ TEST(DatasetErrors, MalformedIndexLinesNameFileAndLine) {
     auto ds = Dataset::open(f.dir);
     expectPoseNear(ds->frame(0).cameraToWorld, Pose::Identity(), 1e-12);
     writeText(f.dir / "groundtruth.txt", "100.0 0 0 0 0 0 0 1\n100.1 0 0 0 0 0 0 0.3\n");
-    std::string msg = errorOf([&] { Dataset::open(f.dir); });
+    std::string msg = errorMessageOf([&] { Dataset::open(f.dir); });
     EXPECT_NE(msg.find("groundtruth.txt:2"), std::string::npos) << msg;
     EXPECT_NE(msg.find("norm"), std::string::npos) << msg;
 }
@@ -554,7 +542,7 @@ TEST(DatasetErrors, BadImagesNameTheFile) {
     {
         TumFixture f = makeTum();
         writeText(f.dir / "depth/100.004000.png", "not a png at all");
-        std::string msg = errorOf([&] { Dataset::open(f.dir); });
+        std::string msg = errorMessageOf([&] { Dataset::open(f.dir); });
         EXPECT_NE(msg.find("100.004000.png"), std::string::npos) << msg;
     }
     TumFixture f = makeTum();
@@ -564,14 +552,14 @@ TEST(DatasetErrors, BadImagesNameTheFile) {
         fs::path p = f.dir / "depth/100.104000.png";
         auto size = fs::file_size(p);
         fs::resize_file(p, size / 2);
-        std::string msg = errorOf([&] { ds->loadDepth(1); });
+        std::string msg = errorMessageOf([&] { ds->loadDepth(1); });
         EXPECT_NE(msg.find("100.104000.png"), std::string::npos) << msg;
     }
     // 8-bit grayscale.
     {
         cv::Mat m(H, W, CV_8UC1, cv::Scalar(7));
         cv::imwrite((f.dir / "depth/100.204000.png").string(), m);
-        std::string msg = errorOf([&] { ds->loadDepth(2); });
+        std::string msg = errorMessageOf([&] { ds->loadDepth(2); });
         EXPECT_NE(msg.find("100.204000.png"), std::string::npos) << msg;
         EXPECT_NE(msg.find("8-bit"), std::string::npos) << msg;
     }
@@ -579,28 +567,28 @@ TEST(DatasetErrors, BadImagesNameTheFile) {
     {
         cv::Mat m(H, W, CV_16UC3, cv::Scalar(7, 7, 7));
         cv::imwrite((f.dir / "depth/100.404000.png").string(), m);
-        std::string msg = errorOf([&] { ds->loadDepth(3); });
+        std::string msg = errorMessageOf([&] { ds->loadDepth(3); });
         EXPECT_NE(msg.find("100.404000.png"), std::string::npos) << msg;
         EXPECT_NE(msg.find("3 channels"), std::string::npos) << msg;
     }
     // Another size than frame 0.
     {
         writeDepth(f.dir / "depth/100.504000.png", [](int, int) { return 1000; }, W + 2, H);
-        std::string msg = errorOf([&] { ds->loadDepth(4); });
+        std::string msg = errorMessageOf([&] { ds->loadDepth(4); });
         EXPECT_NE(msg.find("100.504000.png"), std::string::npos) << msg;
         EXPECT_NE(msg.find("10x6"), std::string::npos) << msg;
     }
     // Deleted after open.
     {
         fs::remove(f.dir / "depth/100.004000.png");
-        std::string msg = errorOf([&] { ds->loadDepth(0); });
+        std::string msg = errorMessageOf([&] { ds->loadDepth(0); });
         EXPECT_NE(msg.find("100.004000.png"), std::string::npos) << msg;
     }
     // Out-of-range frame index.
-    std::string msg = errorOf([&] { ds->loadDepth(99); });
+    std::string msg = errorMessageOf([&] { ds->loadDepth(99); });
     EXPECT_NE(msg.find("99"), std::string::npos) << msg;
     // Listed but missing at open time: reported then, not in the middle of a run.
-    msg = errorOf([&] { Dataset::open(f.dir); });
+    msg = errorMessageOf([&] { Dataset::open(f.dir); });
     EXPECT_NE(msg.find("100.004000.png"), std::string::npos) << msg;
 }
 
@@ -609,24 +597,24 @@ TEST(DatasetErrors, BadOptionsAndCameraJsonNameTheValue) {
     for (double s : {0.0, -5.0, std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity()}) {
         DatasetOptions o;
         o.depthScale = s;
-        std::string msg = errorOf([&] { Dataset::open(f.dir, o); });
+        std::string msg = errorMessageOf([&] { Dataset::open(f.dir, o); });
         EXPECT_NE(msg.find("depth scale"), std::string::npos) << msg;
     }
     {
         DatasetOptions o;
         o.depthScale = -5.0;
-        EXPECT_NE(errorOf([&] { Dataset::open(f.dir, o); }).find("-5"), std::string::npos);
+        EXPECT_NE(errorMessageOf([&] { Dataset::open(f.dir, o); }).find("-5"), std::string::npos);
     }
     {
         DatasetOptions o;
         o.maxDepth = -1.5f;
-        std::string msg = errorOf([&] { Dataset::open(f.dir, o); });
+        std::string msg = errorMessageOf([&] { Dataset::open(f.dir, o); });
         EXPECT_NE(msg.find("-1.5"), std::string::npos) << msg;
     }
     {
         DatasetOptions o;
         o.intrinsics = Intrinsics{0.0f, 500.0f, 1, 1, 0, 0};
-        std::string msg = errorOf([&] { Dataset::open(f.dir, o); });
+        std::string msg = errorMessageOf([&] { Dataset::open(f.dir, o); });
         EXPECT_NE(msg.find("fx"), std::string::npos) << msg;
     }
     struct Case { std::string json, needle; };
@@ -634,7 +622,7 @@ TEST(DatasetErrors, BadOptionsAndCameraJsonNameTheValue) {
                           Case{R"({"fy": 0})", "fy"}, Case{R"({"depth_scale": -1})", "depth_scale"},
                           Case{"[1, 2]", "camera.json"}}) {
         writeText(f.dir / "camera.json", c.json);
-        std::string msg = errorOf([&] { Dataset::open(f.dir); });
+        std::string msg = errorMessageOf([&] { Dataset::open(f.dir); });
         EXPECT_NE(msg.find(c.needle), std::string::npos) << c.json << ": " << msg;
         EXPECT_NE(msg.find("camera.json"), std::string::npos) << c.json << ": " << msg;
     }
@@ -647,11 +635,11 @@ TEST(ParseIntrinsics, AcceptsFourNumbersAndNamesTheBadValue) {
     EXPECT_FLOAT_EQ(k.cx, 319.5f);
     EXPECT_FLOAT_EQ(k.cy, 239.5f);
     EXPECT_EQ(k.width, 0);
-    EXPECT_NE(errorOf([] { parseIntrinsics("525,525,319.5"); }).find("525,525,319.5"), std::string::npos);
-    EXPECT_NE(errorOf([] { parseIntrinsics("525,abc,319.5,239.5"); }).find("abc"), std::string::npos);
-    EXPECT_NE(errorOf([] { parseIntrinsics("525,0,319.5,239.5"); }).find("fy"), std::string::npos);
-    EXPECT_NE(errorOf([] { parseIntrinsics("nan,525,319.5,239.5"); }).find("nan"), std::string::npos);
-    EXPECT_NE(errorOf([] { parseIntrinsics(""); }).find("fx,fy,cx,cy"), std::string::npos);
+    EXPECT_NE(errorMessageOf([] { parseIntrinsics("525,525,319.5"); }).find("525,525,319.5"), std::string::npos);
+    EXPECT_NE(errorMessageOf([] { parseIntrinsics("525,abc,319.5,239.5"); }).find("abc"), std::string::npos);
+    EXPECT_NE(errorMessageOf([] { parseIntrinsics("525,0,319.5,239.5"); }).find("fy"), std::string::npos);
+    EXPECT_NE(errorMessageOf([] { parseIntrinsics("nan,525,319.5,239.5"); }).find("nan"), std::string::npos);
+    EXPECT_NE(errorMessageOf([] { parseIntrinsics(""); }).find("fx,fy,cx,cy"), std::string::npos);
 }
 
 TEST(ValidatePose, AcceptsRigidRejectsTheRest) {
@@ -665,17 +653,17 @@ TEST(ValidatePose, AcceptsRigidRejectsTheRest) {
 
     Pose p = ok;
     p(1, 3) = std::numeric_limits<double>::infinity();
-    EXPECT_NE(errorOf([&] { validatePose(p, "traj.txt:7"); }).find("traj.txt:7"), std::string::npos);
+    EXPECT_NE(errorMessageOf([&] { validatePose(p, "traj.txt:7"); }).find("traj.txt:7"), std::string::npos);
     p = ok;
     p.topLeftCorner<3, 3>() *= 1.01;
-    EXPECT_NE(errorOf([&] { validatePose(p, "frame 3"); }).find("frame 3"), std::string::npos);
+    EXPECT_NE(errorMessageOf([&] { validatePose(p, "frame 3"); }).find("frame 3"), std::string::npos);
     p = ok;
     p.col(0) *= -1;  // mirror
-    std::string msg = errorOf([&] { validatePose(p, "frame 4"); });
+    std::string msg = errorMessageOf([&] { validatePose(p, "frame 4"); });
     EXPECT_NE(msg.find("determinant"), std::string::npos) << msg;
     p = ok;
     p(3, 2) = 1;
-    msg = errorOf([&] { validatePose(p, "frame 5"); });
+    msg = errorMessageOf([&] { validatePose(p, "frame 5"); });
     EXPECT_NE(msg.find("bottom row"), std::string::npos) << msg;
 }
 
