@@ -48,7 +48,14 @@ bool isBackground(const uint8_t* p) {
     return p[0] == render::kBackground[0] && p[1] == render::kBackground[1] && p[2] == render::kBackground[2];
 }
 
-class Render : public test::GpuTest {};
+// Every test here draws (or runs `vkmesh render`): skipped where lavapipe cannot draw (test_support.h).
+class Render : public test::GpuTest {
+protected:
+    void SetUp() override {
+        if (const std::string why = test::lavapipeCannotDraw(); !why.empty()) GTEST_SKIP() << why;
+        GpuTest::SetUp();
+    }
+};
 
 TEST_F(Render, UnitSquareCoversItsProjectedArea) {
     Mesh mesh;

@@ -28,6 +28,14 @@ std::optional<std::filesystem::path> sharedDatasetsDir() {
     return std::nullopt;
 }
 
+std::string lavapipeCannotDraw() {
+    const char* width = std::getenv("LP_NATIVE_VECTOR_WIDTH");
+    if (!width || !*width || std::atoi(width) >= 256) return {};
+    return std::string("LP_NATIVE_VECTOR_WIDTH=") + width +
+           ": lavapipe (Mesa 22.3) corrupts the heap when a vertex shader reads a VK_FORMAT_R32_UINT attribute, as the "
+           "mesh renderer does; a Mesa bug, reproduced without vkmesh in docs/repro/lavapipe_width128 (docs/PORTABILITY.md)";
+}
+
 std::filesystem::path makeTempDir(const std::string& tag) {
     static std::atomic<int> counter{0};
     auto dir = std::filesystem::temp_directory_path() /

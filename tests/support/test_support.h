@@ -18,6 +18,13 @@ namespace vkmesh::test {
 // Returns nothing (and the caller GTEST_SKIPs with a message saying so) when the folder is absent.
 std::optional<std::filesystem::path> sharedDatasetsDir();
 
+// Non-empty (the reason) when lavapipe cannot draw vkmesh's meshes in this process: with
+// LP_NATIVE_VECTOR_WIDTH below 256 (4-lane subgroups), Mesa 22.3's lavapipe writes past a heap block when
+// a vertex shader reads a VK_FORMAT_R32_UINT attribute, as the mesh renderer does (Vertex::createdFrame),
+// and the process aborts later, usually at exit. A Mesa bug, reproduced without vkmesh in
+// docs/repro/lavapipe_width128/ (docs/PORTABILITY.md). The tests that draw GTEST_SKIP with this reason.
+std::string lavapipeCannotDraw();
+
 // A fresh empty temporary folder for one test, removed by the caller or left for inspection.
 std::filesystem::path makeTempDir(const std::string& tag);
 
