@@ -1,0 +1,97 @@
+#!/usr/bin/env bash
+# CI job: lavapipe run two other ways than the main suite (docs/PORTABILITY.md).
+#  (a) 4-lane subgroups: LP_NATIVE_VECTOR_WIDTH=128 makes lavapipe's subgroups 4 wide instead of 8; the whole
+#      GPU test suite runs that way with validation, so no shader may assume a subgroup size. The tests that
+#      draw skip themselves there (a lavapipe heap overflow, reproduced without vkmesh in docs/PORTABILITY.md).
+#  (b) GPU-assisted validation (the Khronos layer instruments every shader and checks each buffer access and
+#      descriptor at run time) on a subset of the GPU tests that dispatches every compute shader of
+#      shaders_comp/; instrumented shaders run ~15x slower on lavapipe, so not the whole suite. The job
+#      checks that the subset still dispatches every shader (an LD_PRELOAD shim, scripts/ci/tools/
+#      dispatch_log.c, records the dispatched shaders) and fails naming any shader left out.
+# Any validation message fails a test (the fixtures fail on what the layer's messenger received; GPU-AV
+# reports through the same messenger). Uses the main suite's Release build in build/ (scripts/build.sh is
+# a no-op when scripts/test.sh has just built it): nothing here needs other compiler flags.
+# Usage: scripts/ci/20-portability.sh [4lane|gpu-av]   (default: both)
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+start=$SECONDS
+jobs=$(nproc)
+parts=${1:-all}
+case "$parts" in all|4lane|gpu-av) ;; *) echo "usage: $0 [4lane|gpu-av]" >&2; exit 2 ;; esac
+
+scripts/install_deps.sh
+scripts/build.sh
+echo "portability: build up to date after $((SECONDS - start)) s"
+
+# --- (a) 4-lane subgroups ---
+if [[ $parts == all || $parts == 4lane ]]; then
+  # The variable must really change the subgroup size (a newer Mesa could rename it).
+  size=$(LP_NATIVE_VECTOR_WIDTH=128 vulkaninfo 2>/dev/null | sed -n 's/^[[:space:]]*subgroupSize[[:space:]]*= *//p' | head -n1)
+  if [[ $size != 4 ]]; then
+    echo "portability: LP_NATIVE_VECTOR_WIDTH=128 gives subgroupSize '${size}', not 4: the 4-lane run would test nothing" >&2
+    exit 1
+  fi
+  echo "portability: GPU tests with 4-lane subgroups (LP_NATIVE_VECTOR_WIDTH=128, subgroupSize 4)"
+  (cd build && LP_NATIVE_VECTOR_WIDTH=128 VKMESH_VALIDATION=1 ctest -L '^gpu$' --output-on-failure -j"$jobs")
+  echo "portability: 4-lane run passed after $((SECONDS - start)) s"
+fi
+
+# --- (b) GPU-assisted validation ---
+if [[ $parts == all || $parts == gpu-av ]]; then
+  # Together these dispatch every compute shader (checked below); each is also the test of one area:
+  gpu_av_tests=(
+    GpuTest.FusedTsdfMatchesReference                          # allocation + fusion against the CPU reference
+    GpuTest.BaselineMeshMatchesReference                       # baseline marching cubes (mesh_baseline)
+    GpuTest.IncrementalMeshEqualsRebuildFromScratch            # incremental mesh, mark-all-dirty rebuild, export
+    GpuTest.BothVertexUpdatePathsGiveTheSameMesh               # both vertex-update modes
+    GpuTest.RecyclingWithLockFreeClaims                        # lock-free claims, recycling, hash rebuild (rehash_*)
+    GpuTest.RefinementHalvesIrregularityOnASlantedPlane        # refinement (retype passes)
+    MeshDeltas.FollowHeapExhaustionGrowthAndRecycling          # deltas (diff_*, plan_deltas), heap growth, pending dirty
+    OwnDevice.PublishedMeshEqualsTheExportAndSurvivesARebuild  # published mesh: export to draw-ready buffers
+  )
+  regex="^($(IFS='|'; echo "${gpu_av_tests[*]}" | sed 's/\./\\./g'))\$"
+  # A renamed test would otherwise drop out silently (ctest -R runs what matches, even nothing).
+  found=$(cd build && ctest -N -R "$regex" | sed -n 's/^Total Tests: //p')
+  if [[ $found != "${#gpu_av_tests[@]}" ]]; then
+    echo "portability: ${found:-0} of the ${#gpu_av_tests[@]} GPU-AV tests exist; missing:" >&2
+    listed=$(cd build && ctest -N)
+    for t in "${gpu_av_tests[@]}"; do grep -qF " $t" <<<"$listed" || echo "  $t" >&2; done
+    exit 1
+  fi
+
+  tools=build/ci-tools
+  mkdir -p "$tools"
+  gcc -shared -fPIC -O2 -Wall -Wextra -Werror -o "$tools/dispatch_log.so" scripts/ci/tools/dispatch_log.c -ldl
+  gcc -DDISPATCH_LOG_HASH_FILES -O2 -Wall -Wextra -Werror -o "$tools/spv_hash" scripts/ci/tools/dispatch_log.c -ldl -lpthread
+  log=$PWD/$tools/gpu_av_dispatches.txt
+  rm -f "$log"
+
+  echo "portability: ${#gpu_av_tests[@]} GPU tests under GPU-assisted validation"
+  (cd build && LD_PRELOAD="$PWD/ci-tools/dispatch_log.so" VKMESH_DISPATCH_LOG="$log" \
+     VK_LAYER_ENABLES=VK_VALIDATION_FEATURE_ENABLE_GPU_ASSISTED_EXT VKMESH_VALIDATION=1 \
+     ctest -R "$regex" --output-on-failure -j"$jobs" --timeout 900)
+
+  # Every compute shader of the build (build/shaders_gen_all/*.spv, one per shaders_comp/**/*.comp) must
+  # have been dispatched by the tests above.
+  mapfile -t spv < <(find build/shaders_gen_all -maxdepth 1 -name '*.spv' | sort)
+  comp=$(find shaders_comp -name '*.comp' | wc -l)
+  if (( ${#spv[@]} != comp )); then
+    echo "portability: ${#spv[@]} .spv files in build/shaders_gen_all but $comp shaders in shaders_comp/: the coverage check needs updating" >&2
+    exit 1
+  fi
+  if grep -q '^overflow' "$log" 2>/dev/null; then
+    echo "portability: dispatch_log.c's tables overflowed; raise kMaxEntries" >&2
+    exit 1
+  fi
+  missing=()
+  while read -r hash file; do
+    grep -q "^$hash " "$log" 2>/dev/null || missing+=("$file")
+  done < <("$tools/spv_hash" "${spv[@]}")
+  if (( ${#missing[@]} )); then
+    echo "portability: the GPU-AV tests did not dispatch ${#missing[@]} of ${#spv[@]} compute shaders; add a test that does:" >&2
+    printf '  %s\n' "${missing[@]}" >&2
+    exit 1
+  fi
+  echo "portability: GPU-AV run passed, all ${#spv[@]} compute shaders dispatched, after $((SECONDS - start)) s"
+fi
+echo "portability: done in $((SECONDS - start)) s"
