@@ -1,6 +1,6 @@
 // The one place where buffer layouts, binding numbers, push constants and workgroup sizes are defined.
 // Included by the C++ host (namespace vkmesh::gpu, sizes static_assert-ed in src/gpu/layout.h) and by
-// every compute shader (through common.glsl), so the two sides cannot drift apart.
+// every compute shader (through structure/frame.glsl), so the two sides cannot drift apart.
 #ifndef VKMESH_SHARED_LAYOUT_H
 #define VKMESH_SHARED_LAYOUT_H
 
