@@ -27,9 +27,9 @@ function(_vkmesh_embed_spirv target registry key_with_extension)
     # included .glsl/.h rebuilds the shader.
     add_custom_command(
       OUTPUT ${hdr}
-      COMMAND ${Vulkan_GLSLANG_VALIDATOR_EXECUTABLE} --target-env vulkan1.2 -V -I${src_dir} -o ${spv} ${src}
+      COMMAND ${Vulkan_GLSLANG_VALIDATOR_EXECUTABLE} --target-env vulkan1.2 -V -I${src_dir} -I${CMAKE_SOURCE_DIR}/shaders_comp -o ${spv} ${src}
       COMMAND ${SPIRV_VAL} --target-env vulkan1.2 ${spv}
-      COMMAND ${Vulkan_GLSLANG_VALIDATOR_EXECUTABLE} --target-env vulkan1.2 -V -I${src_dir}
+      COMMAND ${Vulkan_GLSLANG_VALIDATOR_EXECUTABLE} --target-env vulkan1.2 -V -I${src_dir} -I${CMAKE_SOURCE_DIR}/shaders_comp
               --vn ${ident} --depfile ${gen_dir}/${key}.d -o ${hdr} ${src}
       DEPENDS ${src}
       DEPFILE ${gen_dir}/${key}.d

@@ -76,7 +76,7 @@ void ReferenceVolume::setRecycling(float keepRadius, uint32_t starveAfterFrames,
     starveWeight_ = starveWeight;
 }
 
-// blockOutsideKeepRadius of common.glsl, the same float operations in the same order.
+// blockOutsideKeepRadius of shaders_comp/structure/frame.glsl, the same float operations in the same order.
 bool ReferenceVolume::outsideKeepRadius(const BlockCoord& c, const float cameraToWorld[3][4]) const {
     if (!(keepRadius_ > 0.0f)) return false;
     const float blockSize = params_.voxelSize * float(BLOCK_SIDE);

@@ -79,7 +79,7 @@ public:
     const std::vector<BlockCoord>& lastTouched() const { return lastTouched_; }
 
     // The corners (voxels, global coordinates block * 8 + local) that "flipped" in the last integrate() call,
-    // in fusion order: the rule of shaders_comp/fuse_depth.comp. With o/n the old/new weight and sdf,
+    // in fusion order: the rule of shaders_comp/fuse/fuse_depth.comp. With o/n the old/new weight and sdf,
     // observed = weight >= minMeshWeight, a corner flips when
     //   observed(o) != observed(n), or observed(n) and (sdf_o < 0) != (sdf_n < 0), or, with refinement on,
     //   observed(n) and (|sdf_o| < epsilon) != (|sdf_n| < epsilon).

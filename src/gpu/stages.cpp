@@ -6,7 +6,7 @@
 
 namespace vkmesh::gpu {
 
-AllocateBlocksStage::AllocateBlocksStage(const vk::Context& context, const vk::BindingLayout& layout)
+AllocateBlocksStage::AllocateBlocksStage(const vk::Context& context, const vk::BindingTable& layout)
     : allocate_(context, layout, "allocate_blocks"),
       plan_(context, layout, "plan_frame"),
       assign_(context, layout, "assign_blocks"),
@@ -26,7 +26,7 @@ void AllocateBlocksStage::record(VkCommandBuffer cmd, const FramePush& push, con
     vk::memoryBarrier(cmd);
 }
 
-FuseDepthStage::FuseDepthStage(const vk::Context& context, const vk::BindingLayout& layout)
+FuseDepthStage::FuseDepthStage(const vk::Context& context, const vk::BindingTable& layout)
     : fuse_(context, layout, "fuse_depth") {}
 
 void FuseDepthStage::record(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters) const {
@@ -34,7 +34,7 @@ void FuseDepthStage::record(VkCommandBuffer cmd, const FramePush& push, const vk
     vk::memoryBarrier(cmd);
 }
 
-BaselineMeshStage::BaselineMeshStage(const vk::Context& context, const vk::BindingLayout& layout)
+BaselineMeshStage::BaselineMeshStage(const vk::Context& context, const vk::BindingTable& layout)
     : collect_(context, layout, "collect_blocks"),
       plan_(context, layout, "plan_block_list"),
       mesh_(context, layout, "mesh_baseline") {}
@@ -53,7 +53,7 @@ void BaselineMeshStage::record(VkCommandBuffer cmd, const FramePush& push, const
     vk::memoryBarrier(cmd);
 }
 
-IncrementalMeshStage::IncrementalMeshStage(const vk::Context& context, const vk::BindingLayout& layout)
+IncrementalMeshStage::IncrementalMeshStage(const vk::Context& context, const vk::BindingTable& layout)
     : markDirty_(context, layout, "mark_dirty"),
       markAllDirty_(context, layout, "mark_all_dirty"),
       markPending_(context, layout, "mark_pending_dirty"),
@@ -133,7 +133,7 @@ void IncrementalMeshStage::recordMesh(VkCommandBuffer cmd, const FramePush& push
     mark("mesh_gc");
 }
 
-RecycleStage::RecycleStage(const vk::Context& context, const vk::BindingLayout& layout)
+RecycleStage::RecycleStage(const vk::Context& context, const vk::BindingTable& layout)
     : retire_(context, layout, "recycle_retire"),
       free_(context, layout, "recycle_free"),
       commitFree_(context, layout, "commit_recycle"),
@@ -167,7 +167,7 @@ void RecycleStage::recordRebuildHash(VkCommandBuffer cmd, const FramePush& push,
     vk::memoryBarrier(cmd);
 }
 
-ExportMeshStage::ExportMeshStage(const vk::Context& context, const vk::BindingLayout& layout)
+ExportMeshStage::ExportMeshStage(const vk::Context& context, const vk::BindingTable& layout)
     : plan_(context, layout, "plan_export"),
       vertices_(context, layout, "export_vertices"),
       triangles_(context, layout, "export_triangles"),
@@ -184,7 +184,7 @@ void ExportMeshStage::record(VkCommandBuffer cmd, const FramePush& push, const v
     vk::memoryBarrier(cmd);
 }
 
-MeshDeltaStage::MeshDeltaStage(const vk::Context& context, const vk::BindingLayout& deltaLayout)
+MeshDeltaStage::MeshDeltaStage(const vk::Context& context, const vk::BindingTable& deltaLayout)
     : plan_(context, deltaLayout, "plan_deltas"),
       vertices_(context, deltaLayout, "diff_vertices"),
       triangles_(context, deltaLayout, "diff_triangles") {}

@@ -16,7 +16,7 @@ namespace vkmesh::gpu {
 // (commit_allocation). Four dispatches, because a free list may not be read and shrunk in one.
 class AllocateBlocksStage {
 public:
-    AllocateBlocksStage(const vk::Context& context, const vk::BindingLayout& layout);
+    AllocateBlocksStage(const vk::Context& context, const vk::BindingTable& layout);
     void record(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters, uint32_t pixelStride) const;
 
 private:
@@ -26,7 +26,7 @@ private:
 // Paper §V.A, second half: one workgroup per touched block updates its 512 TSDF corners.
 class FuseDepthStage {
 public:
-    FuseDepthStage(const vk::Context& context, const vk::BindingLayout& layout);
+    FuseDepthStage(const vk::Context& context, const vk::BindingTable& layout);
     void record(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters) const;
 
 private:
@@ -37,7 +37,7 @@ private:
 // marching cubes in every cube, 3 vertices of its own per triangle (mesh_baseline).
 class BaselineMeshStage {
 public:
-    BaselineMeshStage(const vk::Context& context, const vk::BindingLayout& layout);
+    BaselineMeshStage(const vk::Context& context, const vk::BindingTable& layout);
     // Lists every live block (blockList, liveBlockCount) and sizes listDispatch; other passes use it too.
     void recordCollect(VkCommandBuffer cmd, const FramePush& push, uint32_t hashCapacity) const;
     void record(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters, uint32_t hashCapacity) const;
@@ -53,7 +53,7 @@ private:
 // rebuild changed cubes' triangles (mesh_triangulate, commit_chunks), collect garbage (free_vertices, free_chunks, commit_free).
 class IncrementalMeshStage {
 public:
-    IncrementalMeshStage(const vk::Context& context, const vk::BindingLayout& layout);
+    IncrementalMeshStage(const vk::Context& context, const vk::BindingTable& layout);
     // Dirty = blocks touched this frame and their -x/-y/-z neighbours.
     void recordMarkTouched(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters) const;
     // Dirty = every block listed by collect_blocks (record BaselineMeshStage::recordCollect first).
@@ -78,7 +78,7 @@ private:
 // (BaselineMeshStage::recordCollect). recordRebuildHash drops the tombstones freed keys leave in the hash.
 class RecycleStage {
 public:
-    RecycleStage(const vk::Context& context, const vk::BindingLayout& layout);
+    RecycleStage(const vk::Context& context, const vk::BindingTable& layout);
     void recordRetire(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters) const;
     void recordFree(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters) const;
     // Needs the live block list; clears the table and re-inserts every live block (one CAS each).
@@ -94,7 +94,7 @@ private:
 // (finish_export).
 class ExportMeshStage {
 public:
-    ExportMeshStage(const vk::Context& context, const vk::BindingLayout& layout);
+    ExportMeshStage(const vk::Context& context, const vk::BindingTable& layout);
     void record(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters) const;
 
 private:
@@ -106,7 +106,7 @@ private:
 // layout (DELTA_BINDING_*), no push constants.
 class MeshDeltaStage {
 public:
-    MeshDeltaStage(const vk::Context& context, const vk::BindingLayout& deltaLayout);
+    MeshDeltaStage(const vk::Context& context, const vk::BindingTable& deltaLayout);
     void record(VkCommandBuffer cmd, const vk::Buffer& deltaState) const;
 
 private:

@@ -1,5 +1,5 @@
 // refineType (docs/REFINEMENT.md, paper §V.F): the regular-type table and the pure function the CPU reference
-// mesher and the GPU (shaders_comp/cube_access.glsl) both apply.
+// mesher and the GPU (shaders_comp/structure/cube_access.glsl) both apply.
 #include "core/refinement.h"
 
 #include <gtest/gtest.h>

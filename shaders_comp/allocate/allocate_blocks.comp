@@ -1,0 +1,108 @@
+#version 460
+// Stage 1 of a frame (paper §V.A): every valid pixel walks the blocks that its truncation band crosses
+// (a 3D DDA in block units from depth d - trunc to d + trunc along the pixel's ray), inserts their keys
+// into the spatial hash, and appends each block touched for the first time this frame to the touched
+// list. Blocks get pool memory in the next stage (assign_blocks): here a key is only claimed.
+#extension GL_GOOGLE_include_directive : require
+#include "structure/frame.glsl"
+#include "structure/block_hash.glsl"
+#include "structure/frame_lists.glsl"
+#include "structure/depth_input.glsl"
+
+layout(local_size_x = WG_PIXELS_X, local_size_y = WG_PIXELS_Y) in;
+
+uint requests = 0u, found = 0u, inserted = 0u, full = 0u, outOfRange = 0u, outsideRadius = 0u;
+
+// Claims `cell`'s key without waiting on anyone: one compare-and-swap per probed slot. A slot that
+// already holds the key needs no atomic (keys are never removed during this dispatch, so a plain read
+// equal to the key is final). Returns the slot, or NO_BLOCK if none was free within the probe bound.
+uint insertKey(ivec3 cell) {
+    uint64_t key = packBlockKey(cell);
+    uint slot = hashSlot(cell);
+    // Fast path: nearly every visit finds its key already at its home slot.
+    if (hashKeys[slot] == key) { ++found; return slot; }
+    for (uint probe = 0u; probe < HASH_MAX_PROBES; ++probe) {
+        uint64_t prev = atomicCompSwap(hashKeys[slot], KEY_EMPTY, key);
+        if (prev == KEY_EMPTY) { ++inserted; return slot; }
+        if (prev == key) { ++found; return slot; }
+        slot = (slot + 1u) & (params.hashCapacity - 1u);
+    }
+    ++full;
+    return NO_BLOCK;
+}
+
+void touchBlock(ivec3 cell) {
+    ++requests;
+    if (!blockCoordInRange(cell)) { ++outOfRange; return; }
+    // Bounded maps: blocks beyond the keep radius are not allocated (the recycling passes free those
+    // the camera has left behind), so the map stays a ball around the camera.
+    if (blockOutsideKeepRadius(cell)) { ++outsideRadius; return; }
+    uint slot = insertKey(cell);
+    if (slot == NO_BLOCK) return;
+    // The first invocation to stamp the slot with this frame's number lists it, so each block appears
+    // once in the touched list however many pixels see it.
+    if (hashStamps[slot] != frame.frameNumber &&
+        atomicExchange(hashStamps[slot], frame.frameNumber) != frame.frameNumber) {
+        uint at = atomicAdd(counters.touchedCount, 1u);
+        if (at < params.touchedCapacity) touched[at] = slot;
+    }
+}
+
+void main() {
+    uvec2 size = frameImageSize();
+    uvec2 pixel = gl_GlobalInvocationID.xy * params.allocationStride;
+    uint valid = 0u, truncated = 0u;
+    if (all(lessThan(pixel, size))) {
+        float d = depth[pixel.y * size.x + pixel.x];
+        if (d >= frame.minDepth && d <= frame.maxDepth) {
+            valid = 1u;
+            // Camera-frame ray through the pixel, scaled so that its z is 1.
+            precise vec3 ray = vec3((float(pixel.x) - frame.intrinsics.z) / frame.intrinsics.x,
+                                    (float(pixel.y) - frame.intrinsics.w) / frame.intrinsics.y, 1.0);
+            float nearZ = max(d - params.truncation, frame.minDepth * 0.5);
+            float farZ = d + params.truncation;
+            float blockSize = params.voxelSize * float(BLOCK_SIDE);
+            precise vec3 a = transformPoint(frame.cameraToWorld, ray * nearZ) / blockSize;
+            precise vec3 b = transformPoint(frame.cameraToWorld, ray * farZ) / blockSize;
+
+            // Amanatides & Woo traversal from a to b, parameter t in [0, 1]. Written without dynamic
+            // component indexing (v[axis]), which llvmpipe turns into slow scratch memory.
+            precise vec3 dir = b - a;
+            vec3 fa = floor(a);
+            ivec3 cell = ivec3(fa);
+            ivec3 last = ivec3(floor(b));
+            ivec3 stepDir = ivec3(sign(dir));
+            precise vec3 adir = abs(dir);
+            precise vec3 dist = mix(a - fa, fa + 1.0 - a, greaterThan(dir, vec3(0.0)));
+            bvec3 still = equal(dir, vec3(0.0));
+            precise vec3 tMax = mix(dist / adir, vec3(1e30), still);
+            precise vec3 tDelta = mix(1.0 / adir, vec3(1e30), still);
+            truncated = 1u;
+            for (uint s = 0u; s < RAY_MAX_BLOCKS; ++s) {
+                touchBlock(cell);
+                if (cell == last) { truncated = 0u; break; }
+                if (tMax.x <= tMax.y && tMax.x <= tMax.z) {
+                    if (tMax.x > 1.0) { truncated = 0u; break; }
+                    cell.x += stepDir.x;
+                    tMax.x += tDelta.x;
+                } else if (tMax.y <= tMax.z) {
+                    if (tMax.y > 1.0) { truncated = 0u; break; }
+                    cell.y += stepDir.y;
+                    tMax.y += tDelta.y;
+                } else {
+                    if (tMax.z > 1.0) { truncated = 0u; break; }
+                    cell.z += stepDir.z;
+                    tMax.z += tDelta.z;
+                }
+            }
+        }
+    }
+    ADD_COUNTER(validPixels, valid);
+    ADD_COUNTER(blockRequests, requests);
+    ADD_COUNTER(blocksFound, found);
+    ADD_COUNTER(blocksInserted, inserted);
+    ADD_COUNTER(hashFull, full);
+    ADD_COUNTER(outOfRange, outOfRange);
+    ADD_COUNTER(outsideRadius, outsideRadius);
+    ADD_COUNTER(rayTruncated, truncated);
+}

@@ -1,0 +1,12 @@
+#version 460
+// One invocation after collect_blocks: one workgroup per listed block for the whole-volume pass.
+#extension GL_GOOGLE_include_directive : require
+#include "structure/frame.glsl"
+
+layout(local_size_x = 1) in;
+
+void main() {
+    counters.listDispatch[0] = counters.liveBlockCount;
+    counters.listDispatch[1] = 1u;
+    counters.listDispatch[2] = 1u;
+}

@@ -1,0 +1,60 @@
+#version 460
+// Incremental mesh, pass 1 (paper §V.C): every cube of the retype list computes its new (refined) MC type
+// and, for each edge the type needs, makes sure the edge's owner slot holds a vertex.
+//  - Lock-based (default, PARITY_CLASS = 4): the slot is claimed with one atomicCompSwap(EMPTY -> CLAIMED);
+//    the winner takes a vertex from the heap's free stack and stores its index; losers do not wait:
+//    triangles read the slot in the next pass.
+//  - Lock-free (PARITY_CLASS = 0..3, one dispatch each): only cubes whose global parity (x&1, y&1, z&1)
+//    is in the class {p, 7 - p} run; no two of them share an edge, so a plain read and write suffice.
+// Every new vertex is a GC candidate (freed after triangulation if no triangle ended up using it).
+#extension GL_GOOGLE_include_directive : require
+#include "structure/frame.glsl"
+#include "structure/cube_mesh.glsl"
+#include "structure/frame_lists.glsl"
+#include "structure/mc_tables.glsl"
+#include "structure/cube_access.glsl"
+
+layout(local_size_x = WG_LIST) in;
+layout(constant_id = 0) const uint PARITY_CLASS = 4u;
+
+
+// Pops a vertex for `slot` (the caller owns the slot); returns EMPTY_SLOT when the heap is exhausted.
+uint allocateVertex(uint slot) {
+    uint rank = atomicAdd(counters.vertexAllocRequests, 1u);   // commit_vertices shrinks the stack next
+    if (rank >= counters.vertexFreeTop) return EMPTY_SLOT;     // counted by commit_vertices
+    uint v = vertexFree[counters.vertexFreeTop - 1u - rank];
+    vertices[v].refcount = 0u;
+    vertices[v].createdFrame = frame.frameNumber;
+    vertexOwner[v] = slot;
+    uint c = atomicAdd(counters.candidateCount, 1u);
+    if (c < params.vertexCapacity) setGcCandidate(c, v);
+    return v;
+}
+
+void main() {
+    uint i = gl_GlobalInvocationID.x;
+    if (i >= min(counters.retypeCount, params.retypeCapacity)) return;
+    uint id = retypeList[i];
+    if (id == NO_BLOCK) return;
+    CubeRef r = cubeRef(id / VOXELS_PER_BLOCK, id % VOXELS_PER_BLOCK);
+    if (PARITY_CLASS < 4u) {
+        uint p = (r.cube.x & 1u) | ((r.cube.y & 1u) << 1) | ((r.cube.z & 1u) << 2);   // block origins are even
+        if (min(p, 7u - p) != PARITY_CLASS) return;
+    }
+    float d[8];
+    bool present[8];
+    bool observed;
+    uint t = loadCube(r, d, present, observed);
+    uint mask = edgeMaskOf(refineType(cubeState[id] & CUBE_TYPE_MASK, t, d));
+    for (uint n = 0u; n < 12u && mask != 0u; ++n) {   // over the set bits only
+        uint e = findLSB(mask);
+        mask &= mask - 1u;
+        uint slot = edgeSlot(r, e);
+        if (slot == NO_BLOCK || edgeLoad(slot) != EMPTY_SLOT) continue;
+        if (PARITY_CLASS < 4u) {
+            edgeStore(slot, allocateVertex(slot));
+        } else if (edgeCompSwap(slot, EMPTY_SLOT, CLAIMED_SLOT) == EMPTY_SLOT) {
+            edgeStoreAtomic(slot, allocateVertex(slot));
+        }
+    }
+}

@@ -1,0 +1,71 @@
+#version 460
+// Stage 3 (paper §V.A): one workgroup per touched block updates the TSDF at the block's 512 corners:
+// project the corner into the depth image (nearest pixel), take the projective distance
+// d(pixel) - z, truncate it, and fold it into the weighted running average (weight capped).
+#extension GL_GOOGLE_include_directive : require
+#include "structure/frame.glsl"
+#include "structure/block_store.glsl"
+#include "structure/frame_lists.glsl"
+#include "structure/retype_marks.glsl"
+#include "structure/depth_input.glsl"
+
+layout(local_size_x = WG_BLOCK) in;
+
+// Corners whose sign or observed state flips mark the cubes around them (markCornerRetype, structure/retype_marks.glsl).
+
+void main() {
+    uint entry = touched[gl_WorkGroupID.x];   // the same for the whole workgroup
+    uint updated = 0u;
+    uint fused = 0u;
+    if (entry != NO_BLOCK) {
+        fused = gl_LocalInvocationIndex == 0u ? 1u : 0u;
+        bool fresh = (entry & FRESH_BLOCK) != 0u;
+        uint block = entry & INDEX_MASK;
+        ivec3 origin = blockCoords[block].xyz * int(BLOCK_SIDE);
+        uvec2 size = frameImageSize();
+        float trunc = params.truncation;
+        uint flipped = 0u;   // which of this invocation's corners flipped (marked after the loop, which stays lean)
+        for (uint k = 0u; k < VOXELS_PER_INVOCATION; ++k) {
+            uint local = gl_LocalInvocationIndex + k * WG_BLOCK;
+            uvec3 l = uvec3(local % BLOCK_SIDE, (local / BLOCK_SIDE) % BLOCK_SIDE, local / (BLOCK_SIDE * BLOCK_SIDE));
+            uint v = block * VOXELS_PER_BLOCK + local;
+            // A block handed out this frame may hold a previous owner's values: start from nothing.
+            float oldSdf = fresh ? 0.0 : voxelSdf[v];
+            float oldWeight = fresh ? 0.0 : voxelWeight[v];
+            precise float newSdf = oldSdf;
+            float newWeight = oldWeight;
+
+            precise vec3 world = vec3(origin + ivec3(l)) * params.voxelSize;
+            precise vec3 cam = transformPoint(frame.worldToCamera, world);
+            if (cam.z > 0.0) {
+                precise float u = (cam.x * frame.intrinsics.x) / cam.z + frame.intrinsics.z;
+                precise float w = (cam.y * frame.intrinsics.y) / cam.z + frame.intrinsics.w;
+                float pu = floor(u + 0.5), pv = floor(w + 0.5);
+                if (pu >= 0.0 && pv >= 0.0 && pu < float(size.x) && pv < float(size.y)) {
+                    float d = depth[uint(pv) * size.x + uint(pu)];
+                    precise float sdf = d - cam.z;
+                    if (d >= frame.minDepth && d <= frame.maxDepth && sdf >= -trunc) {
+                        precise float tsdf = min(sdf, trunc);
+                        newSdf = (oldSdf * oldWeight + tsdf) / (oldWeight + 1.0);
+                        newWeight = min(oldWeight + 1.0, params.maxWeight);
+                        ++updated;
+                    }
+                }
+            }
+            bool wasObserved = oldWeight >= params.minMeshWeight, isObserved = newWeight >= params.minMeshWeight;
+            bool nearFlip = params.refine != 0u && (abs(oldSdf) < params.refineEpsilon) != (abs(newSdf) < params.refineEpsilon);
+            if (wasObserved != isObserved || (isObserved && ((oldSdf < 0.0) != (newSdf < 0.0) || nearFlip))) flipped |= 1u << k;
+            if (fresh || newWeight != oldWeight || newSdf != oldSdf) {
+                voxelSdf[v] = newSdf;
+                voxelWeight[v] = newWeight;
+            }
+        }
+        if (params.incrementalMesh != 0u) {
+            for (uint k = 0u; k < VOXELS_PER_INVOCATION && flipped != 0u; ++k) {
+                if ((flipped & (1u << k)) != 0u) markCornerRetype(block, gl_LocalInvocationIndex + k * WG_BLOCK);
+            }
+        }
+    }
+    ADD_COUNTER(updatedVoxels, updated);
+    ADD_COUNTER(fusedBlocks, fused);
+}

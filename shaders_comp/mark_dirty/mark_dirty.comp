@@ -1,0 +1,27 @@
+#version 460
+// Incremental mesh, pass 0 (docs/MESH.md): the dirty blocks of this frame are the touched blocks and the
+// existing blocks at T - o, o in {0,1}^3, whose border cubes read corners of T. One invocation per
+// touched entry; the first to stamp a block with this frame's number lists it.
+#extension GL_GOOGLE_include_directive : require
+#include "structure/frame.glsl"
+#include "structure/block_hash.glsl"
+#include "structure/block_store.glsl"
+#include "structure/frame_lists.glsl"
+
+layout(local_size_x = WG_LIST) in;
+
+void main() {
+    uint i = gl_GlobalInvocationID.x;
+    if (i >= min(counters.touchedCount, params.touchedCapacity)) return;
+    uint entry = touched[i];
+    if (entry == NO_BLOCK) return;
+    uint block = entry & INDEX_MASK;
+    ivec3 coord = blockCoords[block].xyz;
+    for (uint o = 0u; o < 8u; ++o) {
+        ivec3 offset = ivec3(o & 1u, (o >> 1) & 1u, (o >> 2) & 1u);
+        uint b = o == 0u ? block : findBlock(coord - offset);
+        if (b == NO_BLOCK) continue;
+        if (meshStamps[b] != frame.frameNumber && atomicExchange(meshStamps[b], frame.frameNumber) != frame.frameNumber)
+            dirtyList[atomicAdd(counters.dirtyCount, 1u)] = b;
+    }
+}

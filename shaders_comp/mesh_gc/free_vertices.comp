@@ -1,0 +1,20 @@
+#version 460
+// Incremental mesh, pass 3 (paper §V.E, garbage collection), in its own dispatch so that no free stack is
+// popped and pushed at once: every GC candidate still without triangles is freed: refcount 0 -> DEAD with
+// one compare-and-swap (a vertex listed twice is freed once), its edge slot emptied, its index pushed
+// above the committed top of the free stack.
+#extension GL_GOOGLE_include_directive : require
+#include "structure/frame.glsl"
+#include "structure/cube_mesh.glsl"
+#include "structure/frame_lists.glsl"
+
+layout(local_size_x = WG_LIST) in;
+
+void main() {
+    uint i = gl_GlobalInvocationID.x;
+    if (i >= min(counters.candidateCount, params.vertexCapacity)) return;
+    uint v = gcCandidate(i);
+    if (atomicCompSwap(vertices[v].refcount, 0u, DEAD_REFCOUNT) != 0u) return;
+    edgeStore(vertexOwner[v], EMPTY_SLOT);
+    vertexFree[counters.vertexFreeTop + atomicAdd(counters.vertexPushes, 1u)] = v;
+}

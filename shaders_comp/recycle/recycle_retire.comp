@@ -1,0 +1,52 @@
+#version 460
+// Recycling, phase 1 (after fusion and mark_dirty, before the mesh passes): one workgroup per live block
+// (collect_blocks). A block beyond the keep radius has every weight set to 0; a block idle for
+// starveAfterFrames frames loses starveWeight per corner (not below 0). A corner that stops being
+// observed (weight drops below minMeshWeight) marks the 8 cubes around it for retyping, exactly as fusion
+// does, and the block and its -x/-y/-z neighbours (whose cubes read its corners) become dirty: the mesh
+// passes of this same frame then release every triangle that read those corners, and GC frees their
+// vertices. recycle_free frees the block once it owns no TSDF weight, triangle or vertex.
+#extension GL_GOOGLE_include_directive : require
+#include "structure/frame.glsl"
+#include "structure/block_hash.glsl"
+#include "structure/block_store.glsl"
+#include "structure/frame_lists.glsl"
+#include "structure/retype_marks.glsl"
+#include "recycle/recycle.glsl"
+
+layout(local_size_x = WG_BLOCK) in;
+
+void main() {
+    uint block = blockList[gl_WorkGroupID.x];   // the same for the whole workgroup
+    bool retire = blockRetires(block);
+    bool starve = !retire && blockStarves(block);
+    if (!retire && !starve) return;             // uniform over the workgroup
+    uint flipped = 0u;
+    for (uint k = 0u; k < VOXELS_PER_INVOCATION; ++k) {
+        uint local = gl_LocalInvocationIndex + k * WG_BLOCK;
+        uint v = block * VOXELS_PER_BLOCK + local;
+        float oldWeight = voxelWeight[v];
+        precise float newWeight = retire ? 0.0 : max(oldWeight - params.starveWeight, 0.0);
+        if (newWeight == oldWeight) continue;
+        voxelWeight[v] = newWeight;
+        if ((oldWeight >= params.minMeshWeight) != (newWeight >= params.minMeshWeight)) flipped |= 1u << k;
+    }
+    if (params.incrementalMesh != 0u) {
+        for (uint k = 0u; k < VOXELS_PER_INVOCATION && flipped != 0u; ++k)
+            if ((flipped & (1u << k)) != 0u) markCornerRetype(block, gl_LocalInvocationIndex + k * WG_BLOCK);
+        // One invocation per subgroup that saw a flip lists the dirty blocks; the stamp lists each once.
+        if (subgroupOr(flipped) != 0u && subgroupElect()) {
+            ivec3 coord = blockCoords[block].xyz;
+            for (uint o = 0u; o < 8u; ++o) {
+                ivec3 offset = ivec3(o & 1u, (o >> 1) & 1u, (o >> 2) & 1u);
+                uint b = o == 0u ? block : findBlock(coord - offset);
+                if (b == NO_BLOCK) continue;
+                if (meshStamps[b] != frame.frameNumber && atomicExchange(meshStamps[b], frame.frameNumber) != frame.frameNumber)
+                    dirtyList[atomicAdd(counters.dirtyCount, 1u)] = b;
+            }
+        }
+    }
+    if (gl_LocalInvocationIndex == 0u) {
+        if (retire) atomicAdd(counters.blocksRetired, 1u); else atomicAdd(counters.blocksStarved, 1u);
+    }
+}

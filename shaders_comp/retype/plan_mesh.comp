@@ -1,0 +1,13 @@
+#version 460
+// One invocation after mark_dirty: one invocation per retype-mask word of the dirty blocks.
+#extension GL_GOOGLE_include_directive : require
+#include "structure/frame.glsl"
+
+layout(local_size_x = 1) in;
+
+void main() {
+    counters.collectDispatch[0] = (counters.dirtyCount * MASK_WORDS + WG_LIST - 1u) / WG_LIST;
+    counters.collectDispatch[1] = 1u;
+    counters.collectDispatch[2] = 1u;
+
+}

@@ -1,0 +1,124 @@
+// Marching cubes on the hashed grid. A cube (block, local x y z) reads its 8 corners and finds the owner
+// slot of each of its 12 edges in its own block or its +x/+y/+z neighbours, collected in a CubeRef.
+// Conventions: src/core/marching_cubes.h (corner i at (i&1, i>>1&1, i>>2&1); edges axis-major).
+#ifndef VKMESH_CUBE_ACCESS_GLSL
+#define VKMESH_CUBE_ACCESS_GLSL
+#include "structure/block_hash.glsl"
+#include "structure/block_store.glsl"
+#include "structure/mc_tables.glsl"
+
+struct CubeRef {
+    uint nb[8];       // block at offset cornerOffset(i) from the cube's block (nb[0]), NO_BLOCK if absent
+    ivec3 origin;     // global grid index of the block's corner 0 (block coordinate * 8)
+    uvec3 cube;       // the cube's position in its block
+};
+
+uvec3 cornerOffset(uint c) { return uvec3(c & 1u, (c >> 1) & 1u, (c >> 2) & 1u); }
+
+uvec3 cubeOfLocal(uint local) {
+    return uvec3(local % BLOCK_SIDE, (local / BLOCK_SIDE) % BLOCK_SIDE, local / (BLOCK_SIDE * BLOCK_SIDE));
+}
+
+uint localOfCube(uvec3 c) { return (c.z * BLOCK_SIDE + c.y) * BLOCK_SIDE + c.x; }
+
+// A cube on its own: the neighbours it can reach (only on the axes where it sits at the block's far
+// side) are looked up in the hash. For the few cubes a frame retypes.
+CubeRef cubeRef(uint block, uint local) {
+    CubeRef r;
+    r.cube = cubeOfLocal(local);
+    ivec3 coord = blockCoords[block].xyz;
+    r.origin = coord * int(BLOCK_SIDE);
+    uvec3 far = uvec3(equal(r.cube, uvec3(BLOCK_SIDE - 1u)));
+    r.nb[0] = block;
+    for (uint i = 1u; i < 8u; ++i) {
+        uvec3 o = cornerOffset(i);
+        bool reachable = all(lessThanEqual(o, far));
+        r.nb[i] = reachable ? findBlock(coord + ivec3(o)) : NO_BLOCK;
+    }
+    return r;
+}
+
+// A position up to 8 (inclusive) on each axis from the cube's block: which block holds it and where.
+uint blockHolding(CubeRef r, uvec3 g, out uvec3 local) {
+    uvec3 wrap = g / BLOCK_SIDE;
+    local = g % BLOCK_SIDE;
+    return r.nb[wrap.x | (wrap.y << 1) | (wrap.z << 2)];
+}
+
+// The 8 corner values of a cube (present[c]: the corner's block exists) and its MC type; `observed` is
+// false (type 0) unless every corner's block exists and every corner has weight >= minMeshWeight.
+uint loadCube(CubeRef r, out float d[8], out bool present[8], out bool observed) {
+    uint type = 0u;
+    observed = true;
+    for (uint c = 0u; c < 8u; ++c) {
+        uvec3 local;
+        uint nb = blockHolding(r, r.cube + cornerOffset(c), local);
+        d[c] = 0.0;
+        present[c] = nb != NO_BLOCK;
+        if (nb == NO_BLOCK) { observed = false; continue; }
+        uint v = voxelIndex(nb, local);
+        if (voxelWeight[v] < params.minMeshWeight) observed = false;
+        d[c] = voxelSdf[v];
+        if (d[c] < 0.0) type |= 1u << c;
+    }
+    return observed ? type : 0u;
+}
+
+// Edge e of a cube (axis-major numbering): its low corner; its high corner is low | (1 << axis).
+uint edgeLowCorner(uint e) {
+    uint axis = e / 4u, k = e % 4u;
+    uvec3 o = axis == 0u ? uvec3(0u, k & 1u, k >> 1) : (axis == 1u ? uvec3(k & 1u, 0u, k >> 1) : uvec3(k & 1u, k >> 1, 0u));
+    return o.x | (o.y << 1) | (o.z << 2);
+}
+
+// Index into edgeVertex of the slot holding edge e of the cube: the slot (axis of e) of the cube at the
+// edge's low corner, which may be in a neighbouring block. NO_BLOCK if that block does not exist.
+uint edgeSlot(CubeRef r, uint e) {
+    uvec3 local;
+    uint nb = blockHolding(r, r.cube + cornerOffset(edgeLowCorner(e)), local);
+    if (nb == NO_BLOCK) return NO_BLOCK;
+    return (nb * VOXELS_PER_BLOCK + localOfCube(local)) * 3u + e / 4u;
+}
+
+// Position of the vertex on the edge from corner `lo` along `axis` of the cube: linear interpolation of
+// the zero crossing, in grid units, then metres. Written out so the CPU reference reproduces it bit for
+// bit; the baseline and the shared-vertex mesh use this one function, so their vertices coincide exactly.
+// s is clamped to [-0.5, 1.5]: refinement can make an edge whose corners share a sign carry a vertex,
+// extrapolated as the paper intends; where the corners differ in sign s is in (0, 1] and unchanged.
+vec3 edgeVertexPosition(CubeRef r, uint lo, uint axis, float dLo, float dHi) {
+    precise float s = clamp(dLo / (dLo - dHi), -0.5, 1.5);
+    precise vec3 p = vec3(r.origin + ivec3(r.cube + cornerOffset(lo)));
+    p[axis] += s;
+    precise vec3 world = p * params.voxelSize;
+    return world;
+}
+
+// ---- refinement (paper §V.F, docs/REFINEMENT.md) ---------------------------------------------------
+// The six half-cube types (a plane parallel to a face), in vkmesh's corner numbering; the order breaks ties.
+const uint REGULAR_TYPES[6] = uint[6](0x0Fu, 0xF0u, 0x33u, 0xCCu, 0x55u, 0xAAu);
+
+// The type MC uses for a cube whose triangles were built from `prev` and whose corners now give `t`:
+// a nearby regular type when the corners it flips are all within refineEpsilon of the surface.
+uint refineType(uint prev, uint t, float d[8]) {
+    if (params.refine == 0u || t == 0u || t == 255u || bitCount(prev ^ t) > 3) return t;
+    for (uint k = 0u; k < 6u; ++k) if (REGULAR_TYPES[k] == t) return t;
+    uint best = t;
+    float bestCost = 0.0;
+    for (uint k = 0u; k < 6u; ++k) {
+        uint flips = REGULAR_TYPES[k] ^ t;
+        if (bitCount(flips) > 3) continue;
+        float cost = 0.0;
+        bool ok = true;
+        for (uint i = 0u; i < 8u; ++i) {
+            if ((flips & (1u << i)) == 0u) continue;
+            ok = ok && abs(d[i]) < params.refineEpsilon;
+            cost += abs(d[i]);
+        }
+        if (ok && (best == t || cost < bestCost)) {
+            best = REGULAR_TYPES[k];
+            bestCost = cost;
+        }
+    }
+    return best;
+}
+#endif

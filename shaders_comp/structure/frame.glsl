@@ -1,0 +1,57 @@
+// What every vkmesh compute stage sees: the volume's constant parameters, the frame's push constants, the
+// counters (which are also the indirect-dispatch arguments) and small grid helpers. The data structure's
+// buffers are declared by one header per component, next to this one (block_hash.glsl, block_store.glsl,
+// cube_mesh.glsl, frame_lists.glsl, mc_tables.glsl, depth_input.glsl); a shader includes the ones it uses,
+// and its pipeline layout holds only the bindings it statically uses (src/vk/pipeline.cpp reflects them).
+// Rules that hold in every stage (see ../shared/docs/lavapipe.md):
+//   - no invocation waits for another; every loop has a static bound far below 65,535 iterations;
+//   - what one invocation publishes with an atomic, others read in the NEXT dispatch;
+//   - float expressions that the CPU reference must reproduce bit for bit are `precise`.
+#ifndef VKMESH_FRAME_GLSL
+#define VKMESH_FRAME_GLSL
+#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
+#extension GL_EXT_shader_atomic_int64 : require
+#extension GL_KHR_shader_subgroup_basic : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
+#extension GL_KHR_shader_subgroup_ballot : require
+
+#include "shared_layout.h"
+
+layout(std140, set = 0, binding = BINDING_PARAMS) uniform ParamsBuffer { VolumeParamsGpu params; };
+layout(std430, set = 0, binding = BINDING_COUNTERS) coherent buffer CountersBuffer { Counters counters; };
+
+layout(push_constant) uniform Push { FramePush frame; };
+
+// x' = R x + t with R, t given as 3 rows of [R | t]; written out so that the order of the operations
+// (and so the rounding) is the one the CPU reference (src/cpu) uses.
+vec3 transformPoint(vec4 rows[3], vec3 p) {
+    precise vec3 q;
+    q.x = rows[0].x * p.x + rows[0].y * p.y + rows[0].z * p.z + rows[0].w;
+    q.y = rows[1].x * p.x + rows[1].y * p.y + rows[1].z * p.z + rows[1].w;
+    q.z = rows[2].x * p.x + rows[2].y * p.y + rows[2].z * p.z + rows[2].w;
+    return q;
+}
+
+uvec2 frameImageSize() { return uvec2(frame.imageSize & 0xFFFFu, frame.imageSize >> 16); }
+
+// Whether a block lies beyond the keep radius around the camera (its centre farther than keepRadius):
+// such blocks are neither allocated nor kept. The CPU reference (src/cpu/reference_volume.cpp) repeats
+// these float operations in this order.
+bool blockOutsideKeepRadius(ivec3 c) {
+    if (params.keepRadius <= 0.0) return false;
+    float blockSize = params.voxelSize * float(BLOCK_SIDE);
+    precise vec3 centre = (vec3(c) + 0.5) * blockSize;
+    precise vec3 d = centre - vec3(frame.cameraToWorld[0].w, frame.cameraToWorld[1].w, frame.cameraToWorld[2].w);
+    precise float distance2 = d.x * d.x + d.y * d.y + d.z * d.z;
+    return distance2 > params.keepRadius * params.keepRadius;
+}
+
+// Aggregates a per-invocation count over the subgroup and adds it with one atomic. Must be called in
+// uniform control flow (every invocation of the workgroup reaches it).
+#define ADD_COUNTER(field, value)                                   \
+    {                                                               \
+        uint subgroupTotal_ = subgroupAdd(value);                   \
+        if (subgroupElect() && subgroupTotal_ != 0u)                \
+            atomicAdd(counters.field, subgroupTotal_);              \
+    }
+#endif

@@ -1,0 +1,22 @@
+// Component: the per-frame lists (src/gpu/frame_lists.h), what one pass hands the next: the blocks a frame
+// touched, the live-block list of whole-volume passes, the dirty blocks (deduplicated with per-block mesh
+// stamps), the retype masks and list of cubes to re-mesh, the vertices that may have lost their last
+// triangle (GC candidates) and the chunks released this frame. Their lengths are in Counters.
+#ifndef VKMESH_FRAME_LISTS_GLSL
+#define VKMESH_FRAME_LISTS_GLSL
+#include "structure/frame.glsl"
+
+layout(std430, set = 0, binding = BINDING_TOUCHED) buffer Touched { uint touched[]; };
+layout(std430, set = 0, binding = BINDING_BLOCK_LIST) buffer BlockList { uint blockList[]; };
+layout(std430, set = 0, binding = BINDING_MESH_STAMPS) coherent buffer MeshStamps { uint meshStamps[]; };
+layout(std430, set = 0, binding = BINDING_DIRTY_LIST) buffer DirtyList { uint dirtyList[]; };
+layout(std430, set = 0, binding = BINDING_RETYPE_MASK) coherent buffer RetypeMask { uint retypeMask[]; };
+layout(std430, set = 0, binding = BINDING_RETYPE_LIST) buffer RetypeList { uint retypeList[]; };
+layout(std430, set = 0, binding = BINDING_GARBAGE) buffer Garbage { uint garbage[]; };
+
+// The two garbage lists (shared_layout.h, BINDING_GARBAGE).
+uint gcCandidate(uint i) { return garbage[i]; }
+void setGcCandidate(uint i, uint v) { garbage[i] = v; }
+uint releasedChunk(uint i) { return garbage[params.vertexCapacity + i]; }
+void setReleasedChunk(uint i, uint chunk) { garbage[params.vertexCapacity + i] = chunk; }
+#endif

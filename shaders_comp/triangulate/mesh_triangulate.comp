@@ -1,0 +1,108 @@
+#version 460
+// Incremental mesh, pass 3 (paper §V.D, §V.E): every cube of the retype list
+//  - keeps its triangles if its MC type did not change (temporal consistency);
+//  - otherwise releases them (refcount - 1 on their vertices; a vertex reaching 0 becomes a GC candidate)
+//    and builds the new type's triangles from the edge slots claimed in pass 1 (+1 each).
+// Triangles live in a chunk of 5 per cube; a cube gaining triangles pops a chunk (committed next pass), a
+// cube losing all of them lists its chunk for release (pushed back two passes later). A cube left
+// INCOMPLETE (a heap was exhausted) sets its retype bit again: it is rebuilt when its block is next dirty.
+#extension GL_GOOGLE_include_directive : require
+#include "structure/frame.glsl"
+#include "structure/cube_mesh.glsl"
+#include "structure/frame_lists.glsl"
+#include "structure/mc_tables.glsl"
+#include "structure/cube_access.glsl"
+
+layout(local_size_x = WG_LIST) in;
+
+
+uint created = 0u, released = 0u, invalid = 0u, retyped = 0u;
+
+void listCandidate(uint v) {
+    uint c = atomicAdd(counters.candidateCount, 1u);
+    if (c < params.vertexCapacity) setGcCandidate(c, v);
+}
+
+void retype(uint id) {
+    CubeRef r = cubeRef(id / VOXELS_PER_BLOCK, id % VOXELS_PER_BLOCK);
+    float d[8];
+    bool present[8];
+    bool observed;
+    uint state = cubeState[id];
+    uint oldType = state & CUBE_TYPE_MASK;
+    uint type = refineType(oldType, loadCube(r, d, present, observed), d);
+    if (type == oldType && (state & CUBE_INCOMPLETE) == 0u) return;
+    ++retyped;
+    uint chunk = state >> CUBE_CHUNK_SHIFT;   // chunk index + 1, 0 = none
+
+    // Release the old triangles.
+    if (chunk != 0u) {
+        uint base = (chunk - 1u) * CHUNK_WORDS;
+        for (uint t = 0u; t < triangleCountOf(oldType); ++t) {
+            if (chunkTriangles[base + 3u * t] == INVALID_INDEX) continue;
+            for (uint j = 0u; j < 3u; ++j) {
+                uint v = chunkTriangles[base + 3u * t + j];
+                if (atomicAdd(vertices[v].refcount, 0xFFFFFFFFu) == 1u) listCandidate(v);
+            }
+            ++released;
+        }
+    }
+
+    // Build the new ones.
+    bool incomplete = false;
+    uint count = triangleCountOf(type);
+    if (count == 0u) {
+        if (chunk != 0u) {
+            // Released chunks go back holding no triangle, so a chunk's words alone say which of its
+            // triangles exist (the delta passes read them without the cube state).
+            uint base = (chunk - 1u) * CHUNK_WORDS;
+            for (uint t = 0u; t < TRIANGLES_PER_CHUNK; ++t) chunkTriangles[base + 3u * t] = INVALID_INDEX;
+            uint at = atomicAdd(counters.releaseCount, 1u);
+            if (at < params.chunkCapacity) setReleasedChunk(at, chunk - 1u);
+            chunk = 0u;
+        }
+    } else {
+        if (chunk == 0u) {
+            uint rank = atomicAdd(counters.chunkAllocRequests, 1u);
+            if (rank < counters.chunkFreeTop) chunk = chunkFree[counters.chunkFreeTop - 1u - rank] + 1u;
+        }
+        if (chunk == 0u) {
+            incomplete = true;       // no chunk: counted by commit_chunks
+            invalid += count;
+        } else {
+            uint base = (chunk - 1u) * CHUNK_WORDS;
+            for (uint t = 0u; t < count; ++t) {
+                uint tri[3];
+                bool ok = true;
+                for (uint j = 0u; j < 3u; ++j) {
+                    uint slot = edgeSlot(r, triangleEdge(type, 3u * t + j));
+                    tri[j] = slot == NO_BLOCK ? EMPTY_SLOT : edgeLoad(slot);
+                    ok = ok && tri[j] < CLAIMED_SLOT;
+                }
+                if (!ok) {
+                    chunkTriangles[base + 3u * t] = INVALID_INDEX;
+                    incomplete = true;
+                    ++invalid;
+                    continue;
+                }
+                for (uint j = 0u; j < 3u; ++j) {
+                    chunkTriangles[base + 3u * t + j] = tri[j];
+                    atomicAdd(vertices[tri[j]].refcount, 1u);
+                }
+                ++created;
+            }
+            for (uint t = count; t < TRIANGLES_PER_CHUNK; ++t) chunkTriangles[base + 3u * t] = INVALID_INDEX;
+        }
+    }
+    cubeState[id] = type | (incomplete ? CUBE_INCOMPLETE : 0u) | (chunk << CUBE_CHUNK_SHIFT);
+    if (incomplete) atomicOr(retypeMask[id / 32u], 1u << (id % 32u));
+}
+
+void main() {
+    uint i = gl_GlobalInvocationID.x;
+    if (i < min(counters.retypeCount, params.retypeCapacity) && retypeList[i] != NO_BLOCK) retype(retypeList[i]);
+    ADD_COUNTER(trianglesCreated, created);
+    ADD_COUNTER(trianglesReleased, released);
+    ADD_COUNTER(trianglesInvalid, invalid);
+    ADD_COUNTER(cubesRetyped, retyped);
+}

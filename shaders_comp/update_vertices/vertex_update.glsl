@@ -1,0 +1,31 @@
+// Moving a vertex to the current zero crossing of its edge (paper §V.B): the position interpolated along
+// the edge (extrapolated, within limits, on an edge that only a refined type uses), the normal from the
+// owner cube's TSDF gradient. Includes cube_access.glsl.
+#ifndef VKMESH_VERTEX_UPDATE_GLSL
+#define VKMESH_VERTEX_UPDATE_GLSL
+#include "structure/cube_access.glsl"
+#include "structure/cube_mesh.glsl"
+
+// r: the owner cube with its corners loaded into d/present; axis: which of its 3 edges.
+void moveVertex(uint v, CubeRef r, uint axis, float d[8], bool present[8]) {
+    uint hi = 1u << axis;
+    // Also edges whose corners share a sign: refinement may use them (the position is then extrapolated).
+    if (!present[0] || !present[hi] || d[0] == d[hi]) return;
+    vec3 p = edgeVertexPosition(r, 0u, axis, d[0], d[hi]);
+    vec3 n = vec3(0.0);
+    n[axis] = d[hi] - d[0] >= 0.0 ? 1.0 : -1.0;   // fallback: along the edge, toward free space
+    bool all8 = true;
+    for (uint c = 0u; c < 8u; ++c) all8 = all8 && present[c];
+    if (all8) {
+        vec3 g = vec3(0.0);
+        for (uint c = 0u; c < 8u; ++c) g += mix(vec3(-d[c]), vec3(d[c]), bvec3(cornerOffset(c)));
+        if (dot(g, g) > 0.0) n = normalize(g);
+    }
+    vertices[v].px = p.x;
+    vertices[v].py = p.y;
+    vertices[v].pz = p.z;
+    vertices[v].nx = n.x;
+    vertices[v].ny = n.y;
+    vertices[v].nz = n.z;
+}
+#endif
