@@ -71,21 +71,26 @@ if [[ $parts == all || $parts == gpu-av ]]; then
      VK_LAYER_ENABLES=VK_VALIDATION_FEATURE_ENABLE_GPU_ASSISTED_EXT VKMESH_VALIDATION=1 \
      ctest -R "$regex" --output-on-failure -j"$jobs" --timeout 900)
 
-  # Every compute shader of the build (build/shaders_gen_all/*.spv, one per shaders_comp/**/*.comp) must
-  # have been dispatched by the tests above.
-  mapfile -t spv < <(find build/shaders_gen_all -maxdepth 1 -name '*.spv' | sort)
-  comp=$(find shaders_comp -name '*.comp' | wc -l)
-  if (( ${#spv[@]} != comp )); then
-    echo "portability: ${#spv[@]} .spv files in build/shaders_gen_all but $comp shaders in shaders_comp/: the coverage check needs updating" >&2
-    exit 1
-  fi
+  # Every compute shader, shaders_comp/**/<name>.comp, compiled to build/shaders_gen_all/<name>.spv
+  # (cmake/EmbedShaders.cmake), must have been dispatched by the tests above.
+  spv=()
+  declare -A source_of
+  while read -r comp; do
+    name=$(basename "$comp" .comp)
+    if [[ ! -f build/shaders_gen_all/$name.spv ]]; then
+      echo "portability: no build/shaders_gen_all/$name.spv for $comp: the coverage check needs updating" >&2
+      exit 1
+    fi
+    spv+=("build/shaders_gen_all/$name.spv")
+    source_of[build/shaders_gen_all/$name.spv]=$comp
+  done < <(find shaders_comp -name '*.comp' | sort)
   if grep -q '^overflow' "$log" 2>/dev/null; then
     echo "portability: dispatch_log.c's tables overflowed; raise kMaxEntries" >&2
     exit 1
   fi
   missing=()
   while read -r hash file; do
-    grep -q "^$hash " "$log" 2>/dev/null || missing+=("$file")
+    grep -q "^$hash " "$log" 2>/dev/null || missing+=("${source_of[$file]}")
   done < <("$tools/spv_hash" "${spv[@]}")
   if (( ${#missing[@]} )); then
     echo "portability: the GPU-AV tests did not dispatch ${#missing[@]} of ${#spv[@]} compute shaders; add a test that does:" >&2
