@@ -184,6 +184,7 @@ TEST_F(GpuTest, EmptyVolumeExportsAnEmptyMesh) {
 TEST_F(GpuTest, VertexHeapExhaustionIsCountedAndConsistent) {
     auto config = meshConfig();
     config.vertexCapacity = 512;
+    config.growCapacities = false;
     gpu::GpuVolume volume(context(), config);
     std::vector<gpu::FrameReport> reports;
     integrateRoom(volume, 3, synth::PathKind::Orbit, 24, &reports);
