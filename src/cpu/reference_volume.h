@@ -60,6 +60,9 @@ public:
 
     // Blocks in coordinate order.
     const std::map<BlockCoord, ReferenceBlock>& blocks() const { return blocks_; }
+    // Places a block as given, replacing any there (tests of single stages: the baseline and the mesher read
+    // the volume's blocks). Changes nothing of lastTouched(), lastFlipped() or retypeCubes().
+    void setBlock(const BlockCoord& c, const ReferenceBlock& block) { blocks_[c] = block; }
 
     // Blocks whose truncation band a pixel of the image crosses (the allocation stage alone).
     std::vector<BlockCoord> blocksTouchedBy(const DepthImage& depth, const Intrinsics& intrinsics,
