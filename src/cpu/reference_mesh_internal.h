@@ -1,5 +1,6 @@
 // Internal to the CPU reference mesher (src/cpu/reference_mesh*.cpp): the neighbourhood arithmetic its passes
-// share, and the dirty block they work on. Not installed API: include only from those files.
+// share, and the dirty block they work on. Installed with the other headers but no API: only those files
+// include it.
 #pragma once
 
 #include <array>
@@ -16,6 +17,7 @@ namespace vkmesh::cpu::mesh_detail {
 inline constexpr uint32_t SLOTS_PER_BLOCK = gpu::VOXELS_PER_BLOCK * 3;
 // The vertex owner of a vertex on the free stack (no edge).
 inline constexpr uint64_t NO_OWNER = ~uint64_t(0);
+static_assert(gpu::CHUNK_WORDS == 3 * gpu::TRIANGLES_PER_CHUNK, "a chunk holds 3 vertex indices per triangle");
 
 inline BlockCoord plus(const BlockCoord& c, const std::array<int, 3>& o) { return {c[0] + o[0], c[1] + o[1], c[2] + o[2]}; }
 

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "core/types.h"
+#include "test_support.h"
 
 namespace vkmesh {
 namespace {
@@ -17,11 +18,7 @@ using cpu::BlockCoord;
 using cpu::HashInsert;
 using cpu::ReferenceHash;
 
-std::string joined(const std::vector<std::string>& problems) {
-    std::string out;
-    for (const auto& p : problems) out += p + "\n";
-    return out;
-}
+using test::joined;
 
 // `count` distinct coordinates whose home slot in a table of `capacity` is `home`.
 std::vector<BlockCoord> collidingCoords(uint32_t capacity, uint32_t home, size_t count) {

@@ -37,11 +37,7 @@ VolumeParams smallParams(float voxel = 0.04f) {
     return p;
 }
 
-std::string joined(const std::vector<std::string>& lines) {
-    std::string out;
-    for (const auto& l : lines) out += l + "\n";
-    return out;
-}
+using test::joined;
 
 DepthImage render(const synth::SyntheticScene& scene, const Pose& pose, bool noise, uint32_t seed) {
     synth::RenderOptions options;

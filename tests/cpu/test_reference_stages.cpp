@@ -15,17 +15,14 @@
 #include "cpu/reference_mesher.h"
 #include "cpu/reference_recycling.h"
 #include "cpu/reference_volume.h"
+#include "test_support.h"
 
 namespace vkmesh {
 namespace {
 
 using cpu::BlockCoord;
 
-std::string joined(const std::vector<std::string>& problems) {
-    std::string out;
-    for (const auto& p : problems) out += p + "\n";
-    return out;
-}
+using test::joined;
 
 // A camera at the origin looking along +z at a wall at `depth` metres filling the image.
 struct WallView {
