@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "api/exported_mesh.h"
 #include "core/mesh_analysis.h"
 #include "core/mesh_delta.h"
 #include "gpu/gpu_volume.h"
@@ -24,13 +25,6 @@ gpu::GpuVolumeConfig deltaConfig() {
     gpu::GpuVolumeConfig c = test::smallRoomConfig();
     c.trackDeltas = true;
     return c;
-}
-
-Mesh toMesh(const gpu::ExportedMesh& exported) {
-    Mesh mesh;
-    for (const auto& v : exported.vertices) mesh.positions.emplace_back(v.px, v.py, v.pz);
-    mesh.triangles = exported.triangles;
-    return mesh;
 }
 
 class MeshDeltas : public test::GpuTest {
