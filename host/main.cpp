@@ -33,7 +33,8 @@
 #include "gpu/gpu_volume.h"
 #include "io/dataset.h"
 #include "io/ply.h"
-#include "synth/synthetic_scene.h"
+#include "io/png.h"
+#include "synth/tum_sequence.h"
 #include "vk/context.h"
 
 namespace {
@@ -315,7 +316,7 @@ int commandFuse(const FuseArgs& args) {
             }
             char name[32];
             std::snprintf(name, sizeof(name), "frame_%06zu.png", i);
-            render::writePng(std::filesystem::path(args.renderDir) / name, renderer->render(volume.meshBuffers(), lo, hi, renderOptions));
+            io::writePng(std::filesystem::path(args.renderDir) / name, renderer->render(volume.meshBuffers(), lo, hi, renderOptions));
             ++picturesWritten;
         }
         if (!args.quiet && (tty || (i + 1) % 50 == 0 || i + 1 == dataset->size())) {

@@ -5,6 +5,7 @@
 #include <iostream>
 #include <memory>
 
+#include "io/png.h"
 #include "render/mesh_renderer.h"
 #include "vk/context.h"
 
@@ -44,7 +45,8 @@ std::function<int()> addRenderCommand(CLI::App& app) {
         options.color = render::parseColorMode(args->color);
         if (!args->camera.empty()) options.camera = render::parseCamera(args->camera);
         vk::Context context({args->device, args->validation});
-        render::Image image = render::renderMeshFile(context, args->mesh, args->output, options);
+        render::Image image = render::renderMeshFile(context, args->mesh, options);
+        io::writePng(args->output, image);
         std::cout << "vkmesh render: " << args->mesh << " -> " << args->output << " (" << image.width << "x" << image.height
                   << ", " << args->color << ") on " << context.info().name << "\n";
         return 0;

@@ -1,7 +1,8 @@
 // `vkmesh render`: headless offscreen rendering of a mesh to a PNG with a Vulkan graphics pipeline.
 //   vkmesh render MESH.ply -o view.png [--width 800 --height 600]
 //                 [--camera eye_x,eye_y,eye_z,target_x,target_y,target_z] [--color shade|normal|age]
-// The work is done by vkmesh::render::renderMeshFile (src/render/mesh_renderer.h), which the tests call too.
+// The work is done by vkmesh::render::renderMeshFile (src/render/mesh_renderer.h), which the tests call too,
+// and io::writePng (src/io/png.h).
 #pragma once
 
 #include <functional>

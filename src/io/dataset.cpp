@@ -1,4 +1,5 @@
 #include "io/dataset.h"
+#include "io/data_dir.h"
 #include "io/parsers.h"
 
 #include <Eigen/Geometry>
@@ -465,6 +466,13 @@ struct Layout {
     size_t skipped = 0;
 };
 
+// The layout's default calibration, from its camera preset (data/cameras/<name>/camera.json).
+void applyPreset(Layout& layout, const std::string& name) {
+    const CameraPreset preset = loadCameraPreset(name);
+    layout.intrinsics = preset.intrinsics;
+    layout.depthScale = preset.depthScale;
+}
+
 // Per-frame warnings are capped so that a sequence with a long tracking gap does not flood the log.
 constexpr size_t kMaxFrameWarnings = 20;
 
@@ -575,21 +583,19 @@ Layout readTum(const fs::path& folder, const std::string& folderName) {
     // the name says which TUM sensor recorded the sequence.
     bool icl = containsWord(folderName, "icl") || (tumSensor == 0 && timestampsAreFrameIndices(depth));
     layout.kind = icl ? DatasetKind::ICLNUIM : DatasetKind::TUM;
-    layout.depthScale = 5000.0;
+    // The calibration comes from data/cameras/ (ICL-NUIM's fy is negative: its poses are for a camera whose
+    // image y axis points up).
     if (icl) {
-        // fy is negative: ICL-NUIM's poses are for a camera whose image y axis points up.
-        layout.intrinsics = {481.2f, -480.0f, 319.5f, 239.5f, 0, 0};
-    } else if (tumSensor == 1) {
-        layout.intrinsics = {517.3f, 516.5f, 318.6f, 255.3f, 0, 0};
-    } else if (tumSensor == 2) {
-        layout.intrinsics = {520.9f, 521.0f, 325.1f, 249.7f, 0, 0};
-    } else if (tumSensor == 3) {
-        layout.intrinsics = {535.4f, 539.2f, 320.1f, 247.6f, 0, 0};
+        applyPreset(layout, "icl_nuim");
+    } else if (tumSensor != 0) {
+        applyPreset(layout, "tum_fr" + std::to_string(tumSensor));
     } else {
-        layout.intrinsics = {525.0f, 525.0f, 319.5f, 239.5f, 0, 0};
+        applyPreset(layout, "tum_default");
+        const Intrinsics& k = layout.intrinsics;
         layout.intrinsicsWarning = "folder name '" + folderName +
                                    "' names no TUM sensor (freiburg1/2/3 or fr1/2/3); using the default "
-                                   "intrinsics 525 525 319.5 239.5 (give --intrinsics or a camera.json)";
+                                   "intrinsics " + fmt(k.fx) + " " + fmt(k.fy) + " " + fmt(k.cx) + " " + fmt(k.cy) +
+                                   " (give --intrinsics or a camera.json)";
     }
 
     // TUM's motion capture runs at ~100 Hz, so a pose within 20 ms exists unless tracking dropped out;
@@ -640,8 +646,7 @@ std::vector<fs::path> filesWithExtension(const fs::path& dir, const std::string&
 Layout readRedwood(const fs::path& folder, const fs::path& logFile) {
     Layout layout;
     layout.kind = DatasetKind::Redwood;
-    layout.depthScale = 1000.0;
-    layout.intrinsics = {525.0f, 525.0f, 319.5f, 239.5f, 0, 0};
+    applyPreset(layout, "redwood");  // PrimeSense defaults, depth in millimetres
 
     std::vector<fs::path> images = filesWithExtension(folder / "depth", ".png");
     if (images.empty()) throw Error("Redwood layout: " + (folder / "depth").string() + " holds no .png depth images");
@@ -722,9 +727,8 @@ std::vector<double> readNumbers(const fs::path& file, size_t count, const std::s
 Layout readSevenScenes(const fs::path& folder, const std::vector<SevenScenesFrame>& images) {
     Layout layout;
     layout.kind = DatasetKind::SevenScenes;
-    layout.depthScale = 1000.0;
+    applyPreset(layout, "seven_scenes");  // depth in millimetres
     layout.invalidRaw = 65535;  // the Kinect's "no reading" marker in 7-Scenes, besides 0
-    layout.intrinsics = {585.0f, 585.0f, 320.0f, 240.0f, 0, 0};
 
     // Calibration may sit beside the frames or, for a seq-XX folder, in the scene folder above it.
     for (const fs::path& dir : {folder, folder.parent_path()}) {
@@ -825,6 +829,25 @@ std::string toString(DatasetKind kind) {
         case DatasetKind::SevenScenes: return "7-Scenes";
     }
     return "unknown";
+}
+
+CameraPreset loadCameraPreset(const std::string& name) {
+    CameraPreset preset;
+    preset.name = name;
+    preset.file = io::findDataFile("cameras/" + name + "/camera.json");
+    std::ifstream in = openText(preset.file);
+    const io::CameraJson c = io::parseCameraJson(in, preset.file.string());
+    // A preset is the product's own file: every value stated, nothing unknown (a typo must not fall back).
+    std::string missing;
+    for (const auto& [key, value] : {std::pair<const char*, bool>{"fx", bool(c.fx)}, {"fy", bool(c.fy)}, {"cx", bool(c.cx)},
+                                     {"cy", bool(c.cy)}, {"depth_scale", bool(c.depthScale)}})
+        if (!value) missing += (missing.empty() ? "" : ", ") + std::string(key);
+    if (!missing.empty()) throw Error(preset.file.string() + ": a camera preset must give fx, fy, cx, cy and depth_scale; missing " + missing);
+    if (!c.ignoredKeys.empty()) throw Error(preset.file.string() + ": unknown key " + c.ignoredKeys.front() + " in a camera preset");
+    preset.intrinsics = {float(*c.fx), float(*c.fy), float(*c.cx), float(*c.cy), c.width.value_or(0), c.height.value_or(0)};
+    checkIntrinsics(preset.intrinsics, preset.file.string());
+    preset.depthScale = *c.depthScale;
+    return preset;
 }
 
 Intrinsics parseIntrinsics(const std::string& text) {

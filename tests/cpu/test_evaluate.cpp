@@ -6,6 +6,7 @@
 #include "io/dataset.h"
 #include "io/ply.h"
 #include "synth/synthetic_scene.h"
+#include "synth/tum_sequence.h"
 #include "test_support.h"
 
 #include <gtest/gtest.h>
