@@ -4,8 +4,11 @@
 //   vk::Context                   Vulkan instance/device (validation with VKMESH_VALIDATION=1)
 //   gpu::GpuVolume                the TSDF volume: integrate depth frames, export the mesh
 //   render::MeshRenderer          offscreen pictures of a mesh
-//   Dataset, readPly/writePly     depth sequences on disk (TUM, ICL-NUIM, Redwood, 7-Scenes), meshes
+//   readPly/writePly              meshes on disk
 //   synth::SyntheticScene         synthetic depth with exact ground truth
+// All of it is in vkmesh::vkmesh (Vulkan, no OpenCV). Image and dataset I/O is the vkmesh::io library, with
+// headers of its own: io/dataset.h (Dataset: TUM, ICL-NUIM, Redwood, 7-Scenes), io/png.h, synth/tum_sequence.h,
+// eval/evaluate.h.
 // The other installed headers (core/, cpu/, eval/, ...) are the internals these include, or tools;
 // they may change between versions.
 #pragma once
@@ -15,7 +18,6 @@
 #include "core/types.h"
 #include "gpu/gpu_volume.h"
 #include "io/delta_stream.h"
-#include "io/dataset.h"
 #include "io/ply.h"
 #include "render/mesh_renderer.h"
 #include "synth/synthetic_scene.h"
