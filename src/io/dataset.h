@@ -11,7 +11,8 @@
 // Precedence of calibration values: DatasetOptions > camera.json > the layout's default.
 // The layouts' defaults are camera presets in vkmesh's data folder (data/cameras/<name>/camera.json, the
 // same format; found as io/data_dir.h says): tum_fr1, tum_fr2, tum_fr3 (chosen by freiburgN / frN in the
-// folder name), tum_default (a TUM folder that names no sensor), icl_nuim, redwood, seven_scenes.
+// folder name), tum_default (a TUM folder that names no sensor), icl_nuim, redwood, seven_scenes. A preset
+// is read only when the folder and the options leave a value to it: a fully calibrated folder needs no data.
 // Part of the vkmesh_io library (OpenCV reads the PNGs).
 #pragma once
 

@@ -851,3 +851,15 @@ TEST(CameraPresets, AMissingOrBrokenPresetIsAClearError) {
     message = errorMessageOf([&] { Dataset::open(f.dir); });
     EXPECT_NE(message.find("depth_sclae"), std::string::npos) << message;
 }
+
+TEST(CameraPresets, AFullyCalibratedFolderNeedsNoPreset) {
+    const fs::path empty = test::makeTempDir("data_dir_empty");
+    TumFixture f = makeTum("tum_fr3_office");
+    writeText(f.dir / "camera.json", R"({"fx": 500, "fy": 501, "cx": 4, "cy": 3, "depth_scale": 5000})");
+    DataDirOverride override(empty);
+    auto ds = Dataset::open(f.dir);
+    EXPECT_FLOAT_EQ(ds->intrinsics().fy, 501.0f);
+    // Without depth_scale the preset is needed again, and missing.
+    writeText(f.dir / "camera.json", R"({"fx": 500, "fy": 501, "cx": 4, "cy": 3})");
+    EXPECT_NE(errorMessageOf([&] { Dataset::open(f.dir); }).find("cameras/tum_fr3/camera.json"), std::string::npos);
+}
