@@ -48,6 +48,7 @@ if [[ $parts == all || $parts == gpu-av ]]; then
     GpuTest.RefinementHalvesIrregularityOnASlantedPlane        # refinement (retype passes)
     MeshDeltas.FollowHeapExhaustionGrowthAndRecycling          # deltas (diff_*, plan_deltas), heap growth, pending dirty
     OwnDevice.PublishedMeshEqualsTheExportAndSurvivesARebuild  # published mesh: export to draw-ready buffers
+    GpuTest.TinyCapacitiesGrowToTheMeshOfAmpleOnes             # every capacity grows (rebound buffers), deferred frames
   )
   regex="^($(IFS='|'; echo "${gpu_av_tests[*]}" | sed 's/\./\\./g'))\$"
   # A renamed test would otherwise drop out silently (ctest -R runs what matches, even nothing).
