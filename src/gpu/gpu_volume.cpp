@@ -96,7 +96,8 @@ std::string mib(uint64_t bytes) { return std::to_string((bytes + (1u << 20) - 1)
 
 }  // namespace
 
-void checkCapacities(const GpuVolumeConfig& c, uint64_t maxBufferBytes, uint64_t deviceMemoryBytes, const std::string& deviceName) {
+void checkCapacities(const GpuVolumeConfig& c, uint64_t maxBufferBytes, uint64_t deviceMemoryBytes, const std::string& deviceName,
+                     uint32_t hashKeyBytesPerSlot) {
     struct Planned {
         const char* buffer;
         uint64_t bytesPerUnit;
@@ -108,7 +109,7 @@ void checkCapacities(const GpuVolumeConfig& c, uint64_t maxBufferBytes, uint64_t
     std::vector<Planned> planned = {
         {"voxel sdf", 4ull * VOXELS_PER_BLOCK, c.blockCapacity, "blockCapacity (--blocks)"},
         {"voxel weight", 4ull * VOXELS_PER_BLOCK, c.blockCapacity, "blockCapacity (--blocks)"},
-        {"hash keys", 8, hashSlots, "hashCapacity (2 x blockCapacity by default, --blocks)"},
+        {"hash keys", hashKeyBytesPerSlot, hashSlots, "hashCapacity (2 x blockCapacity by default, --blocks)"},
         {"depth image", 4, uint64_t(c.imageWidth) * uint64_t(c.imageHeight), "the image size"},
     };
     if (mesh) {
@@ -152,7 +153,8 @@ namespace {
 // The resolved configuration, checked against the device before any buffer is created.
 GpuVolumeConfig checkedFor(const vk::Context& context, const GpuVolumeConfig& config) {
     GpuVolumeConfig c = resolved(config);
-    checkCapacities(c, context.maxStorageBufferRange(), deviceLocalHeapBytes(context), context.info().name);
+    checkCapacities(c, context.maxStorageBufferRange(), deviceLocalHeapBytes(context), context.info().name,
+                    BlockHash::keyBytesPerSlot(context.int64Atomics()));
     return c;
 }
 }  // namespace
@@ -167,6 +169,7 @@ GpuVolume::GpuVolume(const vk::Context& context, const GpuVolumeConfig& config)
     : context_(context),
       config_(checkedFor(context, config)),
       layout_(context, descriptorTypes(), sizeof(FramePush)),
+      hash_(context, layout_, config_.hashCapacity),
       allocate_(context, layout_),
       fuse_(context, layout_),
       baselineMesh_(context, layout_),
@@ -180,9 +183,6 @@ GpuVolume::GpuVolume(const vk::Context& context, const GpuVolumeConfig& config)
     params_ = vk::Buffer(context, sizeof(VolumeParamsGpu), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, vk::MemoryUse::Device, "volume params");
     layout_.bind(BINDING_PARAMS, params_);
     counters_ = makeBuffer(sizeof(Counters), VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT, "counters", BINDING_COUNTERS);
-    hashKeys_ = makeBuffer(VkDeviceSize(c.hashCapacity) * 8, 0, "hash keys", BINDING_HASH_KEYS);
-    hashValues_ = makeBuffer(VkDeviceSize(c.hashCapacity) * 4, 0, "hash values", BINDING_HASH_VALUES);
-    hashStamps_ = makeBuffer(VkDeviceSize(c.hashCapacity) * 4, 0, "hash stamps", BINDING_HASH_STAMPS);
     blockCoords_ = makeBuffer(VkDeviceSize(c.blockCapacity) * 16, 0, "block coords", BINDING_BLOCK_COORDS);
     voxelSdf_ = makeBuffer(voxels * 4, 0, "voxel sdf", BINDING_VOXEL_SDF);
     voxelWeight_ = makeBuffer(voxels * 4, 0, "voxel weight", BINDING_VOXEL_WEIGHT);
@@ -248,12 +248,6 @@ GpuVolume::GpuVolume(const vk::Context& context, const GpuVolumeConfig& config)
     initial.freeTop = c.blockCapacity;
     vk::uploadToBuffer(context, counters_, &initial, sizeof(initial));
 
-    VkCommandBuffer cmd = recorder_.begin();
-    vkCmdFillBuffer(cmd, hashKeys_.handle(), 0, VK_WHOLE_SIZE, 0xFFFFFFFFu);   // KEY_EMPTY
-    vkCmdFillBuffer(cmd, hashValues_.handle(), 0, VK_WHOLE_SIZE, NO_BLOCK);
-    vkCmdFillBuffer(cmd, hashStamps_.handle(), 0, VK_WHOLE_SIZE, 0);
-    vk::memoryBarrier(cmd);
-    recorder_.submitAndWait();
     resetMeshState();
 
     if (c.trackDeltas) {
@@ -278,7 +272,7 @@ GpuVolume::GpuVolume(const vk::Context& context, const GpuVolumeConfig& config)
         state.vertexRecordCapacity = state.triangleRecordCapacity = c.deltaRecordCapacity;
         vk::uploadToBuffer(context, deltaState_, &state, sizeof(state));
         // The shadows start as an empty mesh: every vertex dead, every triangle slot empty.
-        cmd = recorder_.begin();
+        VkCommandBuffer cmd = recorder_.begin();
         vkCmdFillBuffer(cmd, prevVertices_.handle(), 0, VK_WHOLE_SIZE, 0xFFFFFFFFu);
         vkCmdFillBuffer(cmd, prevChunks_.handle(), 0, VK_WHOLE_SIZE, INVALID_INDEX);
         vk::memoryBarrier(cmd);
@@ -374,7 +368,7 @@ FrameReport GpuVolume::integrate(const DepthImage& depth, const Intrinsics& intr
     timer_.mark(cmd, "start");
     if (rebuildHash) {
         collectLiveBlocks(cmd);
-        recycle_.recordRebuildHash(cmd, push, hashKeys_, hashValues_, config_.blockCapacity);
+        hash_.recordRebuild(cmd, push, config_.blockCapacity);
         timer_.mark(cmd, "rehash");
     }
     allocate_.record(cmd, push, counters_, uint32_t(config_.params.allocationStride));
@@ -807,10 +801,6 @@ Counters GpuVolume::readCounters() const {
 
 std::vector<BlockSnapshot> GpuVolume::downloadBlocks() const {
     const GpuVolumeConfig& c = config_;
-    std::vector<uint64_t> keys(c.hashCapacity);
-    std::vector<uint32_t> values(c.hashCapacity);
-    vk::downloadFromBuffer(context_, hashKeys_, keys.data(), keys.size() * 8);
-    vk::downloadFromBuffer(context_, hashValues_, values.data(), values.size() * 4);
     std::vector<float> sdf(size_t(c.blockCapacity) * VOXELS_PER_BLOCK), weight(sdf.size());
     vk::downloadFromBuffer(context_, voxelSdf_, sdf.data(), sdf.size() * 4);
     vk::downloadFromBuffer(context_, voxelWeight_, weight.data(), weight.size() * 4);
@@ -818,9 +808,9 @@ std::vector<BlockSnapshot> GpuVolume::downloadBlocks() const {
     vk::downloadFromBuffer(context_, blockCoords_, coords.data(), coords.size() * 4);
 
     std::vector<BlockSnapshot> out;
-    for (uint32_t s = 0; s < c.hashCapacity; ++s) {
-        if (keys[s] == KEY_EMPTY || values[s] == NO_BLOCK) continue;
-        uint32_t b = values[s];
+    for (const BlockHash::Entry& e : hash_.downloadEntries()) {
+        if (e.block == NO_BLOCK) continue;
+        uint32_t b = e.block;
         BlockSnapshot snap;
         snap.coord = Eigen::Vector3i(coords[4 * b], coords[4 * b + 1], coords[4 * b + 2]);
         snap.index = b;
@@ -831,9 +821,26 @@ std::vector<BlockSnapshot> GpuVolume::downloadBlocks() const {
     return out;
 }
 
+void GpuVolume::growHash(uint32_t hashCapacity) {
+    const uint32_t lost = hash_.grow(hashCapacity, params_, counters_, lastPush_, config_.blockCapacity, [&](VkCommandBuffer cmd) {
+        vkCmdFillBuffer(cmd, counters_.handle(), offsetof(Counters, liveBlockCount), sizeof(uint32_t), 0);
+        vk::memoryBarrier(cmd);
+        baselineMesh_.recordCollect(cmd, lastPush_, config_.hashCapacity);
+    });
+    config_.hashCapacity = hash_.capacity();
+    // readCounters() reads the host copy: hashEntries and hashTombstones changed.
+    VkCommandBuffer readback = recorder_.begin();
+    recordCountersReadback(readback);
+    recorder_.submitAndWait();
+    if (lost)
+        throw Error("hash growth to " + std::to_string(hashCapacity) + " slots could not re-insert " + std::to_string(lost) +
+                    " live blocks within " + std::to_string(HASH_MAX_PROBES) + " probes");
+}
+
 std::vector<PoolInfo> GpuVolume::pools() const {
     std::vector<PoolInfo> out;
-    for (const vk::Buffer* b : {&params_, &counters_, &hashKeys_, &hashValues_, &hashStamps_, &blockCoords_, &voxelSdf_,
+    for (const vk::Buffer* b : hash_.buffers()) out.push_back({b->name(), size_t(b->size())});
+    for (const vk::Buffer* b : {&params_, &counters_, &blockCoords_, &voxelSdf_,
                                 &voxelWeight_, &freeList_, &touched_, &depth_, &mcTables_, &blockList_, &meshVertices_,
                                 &cubeState_, &edgeVertexX_, &edgeVertexY_, &edgeVertexZ_, &meshStamps_, &dirtyList_, &vertices_, &vertexOwner_, &vertexFree_, &gcCandidates_,
                                 &chunkTriangles_, &chunkFree_, &chunkRelease_, &exportVertices_, &exportIndices_, &vertexRemap_,

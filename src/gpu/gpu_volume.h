@@ -15,6 +15,8 @@
 
 #include "core/mesh_delta.h"
 #include "core/types.h"
+#include "gpu/allocate_blocks_stage.h"
+#include "gpu/block_hash.h"
 #include "gpu/layout.h"
 #include "gpu/stages.h"
 #include "vk/buffer.h"
@@ -138,8 +140,9 @@ struct PoolInfo {
 // buffer binding (maxBufferBytes: maxStorageBufferRange) and that all of them fit in the device's largest
 // device-local memory heap. Throws Error naming the buffer, the setting that sizes it (config field and CLI
 // option) and the largest value that fits. Called by the GpuVolume constructor; exposed for tests.
+// hashKeyBytesPerSlot: BlockHash::keyBytesPerSlot of the device's hash path.
 void checkCapacities(const GpuVolumeConfig& config, uint64_t maxBufferBytes, uint64_t deviceMemoryBytes,
-                     const std::string& deviceName);
+                     const std::string& deviceName, uint32_t hashKeyBytesPerSlot = 8);
 
 class GpuVolume {
 public:
@@ -169,6 +172,10 @@ public:
     // heaps are copied and the new entries pushed on the free stacks). The next frame also re-meshes every
     // cube left INCOMPLETE while a heap was full, so the missing triangles appear at once.
     void growMeshHeaps(uint32_t vertexCapacity, uint32_t chunkCapacity);
+    // Rehashes the block hash into a table of `hashCapacity` slots (a power of two, larger than now) between
+    // frames: every block and its stamp are kept (BlockHash::grow). Throws if some live block found no slot.
+    void growHash(uint32_t hashCapacity);
+    const BlockHash& blockHash() const { return hash_; }
     // How many cubes carry triangles of each MC type (the stored, possibly refined, type).
     std::array<uint64_t, 256> surfaceCubeTypes() const;
 
@@ -200,7 +207,8 @@ private:
     const vk::Context& context_;
     GpuVolumeConfig config_;
     vk::BindingLayout layout_;
-    vk::Buffer params_, counters_, hashKeys_, hashValues_, hashStamps_, blockCoords_, voxelSdf_, voxelWeight_,
+    BlockHash hash_;
+    vk::Buffer params_, counters_, blockCoords_, voxelSdf_, voxelWeight_,
         freeList_, touched_, depth_, mcTables_, blockList_, meshVertices_;
     vk::Buffer cubeState_, edgeVertexX_, edgeVertexY_, edgeVertexZ_, meshStamps_, dirtyList_, vertices_, vertexOwner_, vertexFree_, gcCandidates_,
         chunkTriangles_, chunkFree_, chunkRelease_, exportVertices_, exportIndices_, vertexRemap_, retypeMask_, retypeList_;

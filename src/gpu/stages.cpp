@@ -6,26 +6,6 @@
 
 namespace vkmesh::gpu {
 
-AllocateBlocksStage::AllocateBlocksStage(const vk::Context& context, const vk::BindingLayout& layout)
-    : allocate_(context, layout, "allocate_blocks"),
-      plan_(context, layout, "plan_frame"),
-      assign_(context, layout, "assign_blocks"),
-      commit_(context, layout, "commit_allocation") {}
-
-void AllocateBlocksStage::record(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters,
-                                 uint32_t pixelStride) const {
-    uint32_t width = ((push.imageSize & 0xFFFFu) + pixelStride - 1) / pixelStride;
-    uint32_t height = ((push.imageSize >> 16) + pixelStride - 1) / pixelStride;
-    allocate_.dispatch(cmd, &push, (width + WG_PIXELS_X - 1) / WG_PIXELS_X, (height + WG_PIXELS_Y - 1) / WG_PIXELS_Y);
-    vk::memoryBarrier(cmd);
-    plan_.dispatch(cmd, &push, 1);
-    vk::memoryBarrier(cmd);
-    assign_.dispatchIndirect(cmd, &push, counters, offsetof(Counters, assignDispatch));
-    vk::memoryBarrier(cmd);
-    commit_.dispatch(cmd, &push, 1);
-    vk::memoryBarrier(cmd);
-}
-
 FuseDepthStage::FuseDepthStage(const vk::Context& context, const vk::BindingLayout& layout)
     : fuse_(context, layout, "fuse_depth") {}
 
@@ -136,10 +116,7 @@ void IncrementalMeshStage::recordMesh(VkCommandBuffer cmd, const FramePush& push
 RecycleStage::RecycleStage(const vk::Context& context, const vk::BindingLayout& layout)
     : retire_(context, layout, "recycle_retire"),
       free_(context, layout, "recycle_free"),
-      commitFree_(context, layout, "commit_recycle"),
-      save_(context, layout, "rehash_save"),
-      insert_(context, layout, "rehash_insert"),
-      commitRehash_(context, layout, "commit_rehash") {}
+      commitFree_(context, layout, "commit_recycle") {}
 
 void RecycleStage::recordRetire(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters) const {
     retire_.dispatchIndirect(cmd, &push, counters, offsetof(Counters, listDispatch));
@@ -150,20 +127,6 @@ void RecycleStage::recordFree(VkCommandBuffer cmd, const FramePush& push, const 
     free_.dispatchIndirect(cmd, &push, counters, offsetof(Counters, listDispatch));
     vk::memoryBarrier(cmd);
     commitFree_.dispatch(cmd, &push, 1);
-    vk::memoryBarrier(cmd);
-}
-
-void RecycleStage::recordRebuildHash(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& hashKeys,
-                                     const vk::Buffer& hashValues, uint32_t blockCapacity) const {
-    const uint32_t groups = (blockCapacity + WG_LIST - 1) / WG_LIST;
-    save_.dispatch(cmd, &push, groups);
-    vk::memoryBarrier(cmd);
-    vkCmdFillBuffer(cmd, hashKeys.handle(), 0, VK_WHOLE_SIZE, 0xFFFFFFFFu);   // KEY_EMPTY
-    vkCmdFillBuffer(cmd, hashValues.handle(), 0, VK_WHOLE_SIZE, NO_BLOCK);
-    vk::memoryBarrier(cmd);
-    insert_.dispatch(cmd, &push, groups);
-    vk::memoryBarrier(cmd);
-    commitRehash_.dispatch(cmd, &push, 1);
     vk::memoryBarrier(cmd);
 }
 

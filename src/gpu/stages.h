@@ -10,19 +10,6 @@
 
 namespace vkmesh::gpu {
 
-// Paper §V.A, first half: pixels walk their truncation bands and claim block keys in the hash
-// (allocate_blocks), the touched list is sized (plan_frame), touched keys without memory get a block
-// from the free list (assign_blocks), and the free list is shrunk by what was handed out
-// (commit_allocation). Four dispatches, because a free list may not be read and shrunk in one.
-class AllocateBlocksStage {
-public:
-    AllocateBlocksStage(const vk::Context& context, const vk::BindingLayout& layout);
-    void record(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters, uint32_t pixelStride) const;
-
-private:
-    vk::ComputePipeline allocate_, plan_, assign_, commit_;
-};
-
 // Paper §V.A, second half: one workgroup per touched block updates its 512 TSDF corners.
 class FuseDepthStage {
 public:
@@ -75,18 +62,16 @@ private:
 // before the mesh passes) zeroes the weights of blocks beyond the keep radius and decays those of idle
 // blocks, marking the cubes that read corners which stop being observed; phase 2 (recordFree, after the
 // mesh passes) frees the blocks left with no weight and no mesh state. Both run over the live block list
-// (BaselineMeshStage::recordCollect). recordRebuildHash drops the tombstones freed keys leave in the hash.
+// (BaselineMeshStage::recordCollect). The tombstones freed keys leave in the hash are dropped by
+// BlockHash::recordRebuild (src/gpu/block_hash.h).
 class RecycleStage {
 public:
     RecycleStage(const vk::Context& context, const vk::BindingLayout& layout);
     void recordRetire(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters) const;
     void recordFree(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters) const;
-    // Needs the live block list; clears the table and re-inserts every live block (one CAS each).
-    void recordRebuildHash(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& hashKeys,
-                           const vk::Buffer& hashValues, uint32_t blockCapacity) const;
 
 private:
-    vk::ComputePipeline retire_, free_, commitFree_, save_, insert_, commitRehash_;
+    vk::ComputePipeline retire_, free_, commitFree_;
 };
 
 // Compaction of the shared-vertex mesh into dense vertex and index buffers (plan_export, export_vertices,

@@ -1,6 +1,7 @@
 #include "vk/pipeline.h"
 
 #include "vk/check.h"
+#include "vk/shader_registry.h"
 
 namespace vkmesh::vk {
 
@@ -69,12 +70,10 @@ void BindingLayout::bind(uint32_t binding, const Buffer& buffer) {
 ComputePipeline::ComputePipeline(const Context& context, const BindingLayout& layout, const std::string& shaderName,
                                  std::optional<uint32_t> specialization)
     : context_(context), layout_(layout), name_(shaderName) {
-    const auto& table = shaders::all();
-    auto it = table.find(shaderName);
-    if (it == table.end()) throw Error("No embedded shader named '" + shaderName + "'");
+    const std::span<const uint32_t> code = shaders::computeShaderFor(context, shaderName);   // the device's hash build
     VkShaderModuleCreateInfo moduleInfo{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
-    moduleInfo.codeSize = it->second.size() * sizeof(uint32_t);
-    moduleInfo.pCode = it->second.data();
+    moduleInfo.codeSize = code.size() * sizeof(uint32_t);
+    moduleInfo.pCode = code.data();
     VkShaderModule module = VK_NULL_HANDLE;
     check(vkCreateShaderModule(context.device(), &moduleInfo, nullptr, &module), ("vkCreateShaderModule(" + name_ + ")").c_str());
 

@@ -1,0 +1,29 @@
+#include "gpu/allocate_blocks_stage.h"
+
+#include <cstddef>
+
+#include "vk/commands.h"
+
+namespace vkmesh::gpu {
+
+AllocateBlocksStage::AllocateBlocksStage(const vk::Context& context, const vk::BindingLayout& layout)
+    : allocate_(context, layout, "allocate_blocks"),
+      plan_(context, layout, "plan_frame"),
+      assign_(context, layout, "assign_blocks"),
+      commit_(context, layout, "commit_allocation") {}
+
+void AllocateBlocksStage::record(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters,
+                                 uint32_t pixelStride) const {
+    uint32_t width = ((push.imageSize & 0xFFFFu) + pixelStride - 1) / pixelStride;
+    uint32_t height = ((push.imageSize >> 16) + pixelStride - 1) / pixelStride;
+    allocate_.dispatch(cmd, &push, (width + WG_PIXELS_X - 1) / WG_PIXELS_X, (height + WG_PIXELS_Y - 1) / WG_PIXELS_Y);
+    vk::memoryBarrier(cmd);
+    plan_.dispatch(cmd, &push, 1);
+    vk::memoryBarrier(cmd);
+    assign_.dispatchIndirect(cmd, &push, counters, offsetof(Counters, assignDispatch));
+    vk::memoryBarrier(cmd);
+    commit_.dispatch(cmd, &push, 1);
+    vk::memoryBarrier(cmd);
+}
+
+}  // namespace vkmesh::gpu
