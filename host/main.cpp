@@ -82,7 +82,7 @@ int commandDevices() {
     }
     for (const auto& d : devices) {
         std::cout << d.index << ": " << d.name << " (" << d.type << ", Vulkan " << d.apiVersion << ", " << d.driver << ")"
-                  << (d.suitable ? "" : "  NOT USABLE: " + d.whyNot) << "\n";
+                  << (d.suitable ? "; block hash: " + d.hashPath : "  NOT USABLE: " + d.whyNot) << "\n";
     }
     return 0;
 }
@@ -381,6 +381,7 @@ int commandFuse(const FuseArgs& args) {
                         {"kind", toString(dataset->kind())},
                         {"frames_available", dataset->size()}};
     stats["device"] = context.info().name;
+    stats["int64_atomics"] = context.int64Atomics();   // the block hash's path (docs/HASH.md)
     stats["mode"] = args.mode;
     stats["refine"] = args.refine;
     stats["refine_epsilon_voxels"] = args.refineEps;
