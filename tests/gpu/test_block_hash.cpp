@@ -33,8 +33,20 @@ constexpr const char* kPretendNo64 = "shaderBufferInt64Atomics,shaderInt64";
 
 // One context per path for the whole program, validation on. The 32-bit one is created with
 // VKMESH_PRETEND_MISSING naming both 64-bit features, the other one without it (whatever the environment).
+std::unique_ptr<vk::Context> contexts[2];
+
+// Destroys both contexts when the tests are done, before static destruction: two Vulkan instances left to
+// static destruction crashed at exit (segfault after every test had passed; cause not established).
+class ContextsTeardown : public ::testing::Environment {
+public:
+    void TearDown() override {
+        contexts[0].reset();
+        contexts[1].reset();
+    }
+};
+const ::testing::Environment* const kTeardown = ::testing::AddGlobalTestEnvironment(new ContextsTeardown);
+
 vk::Context& contextFor(bool int64) {
-    static std::unique_ptr<vk::Context> contexts[2];
     std::unique_ptr<vk::Context>& c = contexts[int64 ? 1 : 0];
     if (!c) {
         const char* env = std::getenv("VKMESH_PRETEND_MISSING");
