@@ -77,7 +77,7 @@ VKM_CONST BINDING_VOXEL_WEIGHT = 7u;   // float per TSDF corner
 VKM_CONST BINDING_FREE_LIST = 8u;      // uint stack of free block indices
 VKM_CONST BINDING_TOUCHED = 9u;        // uint list of the frame's blocks (hash slot, then block index)
 VKM_CONST BINDING_DEPTH = 10u;         // float depth image in metres
-VKM_CONST BINDING_MC_TABLES = 11u;     // uint marching-cubes tables, see McTableLayout
+VKM_CONST BINDING_MC_TABLES = 11u;     // uniform: marching-cubes tables as uint words (MC_TRIANGLE_WORDS_OFFSET)
 VKM_CONST BINDING_BLOCK_LIST = 12u;    // uint list of all live blocks (for whole-volume passes)
 VKM_CONST BINDING_MESH_VERTICES = 13u; // vec4 per vertex of the baseline mesh (3 per triangle)
 // The incremental shared-vertex mesh (docs/MESH.md).
@@ -88,10 +88,13 @@ VKM_CONST BINDING_DIRTY_LIST = 17u;    // uint list of the frame's dirty blocks
 VKM_CONST BINDING_VERTICES = 18u;      // Vertex heap
 VKM_CONST BINDING_VERTEX_OWNER = 19u;  // uint per vertex: global edge id (block * 512 + cube) * 3 + axis
 VKM_CONST BINDING_VERTEX_FREE = 20u;   // uint stack of free vertex indices
-VKM_CONST BINDING_GC_CANDIDATES = 21u; // uint list: vertices that may have lost their last triangle
+// The frame's garbage, two uint lists in one buffer (one binding fewer for the passes that write both):
+// [0, vertexCapacity) vertices that may have lost their last triangle (GC candidates; also the new vertices
+// update_new_vertices moves), [vertexCapacity, vertexCapacity + chunkCapacity) chunks released this frame.
+VKM_CONST BINDING_GARBAGE = 21u;
 VKM_CONST BINDING_CHUNK_TRIANGLES = 22u; // uint: 5 triangles x 3 vertex indices per chunk
 VKM_CONST BINDING_CHUNK_FREE = 23u;    // uint stack of free chunk indices
-VKM_CONST BINDING_CHUNK_RELEASE = 24u; // uint list: chunks released this frame
+VKM_CONST BINDING_UNUSED_24 = 24u;     // free (was the chunk release list, now part of BINDING_GARBAGE)
 VKM_CONST BINDING_EXPORT_VERTICES = 25u; // Vertex: the compacted mesh's vertices
 VKM_CONST BINDING_EXPORT_INDICES = 26u;  // uint: the compacted mesh's triangles
 VKM_CONST BINDING_VERTEX_REMAP = 27u;    // uint per vertex: its index in the compacted mesh

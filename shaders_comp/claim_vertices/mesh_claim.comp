@@ -27,7 +27,7 @@ uint allocateVertex(uint slot) {
     vertices[v].createdFrame = frame.frameNumber;
     vertexOwner[v] = slot;
     uint c = atomicAdd(counters.candidateCount, 1u);
-    if (c < params.vertexCapacity) gcCandidates[c] = v;
+    if (c < params.vertexCapacity) setGcCandidate(c, v);
     return v;
 }
 

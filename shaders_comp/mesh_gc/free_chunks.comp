@@ -10,5 +10,5 @@ layout(local_size_x = WG_LIST) in;
 void main() {
     uint i = gl_GlobalInvocationID.x;
     if (i >= min(counters.releaseCount, params.chunkCapacity)) return;
-    chunkFree[counters.chunkFreeTop + atomicAdd(counters.chunkPushes, 1u)] = chunkRelease[i];
+    chunkFree[counters.chunkFreeTop + atomicAdd(counters.chunkPushes, 1u)] = releasedChunk(i);
 }

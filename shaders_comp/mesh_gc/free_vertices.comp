@@ -13,7 +13,7 @@ layout(local_size_x = WG_LIST) in;
 void main() {
     uint i = gl_GlobalInvocationID.x;
     if (i >= min(counters.candidateCount, params.vertexCapacity)) return;
-    uint v = gcCandidates[i];
+    uint v = gcCandidate(i);
     if (atomicCompSwap(vertices[v].refcount, 0u, DEAD_REFCOUNT) != 0u) return;
     edgeStore(vertexOwner[v], EMPTY_SLOT);
     vertexFree[counters.vertexFreeTop + atomicAdd(counters.vertexPushes, 1u)] = v;

@@ -12,6 +12,11 @@ layout(std430, set = 0, binding = BINDING_MESH_STAMPS) coherent buffer MeshStamp
 layout(std430, set = 0, binding = BINDING_DIRTY_LIST) buffer DirtyList { uint dirtyList[]; };
 layout(std430, set = 0, binding = BINDING_RETYPE_MASK) coherent buffer RetypeMask { uint retypeMask[]; };
 layout(std430, set = 0, binding = BINDING_RETYPE_LIST) buffer RetypeList { uint retypeList[]; };
-layout(std430, set = 0, binding = BINDING_GC_CANDIDATES) buffer GcCandidates { uint gcCandidates[]; };
-layout(std430, set = 0, binding = BINDING_CHUNK_RELEASE) buffer ChunkRelease { uint chunkRelease[]; };
+layout(std430, set = 0, binding = BINDING_GARBAGE) buffer Garbage { uint garbage[]; };
+
+// The two garbage lists (shared_layout.h, BINDING_GARBAGE).
+uint gcCandidate(uint i) { return garbage[i]; }
+void setGcCandidate(uint i, uint v) { garbage[i] = v; }
+uint releasedChunk(uint i) { return garbage[params.vertexCapacity + i]; }
+void setReleasedChunk(uint i, uint chunk) { garbage[params.vertexCapacity + i] = chunk; }
 #endif

@@ -20,7 +20,7 @@ uint created = 0u, released = 0u, invalid = 0u, retyped = 0u;
 
 void listCandidate(uint v) {
     uint c = atomicAdd(counters.candidateCount, 1u);
-    if (c < params.vertexCapacity) gcCandidates[c] = v;
+    if (c < params.vertexCapacity) setGcCandidate(c, v);
 }
 
 void retype(uint id) {
@@ -58,7 +58,7 @@ void retype(uint id) {
             uint base = (chunk - 1u) * CHUNK_WORDS;
             for (uint t = 0u; t < TRIANGLES_PER_CHUNK; ++t) chunkTriangles[base + 3u * t] = INVALID_INDEX;
             uint at = atomicAdd(counters.releaseCount, 1u);
-            if (at < params.chunkCapacity) chunkRelease[at] = chunk - 1u;
+            if (at < params.chunkCapacity) setReleasedChunk(at, chunk - 1u);
             chunk = 0u;
         }
     } else {

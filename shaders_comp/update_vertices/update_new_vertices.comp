@@ -15,7 +15,7 @@ layout(local_size_x = WG_LIST) in;
 void main() {
     uint i = gl_GlobalInvocationID.x;
     if (i >= min(counters.candidateCount, params.vertexCapacity)) return;
-    uint v = gcCandidates[i];
+    uint v = gcCandidate(i);
     uint owner = vertexOwner[v];
     uint block = owner / (VOXELS_PER_BLOCK * 3u);
     if (meshStamps[block] == frame.frameNumber) return;   // update_vertices moves it

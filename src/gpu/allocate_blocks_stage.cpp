@@ -6,7 +6,7 @@
 
 namespace vkmesh::gpu {
 
-AllocateBlocksStage::AllocateBlocksStage(const vk::Context& context, const vk::BindingLayout& layout)
+AllocateBlocksStage::AllocateBlocksStage(const vk::Context& context, const vk::BindingTable& layout)
     : allocate_(context, layout, "allocate_blocks"),
       plan_(context, layout, "plan_frame"),
       assign_(context, layout, "assign_blocks"),

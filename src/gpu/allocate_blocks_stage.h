@@ -16,7 +16,7 @@ namespace vkmesh::gpu {
 // the block coordinates of new blocks and Counters::assignDispatch / blockDispatch (the fuse stage's).
 class AllocateBlocksStage {
 public:
-    AllocateBlocksStage(const vk::Context& context, const vk::BindingLayout& layout);
+    AllocateBlocksStage(const vk::Context& context, const vk::BindingTable& layout);
     void record(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters, uint32_t pixelStride) const;
 
 private:

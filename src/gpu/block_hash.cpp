@@ -7,7 +7,7 @@
 
 namespace vkmesh::gpu {
 
-BlockHash::BlockHash(const vk::Context& context, vk::BindingLayout& layout, uint32_t capacity)
+BlockHash::BlockHash(const vk::Context& context, const vk::BindingTable& layout, uint32_t capacity)
     : context_(context),
       layout_(layout),
       int64Keys_(context.int64Atomics()),

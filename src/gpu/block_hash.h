@@ -25,7 +25,7 @@ namespace vkmesh::gpu {
 class BlockHash {
 public:
     // Creates an empty table of `capacity` slots (a power of two) and binds its buffers in `layout`.
-    BlockHash(const vk::Context& context, vk::BindingLayout& layout, uint32_t capacity);
+    BlockHash(const vk::Context& context, const vk::BindingTable& layout, uint32_t capacity);
 
     uint32_t capacity() const { return capacity_; }
     bool int64Keys() const { return int64Keys_; }
@@ -75,7 +75,7 @@ private:
     void recordReinsert(VkCommandBuffer cmd, const FramePush& push, uint32_t blockCapacity) const;
 
     const vk::Context& context_;
-    vk::BindingLayout& layout_;
+    const vk::BindingTable& layout_;
     bool int64Keys_;
     uint32_t capacity_ = 0;
     vk::Buffer keys_, values_, stamps_;

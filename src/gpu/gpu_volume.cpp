@@ -20,12 +20,6 @@ uint32_t nextPowerOfTwo(uint32_t v) {
     return p;
 }
 
-std::vector<VkDescriptorType> descriptorTypes() {
-    std::vector<VkDescriptorType> types(BINDING_COUNT, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER);
-    types[BINDING_PARAMS] = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER;
-    return types;
-}
-
 // The marching-cubes tables in the word layout the shaders read (see MC_TRIANGLE_WORDS_OFFSET).
 std::vector<uint32_t> packMarchingCubesTables() {
     const MarchingCubesTables& t = marchingCubesTables();
@@ -168,7 +162,7 @@ vk::Buffer GpuVolume::makeBuffer(VkDeviceSize size, VkBufferUsageFlags extraUsag
 GpuVolume::GpuVolume(const vk::Context& context, const GpuVolumeConfig& config)
     : context_(context),
       config_(checkedFor(context, config)),
-      layout_(context, descriptorTypes(), sizeof(FramePush)),
+      layout_(context, sizeof(FramePush)),
       hash_(context, layout_, config_.hashCapacity),
       allocate_(context, layout_),
       fuse_(context, layout_),
@@ -189,7 +183,8 @@ GpuVolume::GpuVolume(const vk::Context& context, const GpuVolumeConfig& config)
     freeList_ = makeBuffer(VkDeviceSize(c.blockCapacity) * 4, 0, "free list", BINDING_FREE_LIST);
     touched_ = makeBuffer(VkDeviceSize(c.touchedCapacity) * 4, 0, "touched list", BINDING_TOUCHED);
     depth_ = makeBuffer(VkDeviceSize(c.imageWidth) * c.imageHeight * 4, 0, "depth image", BINDING_DEPTH);
-    mcTables_ = makeBuffer(MC_TABLE_WORDS * 4, 0, "marching cubes tables", BINDING_MC_TABLES);
+    mcTables_ = vk::Buffer(context, MC_TABLE_WORDS * 4, VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, vk::MemoryUse::Device, "marching cubes tables");
+    layout_.bind(BINDING_MC_TABLES, mcTables_);
     blockList_ = makeBuffer(VkDeviceSize(c.blockCapacity) * 4, 0, "block list", BINDING_BLOCK_LIST);
     meshVertices_ = makeBuffer(VkDeviceSize(c.meshVertexCapacity) * 16, 0, "baseline mesh vertices", BINDING_MESH_VERTICES);
     const VkDeviceSize cubes = voxels;
@@ -202,10 +197,9 @@ GpuVolume::GpuVolume(const vk::Context& context, const GpuVolumeConfig& config)
     vertices_ = makeBuffer(VkDeviceSize(c.vertexCapacity) * sizeof(Vertex), 0, "vertex heap", BINDING_VERTICES);
     vertexOwner_ = makeBuffer(VkDeviceSize(c.vertexCapacity) * 4, 0, "vertex owners", BINDING_VERTEX_OWNER);
     vertexFree_ = makeBuffer(VkDeviceSize(c.vertexCapacity) * 4, 0, "vertex free stack", BINDING_VERTEX_FREE);
-    gcCandidates_ = makeBuffer(VkDeviceSize(c.vertexCapacity) * 4, 0, "GC candidates", BINDING_GC_CANDIDATES);
+    garbage_ = makeBuffer((VkDeviceSize(c.vertexCapacity) + c.chunkCapacity) * 4, 0, "garbage lists", BINDING_GARBAGE);
     chunkTriangles_ = makeBuffer(VkDeviceSize(c.chunkCapacity) * CHUNK_WORDS * 4, 0, "triangle chunks", BINDING_CHUNK_TRIANGLES);
     chunkFree_ = makeBuffer(VkDeviceSize(c.chunkCapacity) * 4, 0, "chunk free stack", BINDING_CHUNK_FREE);
-    chunkRelease_ = makeBuffer(VkDeviceSize(c.chunkCapacity) * 4, 0, "chunk release list", BINDING_CHUNK_RELEASE);
     vertexRemap_ = makeBuffer(VkDeviceSize(c.vertexCapacity) * 4, 0, "vertex remap", BINDING_VERTEX_REMAP);
     retypeMask_ = makeBuffer(VkDeviceSize(c.blockCapacity) * MASK_WORDS * 4, 0, "retype masks", BINDING_RETYPE_MASK);
     retypeList_ = makeBuffer(VkDeviceSize(c.retypeCapacity) * 4, 0, "retype list", BINDING_RETYPE_LIST);
@@ -251,8 +245,7 @@ GpuVolume::GpuVolume(const vk::Context& context, const GpuVolumeConfig& config)
     resetMeshState();
 
     if (c.trackDeltas) {
-        std::vector<VkDescriptorType> types(DELTA_BINDING_COUNT, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER);
-        deltaLayout_.emplace(context, types, 0);
+        deltaLayout_.emplace(context, 0);
         deltaStage_.emplace(context, *deltaLayout_);
         auto deltaBuffer = [&](VkDeviceSize size, VkBufferUsageFlags usage, const char* name, uint32_t binding) {
             vk::Buffer b(context, size, kStorage | usage, vk::MemoryUse::Device, name);
@@ -708,14 +701,13 @@ void GpuVolume::growMeshHeaps(uint32_t vertexCapacity, uint32_t chunkCapacity) {
         VkDeviceSize kept = growCopy(vertices_, VkDeviceSize(vertexCapacity) * sizeof(Vertex), "vertex heap", BINDING_VERTICES);
         vkCmdFillBuffer(cmd, vertices_.handle(), kept, VK_WHOLE_SIZE, 0xFFFFFFFFu);   // new entries: refcount DEAD
         growCopy(vertexOwner_, VkDeviceSize(vertexCapacity) * 4, "vertex owners", BINDING_VERTEX_OWNER);
-        gcCandidates_ = makeBuffer(VkDeviceSize(vertexCapacity) * 4, 0, "GC candidates", BINDING_GC_CANDIDATES);
         vertexRemap_ = makeBuffer(VkDeviceSize(vertexCapacity) * 4, 0, "vertex remap", BINDING_VERTEX_REMAP);
     }
     if (chunkCapacity > oldChunks) {
         VkDeviceSize kept = growCopy(chunkTriangles_, VkDeviceSize(chunkCapacity) * CHUNK_WORDS * 4, "triangle chunks", BINDING_CHUNK_TRIANGLES);
         vkCmdFillBuffer(cmd, chunkTriangles_.handle(), kept, VK_WHOLE_SIZE, INVALID_INDEX);   // new chunks: no triangle
-        chunkRelease_ = makeBuffer(VkDeviceSize(chunkCapacity) * 4, 0, "chunk release list", BINDING_CHUNK_RELEASE);
     }
+    garbage_ = makeBuffer((VkDeviceSize(vertexCapacity) + chunkCapacity) * 4, 0, "garbage lists", BINDING_GARBAGE);
     if (deltaLayout_) {
         // The delta passes read the heaps through their own set, and their shadows grow with the heaps
         // (new entries: dead vertices, empty triangle slots, as the heaps' new entries are).
@@ -842,8 +834,8 @@ std::vector<PoolInfo> GpuVolume::pools() const {
     for (const vk::Buffer* b : hash_.buffers()) out.push_back({b->name(), size_t(b->size())});
     for (const vk::Buffer* b : {&params_, &counters_, &blockCoords_, &voxelSdf_,
                                 &voxelWeight_, &freeList_, &touched_, &depth_, &mcTables_, &blockList_, &meshVertices_,
-                                &cubeState_, &edgeVertexX_, &edgeVertexY_, &edgeVertexZ_, &meshStamps_, &dirtyList_, &vertices_, &vertexOwner_, &vertexFree_, &gcCandidates_,
-                                &chunkTriangles_, &chunkFree_, &chunkRelease_, &exportVertices_, &exportIndices_, &vertexRemap_,
+                                &cubeState_, &edgeVertexX_, &edgeVertexY_, &edgeVertexZ_, &meshStamps_, &dirtyList_, &vertices_, &vertexOwner_, &vertexFree_, &garbage_,
+                                &chunkTriangles_, &chunkFree_, &exportVertices_, &exportIndices_, &vertexRemap_,
                                 &retypeMask_, &retypeList_,
                                 &depthStaging_, &countersReadback_, &prevVertices_, &prevChunks_, &deltaState_,
                                 &deltaVertexRecords_, &deltaTriangleRecords_, &deltaStateReadback_})

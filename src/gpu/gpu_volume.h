@@ -206,15 +206,15 @@ private:
 
     const vk::Context& context_;
     GpuVolumeConfig config_;
-    vk::BindingLayout layout_;
+    vk::BindingTable layout_;
     BlockHash hash_;
     vk::Buffer params_, counters_, blockCoords_, voxelSdf_, voxelWeight_,
         freeList_, touched_, depth_, mcTables_, blockList_, meshVertices_;
-    vk::Buffer cubeState_, edgeVertexX_, edgeVertexY_, edgeVertexZ_, meshStamps_, dirtyList_, vertices_, vertexOwner_, vertexFree_, gcCandidates_,
-        chunkTriangles_, chunkFree_, chunkRelease_, exportVertices_, exportIndices_, vertexRemap_, retypeMask_, retypeList_;
+    vk::Buffer cubeState_, edgeVertexX_, edgeVertexY_, edgeVertexZ_, meshStamps_, dirtyList_, vertices_, vertexOwner_, vertexFree_, garbage_,
+        chunkTriangles_, chunkFree_, exportVertices_, exportIndices_, vertexRemap_, retypeMask_, retypeList_;
     vk::Buffer depthStaging_, countersReadback_;
     // Mesh deltas (trackDeltas only).
-    std::optional<vk::BindingLayout> deltaLayout_;
+    std::optional<vk::BindingTable> deltaLayout_;
     std::optional<MeshDeltaStage> deltaStage_;
     vk::Buffer prevVertices_, prevChunks_, deltaState_, deltaVertexRecords_, deltaTriangleRecords_, deltaStateReadback_;
     uint32_t exportVertexCapacity_ = 0, exportTriangleCapacity_ = 0;

@@ -6,7 +6,7 @@
 
 namespace vkmesh::gpu {
 
-FuseDepthStage::FuseDepthStage(const vk::Context& context, const vk::BindingLayout& layout)
+FuseDepthStage::FuseDepthStage(const vk::Context& context, const vk::BindingTable& layout)
     : fuse_(context, layout, "fuse_depth") {}
 
 void FuseDepthStage::record(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters) const {
@@ -14,7 +14,7 @@ void FuseDepthStage::record(VkCommandBuffer cmd, const FramePush& push, const vk
     vk::memoryBarrier(cmd);
 }
 
-BaselineMeshStage::BaselineMeshStage(const vk::Context& context, const vk::BindingLayout& layout)
+BaselineMeshStage::BaselineMeshStage(const vk::Context& context, const vk::BindingTable& layout)
     : collect_(context, layout, "collect_blocks"),
       plan_(context, layout, "plan_block_list"),
       mesh_(context, layout, "mesh_baseline") {}
@@ -33,7 +33,7 @@ void BaselineMeshStage::record(VkCommandBuffer cmd, const FramePush& push, const
     vk::memoryBarrier(cmd);
 }
 
-IncrementalMeshStage::IncrementalMeshStage(const vk::Context& context, const vk::BindingLayout& layout)
+IncrementalMeshStage::IncrementalMeshStage(const vk::Context& context, const vk::BindingTable& layout)
     : markDirty_(context, layout, "mark_dirty"),
       markAllDirty_(context, layout, "mark_all_dirty"),
       markPending_(context, layout, "mark_pending_dirty"),
@@ -113,7 +113,7 @@ void IncrementalMeshStage::recordMesh(VkCommandBuffer cmd, const FramePush& push
     mark("mesh_gc");
 }
 
-RecycleStage::RecycleStage(const vk::Context& context, const vk::BindingLayout& layout)
+RecycleStage::RecycleStage(const vk::Context& context, const vk::BindingTable& layout)
     : retire_(context, layout, "recycle_retire"),
       free_(context, layout, "recycle_free"),
       commitFree_(context, layout, "commit_recycle") {}
@@ -130,7 +130,7 @@ void RecycleStage::recordFree(VkCommandBuffer cmd, const FramePush& push, const 
     vk::memoryBarrier(cmd);
 }
 
-ExportMeshStage::ExportMeshStage(const vk::Context& context, const vk::BindingLayout& layout)
+ExportMeshStage::ExportMeshStage(const vk::Context& context, const vk::BindingTable& layout)
     : plan_(context, layout, "plan_export"),
       vertices_(context, layout, "export_vertices"),
       triangles_(context, layout, "export_triangles"),
@@ -147,7 +147,7 @@ void ExportMeshStage::record(VkCommandBuffer cmd, const FramePush& push, const v
     vk::memoryBarrier(cmd);
 }
 
-MeshDeltaStage::MeshDeltaStage(const vk::Context& context, const vk::BindingLayout& deltaLayout)
+MeshDeltaStage::MeshDeltaStage(const vk::Context& context, const vk::BindingTable& deltaLayout)
     : plan_(context, deltaLayout, "plan_deltas"),
       vertices_(context, deltaLayout, "diff_vertices"),
       triangles_(context, deltaLayout, "diff_triangles") {}

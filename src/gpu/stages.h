@@ -13,7 +13,7 @@ namespace vkmesh::gpu {
 // Paper §V.A, second half: one workgroup per touched block updates its 512 TSDF corners.
 class FuseDepthStage {
 public:
-    FuseDepthStage(const vk::Context& context, const vk::BindingLayout& layout);
+    FuseDepthStage(const vk::Context& context, const vk::BindingTable& layout);
     void record(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters) const;
 
 private:
@@ -24,7 +24,7 @@ private:
 // marching cubes in every cube, 3 vertices of its own per triangle (mesh_baseline).
 class BaselineMeshStage {
 public:
-    BaselineMeshStage(const vk::Context& context, const vk::BindingLayout& layout);
+    BaselineMeshStage(const vk::Context& context, const vk::BindingTable& layout);
     // Lists every live block (blockList, liveBlockCount) and sizes listDispatch; other passes use it too.
     void recordCollect(VkCommandBuffer cmd, const FramePush& push, uint32_t hashCapacity) const;
     void record(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters, uint32_t hashCapacity) const;
@@ -40,7 +40,7 @@ private:
 // rebuild changed cubes' triangles (mesh_triangulate, commit_chunks), collect garbage (free_vertices, free_chunks, commit_free).
 class IncrementalMeshStage {
 public:
-    IncrementalMeshStage(const vk::Context& context, const vk::BindingLayout& layout);
+    IncrementalMeshStage(const vk::Context& context, const vk::BindingTable& layout);
     // Dirty = blocks touched this frame and their -x/-y/-z neighbours.
     void recordMarkTouched(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters) const;
     // Dirty = every block listed by collect_blocks (record BaselineMeshStage::recordCollect first).
@@ -66,7 +66,7 @@ private:
 // BlockHash::recordRebuild (src/gpu/block_hash.h).
 class RecycleStage {
 public:
-    RecycleStage(const vk::Context& context, const vk::BindingLayout& layout);
+    RecycleStage(const vk::Context& context, const vk::BindingTable& layout);
     void recordRetire(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters) const;
     void recordFree(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters) const;
 
@@ -79,7 +79,7 @@ private:
 // (finish_export).
 class ExportMeshStage {
 public:
-    ExportMeshStage(const vk::Context& context, const vk::BindingLayout& layout);
+    ExportMeshStage(const vk::Context& context, const vk::BindingTable& layout);
     void record(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters) const;
 
 private:
@@ -91,7 +91,7 @@ private:
 // layout (DELTA_BINDING_*), no push constants.
 class MeshDeltaStage {
 public:
-    MeshDeltaStage(const vk::Context& context, const vk::BindingLayout& deltaLayout);
+    MeshDeltaStage(const vk::Context& context, const vk::BindingTable& deltaLayout);
     void record(VkCommandBuffer cmd, const vk::Buffer& deltaState) const;
 
 private:

@@ -158,13 +158,13 @@ DeviceInfo describe(VkPhysicalDevice device, uint32_t index) {
         VkSubgroupFeatureFlags need = VK_SUBGROUP_FEATURE_BASIC_BIT | VK_SUBGROUP_FEATURE_ARITHMETIC_BIT | VK_SUBGROUP_FEATURE_BALLOT_BIT;
         if ((subgroup.supportedOperations & need) != need || !(subgroup.supportedStages & VK_SHADER_STAGE_COMPUTE_BIT))
             missing.push_back("subgroup basic+arithmetic+ballot operations in compute shaders");
-        // Limits above Vulkan's guaranteed minimums that the compute pipelines rely on: one descriptor set of
-        // 31 storage buffers shared by all of them, 16 x 16 pixel workgroups.
+        // Limits above Vulkan's guaranteed minimums that the compute pipelines rely on: up to
+        // kMaxStorageBuffersPerPipeline (vk/pipeline.h) storage buffers per pipeline, 16 x 16 pixel workgroups.
         const VkPhysicalDeviceLimits& l = props.limits;
         auto atLeast = [&](uint64_t have, uint64_t need, const char* limit) {
             if (have < need) missing.push_back(std::string(limit) + " >= " + std::to_string(need) + " (has " + std::to_string(have) + ")");
         };
-        atLeast(l.maxPerStageDescriptorStorageBuffers, 31, "maxPerStageDescriptorStorageBuffers");
+        atLeast(l.maxPerStageDescriptorStorageBuffers, 16, "maxPerStageDescriptorStorageBuffers");
         atLeast(l.maxComputeWorkGroupInvocations, 256, "maxComputeWorkGroupInvocations");
     }
     info.suitable = missing.empty();

@@ -1,4 +1,8 @@
-// Compute pipelines built from the SPIR-V embedded at build time (cmake/EmbedShaders.cmake).
+// Compute pipelines built from the SPIR-V embedded at build time (cmake/EmbedShaders.cmake). Each pipeline
+// has a descriptor set layout of its own holding only the bindings its shader statically uses (reflected
+// from the SPIR-V), so a pipeline never counts buffers it does not touch against the device's per-stage
+// limit, and GPU-assisted validation has slots to spare. The buffers themselves are named once, by
+// binding number, in a BindingTable shared by a family of pipelines.
 #pragma once
 
 #include <vulkan/vulkan.h>
@@ -14,56 +18,91 @@
 #include "vk/context.h"
 
 namespace vkmesh::shaders {
-// Every shaders_comp/*.comp as SPIR-V words, by file name without extension.
+// Every shaders_comp/**/*.comp as SPIR-V words, by file name without extension.
 const std::map<std::string, std::span<const uint32_t>>& all();
 }  // namespace vkmesh::shaders
 
 namespace vkmesh::vk {
 
-// One descriptor set layout + push-constant range shared by a family of compute pipelines, and the
-// single descriptor set that binds their buffers.
-class BindingLayout {
-public:
-    // descriptorTypes[i] is the type of binding i (all visible to the compute stage).
-    BindingLayout(const Context& context, const std::vector<VkDescriptorType>& descriptorTypes, uint32_t pushConstantSize);
-    ~BindingLayout();
-    BindingLayout(const BindingLayout&) = delete;
-    BindingLayout& operator=(const BindingLayout&) = delete;
+// The most storage buffers one vkmesh pipeline may use: half of lavapipe's (and many mobile GPUs')
+// maxPerStageDescriptorStorageBuffers of 32, so that GPU-assisted validation, which needs slots of its own,
+// fits too (docs/PORTABILITY.md). Checked when a pipeline is created.
+inline constexpr uint32_t kMaxStorageBuffersPerPipeline = 16;
 
-    void bind(uint32_t binding, const Buffer& buffer);   // (re)points a binding at a whole buffer
-    VkPipelineLayout pipelineLayout() const { return pipelineLayout_; }
-    VkDescriptorSet set() const { return set_; }
+// A descriptor binding (set 0) that a shader's entry point statically uses.
+struct ShaderBinding {
+    uint32_t binding = 0;
+    VkDescriptorType type = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+};
+
+// The set-0 bindings the entry point of a SPIR-V module statically uses (loads, stores, atomics, access
+// chains, array lengths on the variable), sorted by binding. Declared but unused buffers are left out.
+// Throws Error on malformed SPIR-V or on a binding in another set.
+std::vector<ShaderBinding> reflectBindings(std::span<const uint32_t> spirv, const std::string& shaderName);
+
+class ComputePipeline;
+
+// Binding number -> buffer for a family of compute pipelines with a common numbering (shared_layout.h).
+// The data structure's components bind their buffers here (again after growing one); every pipeline's own
+// descriptor set is written from the table, at creation and whenever a binding it uses changes.
+class BindingTable {
+public:
+    BindingTable(const Context& context, uint32_t pushConstantSize);
+    ~BindingTable();
+    BindingTable(const BindingTable&) = delete;
+    BindingTable& operator=(const BindingTable&) = delete;
+
+    // (Re)points `binding` at the whole buffer. Never while a command buffer that uses it is recorded but
+    // not yet finished (descriptor sets are updated at once).
+    void bind(uint32_t binding, const Buffer& buffer) const;
     uint32_t pushConstantSize() const { return pushConstantSize_; }
 
 private:
+    friend class ComputePipeline;
+    struct Bound {
+        VkBuffer buffer = VK_NULL_HANDLE;
+        VkDeviceSize size = 0;
+        std::string name;
+    };
     const Context& context_;
-    std::vector<VkDescriptorType> types_;
     uint32_t pushConstantSize_;
-    VkDescriptorSetLayout setLayout_ = VK_NULL_HANDLE;
-    VkPipelineLayout pipelineLayout_ = VK_NULL_HANDLE;
-    VkDescriptorPool pool_ = VK_NULL_HANDLE;
-    VkDescriptorSet set_ = VK_NULL_HANDLE;
+    // Mutable: binding buffers and (un)registering pipelines does not change which numbering the table is.
+    mutable std::map<uint32_t, Bound> bound_;
+    mutable std::vector<ComputePipeline*> pipelines_;
 };
 
 class ComputePipeline {
 public:
     // `specialization`: the value of the shader's `layout(constant_id = 0)` constant, when it has one.
-    ComputePipeline(const Context& context, const BindingLayout& layout, const std::string& shaderName,
+    ComputePipeline(const Context& context, const BindingTable& table, const std::string& shaderName,
                     std::optional<uint32_t> specialization = std::nullopt);
     ~ComputePipeline();
     ComputePipeline(const ComputePipeline&) = delete;
     ComputePipeline& operator=(const ComputePipeline&) = delete;
 
-    // Binds pipeline, descriptor set and push constants.
+    // Binds pipeline, descriptor set and push constants. Throws if a binding the shader uses has no buffer.
     void bind(VkCommandBuffer cmd, const void* pushConstants) const;
     void dispatch(VkCommandBuffer cmd, const void* push, uint32_t x, uint32_t y = 1, uint32_t z = 1) const;
+    // One invocation per item: ceil(items / workgroup size) workgroups along x (none when items is 0).
+    void dispatchItems(VkCommandBuffer cmd, const void* push, uint32_t items) const;
     void dispatchIndirect(VkCommandBuffer cmd, const void* push, const Buffer& args, VkDeviceSize offset) const;
     const std::string& name() const { return name_; }
+    const std::vector<ShaderBinding>& bindings() const { return bindings_; }
+    uint32_t workgroupSize() const { return workgroupSize_; }   // local_size_x * y * z of the shader
 
 private:
+    friend class BindingTable;
+    void write(uint32_t binding, const BindingTable::Bound& bound) const;
+
     const Context& context_;
-    const BindingLayout& layout_;
+    const BindingTable& table_;
     std::string name_;
+    std::vector<ShaderBinding> bindings_;
+    uint32_t workgroupSize_ = 1;
+    VkDescriptorSetLayout setLayout_ = VK_NULL_HANDLE;
+    VkPipelineLayout pipelineLayout_ = VK_NULL_HANDLE;
+    VkDescriptorPool pool_ = VK_NULL_HANDLE;
+    VkDescriptorSet set_ = VK_NULL_HANDLE;
     VkPipeline pipeline_ = VK_NULL_HANDLE;
 };
 

@@ -82,12 +82,6 @@ uint32_t homeSlot(const Coord& c, uint32_t capacity) {
     return h & (capacity - 1);
 }
 
-std::vector<VkDescriptorType> computeBindingTypes() {
-    std::vector<VkDescriptorType> types(gpu::BINDING_COUNT, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER);
-    types[gpu::BINDING_PARAMS] = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER;
-    return types;
-}
-
 // The hash with the few buffers its passes touch, driven by hash/test_hash_access.comp: entry i of the
 // block coordinates holds a key; the invocation that inserts a key makes its entry that key's block.
 class HashHarness {
@@ -95,7 +89,7 @@ public:
     HashHarness(const vk::Context& context, uint32_t capacity, const std::vector<Coord>& entries)
         : context_(context),
           n_(uint32_t(entries.size())),
-          layout_(context, computeBindingTypes(), sizeof(gpu::FramePush)),
+          layout_(context, sizeof(gpu::FramePush)),
           hash_(context, layout_, capacity),
           insert_(context, layout_, "test_hash_access", 0u),
           find_(context, layout_, "test_hash_access", 1u),
@@ -190,7 +184,7 @@ private:
 
     const vk::Context& context_;
     uint32_t n_;
-    vk::BindingLayout layout_;
+    vk::BindingTable layout_;
     gpu::BlockHash hash_;
     vk::ComputePipeline insert_, find_, remove_, collect_, planList_;
     vk::CommandRecorder recorder_;

@@ -1,0 +1,61 @@
+// Every compute pipeline binds only the buffers its shader uses (reflected from the SPIR-V), at most
+// vk::kMaxStorageBuffersPerPipeline storage buffers, so GPU-assisted validation and small-limit devices fit.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <iostream>
+
+#include "shared_layout.h"
+#include "vk/check.h"
+#include "vk/pipeline.h"
+
+using namespace vkmesh;
+
+namespace {
+bool uses(const std::vector<vk::ShaderBinding>& b, uint32_t binding) {
+    return std::any_of(b.begin(), b.end(), [&](const vk::ShaderBinding& s) { return s.binding == binding; });
+}
+}  // namespace
+
+TEST(PipelineLayouts, EveryShaderFitsTheStorageBufferBudget) {
+    ASSERT_FALSE(shaders::all().empty());
+    for (const auto& [name, spirv] : shaders::all()) {
+        const auto bindings = vk::reflectBindings(spirv, name);
+        const auto storage = std::count_if(bindings.begin(), bindings.end(),
+                                           [](const vk::ShaderBinding& b) { return b.type == VK_DESCRIPTOR_TYPE_STORAGE_BUFFER; });
+        std::cout << name << ": " << storage << " storage buffers\n";
+        EXPECT_LE(storage, vk::kMaxStorageBuffersPerPipeline) << name;
+        EXPECT_FALSE(bindings.empty()) << name << " reflects no binding at all";
+    }
+}
+
+TEST(PipelineLayouts, ReflectionFindsWhatAShaderUsesAndNothingElse) {
+    // plan_frame reads the touched count and writes dispatch sizes: counters and params only, although its
+    // headers declare more.
+    const auto plan = vk::reflectBindings(shaders::all().at("plan_frame"), "plan_frame");
+    ASSERT_EQ(plan.size(), 2u);
+    EXPECT_EQ(plan[0].binding, gpu::BINDING_PARAMS);
+    EXPECT_EQ(plan[0].type, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER);
+    EXPECT_EQ(plan[1].binding, gpu::BINDING_COUNTERS);
+    EXPECT_EQ(plan[1].type, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER);
+    // fuse_depth reads the depth image and writes the TSDF; it never touches the mesh heaps.
+    const auto fuse = vk::reflectBindings(shaders::all().at("fuse_depth"), "fuse_depth");
+    EXPECT_TRUE(uses(fuse, gpu::BINDING_DEPTH));
+    EXPECT_TRUE(uses(fuse, gpu::BINDING_VOXEL_SDF));
+    EXPECT_TRUE(uses(fuse, gpu::BINDING_RETYPE_MASK));
+    EXPECT_FALSE(uses(fuse, gpu::BINDING_VERTICES));
+    EXPECT_FALSE(uses(fuse, gpu::BINDING_CHUNK_TRIANGLES));
+}
+
+TEST(PipelineLayouts, MalformedSpirvIsAClearError) {
+    std::vector<uint32_t> junk = {0x12345678u, 0, 0, 0, 0};
+    try {
+        vk::reflectBindings(junk, "junk");
+        FAIL() << "accepted a module without the SPIR-V magic number";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("junk"), std::string::npos);
+    }
+    std::vector<uint32_t> truncated(shaders::all().at("plan_frame").begin(), shaders::all().at("plan_frame").end());
+    truncated.resize(40);
+    EXPECT_THROW(vk::reflectBindings(truncated, "truncated"), Error);
+}
