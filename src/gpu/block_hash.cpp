@@ -49,12 +49,12 @@ void BlockHash::recordClear(VkCommandBuffer cmd) const {
 }
 
 void BlockHash::recordSaveStamps(VkCommandBuffer cmd, const FramePush& push, uint32_t blockCapacity) const {
-    save_.dispatch(cmd, &push, (blockCapacity + WG_LIST - 1) / WG_LIST);
+    save_.dispatchItems(cmd, &push, blockCapacity);   // one invocation per block (rehash_save skips past liveBlockCount)
     vk::memoryBarrier(cmd);
 }
 
 void BlockHash::recordReinsert(VkCommandBuffer cmd, const FramePush& push, uint32_t blockCapacity) const {
-    insert_.dispatch(cmd, &push, (blockCapacity + WG_LIST - 1) / WG_LIST);
+    insert_.dispatchItems(cmd, &push, blockCapacity);
     vk::memoryBarrier(cmd);
     commit_.dispatch(cmd, &push, 1);
     vk::memoryBarrier(cmd);

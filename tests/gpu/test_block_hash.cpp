@@ -125,7 +125,7 @@ public:
         vkCmdFillBuffer(cmd, counters_.handle(), gpu::COUNTERS_PER_FRAME_OFFSET, gpu::COUNTERS_PER_FRAME_SIZE, 0);
         vk::memoryBarrier(cmd);
         gpu::FramePush push = pushFor(frameNumber);
-        pipeline.dispatch(cmd, &push, (n_ + gpu::WG_LIST - 1) / gpu::WG_LIST);
+        pipeline.dispatchItems(cmd, &push, n_);
         vk::memoryBarrier(cmd);
         recorder_.submitAndWait();
         return counters();
@@ -176,7 +176,7 @@ private:
         vkCmdFillBuffer(cmd, counters_.handle(), offsetof(gpu::Counters, liveBlockCount), sizeof(uint32_t), 0);
         vk::memoryBarrier(cmd);
         gpu::FramePush push = pushFor(0);
-        collect_.dispatch(cmd, &push, (hash_.capacity() + gpu::WG_LIST - 1) / gpu::WG_LIST);
+        collect_.dispatchItems(cmd, &push, hash_.capacity());
         vk::memoryBarrier(cmd);
         planList_.dispatch(cmd, &push, 1);
         vk::memoryBarrier(cmd);
