@@ -22,6 +22,7 @@
 #include <numeric>
 #include <optional>
 
+#include "api/exported_mesh.h"
 #include "core/mesh_analysis.h"
 #include "core/mesh_delta.h"
 #include "io/delta_stream.h"
@@ -344,13 +345,7 @@ int commandFuse(const FuseArgs& args) {
     if (config.meshMode == gpu::MeshMode::Incremental) {
         gpu::ExportedMesh exported = volume.exportMesh(&meshMs);
         unreferenced = exported.unreferencedVertices;
-        const uint32_t now = volume.framesIntegrated();
-        for (const gpu::Vertex& v : exported.vertices) {
-            mesh.positions.emplace_back(v.px, v.py, v.pz);
-            mesh.normals.emplace_back(v.nx, v.ny, v.nz);
-            mesh.vertexAge.push_back(now - v.createdFrame);
-        }
-        mesh.triangles = std::move(exported.triangles);
+        mesh = toMesh(exported, volume.framesIntegrated());
         baselineVertices = volume.countBaselineVertices();
         // Regularity (what refinement improves): sliver triangles, and surface cubes whose type is not one of
         // the six half-cube types.

@@ -145,7 +145,10 @@ struct VolumeParamsGpu {
     uint starveAfterFrames; // blocks not touched for this many frames lose starveWeight per frame; freed at 0
     float starveWeight;
     uint exportVertexCapacity; // Vertex entries of the export buffer (export_vertices counts what does not fit)
-    uint pad0, pad1, pad2;
+    // 1: a frame whose allocation overflowed a capacity (pool, hash, touched list) is deferred: nothing is
+    // fused, the host grows what overflowed and runs the frame again (docs/MESH.md, "Capacities").
+    uint deferOnOverflow;
+    uint pad1, pad2;
 };
 VKM_CONST VERTEX_UPDATE_AUTO = 0u;     // whichever of the two visits fewer entries this frame
 VKM_CONST VERTEX_UPDATE_HEAP = 1u;     // scan the heap (update_heap_vertices)
@@ -208,7 +211,8 @@ struct Counters {
     uint recycleDeferred;       // empty blocks not freed because they still owned mesh state (retried next frame)
     uint hashRebuilt;           // 1 when the hash table was rebuilt (tombstones dropped) at the start of the frame
     uint rehashLost;            // live blocks the rebuild could not re-insert within HASH_MAX_PROBES (must be 0)
-    uint framePad0, framePad1;
+    uint frameDeferred;         // 1 when defer_frame found an overflowed capacity (deferOnOverflow): the frame fused nothing
+    uint meshPending;           // 1 when the mesh passes left cubes for a follow-up pass (commit_free, deferOnOverflow)
     // --- persistent across frames ---
     uint freeTop;               // blocks on the free list
     uint blocksInUse;           // blocks handed out of the pool

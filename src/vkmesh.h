@@ -3,6 +3,7 @@
 //   Reconstructor                 the embedding API: fuse frames, draw the mesh from its GPU buffers
 //   vk::Context                   Vulkan instance/device (validation with VKMESH_VALIDATION=1)
 //   gpu::GpuVolume                the TSDF volume: integrate depth frames, export the mesh
+//   toMesh                        the exported mesh as a Mesh (for writePly, evaluation)
 //   render::MeshRenderer          offscreen pictures of a mesh
 //   Dataset, readPly/writePly     depth sequences on disk (TUM, ICL-NUIM, Redwood, 7-Scenes), meshes
 //   synth::SyntheticScene         synthetic depth with exact ground truth
@@ -10,6 +11,7 @@
 // they may change between versions.
 #pragma once
 
+#include "api/exported_mesh.h"
 #include "api/reconstructor.h"
 #include "core/mesh_delta.h"
 #include "core/types.h"

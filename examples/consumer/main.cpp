@@ -36,10 +36,7 @@ int main(int argc, char** argv) {
                 return 1;
             }
             if (argc > 1) {  // optional: write the mesh as PLY
-                Mesh mesh;
-                for (const gpu::Vertex& v : exported.vertices) mesh.positions.emplace_back(v.px, v.py, v.pz);
-                mesh.triangles = exported.triangles;
-                writePly(argv[1], mesh);
+                writePly(argv[1], toMesh(exported, volume.framesIntegrated()));
                 std::printf("wrote %s\n", argv[1]);
             }
         }

@@ -5,8 +5,8 @@
 // passes released the triangles reading its corners and GC freed the vertices on its edges). Otherwise
 // it is counted (recycleDeferred) and tried again next frame. Freeing: the hash key becomes a tombstone,
 // the block index is pushed above the committed top of the free list (commit_recycle moves the top), and
-// its retype mask is cleared, so a block handed out again starts like a never-used one (fusion resets the
-// TSDF of FRESH blocks; cube state and edge slots were verified empty here).
+// its retype mask is cleared, so a block handed out again starts like a never-used one (its TSDF is zeroed
+// here; cube state and edge slots were verified empty).
 #extension GL_GOOGLE_include_directive : require
 #include "structure/frame.glsl"
 #include "structure/block_hash.glsl"
@@ -40,6 +40,9 @@ void main() {
         if (gl_LocalInvocationIndex == 0u) atomicAdd(counters.recycleDeferred, 1u);
         return;
     }
+    // A free block is all zero (its weights already are): a block handed out again, or fused without the
+    // FRESH flag after a deferred frame (docs/MESH.md, "Capacities"), starts like a never-used one.
+    for (uint k = 0u; k < VOXELS_PER_INVOCATION; ++k) voxelSdf[block * VOXELS_PER_BLOCK + gl_LocalInvocationIndex + k * WG_BLOCK] = 0.0;
     if (gl_LocalInvocationIndex < MASK_WORDS) retypeMask[block * MASK_WORDS + gl_LocalInvocationIndex] = 0u;
     if (gl_LocalInvocationIndex == 0u) {
         uint slot = uint(blockCoords[block].w);

@@ -1,7 +1,7 @@
 // Mesh refinement (paper §V.F, docs/REFINEMENT.md): a cube whose MC type is a few corners away from one of the
 // six "regular" types (a plane parallel to a cube face splitting the cube in two halves) takes that regular
 // type instead, when every corner it would flip lies within epsilon of the surface. Shared by the CPU
-// reference (src/cpu/reference_mesher.cpp); shaders_comp/structure/cube_access.glsl computes the same function.
+// reference (src/cpu/reference_mesh_dirty.cpp); shaders_comp/structure/cube_access.glsl computes the same function.
 #pragma once
 
 #include <array>

@@ -18,8 +18,10 @@
 #include <string>
 #include <vector>
 
+#include "cpu/reference_block.h"
 #include "cpu/reference_volume.h"
 #include "io/ply.h"
+#include "shared_layout.h"
 
 namespace vkmesh::cpu {
 
@@ -45,22 +47,14 @@ struct MeshFrameStats {
     uint32_t lockFreeSharedSlots = 0;
 };
 
-// One vertex of the heap, the layout of the GPU's `vertices` buffer (32 bytes).
-struct MeshVertex {
-    float px = 0, py = 0, pz = 0;
-    uint32_t refcount = 0;  // live triangles using it; DEAD while on the free stack
-    float nx = 0, ny = 0, nz = 0;
-    uint32_t createdFrame = 0;
-};
-
 // The mesh state of one block, created (all slots EMPTY, every cube state 0) the first time the block exists in
 // the volume.
 struct BlockMeshState {
-    // Per cube (index x + 8 (y + 8 z)): bits 0-7 the MC type its triangles were built from, bit 8 INCOMPLETE,
-    // bits 9-31 its triangle chunk + 1 (0 = none).
+    // Per cube (index x + 8 (y + 8 z)), the GPU's cube state: the MC type its triangles were built from
+    // (CUBE_TYPE_MASK), CUBE_INCOMPLETE, and its triangle chunk + 1 from bit CUBE_CHUNK_SHIFT on (0 = none).
     std::array<uint32_t, gpu::VOXELS_PER_BLOCK> cubeState{};
     // Per cube and axis (index cube * 3 + axis): the vertex on the edge leaving the cube's corner 0 along that
-    // axis, or EMPTY.
+    // axis, or EMPTY_SLOT.
     std::array<uint32_t, gpu::VOXELS_PER_BLOCK * 3> edgeVertex{};
     BlockCoord coord{};
     uint32_t index = 0;  // creation order: the block number in global edge ids (block * 512 + cube) * 3 + axis
@@ -87,14 +81,9 @@ enum class RetypeScope {
 
 class ReferenceMesher {
 public:
-    static constexpr uint32_t kEmpty = 0xFFFFFFFFu;    // edge slot without a vertex
-    static constexpr uint32_t kInvalid = 0xFFFFFFFFu;  // first index of a triangle that does not exist
-    static constexpr uint32_t kDead = 0xFFFFFFFFu;     // refcount of a vertex on the free stack
-    static constexpr uint32_t kTypeMask = 0xFFu;
-    static constexpr uint32_t kIncomplete = 1u << 8;
-    static constexpr uint32_t kChunkShift = 9;
-    static constexpr uint32_t kMaxChunkCapacity = (1u << 23) - 1;  // chunk + 1 must fit in bits 9-31
-    static constexpr int kChunkTriangles = 5;
+    // The state words, slots and heaps are the GPU's (shared_layout.h): EMPTY_SLOT, INVALID_INDEX,
+    // DEAD_REFCOUNT, CUBE_*, TRIANGLES_PER_CHUNK, CHUNK_WORDS and gpu::Vertex.
+    static constexpr uint32_t kMaxChunkCapacity = (1u << (32 - gpu::CUBE_CHUNK_SHIFT)) - 1;  // chunk + 1 must fit
 
     // Throws Error for a zero capacity or a chunk capacity above kMaxChunkCapacity.
     explicit ReferenceMesher(const VolumeParams& params, float minMeshWeight = 1.0f,
@@ -133,18 +122,29 @@ public:
     uint32_t chunkCapacity() const { return chunkCapacity_; }
 
     const std::map<BlockCoord, BlockMeshState>& blockStates() const { return blocks_; }
-    const MeshVertex& vertex(uint32_t v) const { return vertices_.at(v); }
+    const gpu::Vertex& vertex(uint32_t v) const { return vertices_.at(v); }
 
 private:
     struct DirtyBlock;
     // A block and its 7 neighbours in +x, +y, +z (indexed like cube corners; null where not allocated).
     using TsdfBlocks = std::array<const ReferenceBlock*, 8>;
 
+    // The passes of update(), each in its own file (reference_mesh_<pass>.cpp).
     void createBlockStates(const ReferenceVolume& volume);
+    // Dirty marking (reference_mesh_dirty.cpp): D, the cubes to re-evaluate and their new types.
+    std::vector<DirtyBlock> markDirty(const ReferenceVolume& volume, const std::vector<BlockCoord>& touched,
+                                      RetypeScope scope, MeshFrameStats& stats);
+    void chooseTypes(std::vector<DirtyBlock>& dirty) const;
+    // Claim (reference_mesh_claim.cpp).
+    void claimVertices(std::vector<DirtyBlock>& dirty, MeshFrameStats& stats, uint32_t frameNumber);
     void claimCube(DirtyBlock& block, uint32_t cube, MeshFrameStats& stats, uint32_t frameNumber);
+    // Vertex update (reference_mesh_vertices.cpp).
+    void updateVertices(const ReferenceVolume& volume, std::vector<DirtyBlock>& dirty, MeshFrameStats& stats);
     void updateVertex(const TsdfBlocks& tsdf, const BlockMeshState& owner, uint32_t cube, int axis);
+    // Triangulation (reference_mesh_triangulate.cpp).
     void triangulate(DirtyBlock& block, MeshFrameStats& stats);
     void releaseReference(uint32_t v);
+    // Garbage collection (reference_mesh_gc.cpp).
     void collectGarbage(MeshFrameStats& stats);
 
     VolumeParams params_;
@@ -156,10 +156,10 @@ private:
     std::map<BlockCoord, BlockMeshState> blocks_;
     std::vector<BlockMeshState*> blockByIndex_;  // BlockMeshState::index -> state
 
-    std::vector<MeshVertex> vertices_;
+    std::vector<gpu::Vertex> vertices_;
     std::vector<uint64_t> vertexOwner_;         // global edge id of the slot holding the vertex
     std::vector<uint32_t> freeVertices_;        // stack, top at the back
-    std::vector<std::array<uint32_t, 3 * kChunkTriangles>> chunkTriangles_;
+    std::vector<std::array<uint32_t, gpu::CHUNK_WORDS>> chunkTriangles_;  // 3 vertex indices per triangle
     std::vector<uint32_t> freeChunks_;          // stack, top at the back
     uint32_t vertexHighWater_ = 0, chunkHighWater_ = 0;
 

@@ -1,27 +1,23 @@
-// The CPU reference of vkmesh's GPU stages: block allocation along truncation bands, TSDF fusion and
-// the baseline marching-cubes mesh, written serially and plainly, with the same float operations in
-// the same order as the shaders (shaders_comp/*.comp), so tests can compare GPU and CPU results
-// value for value. It is also the readable statement of what each stage computes.
+// The CPU reference of vkmesh's GPU stages up to the TSDF: one frame = block allocation along truncation
+// bands (reference_allocation.h), TSDF fusion and the corners it flips (reference_fusion.h), then bounded-map
+// recycling (reference_recycling.h); and the baseline marching-cubes mesh (reference_baseline.h). Each stage
+// is written serially and plainly in its own file, with the same float operations in the same order as its
+// shaders (shaders_comp/*.comp), so tests can compare GPU and CPU results value for value. The block hash
+// has its own reference (reference_hash.h); this volume keeps its blocks in an ordered map.
 #pragma once
 
 #include <Eigen/Core>
 
 #include <array>
-#include <bitset>
 #include <map>
 #include <vector>
 
 #include "core/types.h"
+#include "cpu/reference_block.h"
+#include "cpu/reference_recycling.h"
 #include "shared_layout.h"
 
 namespace vkmesh::cpu {
-
-using BlockCoord = std::array<int, 3>;
-
-struct ReferenceBlock {
-    std::array<float, gpu::VOXELS_PER_BLOCK> sdf{};
-    std::array<float, gpu::VOXELS_PER_BLOCK> weight{};
-};
 
 // What one frame did; the fields mean the same as the GPU's Counters of the same names.
 struct ReferenceFrameStats {
@@ -31,15 +27,12 @@ struct ReferenceFrameStats {
     uint32_t touchedCount = 0;
     uint32_t updatedVoxels = 0;
     uint32_t rayTruncated = 0;
+    uint32_t outOfRange = 0;       // block visits beyond the block key range
     uint32_t outsideRadius = 0;    // recycling (setRecycling): block visits beyond the keep radius
     uint32_t blocksStarved = 0;
     uint32_t blocksRetired = 0;
     uint32_t blocksFreed = 0;
 };
-
-// Which cubes the incremental mesh re-evaluates after a frame (docs/MESH.md, docs/REFINEMENT.md): per block,
-// one bit per cube (index x + 8 (y + 8 z)).
-using CubeMask = std::bitset<gpu::VOXELS_PER_BLOCK>;
 
 class ReferenceVolume {
 public:
@@ -67,6 +60,9 @@ public:
 
     // Blocks in coordinate order.
     const std::map<BlockCoord, ReferenceBlock>& blocks() const { return blocks_; }
+    // Places a block as given, replacing any there (tests of single stages: the baseline and the mesher read
+    // the volume's blocks). Changes nothing of lastTouched(), lastFlipped() or retypeCubes().
+    void setBlock(const BlockCoord& c, const ReferenceBlock& block) { blocks_[c] = block; }
 
     // Blocks whose truncation band a pixel of the image crosses (the allocation stage alone).
     std::vector<BlockCoord> blocksTouchedBy(const DepthImage& depth, const Intrinsics& intrinsics,
@@ -99,10 +95,7 @@ private:
     bool refine_ = false;
     float refineEpsilon_ = 0.0f;
     std::map<BlockCoord, ReferenceBlock> blocks_;
-    bool outsideKeepRadius(const BlockCoord& c, const float cameraToWorld[3][4]) const;
-    float keepRadius_ = 0.0f;
-    uint32_t starveAfterFrames_ = 0;
-    float starveWeight_ = 0.0f;
+    RecyclingRule recycling_;
     uint32_t frame_ = 0;                             // integrate() calls so far (the GPU's frame number)
     std::map<BlockCoord, uint32_t> lastTouchedFrame_;   // the GPU's hash stamp of each block
     std::vector<BlockCoord> lastTouched_;

@@ -153,62 +153,9 @@ GpuVolumeConfig checkedFor(const vk::Context& context, const GpuVolumeConfig& co
 }
 }  // namespace
 
-vk::Buffer GpuVolume::makeBuffer(VkDeviceSize size, VkBufferUsageFlags extraUsage, const std::string& name, uint32_t binding) {
-    vk::Buffer buffer(context_, size, kStorage | extraUsage, vk::MemoryUse::Device, name);
-    layout_.bind(binding, buffer);
-    return buffer;
-}
+namespace {
 
-GpuVolume::GpuVolume(const vk::Context& context, const GpuVolumeConfig& config)
-    : context_(context),
-      config_(checkedFor(context, config)),
-      layout_(context, sizeof(FramePush)),
-      hash_(context, layout_, config_.hashCapacity),
-      allocate_(context, layout_),
-      fuse_(context, layout_),
-      baselineMesh_(context, layout_),
-      incrementalMesh_(context, layout_),
-      exportMesh_(context, layout_),
-      recycle_(context, layout_),
-      recorder_(context),
-      timer_(context) {
-    const GpuVolumeConfig& c = config_;
-    const VkDeviceSize voxels = VkDeviceSize(c.blockCapacity) * VOXELS_PER_BLOCK;
-    params_ = vk::Buffer(context, sizeof(VolumeParamsGpu), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, vk::MemoryUse::Device, "volume params");
-    layout_.bind(BINDING_PARAMS, params_);
-    counters_ = makeBuffer(sizeof(Counters), VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT, "counters", BINDING_COUNTERS);
-    blockCoords_ = makeBuffer(VkDeviceSize(c.blockCapacity) * 16, 0, "block coords", BINDING_BLOCK_COORDS);
-    voxelSdf_ = makeBuffer(voxels * 4, 0, "voxel sdf", BINDING_VOXEL_SDF);
-    voxelWeight_ = makeBuffer(voxels * 4, 0, "voxel weight", BINDING_VOXEL_WEIGHT);
-    freeList_ = makeBuffer(VkDeviceSize(c.blockCapacity) * 4, 0, "free list", BINDING_FREE_LIST);
-    touched_ = makeBuffer(VkDeviceSize(c.touchedCapacity) * 4, 0, "touched list", BINDING_TOUCHED);
-    depth_ = makeBuffer(VkDeviceSize(c.imageWidth) * c.imageHeight * 4, 0, "depth image", BINDING_DEPTH);
-    mcTables_ = vk::Buffer(context, MC_TABLE_WORDS * 4, VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, vk::MemoryUse::Device, "marching cubes tables");
-    layout_.bind(BINDING_MC_TABLES, mcTables_);
-    blockList_ = makeBuffer(VkDeviceSize(c.blockCapacity) * 4, 0, "block list", BINDING_BLOCK_LIST);
-    meshVertices_ = makeBuffer(VkDeviceSize(c.meshVertexCapacity) * 16, 0, "baseline mesh vertices", BINDING_MESH_VERTICES);
-    const VkDeviceSize cubes = voxels;
-    cubeState_ = makeBuffer(cubes * 4, 0, "cube state", BINDING_CUBE_STATE);
-    edgeVertexX_ = makeBuffer(cubes * 4, 0, "edge vertex slots x", BINDING_EDGE_VERTEX_X);
-    edgeVertexY_ = makeBuffer(cubes * 4, 0, "edge vertex slots y", BINDING_EDGE_VERTEX_Y);
-    edgeVertexZ_ = makeBuffer(cubes * 4, 0, "edge vertex slots z", BINDING_EDGE_VERTEX_Z);
-    meshStamps_ = makeBuffer(VkDeviceSize(c.blockCapacity) * 4, 0, "mesh stamps", BINDING_MESH_STAMPS);
-    dirtyList_ = makeBuffer(VkDeviceSize(c.blockCapacity) * 4, 0, "dirty list", BINDING_DIRTY_LIST);
-    vertices_ = makeBuffer(VkDeviceSize(c.vertexCapacity) * sizeof(Vertex), 0, "vertex heap", BINDING_VERTICES);
-    vertexOwner_ = makeBuffer(VkDeviceSize(c.vertexCapacity) * 4, 0, "vertex owners", BINDING_VERTEX_OWNER);
-    vertexFree_ = makeBuffer(VkDeviceSize(c.vertexCapacity) * 4, 0, "vertex free stack", BINDING_VERTEX_FREE);
-    garbage_ = makeBuffer((VkDeviceSize(c.vertexCapacity) + c.chunkCapacity) * 4, 0, "garbage lists", BINDING_GARBAGE);
-    chunkTriangles_ = makeBuffer(VkDeviceSize(c.chunkCapacity) * CHUNK_WORDS * 4, 0, "triangle chunks", BINDING_CHUNK_TRIANGLES);
-    chunkFree_ = makeBuffer(VkDeviceSize(c.chunkCapacity) * 4, 0, "chunk free stack", BINDING_CHUNK_FREE);
-    vertexRemap_ = makeBuffer(VkDeviceSize(c.vertexCapacity) * 4, 0, "vertex remap", BINDING_VERTEX_REMAP);
-    retypeMask_ = makeBuffer(VkDeviceSize(c.blockCapacity) * MASK_WORDS * 4, 0, "retype masks", BINDING_RETYPE_MASK);
-    retypeList_ = makeBuffer(VkDeviceSize(c.retypeCapacity) * 4, 0, "retype list", BINDING_RETYPE_LIST);
-    exportVertices_ = makeBuffer(1024 * sizeof(Vertex), VK_BUFFER_USAGE_VERTEX_BUFFER_BIT, "export vertices", BINDING_EXPORT_VERTICES);
-    exportIndices_ = makeBuffer(1024 * 12, VK_BUFFER_USAGE_INDEX_BUFFER_BIT, "export indices", BINDING_EXPORT_INDICES);
-    exportVertexCapacity_ = exportTriangleCapacity_ = 1024;
-    depthStaging_ = vk::Buffer(context, depth_.size(), VK_BUFFER_USAGE_TRANSFER_SRC_BIT, vk::MemoryUse::Upload, "depth staging");
-    countersReadback_ = vk::Buffer(context, sizeof(Counters), VK_BUFFER_USAGE_TRANSFER_DST_BIT, vk::MemoryUse::Readback, "counters readback");
-
+VolumeParamsGpu initialParams(const GpuVolumeConfig& c) {
     VolumeParamsGpu gp{};
     gp.voxelSize = c.params.voxelSize;
     gp.truncation = c.params.truncation();
@@ -221,100 +168,356 @@ GpuVolume::GpuVolume(const vk::Context& context, const GpuVolumeConfig& config)
     gp.allocationStride = uint32_t(c.params.allocationStride);
     gp.vertexCapacity = c.vertexCapacity;
     gp.chunkCapacity = c.chunkCapacity;
-    gp.exportTriangleCapacity = 1024;
     gp.retypeCapacity = c.retypeCapacity;
     gp.incrementalMesh = c.meshMode == MeshMode::Incremental ? 1u : 0u;
     gp.refine = c.refine ? 1u : 0u;
     gp.refineEpsilon = c.refineEpsilonVoxels * c.params.voxelSize;
     gp.vertexUpdate = c.vertexUpdate;
-    gp.exportVertexCapacity = exportVertexCapacity_;
     gp.keepRadius = c.keepRadius;
     gp.starveAfterFrames = c.recycle ? c.recycleAfterFrames : 0u;
     gp.starveWeight = c.starveWeight;
-    vk::uploadToBuffer(context, params_, &gp, sizeof(gp));
-    auto tables = packMarchingCubesTables();
+    gp.deferOnOverflow = c.growCapacities ? 1u : 0u;
+    return gp;   // the export capacities are set by ExportMeshStage
+}
+
+FrameListCapacities listCapacities(const GpuVolumeConfig& c) {
+    return {c.blockCapacity, c.touchedCapacity, c.retypeCapacity, c.vertexCapacity, c.chunkCapacity};
+}
+
+// A frame deferred this many times (growing each time) runs the last time without deferral: what still
+// does not fit (a device limit reached) is reported and skipped.
+constexpr int kMaxDeferrals = 4;
+// Follow-up mesh passes after a frame whose mesh passes ran out of a heap or the retype list.
+constexpr int kMaxMeshCompletions = 4;
+
+// The counters of a frame whose mesh was completed by follow-up passes: the frame's own counts, the state
+// (everything persistent) as the last pass left it, what ran out as the last pass saw it, and the mesh work
+// of all passes added up.
+Counters mergedCounters(const Counters& frame, const std::vector<Counters>& passes) {
+    if (passes.empty()) return frame;
+    Counters k = frame;
+    const Counters& last = passes.back();
+    std::memcpy(reinterpret_cast<char*>(&k) + offsetof(Counters, freeTop), reinterpret_cast<const char*>(&last) + offsetof(Counters, freeTop),
+                sizeof(Counters) - offsetof(Counters, freeTop));
+    k.vertexExhausted = last.vertexExhausted;
+    k.chunkExhausted = last.chunkExhausted;
+    k.trianglesInvalid = last.trianglesInvalid;
+    k.retypeDeferred = last.retypeDeferred;
+    k.meshPending = last.meshPending;
+    for (const Counters& p : passes) {
+        k.cubesRetyped += p.cubesRetyped;
+        k.vertexAllocRequests += p.vertexAllocRequests;
+        k.chunkAllocRequests += p.chunkAllocRequests;
+        k.trianglesCreated += p.trianglesCreated;
+        k.trianglesReleased += p.trianglesReleased;
+        k.vertexPushes += p.vertexPushes;
+        k.chunkPushes += p.chunkPushes;
+        k.retypeCount += p.retypeCount;
+    }
+    return k;
+}
+
+}  // namespace
+
+GpuVolume::GpuVolume(const vk::Context& context, const GpuVolumeConfig& config)
+    : context_(context),
+      config_(checkedFor(context, config)),
+      table_(context, sizeof(FramePush)),
+      counters_(context, table_),
+      params_(context, table_, initialParams(config_)),
+      hash_(context, table_, config_.hashCapacity),
+      store_(context, table_, config_.blockCapacity, counters_),
+      mesh_(context, table_, config_.blockCapacity, config_.vertexCapacity, config_.chunkCapacity, counters_),
+      lists_(context, table_, listCapacities(config_)),
+      allocate_(context, table_),
+      deferFrame_(context, table_, "defer_frame"),
+      fuse_(context, table_),
+      blockList_(context, table_),
+      baselineMesh_(context, table_, params_),
+      markDirty_(context, table_),
+      retype_(context, table_),
+      claim_(context, table_),
+      updateVertices_(context, table_),
+      triangulate_(context, table_),
+      meshGc_(context, table_),
+      recycle_(context, table_),
+      recorder_(context),
+      timer_(context) {
+    const GpuVolumeConfig& c = config_;
+    touchedFollowsPool_ = config.touchedCapacity == 0;
+    depth_ = makeStorage(context, table_, BINDING_DEPTH, VkDeviceSize(c.imageWidth) * c.imageHeight * 4, "depth image");
+    depthStaging_ = vk::Buffer(context, depth_.size(), VK_BUFFER_USAGE_TRANSFER_SRC_BIT, vk::MemoryUse::Upload, "depth staging");
+    mcTables_ = vk::Buffer(context, MC_TABLE_WORDS * 4, VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, vk::MemoryUse::Device, "marching cubes tables");
+    table_.bind(BINDING_MC_TABLES, mcTables_);
+    const auto tables = packMarchingCubesTables();
     vk::uploadToBuffer(context, mcTables_, tables.data(), tables.size() * 4);
-    // The free list is a stack popped from its top: block 0 is handed out first.
-    std::vector<uint32_t> free(c.blockCapacity);
-    for (uint32_t i = 0; i < c.blockCapacity; ++i) free[i] = c.blockCapacity - 1 - i;
-    vk::uploadToBuffer(context, freeList_, free.data(), free.size() * 4);
-    Counters initial{};
-    initial.freeTop = c.blockCapacity;
-    vk::uploadToBuffer(context, counters_, &initial, sizeof(initial));
+    exportMesh_.emplace(context, table_, params_);
+    if (c.trackDeltas) deltas_.emplace(context, counters_, mesh_, c.deltaRecordCapacity);
+    VkCommandBuffer cmd = beginSubmission();
+    counters_.recordReadback(cmd);
+    recorder_.submitAndWait();
+}
 
-    resetMeshState();
+VkCommandBuffer GpuVolume::beginSubmission() {
+    VkCommandBuffer cmd = recorder_.begin();
+    params_.recordUpload(cmd);
+    return cmd;
+}
 
-    if (c.trackDeltas) {
-        deltaLayout_.emplace(context, 0);
-        deltaStage_.emplace(context, *deltaLayout_);
-        auto deltaBuffer = [&](VkDeviceSize size, VkBufferUsageFlags usage, const char* name, uint32_t binding) {
-            vk::Buffer b(context, size, kStorage | usage, vk::MemoryUse::Device, name);
-            deltaLayout_->bind(binding, b);
-            return b;
-        };
-        prevVertices_ = deltaBuffer(vertices_.size(), 0, "vertex heap shadow", DELTA_BINDING_PREV_VERTICES);
-        prevChunks_ = deltaBuffer(chunkTriangles_.size(), 0, "triangle chunk shadow", DELTA_BINDING_PREV_CHUNKS);
-        deltaState_ = deltaBuffer(sizeof(DeltaState), VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT, "delta state", DELTA_BINDING_STATE);
-        deltaVertexRecords_ = deltaBuffer(c.deltaRecordCapacity * sizeof(DeltaVertexRecord), 0, "vertex delta records", DELTA_BINDING_VERTEX_RECORDS);
-        deltaTriangleRecords_ = deltaBuffer(c.deltaRecordCapacity * sizeof(DeltaTriangleRecord), 0, "triangle delta records", DELTA_BINDING_TRIANGLE_RECORDS);
-        deltaLayout_->bind(DELTA_BINDING_COUNTERS, counters_);
-        deltaLayout_->bind(DELTA_BINDING_VERTICES, vertices_);
-        deltaLayout_->bind(DELTA_BINDING_CHUNKS, chunkTriangles_);
-        deltaStateReadback_ = vk::Buffer(context, sizeof(DeltaState), VK_BUFFER_USAGE_TRANSFER_DST_BIT, vk::MemoryUse::Readback, "delta state readback");
-        DeltaState state{};
-        state.vertexRecordCapacity = state.triangleRecordCapacity = c.deltaRecordCapacity;
-        vk::uploadToBuffer(context, deltaState_, &state, sizeof(state));
-        // The shadows start as an empty mesh: every vertex dead, every triangle slot empty.
-        VkCommandBuffer cmd = recorder_.begin();
-        vkCmdFillBuffer(cmd, prevVertices_.handle(), 0, VK_WHOLE_SIZE, 0xFFFFFFFFu);
-        vkCmdFillBuffer(cmd, prevChunks_.handle(), 0, VK_WHOLE_SIZE, INVALID_INDEX);
-        vk::memoryBarrier(cmd);
-        recorder_.submitAndWait();
+// ---- the block hash -------------------------------------------------------------------------------
+
+void GpuVolume::recordRebuildHash(VkCommandBuffer cmd, const FramePush& push) {
+    blockList_.record(cmd, push, counters_, config_.hashCapacity);
+    hash_.recordRebuild(cmd, push, config_.blockCapacity);
+}
+
+void GpuVolume::growHash(uint32_t slots, FrameReport& report) {
+    const uint64_t maxSlots = std::min<uint64_t>(context_.maxStorageBufferRange() / BlockHash::keyBytesPerSlot(context_.int64Atomics()), 1u << 31);
+    slots = uint32_t(std::min<uint64_t>(nextPowerOfTwo(slots), maxSlots));
+    const uint32_t oldSlots = config_.hashCapacity;
+    if (slots <= oldSlots) {
+        report.warnings.push_back("the block hash cannot grow past " + std::to_string(oldSlots) + " slots on this device");
+        return;
+    }
+    // With the old table: list the live blocks, keep each one's stamp in its coordinate's w.
+    VkCommandBuffer cmd = beginSubmission();
+    counters_.recordClear(cmd, offsetof(Counters, rehashLost), 1);
+    blockList_.record(cmd, lastPush_, counters_, oldSlots);
+    hash_.recordSaveStamps(cmd, lastPush_, config_.blockCapacity);
+    recorder_.submitAndWait();
+    // The new, empty table (BlockHash::grow's parts, so that the new hashCapacity reaches the GPU with the
+    // parameters at the start of the next submission); every live block re-inserted under it.
+    hash_.replace(slots);
+    params_.edit().hashCapacity = slots;
+    config_.hashCapacity = slots;
+    cmd = beginSubmission();
+    hash_.recordReinsert(cmd, lastPush_, config_.blockCapacity);
+    counters_.recordReadback(cmd);
+    recorder_.submitAndWait();
+    report.growth.push_back("block hash " + std::to_string(oldSlots) + " -> " + std::to_string(slots) + " slots");
+    if (counters_.read().rehashLost)
+        report.warnings.push_back("growing the hash could not re-insert " + std::to_string(counters_.read().rehashLost) +
+                                  " live blocks within " + std::to_string(HASH_MAX_PROBES) + " probes");
+}
+
+// ---- growth ---------------------------------------------------------------------------------------
+
+void GpuVolume::growBlockPool(uint32_t blocks, FrameReport& report) {
+    const uint32_t old = config_.blockCapacity;
+    // The per-cube arrays (TSDF, cube state, edge slots: 2 KiB per block each) are the largest bindings.
+    const uint64_t maxBlocks = std::min<uint64_t>(context_.maxStorageBufferRange() / (4ull * VOXELS_PER_BLOCK), 1u << 30);
+    blocks = uint32_t(std::min<uint64_t>(blocks, maxBlocks));
+    if (blocks <= old) {
+        report.warnings.push_back("the block pool cannot grow past " + std::to_string(old) +
+                                  " blocks: one storage buffer binding holds at most that many blocks' TSDF on this device");
+        return;
+    }
+    GpuVolumeConfig next = config_;
+    next.blockCapacity = blocks;
+    if (touchedFollowsPool_) next.touchedCapacity = blocks;
+    next.hashCapacity = std::max(config_.hashCapacity, nextPowerOfTwo(2 * blocks));
+    try {
+        checkCapacities(next, context_.maxStorageBufferRange(), deviceLocalHeapBytes(context_), context_.info().name,
+                        BlockHash::keyBytesPerSlot(context_.int64Atomics()));
+    } catch (const Error& e) {
+        report.warnings.push_back(std::string("the block pool cannot grow past ") + std::to_string(old) + " blocks: " + e.what());
+        return;
+    }
+    store_.grow(blocks, counters_);
+    mesh_.growCubes(blocks);
+    lists_.grow(listCapacities(next));
+    config_.blockCapacity = blocks;
+    config_.touchedCapacity = next.touchedCapacity;
+    params_.edit().blockCapacity = blocks;
+    params_.edit().touchedCapacity = next.touchedCapacity;
+    report.growth.push_back("block pool " + std::to_string(old) + " -> " + std::to_string(blocks) + " blocks");
+    if (next.hashCapacity > config_.hashCapacity) growHash(next.hashCapacity, report);
+}
+
+void GpuVolume::growTouched(uint32_t entries, FrameReport& report) {
+    if (entries <= config_.touchedCapacity) return;
+    const uint32_t old = config_.touchedCapacity;
+    lists_.grow({config_.blockCapacity, entries, config_.retypeCapacity, config_.vertexCapacity, config_.chunkCapacity});
+    config_.touchedCapacity = entries;
+    params_.edit().touchedCapacity = entries;
+    report.growth.push_back("touched list " + std::to_string(old) + " -> " + std::to_string(entries));
+}
+
+void GpuVolume::growRetypeList(uint32_t entries, FrameReport& report) {
+    const uint32_t maxEntries = uint32_t(std::min<uint64_t>(context_.maxStorageBufferRange() / 4, uint64_t(config_.blockCapacity) * VOXELS_PER_BLOCK));
+    entries = std::min(entries, maxEntries);
+    if (entries <= config_.retypeCapacity) return;
+    const uint32_t old = config_.retypeCapacity;
+    lists_.grow({config_.blockCapacity, config_.touchedCapacity, entries, config_.vertexCapacity, config_.chunkCapacity});
+    config_.retypeCapacity = entries;
+    params_.edit().retypeCapacity = entries;
+    report.growth.push_back("retype list " + std::to_string(old) + " -> " + std::to_string(entries));
+}
+
+void GpuVolume::growHeaps(uint32_t vertexCapacity, uint32_t chunkCapacity, FrameReport* report) {
+    if (config_.meshMode != MeshMode::Incremental) throw Error("growMeshHeaps needs the incremental mesh mode");
+    const uint32_t oldVertices = config_.vertexCapacity, oldChunks = config_.chunkCapacity;
+    vertexCapacity = std::max(vertexCapacity, oldVertices);
+    chunkCapacity = std::max(chunkCapacity, oldChunks);
+    if (vertexCapacity == oldVertices && chunkCapacity == oldChunks) return;
+    if (vertexCapacity >= CLAIMED_SLOT) throw Error("vertex capacity " + std::to_string(vertexCapacity) + " must be < 2^32 - 2");
+    if (chunkCapacity >= (1u << (32 - CUBE_CHUNK_SHIFT)) - 1)
+        throw Error("triangle chunk capacity " + std::to_string(chunkCapacity) + " must be < 2^23 - 1");
+    for (VkDeviceSize bytes : {VkDeviceSize(vertexCapacity) * sizeof(Vertex), VkDeviceSize(chunkCapacity) * CHUNK_WORDS * 4})
+        if (bytes > context_.maxStorageBufferRange())
+            throw Error("a mesh heap of " + std::to_string(bytes) + " bytes exceeds one storage buffer on this device (" +
+                        std::to_string(context_.maxStorageBufferRange()) + " bytes)");
+    mesh_.growHeaps(vertexCapacity, chunkCapacity, counters_);
+    lists_.grow({config_.blockCapacity, config_.touchedCapacity, config_.retypeCapacity, vertexCapacity, chunkCapacity});
+    exportMesh_->growRemap(vertexCapacity);
+    if (deltas_) deltas_->followHeaps(mesh_);
+    config_.vertexCapacity = vertexCapacity;
+    config_.chunkCapacity = chunkCapacity;
+    params_.edit().vertexCapacity = vertexCapacity;
+    params_.edit().chunkCapacity = chunkCapacity;
+    retryPending_ = true;
+    if (report)
+        report->growth.push_back("mesh heaps " + std::to_string(oldVertices) + " -> " + std::to_string(vertexCapacity) + " vertices, " +
+                                 std::to_string(oldChunks) + " -> " + std::to_string(chunkCapacity) + " triangle chunks");
+}
+
+void GpuVolume::growMeshHeaps(uint32_t vertexCapacity, uint32_t chunkCapacity) { growHeaps(vertexCapacity, chunkCapacity, nullptr); }
+
+namespace {
+// The next size of a capacity that must hold `wanted`: at least double, with a quarter of headroom.
+uint32_t grownSize(uint32_t current, uint64_t wanted, uint64_t limit) {
+    return uint32_t(std::min<uint64_t>(std::max<uint64_t>(2ull * current, wanted + wanted / 4), limit));
+}
+}  // namespace
+
+void GpuVolume::growBeforeFrame(FrameReport& report) {
+    // Keep a quarter of every capacity free, and room for twice what the last frame asked of it.
+    const Counters k = counters_.read();
+    const GpuVolumeConfig& c = config_;
+    const uint64_t blocksWanted = uint64_t(k.blocksInUse) + std::max<uint64_t>(2ull * k.allocRequests, c.blockCapacity / 4);
+    if (blocksWanted > c.blockCapacity) growBlockPool(grownSize(c.blockCapacity, blocksWanted, UINT32_MAX), report);
+    if (2ull * (uint64_t(k.hashEntries) + k.hashTombstones) > c.hashCapacity) growHash(2 * c.hashCapacity, report);
+    if (!touchedFollowsPool_ && 2ull * k.touchedCount > c.touchedCapacity) growTouched(grownSize(c.touchedCapacity, 2ull * k.touchedCount, UINT32_MAX), report);
+    if (c.meshMode == MeshMode::Incremental) {
+        const bool vertices = 4ull * k.verticesInUse > 3ull * c.vertexCapacity, chunks = 4ull * k.chunksInUse > 3ull * c.chunkCapacity;
+        if (vertices || chunks) {
+            const uint64_t maxVertices = std::min<uint64_t>(context_.maxStorageBufferRange() / sizeof(Vertex), CLAIMED_SLOT - 1);
+            const uint64_t maxChunks = std::min<uint64_t>(context_.maxStorageBufferRange() / (4ull * CHUNK_WORDS), (1u << (32 - CUBE_CHUNK_SHIFT)) - 2);
+            growHeaps(vertices ? grownSize(c.vertexCapacity, k.verticesInUse, maxVertices) : c.vertexCapacity,
+                      chunks ? grownSize(c.chunkCapacity, k.chunksInUse, maxChunks) : c.chunkCapacity, &report);
+        }
     }
 }
 
-void GpuVolume::resetMeshState() {
+void GpuVolume::growAfterDeferral(const Counters& k, FrameReport& report) {
     const GpuVolumeConfig& c = config_;
-    VkCommandBuffer cmd = recorder_.begin();
-    vkCmdFillBuffer(cmd, cubeState_.handle(), 0, VK_WHOLE_SIZE, 0);
-    for (const vk::Buffer* b : {&edgeVertexX_, &edgeVertexY_, &edgeVertexZ_}) vkCmdFillBuffer(cmd, b->handle(), 0, VK_WHOLE_SIZE, EMPTY_SLOT);
-    vkCmdFillBuffer(cmd, meshStamps_.handle(), 0, VK_WHOLE_SIZE, 0);
-    vkCmdFillBuffer(cmd, retypeMask_.handle(), 0, VK_WHOLE_SIZE, 0);
-    vkCmdFillBuffer(cmd, vertices_.handle(), 0, VK_WHOLE_SIZE, 0xFFFFFFFFu);   // refcount DEAD everywhere
-    vkCmdFillBuffer(cmd, chunkTriangles_.handle(), 0, VK_WHOLE_SIZE, INVALID_INDEX);   // every triangle slot empty
-    vk::memoryBarrier(cmd);
-    recorder_.submitAndWait();
-    // Free stacks popped from the top: index 0 first.
-    std::vector<uint32_t> stack(std::max(c.vertexCapacity, c.chunkCapacity));
-    for (uint32_t i = 0; i < c.vertexCapacity; ++i) stack[i] = c.vertexCapacity - 1 - i;
-    vk::uploadToBuffer(context_, vertexFree_, stack.data(), VkDeviceSize(c.vertexCapacity) * 4);
-    for (uint32_t i = 0; i < c.chunkCapacity; ++i) stack[i] = c.chunkCapacity - 1 - i;
-    vk::uploadToBuffer(context_, chunkFree_, stack.data(), VkDeviceSize(c.chunkCapacity) * 4);
-    Counters k{};
-    vk::downloadFromBuffer(context_, counters_, &k, sizeof(k));
-    k.vertexFreeTop = c.vertexCapacity;
-    k.verticesInUse = k.vertexHighWater = 0;
-    k.chunkFreeTop = c.chunkCapacity;
-    k.chunksInUse = k.chunkHighWater = 0;
-    k.liveTriangles = 0;
-    vk::uploadToBuffer(context_, counters_, &k, sizeof(k));
-    // readCounters() reads the host copy: keep it current even before the first frame.
-    VkCommandBuffer readback = recorder_.begin();
-    recordCountersReadback(readback);
-    recorder_.submitAndWait();
+    if (k.poolExhausted) growBlockPool(grownSize(c.blockCapacity, uint64_t(k.blocksInUse) + k.poolExhausted, UINT32_MAX), report);
+    // hashFull counts visits, at least one per key that found no slot: room for all of them at half load.
+    if (k.hashFull) growHash(uint32_t(std::min<uint64_t>(4ull * (uint64_t(k.hashEntries) + k.hashFull), 1u << 31)), report);
+    if (k.touchedCount > config_.touchedCapacity) growTouched(grownSize(config_.touchedCapacity, k.touchedCount, UINT32_MAX), report);
 }
 
-void GpuVolume::setParam(uint32_t VolumeParamsGpu::*field, uint32_t value) {
-    VolumeParamsGpu gp{};
-    vk::downloadFromBuffer(context_, params_, &gp, sizeof(gp));
-    gp.*field = value;
-    vk::uploadToBuffer(context_, params_, &gp, sizeof(gp));
+void GpuVolume::growMeshAfterFrame(const Counters& k, FrameReport& report) {
+    const GpuVolumeConfig& c = config_;
+    if (k.retypeDeferred) {
+        growRetypeList(grownSize(c.retypeCapacity, uint64_t(k.retypeCount) + k.retypeDeferred, UINT32_MAX), report);
+        retryPending_ = true;
+    }
+    if (k.vertexExhausted || k.chunkExhausted) {
+        const uint64_t maxVertices = std::min<uint64_t>(context_.maxStorageBufferRange() / sizeof(Vertex), CLAIMED_SLOT - 1);
+        const uint64_t maxChunks = std::min<uint64_t>(context_.maxStorageBufferRange() / (4ull * CHUNK_WORDS), (1u << (32 - CUBE_CHUNK_SHIFT)) - 2);
+        const uint32_t vertices = k.vertexExhausted ? grownSize(c.vertexCapacity, uint64_t(c.vertexCapacity) + k.vertexExhausted, maxVertices)
+                                                    : c.vertexCapacity;
+        const uint32_t chunks = k.chunkExhausted ? grownSize(c.chunkCapacity, uint64_t(c.chunkCapacity) + k.chunkExhausted, maxChunks)
+                                                 : c.chunkCapacity;
+        if (vertices > c.vertexCapacity || chunks > c.chunkCapacity) growHeaps(vertices, chunks, &report);
+    }
 }
 
-void GpuVolume::recordCountersReadback(VkCommandBuffer cmd) {
-    VkBufferCopy region{0, 0, sizeof(Counters)};
-    vkCmdCopyBuffer(cmd, counters_.handle(), countersReadback_.handle(), 1, &region);
+// ---- the frame ------------------------------------------------------------------------------------
+
+void GpuVolume::recordFrame(VkCommandBuffer cmd, const FramePush& push, bool rebuildHash, bool retryPending) {
+    const bool incremental = config_.meshMode == MeshMode::Incremental;
+    const bool recycling = this->recycling();
+    // Pass                          reads                                     writes
+    // (host)   depth upload         staging                                   depth image; per-frame counters cleared
+    // rehash   (tombstones > 1/8)   block list, hash                          hash (no tombstones), block coords.w
+    // allocate allocate_blocks      depth, hash                               hash keys, stamps, touched list
+    //          plan_frame           touchedCount                              assign/block dispatch
+    //          assign_blocks        touched list, free list, hash             hash values, block coords, touched list
+    //          commit_allocation    allocRequests                             free list top, pool counts
+    //          defer_frame          overflow counts                           frameDeferred, emptied dispatches
+    // fuse     fuse_depth           touched list, depth, block coords         TSDF, retype masks
+    // mesh     mark_dirty           touched list, hash                        dirty list, mesh stamps
+    //          (block list)         hash                                      live-block list  [recycling, pending]
+    //          mark_pending_dirty   block list, retype masks                  dirty list       [after heap growth]
+    // recycle  recycle_retire       block list, hash stamps                   weights, retype masks
+    //          retype stage         dirty list, retype masks                  retype list
+    //          claim stage          retype list, TSDF, hash, cube state       edge slots, vertex heap
+    //          update stage         TSDF, edge slots, dirty list              vertex positions, normals
+    //          triangulate stage    retype list, TSDF, edge slots             cube state, chunks, garbage lists
+    //          mesh GC stage        garbage lists                             free stacks, edge slots
+    // recycle  recycle_free         block list, TSDF, cube state, edge slots  hash (tombstones), free list
+    // export   export stage         vertex heap, chunks                       export buffers, draw command
+    // deltas   delta stage          vertex heap, chunks, shadows              records, shadows
+    // Every pass reads what the one before wrote (at least the counters its dispatch size comes from), so
+    // each is followed by a full compute/transfer barrier (vk::memoryBarrier, inside the stages).
+    // An execution dependency on everything submitted before (an application's draws reading the last
+    // frame's mesh buffers on this queue): this frame overwrites them.
+    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_ALL_COMMANDS_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT | VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+                         0, 0, nullptr, 0, nullptr, 0, nullptr);
+    params_.recordUpload(cmd);   // what grew since the last submission
+    VkBufferCopy region{0, 0, depthStaging_.size()};
+    vkCmdCopyBuffer(cmd, depthStaging_.handle(), depth_.handle(), 1, &region);
+    counters_.recordClearFrame(cmd);
+    timer_.mark(cmd, "start");
+    if (rebuildHash) {
+        recordRebuildHash(cmd, push);
+        timer_.mark(cmd, "rehash");
+    }
+    allocate_.record(cmd, push, counters_.buffer(), uint32_t(config_.params.allocationStride));
+    deferFrame_.dispatch(cmd, &push, 1);
     vk::memoryBarrier(cmd);
+    timer_.mark(cmd, "allocate");
+    fuse_.record(cmd, push, counters_);
+    timer_.mark(cmd, "fuse");
+    if (incremental) {
+        markDirty_.recordTouched(cmd, push, counters_);
+        timer_.mark(cmd, "mesh_mark");
+    }
+    if (recycling || retryPending) blockList_.record(cmd, push, counters_, config_.hashCapacity);
+    if (retryPending) markDirty_.recordPending(cmd, push, config_.blockCapacity);
+    if (recycling) {
+        recycle_.recordRetire(cmd, push, counters_);
+        timer_.mark(cmd, "recycle_retire");
+    }
+    if (incremental) recordMeshPasses(cmd, push, &timer_);
+    if (recycling) {
+        // The live block list is still the one collected above: the mesh passes do not touch the hash.
+        recycle_.recordFree(cmd, push, counters_);
+        timer_.mark(cmd, "recycle_free");
+    }
+    if (config_.publishMesh) {
+        recordExport(cmd);
+        timer_.mark(cmd, "export");
+    }
+    if (deltas_) {
+        deltas_->record(cmd);
+        timer_.mark(cmd, "deltas");
+    }
+}
+
+void GpuVolume::recordMeshPasses(VkCommandBuffer cmd, const FramePush& push, vk::StageTimer* timer) {
+    auto mark = [&](const char* name) { if (timer) timer->mark(cmd, name); };
+    retype_.record(cmd, push, counters_);
+    claim_.record(cmd, push, counters_, config_.lockFree);
+    mark("mesh_claim");
+    updateVertices_.record(cmd, push, counters_);
+    mark("mesh_update");
+    triangulate_.record(cmd, push, counters_);
+    mark("mesh_triangulate");
+    meshGc_.record(cmd, push, counters_);
+    mark("mesh_gc");
 }
 
 FrameReport GpuVolume::integrate(const DepthImage& depth, const Intrinsics& intrinsics, const Pose& cameraToWorld,
@@ -328,91 +531,89 @@ FrameReport GpuVolume::integrate(const DepthImage& depth, const Intrinsics& intr
         throw Error("intrinsics are for " + std::to_string(intrinsics.width) + "x" + std::to_string(intrinsics.height) +
                     " images but the depth image is " + std::to_string(depth.width) + "x" + std::to_string(depth.height));
     std::memcpy(depthStaging_.mapped(), depth.meters.data(), depth.meters.size() * sizeof(float));
-    FramePush push = makeFramePush(intrinsics, cameraToWorld, config_.params, ++frameNumber_);
-    lastPush_ = push;
-
+    FrameReport report;
+    if (config_.growCapacities && framesIntegrated_ > 0) growBeforeFrame(report);
     if (config_.publishMesh) {
         // Room for last frame's mesh plus what one frame can plausibly add; a frame that adds more is
         // re-exported below after growing the buffers.
-        Counters last = readCounters();
-        ensureExportCapacity(last.verticesInUse + last.verticesInUse / 8 + 4096, last.liveTriangles + last.liveTriangles / 8 + 8192);
+        const Counters last = counters_.read();
+        exportMesh_->ensureCapacity(last.verticesInUse + last.verticesInUse / 8 + 4096, last.liveTriangles + last.liveTriangles / 8 + 8192,
+                                    params_);
     }
-    const bool recycling = this->recycling();
     // Tombstones of freed keys make probes longer and are never reused by insertions: past the threshold
     // (read from the previous frame's counters) the table is rebuilt before this frame allocates.
-    const bool rebuildHash = recycling && double(readCounters().hashTombstones) >
-                                              double(config_.hashRebuildTombstoneFraction) * config_.hashCapacity;
-    auto collectLiveBlocks = [&](VkCommandBuffer cmd) {
-        vkCmdFillBuffer(cmd, counters_.handle(), offsetof(Counters, liveBlockCount), sizeof(uint32_t), 0);
-        vk::memoryBarrier(cmd);
-        baselineMesh_.recordCollect(cmd, push, config_.hashCapacity);
-    };
-
-    VkCommandBuffer cmd = recorder_.begin();
-    timer_.reset(cmd);
-    // Execution dependency on everything submitted before (an application's draws reading the last
-    // frame's mesh buffers on this queue): this frame overwrites them.
-    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_ALL_COMMANDS_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT | VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
-                         0, 0, nullptr, 0, nullptr, 0, nullptr);
-    VkBufferCopy region{0, 0, depthStaging_.size()};
-    vkCmdCopyBuffer(cmd, depthStaging_.handle(), depth_.handle(), 1, &region);
-    vkCmdFillBuffer(cmd, counters_.handle(), COUNTERS_PER_FRAME_OFFSET, COUNTERS_PER_FRAME_SIZE, 0);
-    vk::memoryBarrier(cmd);
-    timer_.mark(cmd, "start");
-    if (rebuildHash) {
-        collectLiveBlocks(cmd);
-        hash_.recordRebuild(cmd, push, config_.blockCapacity);
-        timer_.mark(cmd, "rehash");
-    }
-    allocate_.record(cmd, push, counters_, uint32_t(config_.params.allocationStride));
-    timer_.mark(cmd, "allocate");
-    fuse_.record(cmd, push, counters_);
-    timer_.mark(cmd, "fuse");
+    const bool rebuildHash = recycling() && double(counters_.read().hashTombstones) >
+                                                double(config_.hashRebuildTombstoneFraction) * config_.hashCapacity;
     const bool incremental = config_.meshMode == MeshMode::Incremental;
     const bool retryPending = incremental && retryPending_;
-    if (incremental) {
-        incrementalMesh_.recordMarkTouched(cmd, push, counters_);
-        timer_.mark(cmd, "mesh_mark");
-    }
-    if (recycling || retryPending) collectLiveBlocks(cmd);
-    if (retryPending) incrementalMesh_.recordMarkPending(cmd, push, config_.blockCapacity);
-    if (recycling) {
-        recycle_.recordRetire(cmd, push, counters_);
-        timer_.mark(cmd, "recycle_retire");
-    }
-    if (incremental) incrementalMesh_.recordMesh(cmd, push, counters_, &timer_, config_.lockFree);
-    if (recycling) {
-        // The live block list is still the one collected above: the mesh passes do not touch the hash.
-        recycle_.recordFree(cmd, push, counters_);
-        timer_.mark(cmd, "recycle_free");
-    }
-    if (config_.publishMesh) {
-        recordExport(cmd);
-        timer_.mark(cmd, "export");
-    }
-    if (config_.trackDeltas) {
-        recordDeltas(cmd);
-        timer_.mark(cmd, "deltas");
-    }
-    recordCountersReadback(cmd);
-    recorder_.submitAndWait(sync);
 
-    FrameReport report;
-    countersReadback_.invalidate();
-    std::memcpy(&report.counters, countersReadback_.mapped(), sizeof(Counters));
+    // A frame whose allocation overflows is deferred (nothing fused), the capacities grow, and it runs again
+    // under the next frame number. The application's semaphores: waited on by the first submission,
+    // signalled by the one that ends the frame (an empty one when deferral was possible).
+    Counters k{};
+    bool signalled = false;
+    for (int attempt = 0;; ++attempt) {
+        const bool mayDefer = config_.growCapacities && attempt < kMaxDeferrals;
+        if (params_.values().deferOnOverflow != uint32_t(mayDefer)) params_.edit().deferOnOverflow = mayDefer ? 1u : 0u;
+        const FramePush push = makeFramePush(intrinsics, cameraToWorld, config_.params, ++frameNumber_);
+        lastPush_ = push;
+        VkCommandBuffer cmd = recorder_.begin();
+        timer_.reset(cmd);
+        recordFrame(cmd, push, rebuildHash && attempt == 0, retryPending);
+        counters_.recordReadback(cmd);
+        vk::SubmitSync attemptSync;
+        if (attempt == 0) {
+            attemptSync.wait = sync.wait;
+            attemptSync.waitStages = sync.waitStages;
+        }
+        if (!mayDefer) {
+            attemptSync.signal = sync.signal;
+            signalled = true;
+        }
+        recorder_.submitAndWait(attemptSync);
+        k = counters_.read();
+        if (!k.frameDeferred) break;
+        ++report.deferredAttempts;
+        growAfterDeferral(k, report);
+    }
+    if (!signalled && !sync.signal.empty()) {
+        vk::SubmitSync signalOnly;
+        signalOnly.signal = sync.signal;
+        recorder_.begin();
+        recorder_.submitAndWait(signalOnly);
+    }
+    ++framesIntegrated_;
     report.stageMs = timer_.read();
-    if (config_.publishMesh) {
-        meshPublished_ = true;
-        if (!exportFits(report.counters)) report.counters = runExport(nullptr);   // grows to the exact counts
-    }
-    if (config_.trackDeltas) {
-        report.delta = collectDeltas();
-        report.delta.frame = frameNumber_;
-    }
-    const Counters& k = report.counters;
     // Cubes deferred by a full retype list are left for the next frame's retry; INCOMPLETE cubes are retried
     // once after a growth (while the heap stays full they wait for their block to be dirty again).
     if (retryPending) retryPending_ = k.retypeDeferred > 0;
+
+    // The mesh passes ran out of a heap or the retype list (meshPending): grow it and re-mesh the cubes left
+    // over before the frame is published and its deltas are taken, so the frame's mesh is complete.
+    std::vector<Counters> completion;
+    if (incremental && config_.growCapacities) {
+        Counters last = k;
+        for (int pass = 0; pass < kMaxMeshCompletions && last.meshPending; ++pass) {
+            growMeshAfterFrame(last, report);
+            completion.push_back(runMeshCompletion(true));
+            last = completion.back();
+        }
+        if (!last.meshPending) growMeshAfterFrame(last, report);   // a retype list that overflowed without pending work
+    }
+    report.counters = mergedCounters(k, completion);
+    if (config_.publishMesh) {
+        meshPublished_ = true;
+        if (!exportMesh_->fits(report.counters)) report.counters = mergedCounters(k, {runExport(nullptr)});   // grows to the exact counts
+    }
+    if (deltas_) {
+        report.delta = deltas_->collect(recorder_);
+        report.delta.frame = frameNumber_;
+    }
+    warnAboutCapacities(report.counters, report);
+    return report;
+}
+
+void GpuVolume::warnAboutCapacities(const Counters& k, FrameReport& report) const {
     if (k.hashFull)
         report.warnings.push_back(std::to_string(k.hashFull) + " block insertions found no free hash slot within " +
                                   std::to_string(HASH_MAX_PROBES) + " probes (hash capacity " +
@@ -428,13 +629,15 @@ FrameReport GpuVolume::integrate(const DepthImage& depth, const Intrinsics& intr
         report.warnings.push_back(std::to_string(k.outOfRange) + " block visits lay outside the addressable grid (|coordinate| >= 2^20 blocks)");
     if (k.retypeDeferred)
         report.warnings.push_back(std::to_string(k.retypeDeferred) + " cubes to re-mesh did not fit in the retype list (capacity " +
-                                  std::to_string(config_.retypeCapacity) + "); they are re-meshed when their blocks are next dirty");
+                                  std::to_string(config_.retypeCapacity) + "); they are re-meshed " +
+                                  (config_.growCapacities ? "next frame (the list grew)" : "when their blocks are next dirty"));
     if (k.vertexExhausted)
         report.warnings.push_back("vertex heap exhausted: " + std::to_string(k.vertexExhausted) + " edge vertices not created (capacity " +
-                                  std::to_string(config_.vertexCapacity) + "); their triangles are missing until there is room");
+                                  std::to_string(config_.vertexCapacity) + "); their triangles are missing until there is room" +
+                                  (config_.growCapacities ? " (the heap grew: next frame)" : ""));
     if (k.chunkExhausted)
         report.warnings.push_back("triangle chunk heap exhausted: " + std::to_string(k.chunkExhausted) + " cubes without triangles (capacity " +
-                                  std::to_string(config_.chunkCapacity) + ")");
+                                  std::to_string(config_.chunkCapacity) + ")" + (config_.growCapacities ? " (the heap grew: next frame)" : ""));
     if (k.candidateCount > config_.vertexCapacity)
         report.warnings.push_back(std::to_string(k.candidateCount - config_.vertexCapacity) +
                                   " garbage-collection candidates did not fit in their list; those vertices stay allocated until re-meshed");
@@ -448,22 +651,21 @@ FrameReport GpuVolume::integrate(const DepthImage& depth, const Intrinsics& intr
     if (k.rayTruncated)
         report.warnings.push_back(std::to_string(k.rayTruncated) + " pixels' truncation bands crossed more than " +
                                   std::to_string(RAY_MAX_BLOCKS) + " blocks and were cut");
-    return report;
 }
 
+// ---- meshes on demand -----------------------------------------------------------------------------
+
 Counters GpuVolume::runBaselinePass(std::vector<std::pair<std::string, double>>* stageMs) {
-    VkCommandBuffer cmd = recorder_.begin();
+    VkCommandBuffer cmd = beginSubmission();
     timer_.reset(cmd);
-    // liveBlockCount, meshVertices, meshVerticesDropped are consecutive.
-    vkCmdFillBuffer(cmd, counters_.handle(), offsetof(Counters, liveBlockCount), 3 * sizeof(uint32_t), 0);
-    vk::memoryBarrier(cmd);
     timer_.mark(cmd, "start");
-    baselineMesh_.record(cmd, lastPush_, counters_, config_.hashCapacity);
+    blockList_.record(cmd, lastPush_, counters_, config_.hashCapacity);
+    baselineMesh_.record(cmd, lastPush_, counters_);
     timer_.mark(cmd, "mesh_baseline");
-    recordCountersReadback(cmd);
+    counters_.recordReadback(cmd);
     recorder_.submitAndWait();
     if (stageMs) *stageMs = timer_.read();
-    return readCounters();
+    return counters_.read();
 }
 
 uint32_t GpuVolume::countBaselineVertices() {
@@ -473,76 +675,41 @@ uint32_t GpuVolume::countBaselineVertices() {
 
 TriangleSoup GpuVolume::extractBaselineMesh(std::vector<std::pair<std::string, double>>* stageMs) {
     for (int attempt = 0; attempt < 2; ++attempt) {
-        Counters k = runBaselinePass(stageMs);
+        const Counters k = runBaselinePass(stageMs);
         if (k.meshVerticesDropped == 0) {
             TriangleSoup soup;
             soup.vertices.resize(k.meshVertices);
             if (k.meshVertices) {
                 std::vector<float> raw(size_t(k.meshVertices) * 4);
-                vk::downloadFromBuffer(context_, meshVertices_, raw.data(), raw.size() * 4);
+                vk::downloadFromBuffer(context_, baselineMesh_.vertices(), raw.data(), raw.size() * 4);
                 for (size_t i = 0; i < soup.vertices.size(); ++i)
                     soup.vertices[i] = Eigen::Vector3f(raw[4 * i], raw[4 * i + 1], raw[4 * i + 2]);
             }
             return soup;
         }
         // Too small: grow to exactly what the GPU counted and run the pass again.
-        VkDeviceSize need = VkDeviceSize(k.meshVertices) * 16;
-        if (need > context_.maxStorageBufferRange())
-            throw Error("the baseline mesh needs " + std::to_string(k.meshVertices) + " vertices (" + std::to_string(need) +
-                        " bytes), more than one storage buffer may hold on this device (" +
-                        std::to_string(context_.maxStorageBufferRange()) + " bytes); use a larger voxel size");
+        baselineMesh_.ensureCapacity(k.meshVertices, params_);
         config_.meshVertexCapacity = k.meshVertices;
-        meshVertices_ = makeBuffer(need, 0, "baseline mesh vertices", BINDING_MESH_VERTICES);
-        VolumeParamsGpu gp{};
-        vk::downloadFromBuffer(context_, params_, &gp, sizeof(gp));
-        gp.meshVertexCapacity = k.meshVertices;
-        vk::uploadToBuffer(context_, params_, &gp, sizeof(gp));
     }
     throw Error("baseline mesh extraction did not fit after growing its buffer");
 }
 
-void GpuVolume::ensureExportCapacity(uint32_t vertices, uint32_t triangles) {
-    // Grown by a quarter more than asked, so a slowly growing mesh reallocates rarely.
-    if (exportVertexCapacity_ < vertices) {
-        exportVertexCapacity_ = vertices + vertices / 4;
-        exportVertices_ = makeBuffer(VkDeviceSize(exportVertexCapacity_) * sizeof(Vertex), VK_BUFFER_USAGE_VERTEX_BUFFER_BIT,
-                                     "export vertices", BINDING_EXPORT_VERTICES);
-        setParam(&VolumeParamsGpu::exportVertexCapacity, exportVertexCapacity_);
-    }
-    if (exportTriangleCapacity_ < triangles) {
-        exportTriangleCapacity_ = triangles + triangles / 4;
-        exportIndices_ = makeBuffer(VkDeviceSize(exportTriangleCapacity_) * 12, VK_BUFFER_USAGE_INDEX_BUFFER_BIT, "export indices",
-                                    BINDING_EXPORT_INDICES);
-        setParam(&VolumeParamsGpu::exportTriangleCapacity, exportTriangleCapacity_);
-    }
-}
-
-void GpuVolume::recordExport(VkCommandBuffer cmd) {
-    vkCmdFillBuffer(cmd, counters_.handle(), offsetof(Counters, exportVertices), 3 * sizeof(uint32_t), 0);
-    vk::memoryBarrier(cmd);
-    exportMesh_.record(cmd, lastPush_, counters_);
-}
-
-bool GpuVolume::exportFits(const Counters& k) const {
-    return k.exportVertices <= exportVertexCapacity_ && k.exportTriangles <= exportTriangleCapacity_;
-}
-
 Counters GpuVolume::runExport(std::vector<std::pair<std::string, double>>* stageMs) {
-    Counters k = readCounters();
+    Counters k = counters_.read();
     uint32_t wantVertices = k.verticesInUse, wantTriangles = k.liveTriangles;
     for (int attempt = 0; attempt < 2; ++attempt) {
-        ensureExportCapacity(wantVertices, wantTriangles);
-        VkCommandBuffer cmd = recorder_.begin();
+        exportMesh_->ensureCapacity(wantVertices, wantTriangles, params_);
+        VkCommandBuffer cmd = beginSubmission();
         timer_.reset(cmd);
         timer_.mark(cmd, "start");
         recordExport(cmd);
         timer_.mark(cmd, "export");
-        recordCountersReadback(cmd);
+        counters_.recordReadback(cmd);
         recorder_.submitAndWait();
         if (stageMs) *stageMs = timer_.read();
-        k = readCounters();
+        k = counters_.read();
         meshPublished_ = true;
-        if (exportFits(k)) return k;
+        if (exportMesh_->fits(k)) return k;
         // Cannot happen if the live counts are right; grow to what was counted and retry.
         wantVertices = k.exportVertices;
         wantTriangles = k.exportTriangles;
@@ -550,32 +717,119 @@ Counters GpuVolume::runExport(std::vector<std::pair<std::string, double>>* stage
     throw Error("mesh export did not fit after growing its buffers");
 }
 
+Counters GpuVolume::runMeshCompletion(bool publishAndReport) {
+    VkCommandBuffer cmd = beginSubmission();
+    counters_.recordClearFrame(cmd);
+    blockList_.record(cmd, lastPush_, counters_, config_.hashCapacity);
+    markDirty_.recordPending(cmd, lastPush_, config_.blockCapacity);
+    recordMeshPasses(cmd, lastPush_, nullptr);
+    if (publishAndReport && config_.publishMesh) recordExport(cmd);
+    if (publishAndReport && deltas_) deltas_->record(cmd);
+    counters_.recordReadback(cmd);
+    recorder_.submitAndWait();
+    retryPending_ = false;
+    return counters_.read();
+}
+
+void GpuVolume::completePendingMesh() {
+    // A few passes: each retypes what fits in the retype list, and a heap that ran out grows in between.
+    // Their changes reach the next frame's deltas (the shadows are not updated here).
+    for (int pass = 0; pass < kMaxMeshCompletions && retryPending_; ++pass) {
+        const Counters k = runMeshCompletion(false);
+        FrameReport ignored;
+        if (config_.growCapacities) growMeshAfterFrame(k, ignored);   // sets retryPending_ again if it grew
+        else retryPending_ = k.retypeDeferred > 0;
+    }
+}
+
 ExportedMesh GpuVolume::exportMesh(std::vector<std::pair<std::string, double>>* stageMs) {
     if (config_.meshMode != MeshMode::Incremental) throw Error("exportMesh needs the incremental mesh mode");
-    Counters k = runExport(stageMs);
+    completePendingMesh();
+    const Counters k = runExport(stageMs);
     ExportedMesh out;
     out.unreferencedVertices = k.exportUnreferenced;
     out.vertices.resize(k.exportVertices);
     out.triangles.resize(k.exportTriangles);
     if (k.exportVertices)
-        vk::downloadFromBuffer(context_, exportVertices_, out.vertices.data(), out.vertices.size() * sizeof(Vertex));
+        vk::downloadFromBuffer(context_, exportMesh_->vertices(), out.vertices.data(), out.vertices.size() * sizeof(Vertex));
     if (k.exportTriangles)
-        vk::downloadFromBuffer(context_, exportIndices_, out.triangles.data(), out.triangles.size() * 12);
+        vk::downloadFromBuffer(context_, exportMesh_->indices(), out.triangles.data(), out.triangles.size() * 12);
     return out;
 }
 
 MeshBuffers GpuVolume::meshBuffers() const {
     MeshBuffers b;
     if (!meshPublished_) return b;
-    Counters k = readCounters();
-    b.vertices = exportVertices_.handle();
-    b.indices = exportIndices_.handle();
-    b.drawIndirect = counters_.handle();
+    const Counters k = counters_.read();
+    b.vertices = exportMesh_->vertices().handle();
+    b.indices = exportMesh_->indices().handle();
+    b.drawIndirect = counters_.buffer().handle();
     b.drawIndirectOffset = offsetof(Counters, drawIndexed);
-    b.vertexCount = std::min(k.exportVertices, exportVertexCapacity_);
+    b.vertexCount = std::min(k.exportVertices, exportMesh_->vertexCapacity());
     b.triangleCount = k.drawIndexed[0] / 3;
     b.frame = frameNumber_;
     return b;
+}
+
+void GpuVolume::rebuildMesh() {
+    mesh_.reset(counters_);
+    // Every cube of every block is listed for retyping; a pass retypes up to retypeCapacity of them and
+    // leaves the rest of the bits set, so passes repeat until none is left.
+    VkCommandBuffer cmd = beginSubmission();
+    lists_.recordReset(cmd);
+    vkCmdFillBuffer(cmd, lists_.retypeMasks().handle(), 0, VK_WHOLE_SIZE, 0xFFFFFFFFu);
+    vk::memoryBarrier(cmd);
+    recorder_.submitAndWait();
+    retryPending_ = false;
+    const uint32_t maxPasses = 2 + kMaxMeshCompletions + config_.blockCapacity * VOXELS_PER_BLOCK / config_.retypeCapacity;
+    for (uint32_t pass = 0; pass < maxPasses; ++pass) {
+        cmd = beginSubmission();
+        counters_.recordClearFrame(cmd);
+        blockList_.record(cmd, lastPush_, counters_, config_.hashCapacity);
+        markDirty_.recordAll(cmd, lastPush_, config_.blockCapacity);
+        recordMeshPasses(cmd, lastPush_, nullptr);
+        counters_.recordReadback(cmd);
+        recorder_.submitAndWait();
+        const Counters k = counters_.read();
+        if (config_.growCapacities && (k.vertexExhausted || k.chunkExhausted || k.retypeDeferred)) {
+            FrameReport ignored;
+            growMeshAfterFrame(k, ignored);   // INCOMPLETE cubes set their retype bit again: the next pass takes them
+            if (k.vertexExhausted || k.chunkExhausted) continue;
+        }
+        if (k.retypeDeferred == 0) {
+            if (config_.publishMesh) runExport(nullptr);   // the published buffers show the rebuilt mesh
+            return;
+        }
+    }
+    throw Error("mesh rebuild did not finish in " + std::to_string(maxPasses) + " passes");
+}
+
+// ---- downloads ------------------------------------------------------------------------------------
+
+MeshStateSnapshot GpuVolume::downloadMeshState() const { return mesh_.download(counters_.read()); }
+
+std::array<uint64_t, 256> GpuVolume::surfaceCubeTypes() const { return mesh_.surfaceCubeTypes(); }
+
+std::vector<BlockSnapshot> GpuVolume::downloadBlocks() const {
+    std::vector<uint32_t> blocks;
+    for (const BlockHash::Entry& e : hash_.downloadEntries())
+        if (e.block != NO_BLOCK) blocks.push_back(e.block);
+    return store_.download(blocks);
+}
+
+std::vector<PoolInfo> GpuVolume::pools() const {
+    std::vector<PoolInfo> out;
+    params_.pools(out);
+    counters_.pools(out);
+    hash_.pools(out);
+    store_.pools(out);
+    mesh_.pools(out);
+    lists_.pools(out);
+    listPools(out, {&depth_, &depthStaging_, &mcTables_});
+    baselineMesh_.pools(out);
+    exportMesh_->pools(out);
+    if (deltas_) deltas_->pools(out);
+    return out;
 }
 
 void recordMeshReadBarrier(VkCommandBuffer cmd) {
@@ -586,261 +840,6 @@ void recordMeshReadBarrier(VkCommandBuffer cmd) {
     vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT,
                          VK_PIPELINE_STAGE_DRAW_INDIRECT_BIT | VK_PIPELINE_STAGE_VERTEX_INPUT_BIT | VK_PIPELINE_STAGE_VERTEX_SHADER_BIT,
                          0, 1, &barrier, 0, nullptr, 0, nullptr);
-}
-
-void GpuVolume::recordDeltas(VkCommandBuffer cmd) {
-    deltaStage_->record(cmd, deltaState_);
-    VkBufferCopy region{0, 0, sizeof(DeltaState)};
-    vkCmdCopyBuffer(cmd, deltaState_.handle(), deltaStateReadback_.handle(), 1, &region);
-    vk::memoryBarrier(cmd);
-}
-
-MeshDelta GpuVolume::collectDeltas() {
-    MeshDelta delta;
-    // Each pass lists what fits and updates the shadows of only what it listed, so a re-run after growing
-    // the lists finds exactly the rest. The number of records is bounded by the heaps: 3 passes suffice.
-    for (int pass = 0; pass < 3; ++pass) {
-        DeltaState state{};
-        deltaStateReadback_.invalidate();
-        std::memcpy(&state, deltaStateReadback_.mapped(), sizeof(state));
-        uint32_t nv = std::min(state.vertexRecords, state.vertexRecordCapacity);
-        uint32_t nt = std::min(state.triangleRecords, state.triangleRecordCapacity);
-        size_t v0 = delta.vertices.size(), t0 = delta.triangles.size();
-        delta.vertices.resize(v0 + nv);
-        delta.triangles.resize(t0 + nt);
-        if (nv) vk::downloadFromBuffer(context_, deltaVertexRecords_, &delta.vertices[v0], nv * sizeof(DeltaVertexRecord));
-        if (nt) vk::downloadFromBuffer(context_, deltaTriangleRecords_, &delta.triangles[t0], nt * sizeof(DeltaTriangleRecord));
-        if (state.vertexRecords <= state.vertexRecordCapacity && state.triangleRecords <= state.triangleRecordCapacity) return delta;
-        // Grow the lists that overflowed to what was missing, with headroom, and run the passes again.
-        if (state.vertexRecords > state.vertexRecordCapacity) {
-            state.vertexRecordCapacity = state.vertexRecords + state.vertexRecords / 2;
-            deltaVertexRecords_ = vk::Buffer(context_, VkDeviceSize(state.vertexRecordCapacity) * sizeof(DeltaVertexRecord), kStorage,
-                                             vk::MemoryUse::Device, "vertex delta records");
-            deltaLayout_->bind(DELTA_BINDING_VERTEX_RECORDS, deltaVertexRecords_);
-        }
-        if (state.triangleRecords > state.triangleRecordCapacity) {
-            state.triangleRecordCapacity = state.triangleRecords + state.triangleRecords / 2;
-            deltaTriangleRecords_ = vk::Buffer(context_, VkDeviceSize(state.triangleRecordCapacity) * sizeof(DeltaTriangleRecord), kStorage,
-                                               vk::MemoryUse::Device, "triangle delta records");
-            deltaLayout_->bind(DELTA_BINDING_TRIANGLE_RECORDS, deltaTriangleRecords_);
-        }
-        vk::uploadToBuffer(context_, deltaState_, &state.vertexRecordCapacity, 2 * sizeof(uint32_t),
-                           offsetof(DeltaState, vertexRecordCapacity));
-        VkCommandBuffer cmd = recorder_.begin();
-        recordDeltas(cmd);
-        recorder_.submitAndWait();
-    }
-    throw Error("mesh deltas did not fit after growing their lists");
-}
-
-void GpuVolume::rebuildMesh() {
-    resetMeshState();
-    // Every cube of every block is listed for retyping; a pass retypes up to retypeCapacity of them and
-    // leaves the rest of the bits set, so passes repeat until none is left.
-    VkCommandBuffer cmd = recorder_.begin();
-    vkCmdFillBuffer(cmd, retypeMask_.handle(), 0, VK_WHOLE_SIZE, 0xFFFFFFFFu);
-    vk::memoryBarrier(cmd);
-    recorder_.submitAndWait();
-    const uint32_t maxPasses = 2 + config_.blockCapacity * VOXELS_PER_BLOCK / config_.retypeCapacity;
-    for (uint32_t pass = 0; pass < maxPasses; ++pass) {
-        cmd = recorder_.begin();
-        vkCmdFillBuffer(cmd, counters_.handle(), COUNTERS_PER_FRAME_OFFSET, COUNTERS_PER_FRAME_SIZE, 0);
-        vkCmdFillBuffer(cmd, counters_.handle(), offsetof(Counters, liveBlockCount), sizeof(uint32_t), 0);
-        vk::memoryBarrier(cmd);
-        baselineMesh_.recordCollect(cmd, lastPush_, config_.hashCapacity);
-        incrementalMesh_.recordMarkAll(cmd, lastPush_, config_.blockCapacity);
-        incrementalMesh_.recordMesh(cmd, lastPush_, counters_, nullptr, config_.lockFree);
-        recordCountersReadback(cmd);
-        recorder_.submitAndWait();
-        if (readCounters().retypeDeferred == 0) {
-            if (config_.publishMesh) runExport(nullptr);   // the published buffers show the rebuilt mesh
-            return;
-        }
-    }
-    throw Error("mesh rebuild did not finish in " + std::to_string(maxPasses) + " passes");
-}
-
-void GpuVolume::growMeshHeaps(uint32_t vertexCapacity, uint32_t chunkCapacity) {
-    if (config_.meshMode != MeshMode::Incremental) throw Error("growMeshHeaps needs the incremental mesh mode");
-    const uint32_t oldVertices = config_.vertexCapacity, oldChunks = config_.chunkCapacity;
-    vertexCapacity = std::max(vertexCapacity, oldVertices);
-    chunkCapacity = std::max(chunkCapacity, oldChunks);
-    if (vertexCapacity == oldVertices && chunkCapacity == oldChunks) return;
-    if (vertexCapacity >= CLAIMED_SLOT) throw Error("vertex capacity " + std::to_string(vertexCapacity) + " must be < 2^32 - 2");
-    if (chunkCapacity >= (1u << (32 - CUBE_CHUNK_SHIFT)) - 1)
-        throw Error("triangle chunk capacity " + std::to_string(chunkCapacity) + " must be < 2^23 - 1");
-    for (VkDeviceSize bytes : {VkDeviceSize(vertexCapacity) * sizeof(Vertex), VkDeviceSize(chunkCapacity) * CHUNK_WORDS * 4})
-        if (bytes > context_.maxStorageBufferRange())
-            throw Error("a mesh heap of " + std::to_string(bytes) + " bytes exceeds one storage buffer on this device (" +
-                        std::to_string(context_.maxStorageBufferRange()) + " bytes)");
-    Counters k{};
-    vk::downloadFromBuffer(context_, counters_, &k, sizeof(k));
-    // The free stacks (entries [0, top) are free indices, popped from the top): the new indices go UNDER the
-    // old entries, highest first, so that holes and old indices are reused before any new one and new ones are
-    // handed out in ascending order. That keeps every live vertex below the high water, which
-    // update_heap_vertices relies on.
-    auto growStack = [&](vk::Buffer& stack, uint32_t top, uint32_t oldCapacity, uint32_t newCapacity, const char* name, uint32_t binding) {
-        const uint32_t added = newCapacity - oldCapacity;
-        std::vector<uint32_t> entries(top + added);
-        for (uint32_t i = 0; i < added; ++i) entries[i] = newCapacity - 1 - i;
-        if (top) vk::downloadFromBuffer(context_, stack, entries.data() + added, VkDeviceSize(top) * 4);
-        stack = makeBuffer(VkDeviceSize(newCapacity) * 4, 0, name, binding);
-        vk::uploadToBuffer(context_, stack, entries.data(), VkDeviceSize(entries.size()) * 4);
-    };
-    // Heap contents are copied on the GPU; the old buffers live until the copy is done.
-    std::vector<vk::Buffer> old;
-    VkCommandBuffer cmd = recorder_.begin();
-    auto growCopy = [&](vk::Buffer& buffer, VkDeviceSize newSize, const char* name, uint32_t binding) {
-        old.push_back(std::move(buffer));
-        buffer = makeBuffer(newSize, 0, name, binding);
-        VkBufferCopy region{0, 0, old.back().size()};
-        vkCmdCopyBuffer(cmd, old.back().handle(), buffer.handle(), 1, &region);
-        return old.back().size();
-    };
-    if (vertexCapacity > oldVertices) {
-        VkDeviceSize kept = growCopy(vertices_, VkDeviceSize(vertexCapacity) * sizeof(Vertex), "vertex heap", BINDING_VERTICES);
-        vkCmdFillBuffer(cmd, vertices_.handle(), kept, VK_WHOLE_SIZE, 0xFFFFFFFFu);   // new entries: refcount DEAD
-        growCopy(vertexOwner_, VkDeviceSize(vertexCapacity) * 4, "vertex owners", BINDING_VERTEX_OWNER);
-        vertexRemap_ = makeBuffer(VkDeviceSize(vertexCapacity) * 4, 0, "vertex remap", BINDING_VERTEX_REMAP);
-    }
-    if (chunkCapacity > oldChunks) {
-        VkDeviceSize kept = growCopy(chunkTriangles_, VkDeviceSize(chunkCapacity) * CHUNK_WORDS * 4, "triangle chunks", BINDING_CHUNK_TRIANGLES);
-        vkCmdFillBuffer(cmd, chunkTriangles_.handle(), kept, VK_WHOLE_SIZE, INVALID_INDEX);   // new chunks: no triangle
-    }
-    garbage_ = makeBuffer((VkDeviceSize(vertexCapacity) + chunkCapacity) * 4, 0, "garbage lists", BINDING_GARBAGE);
-    if (deltaLayout_) {
-        // The delta passes read the heaps through their own set, and their shadows grow with the heaps
-        // (new entries: dead vertices, empty triangle slots, as the heaps' new entries are).
-        auto growShadow = [&](vk::Buffer& shadow, VkDeviceSize newSize, uint32_t fill, const char* name, uint32_t binding) {
-            old.push_back(std::move(shadow));
-            shadow = vk::Buffer(context_, newSize, kStorage, vk::MemoryUse::Device, name);
-            deltaLayout_->bind(binding, shadow);
-            VkBufferCopy region{0, 0, old.back().size()};
-            vkCmdCopyBuffer(cmd, old.back().handle(), shadow.handle(), 1, &region);
-            vkCmdFillBuffer(cmd, shadow.handle(), old.back().size(), VK_WHOLE_SIZE, fill);
-        };
-        if (vertexCapacity > oldVertices)
-            growShadow(prevVertices_, vertices_.size(), 0xFFFFFFFFu, "vertex heap shadow", DELTA_BINDING_PREV_VERTICES);
-        if (chunkCapacity > oldChunks)
-            growShadow(prevChunks_, chunkTriangles_.size(), INVALID_INDEX, "triangle chunk shadow", DELTA_BINDING_PREV_CHUNKS);
-        deltaLayout_->bind(DELTA_BINDING_VERTICES, vertices_);
-        deltaLayout_->bind(DELTA_BINDING_CHUNKS, chunkTriangles_);
-    }
-    vk::memoryBarrier(cmd);
-    recorder_.submitAndWait();
-    old.clear();
-    if (vertexCapacity > oldVertices) growStack(vertexFree_, k.vertexFreeTop, oldVertices, vertexCapacity, "vertex free stack", BINDING_VERTEX_FREE);
-    if (chunkCapacity > oldChunks) growStack(chunkFree_, k.chunkFreeTop, oldChunks, chunkCapacity, "chunk free stack", BINDING_CHUNK_FREE);
-    k.vertexFreeTop += vertexCapacity - oldVertices;
-    k.chunkFreeTop += chunkCapacity - oldChunks;
-    vk::uploadToBuffer(context_, counters_, &k, sizeof(k));
-    config_.vertexCapacity = vertexCapacity;
-    config_.chunkCapacity = chunkCapacity;
-    setParam(&VolumeParamsGpu::vertexCapacity, vertexCapacity);
-    setParam(&VolumeParamsGpu::chunkCapacity, chunkCapacity);
-    VkCommandBuffer readback = recorder_.begin();
-    recordCountersReadback(readback);
-    recorder_.submitAndWait();
-    retryPending_ = true;
-}
-
-MeshStateSnapshot GpuVolume::downloadMeshState() const {
-    const GpuVolumeConfig& c = config_;
-    MeshStateSnapshot s;
-    s.counters = readCounters();
-    s.vertices.resize(c.vertexCapacity);
-    vk::downloadFromBuffer(context_, vertices_, s.vertices.data(), s.vertices.size() * sizeof(Vertex));
-    s.vertexOwner.resize(c.vertexCapacity);
-    vk::downloadFromBuffer(context_, vertexOwner_, s.vertexOwner.data(), s.vertexOwner.size() * 4);
-    const size_t cubes = size_t(c.blockCapacity) * VOXELS_PER_BLOCK;
-    s.edgeVertex.resize(cubes * 3);
-    std::vector<uint32_t> axis(cubes);
-    const vk::Buffer* axes[3] = {&edgeVertexX_, &edgeVertexY_, &edgeVertexZ_};
-    for (int a = 0; a < 3; ++a) {
-        vk::downloadFromBuffer(context_, *axes[a], axis.data(), cubes * 4);
-        for (size_t i = 0; i < cubes; ++i) s.edgeVertex[i * 3 + a] = axis[i];
-    }
-    std::vector<uint32_t> state(size_t(c.blockCapacity) * VOXELS_PER_BLOCK), chunks(size_t(c.chunkCapacity) * CHUNK_WORDS);
-    vk::downloadFromBuffer(context_, cubeState_, state.data(), state.size() * 4);
-    vk::downloadFromBuffer(context_, chunkTriangles_, chunks.data(), chunks.size() * 4);
-    const MarchingCubesTables& tables = marchingCubesTables();
-    for (uint32_t st : state) {
-        uint32_t chunk = st >> CUBE_CHUNK_SHIFT;
-        if (!chunk) continue;
-        for (uint32_t t = 0; t < tables.triangleCount[st & CUBE_TYPE_MASK]; ++t) {
-            const uint32_t* tri = &chunks[size_t(chunk - 1) * CHUNK_WORDS + 3 * t];
-            if (tri[0] != INVALID_INDEX) s.liveTriangles.push_back({tri[0], tri[1], tri[2]});
-        }
-    }
-    return s;
-}
-
-std::array<uint64_t, 256> GpuVolume::surfaceCubeTypes() const {
-    std::vector<uint32_t> state(size_t(config_.blockCapacity) * VOXELS_PER_BLOCK);
-    vk::downloadFromBuffer(context_, cubeState_, state.data(), state.size() * 4);
-    std::array<uint64_t, 256> histogram{};
-    for (uint32_t st : state)
-        if ((st >> CUBE_CHUNK_SHIFT) != 0) ++histogram[st & CUBE_TYPE_MASK];
-    return histogram;
-}
-
-Counters GpuVolume::readCounters() const {
-    Counters k{};
-    countersReadback_.invalidate();
-    std::memcpy(&k, countersReadback_.mapped(), sizeof(k));
-    return k;
-}
-
-std::vector<BlockSnapshot> GpuVolume::downloadBlocks() const {
-    const GpuVolumeConfig& c = config_;
-    std::vector<float> sdf(size_t(c.blockCapacity) * VOXELS_PER_BLOCK), weight(sdf.size());
-    vk::downloadFromBuffer(context_, voxelSdf_, sdf.data(), sdf.size() * 4);
-    vk::downloadFromBuffer(context_, voxelWeight_, weight.data(), weight.size() * 4);
-    std::vector<int32_t> coords(size_t(c.blockCapacity) * 4);
-    vk::downloadFromBuffer(context_, blockCoords_, coords.data(), coords.size() * 4);
-
-    std::vector<BlockSnapshot> out;
-    for (const BlockHash::Entry& e : hash_.downloadEntries()) {
-        if (e.block == NO_BLOCK) continue;
-        uint32_t b = e.block;
-        BlockSnapshot snap;
-        snap.coord = Eigen::Vector3i(coords[4 * b], coords[4 * b + 1], coords[4 * b + 2]);
-        snap.index = b;
-        snap.sdf.assign(sdf.begin() + size_t(b) * VOXELS_PER_BLOCK, sdf.begin() + size_t(b + 1) * VOXELS_PER_BLOCK);
-        snap.weight.assign(weight.begin() + size_t(b) * VOXELS_PER_BLOCK, weight.begin() + size_t(b + 1) * VOXELS_PER_BLOCK);
-        out.push_back(std::move(snap));
-    }
-    return out;
-}
-
-void GpuVolume::growHash(uint32_t hashCapacity) {
-    const uint32_t lost = hash_.grow(hashCapacity, params_, counters_, lastPush_, config_.blockCapacity, [&](VkCommandBuffer cmd) {
-        vkCmdFillBuffer(cmd, counters_.handle(), offsetof(Counters, liveBlockCount), sizeof(uint32_t), 0);
-        vk::memoryBarrier(cmd);
-        baselineMesh_.recordCollect(cmd, lastPush_, config_.hashCapacity);
-    });
-    config_.hashCapacity = hash_.capacity();
-    // readCounters() reads the host copy: hashEntries and hashTombstones changed.
-    VkCommandBuffer readback = recorder_.begin();
-    recordCountersReadback(readback);
-    recorder_.submitAndWait();
-    if (lost)
-        throw Error("hash growth to " + std::to_string(hashCapacity) + " slots could not re-insert " + std::to_string(lost) +
-                    " live blocks within " + std::to_string(HASH_MAX_PROBES) + " probes");
-}
-
-std::vector<PoolInfo> GpuVolume::pools() const {
-    std::vector<PoolInfo> out;
-    for (const vk::Buffer* b : hash_.buffers()) out.push_back({b->name(), size_t(b->size())});
-    for (const vk::Buffer* b : {&params_, &counters_, &blockCoords_, &voxelSdf_,
-                                &voxelWeight_, &freeList_, &touched_, &depth_, &mcTables_, &blockList_, &meshVertices_,
-                                &cubeState_, &edgeVertexX_, &edgeVertexY_, &edgeVertexZ_, &meshStamps_, &dirtyList_, &vertices_, &vertexOwner_, &vertexFree_, &garbage_,
-                                &chunkTriangles_, &chunkFree_, &exportVertices_, &exportIndices_, &vertexRemap_,
-                                &retypeMask_, &retypeList_,
-                                &depthStaging_, &countersReadback_, &prevVertices_, &prevChunks_, &deltaState_,
-                                &deltaVertexRecords_, &deltaTriangleRecords_, &deltaStateReadback_})
-        if (b->handle()) out.push_back({b->name(), size_t(b->size())});
-    return out;
 }
 
 }  // namespace vkmesh::gpu

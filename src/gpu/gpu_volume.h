@@ -1,7 +1,9 @@
-// The GPU data structure (paper §IV): a spatial hash of 8x8x8 blocks, a pool of blocks with a free
-// list, and the TSDF at every cube corner; plus the frame pipeline that fuses depth images into it
-// and the baseline mesh extraction. One command buffer per frame; only the small Counters struct is
-// read back.
+// The GPU program: the data structure's components (src/gpu/structure: block hash, block store, cube mesh,
+// per-frame lists, counters, parameters), each owning its buffers, and the stages of the frame pipeline
+// (src/gpu/stages), each owning its pipelines. integrate() records one frame (recordFrame: the ordered passes
+// with what each reads and writes) into one command buffer; only the small Counters struct is read back.
+// Capacities grow between frames (growBeforeFrame, growAfterDeferral), policy included, so every user of
+// the library gets it.
 #pragma once
 
 #include <Eigen/Core>
@@ -15,10 +17,26 @@
 
 #include "core/mesh_delta.h"
 #include "core/types.h"
-#include "gpu/allocate_blocks_stage.h"
-#include "gpu/block_hash.h"
 #include "gpu/layout.h"
-#include "gpu/stages.h"
+#include "gpu/stages/allocate_blocks_stage.h"
+#include "gpu/stages/baseline_mesh_stage.h"
+#include "gpu/stages/block_list_stage.h"
+#include "gpu/stages/claim_vertices_stage.h"
+#include "gpu/stages/export_mesh_stage.h"
+#include "gpu/stages/fuse_depth_stage.h"
+#include "gpu/stages/mark_dirty_stage.h"
+#include "gpu/stages/mesh_delta_stage.h"
+#include "gpu/stages/mesh_gc_stage.h"
+#include "gpu/stages/recycle_stage.h"
+#include "gpu/stages/retype_stage.h"
+#include "gpu/stages/triangulate_stage.h"
+#include "gpu/stages/update_vertices_stage.h"
+#include "gpu/structure/block_hash.h"
+#include "gpu/structure/block_store.h"
+#include "gpu/structure/counter_buffer.h"
+#include "gpu/structure/cube_mesh.h"
+#include "gpu/structure/frame_lists.h"
+#include "gpu/structure/params_buffer.h"
 #include "vk/buffer.h"
 #include "vk/commands.h"
 #include "vk/context.h"
@@ -31,6 +49,8 @@ enum class MeshMode {
     Baseline,     // no per-frame mesh; marching cubes over everything on demand, 3 vertices per triangle
 };
 
+// Capacities are initial sizes: with growCapacities (the default) every one grows between frames when it is
+// full or nearly full, up to what the device allows (docs/MESH.md, "Capacities").
 struct GpuVolumeConfig {
     VolumeParams params;
     uint32_t blockCapacity = 16384;      // blocks in the pool (512 TSDF corners each)
@@ -67,6 +87,10 @@ struct GpuVolumeConfig {
     // exceed this fraction of its slots.
     float hashRebuildTombstoneFraction = 0.125f;
     int imageWidth = 640, imageHeight = 480;
+    // Grow the hash, the block pool, the mesh heaps and the per-frame lists between frames when full or nearly
+    // full; a frame whose allocation overflowed is grown past and run again, so nothing is lost. Off: fixed
+    // capacities, and what does not fit is reported (FrameReport::warnings) and skipped.
+    bool growCapacities = true;
 };
 
 // What one frame did, from the GPU's counters, and how long each stage took on the GPU.
@@ -75,6 +99,10 @@ struct FrameReport {
     std::vector<std::pair<std::string, double>> stageMs;
     // Human-readable capacity problems of this frame (empty when none): hash full, pool exhausted, ...
     std::vector<std::string> warnings;
+    // What grew before or during this frame ("block pool 16384 -> 32768", ...), and how many times the frame
+    // was deferred and run again because its allocation overflowed (growCapacities).
+    std::vector<std::string> growth;
+    uint32_t deferredAttempts = 0;
     MeshDelta delta;   // this frame's mesh changes when GpuVolumeConfig::trackDeltas (else empty)
 };
 
@@ -102,13 +130,6 @@ struct MeshBuffers {
 // shaders. An application drawing from MeshBuffers records it before the draw in its own command buffer.
 void recordMeshReadBarrier(VkCommandBuffer cmd);
 
-// The TSDF of one block as downloaded (tests, snapshots).
-struct BlockSnapshot {
-    Eigen::Vector3i coord;
-    uint32_t index = 0;               // its block in the pool
-    std::vector<float> sdf, weight;   // VOXELS_PER_BLOCK each, x fastest
-};
-
 // A triangle soup: 3 vertices per triangle, in order (the baseline mesh).
 struct TriangleSoup {
     std::vector<Eigen::Vector3f> vertices;
@@ -120,20 +141,6 @@ struct ExportedMesh {
     std::vector<Vertex> vertices;                 // position, normal, createdFrame (refcount as it was)
     std::vector<std::array<uint32_t, 3>> triangles;
     uint32_t unreferencedVertices = 0;            // allocated vertices with no triangle (0 unless GC fell behind)
-};
-
-// The raw mesh state, for tests of its invariants.
-struct MeshStateSnapshot {
-    std::vector<Vertex> vertices;                 // the whole heap; refcount DEAD_REFCOUNT when free
-    std::vector<uint32_t> vertexOwner;
-    std::vector<std::array<uint32_t, 3>> liveTriangles;   // raw heap indices
-    std::vector<uint32_t> edgeVertex;             // per cube and axis of every pool block
-    Counters counters{};
-};
-
-struct PoolInfo {
-    std::string name;
-    size_t bytes;
 };
 
 // Checks, before anything is allocated, that every buffer the configuration implies fits in one storage
@@ -148,7 +155,8 @@ class GpuVolume {
 public:
     GpuVolume(const vk::Context& context, const GpuVolumeConfig& config);
 
-    // Fuses one depth image (metres, 0 = none) seen from `cameraToWorld`. One submission.
+    // Fuses one depth image (metres, 0 = none) seen from `cameraToWorld`. One submission (more only when
+    // the frame overflowed a capacity and is run again after growing it).
     // `sync`: semaphores the frame's submission waits on / signals (an application's draws of the last
     // frame's MeshBuffers on another queue); integrate() returns once the GPU has finished the frame.
     FrameReport integrate(const DepthImage& depth, const Intrinsics& intrinsics, const Pose& cameraToWorld,
@@ -161,6 +169,7 @@ public:
     uint32_t countBaselineVertices();
 
     // The shared-vertex mesh, compacted on the GPU. Never truncated (buffers grow to the exact counts).
+    // Cubes left incomplete by a full heap that has grown since are re-meshed first.
     ExportedMesh exportMesh(std::vector<std::pair<std::string, double>>* stageMs = nullptr);
     // Throws away the mesh state (not the TSDF) and rebuilds it from scratch over every block: the
     // reference an incremental mesh must equal.
@@ -170,64 +179,82 @@ public:
     MeshStateSnapshot downloadMeshState() const;
     // Grows the vertex heap and the triangle-chunk heap between frames (never shrinks; the mesh is kept: the
     // heaps are copied and the new entries pushed on the free stacks). The next frame also re-meshes every
-    // cube left INCOMPLETE while a heap was full, so the missing triangles appear at once.
+    // cube left INCOMPLETE while a heap was full, so the missing triangles appear at once. growCapacities
+    // does this by itself; this is for callers that size the heaps themselves.
     void growMeshHeaps(uint32_t vertexCapacity, uint32_t chunkCapacity);
-    // Rehashes the block hash into a table of `hashCapacity` slots (a power of two, larger than now) between
-    // frames: every block and its stamp are kept (BlockHash::grow). Throws if some live block found no slot.
-    void growHash(uint32_t hashCapacity);
-    const BlockHash& blockHash() const { return hash_; }
     // How many cubes carry triangles of each MC type (the stored, possibly refined, type).
     std::array<uint64_t, 256> surfaceCubeTypes() const;
 
     std::vector<BlockSnapshot> downloadBlocks() const;
-    Counters readCounters() const;
+    Counters readCounters() const { return counters_.read(); }
     std::vector<PoolInfo> pools() const;
+    // The configuration with the capacities as they are now (they grow with growCapacities).
     const GpuVolumeConfig& config() const { return config_; }
     bool recycling() const { return config_.keepRadius > 0.0f || config_.recycle; }
-    uint32_t framesIntegrated() const { return frameNumber_; }
+    uint32_t framesIntegrated() const { return framesIntegrated_; }
+    // The GPU's frame number of the last frame (vertices' createdFrame, hash stamps): framesIntegrated() plus
+    // the frames run again after a deferral.
+    uint32_t frameNumber() const { return frameNumber_; }
 
 private:
-    vk::Buffer makeBuffer(VkDeviceSize size, VkBufferUsageFlags extraUsage, const std::string& name, uint32_t binding);
-    void recordCountersReadback(VkCommandBuffer cmd);
+    // The frame: every pass in order, with what it reads and writes (docs/ARCHITECTURE.md draws it).
+    void recordFrame(VkCommandBuffer cmd, const FramePush& push, bool rebuildHash, bool retryPending);
+    // The incremental mesh passes after the dirty blocks are listed (also a rebuild's and a retry's).
+    void recordMeshPasses(VkCommandBuffer cmd, const FramePush& push, vk::StageTimer* timer);
+    void recordExport(VkCommandBuffer cmd) { exportMesh_->record(cmd, lastPush_, counters_); }
+    // recorder_.begin() followed by the upload of changed parameters: how every submission starts.
+    VkCommandBuffer beginSubmission();
+    // Growth policy (growCapacities): before a frame from the last counters; after a deferred frame from
+    // what overflowed; after a frame whose mesh passes ran out of heap.
+    void growBeforeFrame(FrameReport& report);
+    void growAfterDeferral(const Counters& k, FrameReport& report);
+    void growMeshAfterFrame(const Counters& k, FrameReport& report);
+    void growBlockPool(uint32_t blocks, FrameReport& report);
+    void growHash(uint32_t slots, FrameReport& report);
+    void growTouched(uint32_t entries, FrameReport& report);
+    void growRetypeList(uint32_t entries, FrameReport& report);
+    void growHeaps(uint32_t vertices, uint32_t chunks, FrameReport* report);
+    // One submission re-meshing the cubes left INCOMPLETE or deferred (mark_pending_dirty + the mesh passes),
+    // with the export and the delta passes when `publishAndReport`; returns its counters.
+    Counters runMeshCompletion(bool publishAndReport);
+    // Re-meshes what was left (retryPending_) before an export outside integrate().
+    void completePendingMesh();
     Counters runBaselinePass(std::vector<std::pair<std::string, double>>* stageMs);
-    void resetMeshState();
-    void setParam(uint32_t VolumeParamsGpu::*field, uint32_t value);
-    // Export buffers hold at least this many vertices and triangles (grown with headroom, params updated).
-    void ensureExportCapacity(uint32_t vertices, uint32_t triangles);
-    void recordExport(VkCommandBuffer cmd);
-    bool exportFits(const Counters& k) const;
     // Compacts the mesh in its own submission, growing the buffers until it fits; returns the counters.
     Counters runExport(std::vector<std::pair<std::string, double>>* stageMs);
-    // Records the delta passes and the copy of their state to the host.
-    void recordDeltas(VkCommandBuffer cmd);
-    // After a submission with recordDeltas: downloads the records, growing the lists and re-running the
-    // passes until everything fitted.
-    MeshDelta collectDeltas();
+    void warnAboutCapacities(const Counters& k, FrameReport& report) const;
+    // The live block list, then BlockHash::recordRebuild (tombstones dropped).
+    void recordRebuildHash(VkCommandBuffer cmd, const FramePush& push);
 
     const vk::Context& context_;
     GpuVolumeConfig config_;
-    vk::BindingTable layout_;
+    vk::BindingTable table_;
+    CounterBuffer counters_;
+    ParamsBuffer params_;
     BlockHash hash_;
-    vk::Buffer params_, counters_, blockCoords_, voxelSdf_, voxelWeight_,
-        freeList_, touched_, depth_, mcTables_, blockList_, meshVertices_;
-    vk::Buffer cubeState_, edgeVertexX_, edgeVertexY_, edgeVertexZ_, meshStamps_, dirtyList_, vertices_, vertexOwner_, vertexFree_, garbage_,
-        chunkTriangles_, chunkFree_, exportVertices_, exportIndices_, vertexRemap_, retypeMask_, retypeList_;
-    vk::Buffer depthStaging_, countersReadback_;
-    // Mesh deltas (trackDeltas only).
-    std::optional<vk::BindingTable> deltaLayout_;
-    std::optional<MeshDeltaStage> deltaStage_;
-    vk::Buffer prevVertices_, prevChunks_, deltaState_, deltaVertexRecords_, deltaTriangleRecords_, deltaStateReadback_;
-    uint32_t exportVertexCapacity_ = 0, exportTriangleCapacity_ = 0;
-    bool meshPublished_ = false;
+    BlockStore store_;
+    CubeMesh mesh_;
+    FrameLists lists_;
+    vk::Buffer depth_, depthStaging_, mcTables_;
     AllocateBlocksStage allocate_;
+    vk::ComputePipeline deferFrame_;
     FuseDepthStage fuse_;
+    BlockListStage blockList_;
     BaselineMeshStage baselineMesh_;
-    IncrementalMeshStage incrementalMesh_;
-    ExportMeshStage exportMesh_;
+    MarkDirtyStage markDirty_;
+    RetypeStage retype_;
+    ClaimVerticesStage claim_;
+    UpdateVerticesStage updateVertices_;
+    TriangulateStage triangulate_;
+    MeshGcStage meshGc_;
     RecycleStage recycle_;
+    std::optional<ExportMeshStage> exportMesh_;
+    std::optional<MeshDeltaStage> deltas_;
     vk::CommandRecorder recorder_;
     vk::StageTimer timer_;
-    uint32_t frameNumber_ = 0;
+    uint32_t frameNumber_ = 0, framesIntegrated_ = 0;
+    bool touchedFollowsPool_ = false;   // touchedCapacity was left at its default (the pool's size)
+    bool meshPublished_ = false;
     bool retryPending_ = false;   // next frame: dirty every block with retype bits left (see growMeshHeaps)
     FramePush lastPush_{};
 };

@@ -10,6 +10,7 @@
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <random>
 #include <sstream>
 #include <string>
@@ -30,7 +31,7 @@ Mesh makeMesh(size_t nv, size_t nt, bool normals, bool age, unsigned seed = 7) {
     }
     for (size_t i = 0; i < nt; ++i)
         m.triangles.push_back({uint32_t(rng() % nv), uint32_t(rng() % nv), uint32_t(rng() % nv)});
-    if (age && nv > 1) m.vertexAge[1] = 0xFFFFFFFFu;
+    if (age && nv > 1) m.vertexAge[1] = std::numeric_limits<uint32_t>::max();   // the largest age survives
     return m;
 }
 

@@ -37,11 +37,7 @@ VolumeParams smallParams(float voxel = 0.04f) {
     return p;
 }
 
-std::string joined(const std::vector<std::string>& lines) {
-    std::string out;
-    for (const auto& l : lines) out += l + "\n";
-    return out;
-}
+using test::joined;
 
 DepthImage render(const synth::SyntheticScene& scene, const Pose& pose, bool noise, uint32_t seed) {
     synth::RenderOptions options;
@@ -566,7 +562,7 @@ size_t checkStoredTypes(const cpu::ReferenceMesher& mesher, const cpu::Reference
     forEachCube(volume.blocks(), volume.minMeshWeight(), [&](const GlobalCube& g, const float* d, bool observed) {
         const auto& state = states.at({floorDiv8(g[0]), floorDiv8(g[1]), floorDiv8(g[2])});
         const uint32_t cube = uint32_t((g[0] - floorDiv8(g[0]) * 8) + 8 * ((g[1] - floorDiv8(g[1]) * 8) + 8 * (g[2] - floorDiv8(g[2]) * 8)));
-        const int stored = int(state.cubeState[cube] & cpu::ReferenceMesher::kTypeMask);
+        const int stored = int(state.cubeState[cube] & gpu::CUBE_TYPE_MASK);
         const int t = observed ? cubeType(d) : 0;
         if (stored == t) return;
         ++refined;
@@ -719,7 +715,7 @@ PlaneStats planeStats(const cpu::ReferenceMesher& mesher, const Mesh& mesh, cons
     PlaneStats out;
     for (const auto& [coord, state] : mesher.blockStates())
         for (uint32_t cs : state.cubeState) {
-            const int t = int(cs & cpu::ReferenceMesher::kTypeMask);
+            const int t = int(cs & gpu::CUBE_TYPE_MASK);
             if (t == 0 || t == 255) continue;
             ++out.surfaceCubes;
             if (!isRegularType(t)) ++out.irregularCubes;
@@ -728,11 +724,11 @@ PlaneStats planeStats(const cpu::ReferenceMesher& mesher, const Mesh& mesh, cons
         auto it = mesher.blockStates().find({floorDiv8(x), floorDiv8(y), floorDiv8(z)});
         if (it == mesher.blockStates().end()) return -1;
         const uint32_t c = uint32_t((x - floorDiv8(x) * 8) + 8 * ((y - floorDiv8(y) * 8) + 8 * (z - floorDiv8(z) * 8)));
-        return int(it->second.cubeState[c] & cpu::ReferenceMesher::kTypeMask);
+        return int(it->second.cubeState[c] & gpu::CUBE_TYPE_MASK);
     };
     for (const auto& [coord, state] : mesher.blockStates())
         for (uint32_t c = 0; c < gpu::VOXELS_PER_BLOCK; ++c) {
-            const int t = int(state.cubeState[c] & cpu::ReferenceMesher::kTypeMask);
+            const int t = int(state.cubeState[c] & gpu::CUBE_TYPE_MASK);
             if (t == 0 || t == 255) continue;
             const int g[3] = {coord[0] * 8 + int(c % 8), coord[1] * 8 + int(c / 8 % 8), coord[2] * 8 + int(c / 64)};
             for (int axis = 0; axis < 3; ++axis) {

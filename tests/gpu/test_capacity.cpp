@@ -27,8 +27,11 @@ using test::soupOf;
 
 constexpr int kWidth = 160, kHeight = 120;
 
+// Fixed capacities: these tests are about what is reported and kept when a capacity is exhausted
+// (growCapacities off, as with `fuse --no-grow`); test_growth.cpp covers growing past them.
 gpu::GpuVolumeConfig smallConfig() {
     gpu::GpuVolumeConfig c = test::smallRoomConfig();
+    c.growCapacities = false;
     return c;
 }
 

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "api/exported_mesh.h"
 #include "api/reconstructor.h"
 #include "core/mesh_analysis.h"
 #include "gpu_fixture.h"
@@ -48,17 +49,6 @@ std::vector<Frame> roomFrames(size_t count) {
     std::vector<Frame> frames;
     for (size_t i = 0; i < count; ++i) frames.push_back({scene.renderDepth(intr, poses[i % poses.size()], {}), intr, poses[i % poses.size()]});
     return frames;
-}
-
-// The host copy of the mesh, as a Mesh the renderer draws through its upload path.
-Mesh toMesh(const gpu::ExportedMesh& exported) {
-    Mesh mesh;
-    for (const auto& v : exported.vertices) {
-        mesh.positions.emplace_back(v.px, v.py, v.pz);
-        mesh.normals.emplace_back(v.nx, v.ny, v.nz);
-    }
-    mesh.triangles = exported.triangles;
-    return mesh;
 }
 
 // Reads the VkDrawIndexedIndirectCommand the way an application could: a copy on the device.

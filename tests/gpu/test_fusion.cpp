@@ -174,6 +174,7 @@ TEST_F(GpuTest, BaselineMeshMatchesReference) {
 
 TEST_F(GpuTest, PoolExhaustionIsCountedAndKeepsFusedBlocks) {
     auto config = smallConfig();
+    config.growCapacities = false;   // what a fixed pool reports (test_growth.cpp: growing past it)
     config.blockCapacity = 40;
     config.hashCapacity = 4096;
     config.touchedCapacity = 4096;
@@ -200,6 +201,7 @@ TEST_F(GpuTest, PoolExhaustionIsCountedAndKeepsFusedBlocks) {
 
 TEST_F(GpuTest, HashFullIsCountedNeverSilent) {
     auto config = smallConfig();
+    config.growCapacities = false;
     config.hashCapacity = 64;   // far fewer slots than blocks a frame touches
     gpu::GpuVolume volume(context(), config);
     Intrinsics intr = synth::kinectIntrinsics(kWidth, kHeight);

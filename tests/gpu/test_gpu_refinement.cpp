@@ -4,6 +4,7 @@
 
 #include <cmath>
 
+#include "api/exported_mesh.h"
 #include "core/mesh_analysis.h"
 #include "core/refinement.h"
 #include "gpu/gpu_volume.h"
@@ -50,9 +51,7 @@ PlaneRun meshSlantedPlane(vk::Context& context, bool refine, float epsilonVoxels
         volume.integrate(scene.renderDepth(intr, pose, options), intr, pose);
     }
     gpu::ExportedMesh exported = volume.exportMesh();
-    Mesh mesh;
-    for (const auto& v : exported.vertices) mesh.positions.emplace_back(v.px, v.py, v.pz);
-    mesh.triangles = exported.triangles;
+    Mesh mesh = toMesh(exported);
     PlaneRun run{};
     auto types = volume.surfaceCubeTypes();
     uint64_t surface = 0, irregular = 0;

@@ -9,6 +9,7 @@
 #include <map>
 #include <set>
 
+#include "api/exported_mesh.h"
 #include "core/mesh_analysis.h"
 #include "cpu/reference_mesher.h"
 #include "cpu/reference_volume.h"
@@ -48,16 +49,6 @@ void integrateRoom(gpu::GpuVolume& volume, size_t frames, synth::PathKind path =
         gpu::FrameReport r = volume.integrate(scene.renderDepth(intr, pose, options), intr, pose);
         if (reports) reports->push_back(r);
     }
-}
-
-Mesh toMesh(const gpu::ExportedMesh& e) {
-    Mesh m;
-    for (const auto& v : e.vertices) {
-        m.positions.emplace_back(v.px, v.py, v.pz);
-        m.normals.emplace_back(v.nx, v.ny, v.nz);
-    }
-    m.triangles = e.triangles;
-    return m;
 }
 
 TEST_F(GpuTest, IncrementalMeshEqualsRebuildFromScratch) {
@@ -184,6 +175,7 @@ TEST_F(GpuTest, EmptyVolumeExportsAnEmptyMesh) {
 TEST_F(GpuTest, VertexHeapExhaustionIsCountedAndConsistent) {
     auto config = meshConfig();
     config.vertexCapacity = 512;
+    config.growCapacities = false;
     gpu::GpuVolume volume(context(), config);
     std::vector<gpu::FrameReport> reports;
     integrateRoom(volume, 3, synth::PathKind::Orbit, 24, &reports);

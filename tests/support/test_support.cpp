@@ -71,6 +71,12 @@ std::filesystem::path makeMinimalTum(const std::string& name, int frames, int w,
     return dir;
 }
 
+std::string joined(const std::vector<std::string>& lines) {
+    std::string out;
+    for (const auto& l : lines) out += l + "\n";
+    return out;
+}
+
 std::string errorMessageOf(const std::function<void()>& f) {
     try {
         f();

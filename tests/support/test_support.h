@@ -47,6 +47,9 @@ std::filesystem::path makeMinimalTum(const std::string& name, int frames = 3, in
 // throws nothing or another exception.
 std::string errorMessageOf(const std::function<void()>& f);
 
+// The lines one under the other (a list of violated invariants in a failure message).
+std::string joined(const std::vector<std::string>& lines);
+
 // A camera at `eye` looking at `target`: x right, y down, z forward, world z up; a proper rotation.
 Pose lookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& target);
 

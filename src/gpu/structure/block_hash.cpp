@@ -1,4 +1,4 @@
-#include "gpu/block_hash.h"
+#include "gpu/structure/block_hash.h"
 
 #include <cstddef>
 #include <string>
@@ -14,8 +14,12 @@ BlockHash::BlockHash(const vk::Context& context, const vk::BindingTable& layout,
       save_(context, layout, "rehash_save"),
       insert_(context, layout, "rehash_insert"),
       commit_(context, layout, "commit_rehash") {
+    replace(capacity);
+}
+
+void BlockHash::replace(uint32_t capacity) {
     allocate(capacity);
-    vk::CommandRecorder recorder(context);
+    vk::CommandRecorder recorder(context_);
     VkCommandBuffer cmd = recorder.begin();
     recordClear(cmd);
     vk::memoryBarrier(cmd);
@@ -82,9 +86,8 @@ uint32_t BlockHash::grow(uint32_t newCapacity, const vk::Buffer& params, const v
     recordSaveStamps(cmd, push, blockCapacity);
     recorder.submitAndWait();
     // 2. New, empty buffers (the old ones are released once replaced: the GPU is idle).
-    allocate(newCapacity);
+    replace(newCapacity);
     cmd = recorder.begin();
-    recordClear(cmd);
     vkCmdUpdateBuffer(cmd, params.handle(), offsetof(VolumeParamsGpu, hashCapacity), sizeof(uint32_t), &newCapacity);
     vkCmdFillBuffer(cmd, counters.handle(), offsetof(Counters, rehashLost), sizeof(uint32_t), 0);
     vk::memoryBarrier(cmd);

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "gpu/layout.h"
+#include "gpu/structure/component.h"
 #include "vk/buffer.h"
 #include "vk/commands.h"
 #include "vk/context.h"
@@ -51,6 +52,14 @@ public:
     uint32_t grow(uint32_t newCapacity, const vk::Buffer& params, const vk::Buffer& counters, const FramePush& push,
                   uint32_t blockCapacity, const std::function<void(VkCommandBuffer)>& recordLiveBlocks);
 
+    // The three parts of grow(), for a caller with its own submissions (GpuVolume: parameters uploaded at the
+    // start of each): record the stamps' save over the current table (after the live block list), submit;
+    // replace() the buffers by empty ones of newCapacity slots (bound, cleared; the GPU must be idle) and set
+    // hashCapacity in the parameters; record the re-insertion (hashEntries, hashTombstones, rehashLost), submit.
+    void recordSaveStamps(VkCommandBuffer cmd, const FramePush& push, uint32_t blockCapacity) const;
+    void replace(uint32_t newCapacity);
+    void recordReinsert(VkCommandBuffer cmd, const FramePush& push, uint32_t blockCapacity) const;
+
     // What one slot holds, as downloaded (tests, snapshots).
     struct Entry {
         uint32_t slot = 0;
@@ -67,12 +76,10 @@ public:
     Occupancy downloadOccupancy() const;
 
     // The buffers it owns, for GpuVolume::pools().
-    std::vector<const vk::Buffer*> buffers() const { return {&keys_, &values_, &stamps_}; }
+    void pools(std::vector<PoolInfo>& out) const { listPools(out, {&keys_, &values_, &stamps_}); }
 
 private:
     void allocate(uint32_t capacity);   // new buffers of `capacity` slots, bound (not cleared)
-    void recordSaveStamps(VkCommandBuffer cmd, const FramePush& push, uint32_t blockCapacity) const;
-    void recordReinsert(VkCommandBuffer cmd, const FramePush& push, uint32_t blockCapacity) const;
 
     const vk::Context& context_;
     const vk::BindingTable& layout_;

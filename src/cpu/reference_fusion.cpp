@@ -1,0 +1,72 @@
+#include "cpu/reference_fusion.h"
+
+#include <Eigen/Core>
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/marching_cubes.h"
+
+namespace vkmesh::cpu {
+
+using gpu::BLOCK_SIDE;
+using gpu::VOXELS_PER_BLOCK;
+
+bool cornerFlipped(float oldSdf, float oldWeight, float newSdf, float newWeight, const FusionRule& rule) {
+    const bool wasObserved = oldWeight >= rule.minMeshWeight, isObserved = newWeight >= rule.minMeshWeight;
+    bool flipped = wasObserved != isObserved || (isObserved && (oldSdf < 0.0f) != (newSdf < 0.0f));
+    const float eps = rule.refineEpsilon;
+    if (rule.refine && isObserved && (std::fabs(oldSdf) < eps) != (std::fabs(newSdf) < eps)) flipped = true;
+    return flipped;
+}
+
+uint32_t fuseBlock(ReferenceBlock& block, const BlockCoord& c, const DepthImage& depth, const gpu::FramePush& push,
+                   const FusionRule& rule, std::vector<std::array<int, 3>>* flipped) {
+    const float fx = push.intrinsics[0], fy = push.intrinsics[1], cx = push.intrinsics[2], cy = push.intrinsics[3];
+    const float truncation = rule.truncation;
+    const int side = int(BLOCK_SIDE);
+    uint32_t updated = 0;
+    for (uint32_t v = 0; v < VOXELS_PER_BLOCK; ++v) {
+        const auto [lx, ly, lz] = localCoords(v);
+        Eigen::Vector3f world(float(c[0] * side + lx) * rule.voxelSize, float(c[1] * side + ly) * rule.voxelSize,
+                              float(c[2] * side + lz) * rule.voxelSize);
+        Eigen::Vector3f cam = transformRows(push.worldToCamera, world);
+        if (!(cam.z() > 0.0f)) continue;
+        float u = (cam.x() * fx) / cam.z() + cx;
+        float w = (cam.y() * fy) / cam.z() + cy;
+        float pu = std::floor(u + 0.5f), pv = std::floor(w + 0.5f);
+        if (!(pu >= 0.0f && pv >= 0.0f && pu < float(depth.width) && pv < float(depth.height))) continue;
+        float d = depth.at(int(pu), int(pv));
+        float sdf = d - cam.z();
+        if (!(d >= push.minDepth && d <= push.maxDepth && sdf >= -truncation)) continue;
+        float tsdf = std::min(sdf, truncation);
+        float oldSdf = block.sdf[v], oldWeight = block.weight[v];
+        const float newSdf = (oldSdf * oldWeight + tsdf) / (oldWeight + 1.0f);
+        const float newWeight = std::min(oldWeight + 1.0f, rule.maxWeight);
+        block.sdf[v] = newSdf;
+        block.weight[v] = newWeight;
+        ++updated;
+        // Corners not updated keep their values and never flip.
+        if (flipped && cornerFlipped(oldSdf, oldWeight, newSdf, newWeight, rule))
+            flipped->push_back({c[0] * side + lx, c[1] * side + ly, c[2] * side + lz});
+    }
+    return updated;
+}
+
+std::map<BlockCoord, CubeMask> cubesAroundCorners(const std::vector<std::array<int, 3>>& flipped,
+                                                  const std::map<BlockCoord, ReferenceBlock>& blocks) {
+    std::map<BlockCoord, CubeMask> cubes;
+    const int side = int(BLOCK_SIDE);
+    for (const auto& g : flipped) {
+        for (int o = 0; o < kCubeCorners; ++o) {
+            const auto off = cornerOffset(o);
+            const int x = g[0] - off[0], y = g[1] - off[1], z = g[2] - off[2];
+            const BlockCoord b{blockOf(x), blockOf(y), blockOf(z)};
+            if (!blocks.count(b)) continue;
+            cubes[b].set(localIndex(x - b[0] * side, y - b[1] * side, z - b[2] * side));
+        }
+    }
+    return cubes;
+}
+
+}  // namespace vkmesh::cpu

@@ -1,0 +1,21 @@
+// Stage: fuse (paper §V.A, second half; shaders_comp/fuse/). One workgroup per touched block updates its
+// 512 TSDF corners and marks the cubes around corners whose sign or observed state flipped.
+//   reads  touched list (allocate), depth image, block coords    writes voxel sdf/weight, retype masks
+#pragma once
+
+#include "gpu/structure/counter_buffer.h"
+#include "vk/pipeline.h"
+
+namespace vkmesh::gpu {
+
+class FuseDepthStage {
+public:
+    FuseDepthStage(const vk::Context& context, const vk::BindingTable& table);
+    // Over Counters::blockDispatch (one workgroup per touched block, sized by plan_frame).
+    void record(VkCommandBuffer cmd, const FramePush& push, const CounterBuffer& counters) const;
+
+private:
+    vk::ComputePipeline fuse_;
+};
+
+}  // namespace vkmesh::gpu

@@ -1,0 +1,44 @@
+// Component: the block store. A pool of blockCapacity blocks, each the TSDF at its 512 cube corners
+// (distance and weight, block-major, x fastest), the block's coordinate and hash slot, and the free list of
+// unused blocks (a stack popped from its top; its top is Counters::freeTop). A block on the free list holds
+// weight 0 at every corner, so a block handed out needs no clearing. GLSL: shaders_comp/structure/block_store.glsl.
+#pragma once
+
+#include <Eigen/Core>
+
+#include "gpu/structure/component.h"
+#include "gpu/structure/counter_buffer.h"
+#include "gpu/layout.h"
+
+namespace vkmesh::gpu {
+
+// The TSDF of one block as downloaded (tests, snapshots).
+struct BlockSnapshot {
+    Eigen::Vector3i coord;
+    uint32_t index = 0;               // its block in the pool
+    std::vector<float> sdf, weight;   // VOXELS_PER_BLOCK each, x fastest
+};
+
+class BlockStore {
+public:
+    // Every block free; counters.freeTop set to the capacity.
+    BlockStore(const vk::Context& context, const vk::BindingTable& table, uint32_t capacity, CounterBuffer& counters);
+
+    uint32_t capacity() const { return capacity_; }
+    // Grows the pool between frames; blocks keep their index and TSDF, the new ones go on the free list
+    // (under the old entries, so freed blocks are reused first).
+    void grow(uint32_t newCapacity, CounterBuffer& counters);
+    // The TSDF of the given blocks with their coordinates (index = block index).
+    std::vector<BlockSnapshot> download(const std::vector<uint32_t>& blocks) const;
+    void pools(std::vector<PoolInfo>& out) const { listPools(out, {&coords_, &sdf_, &weight_, &freeList_}); }
+
+    static constexpr uint64_t kBytesPerBlock = 16 + 2ull * 4 * VOXELS_PER_BLOCK + 4;
+
+private:
+    const vk::Context& context_;
+    const vk::BindingTable& table_;
+    uint32_t capacity_;
+    vk::Buffer coords_, sdf_, weight_, freeList_;
+};
+
+}  // namespace vkmesh::gpu

@@ -1,0 +1,130 @@
+#include "gpu/structure/cube_mesh.h"
+
+#include "core/marching_cubes.h"
+
+namespace vkmesh::gpu {
+namespace {
+constexpr uint32_t kEdgeBindings[3] = {BINDING_EDGE_VERTEX_X, BINDING_EDGE_VERTEX_Y, BINDING_EDGE_VERTEX_Z};
+constexpr const char* kEdgeNames[3] = {"edge vertex slots x", "edge vertex slots y", "edge vertex slots z"};
+// A vertex of the heap that is free: every word all ones (its refcount is then DEAD_REFCOUNT).
+constexpr uint32_t kDeadVertexWord = DEAD_REFCOUNT;
+}  // namespace
+
+CubeMesh::CubeMesh(const vk::Context& context, const vk::BindingTable& table, uint32_t blockCapacity, uint32_t vertexCapacity,
+                   uint32_t chunkCapacity, CounterBuffer& counters)
+    : context_(context), table_(table), blockCapacity_(blockCapacity), vertexCapacity_(vertexCapacity), chunkCapacity_(chunkCapacity) {
+    const VkDeviceSize cubes = VkDeviceSize(blockCapacity) * VOXELS_PER_BLOCK;
+    cubeState_ = makeStorage(context, table, BINDING_CUBE_STATE, cubes * 4, "cube state");
+    for (int a = 0; a < 3; ++a) edgeVertex_[a] = makeStorage(context, table, kEdgeBindings[a], cubes * 4, kEdgeNames[a]);
+    vertices_ = makeStorage(context, table, BINDING_VERTICES, VkDeviceSize(vertexCapacity) * sizeof(Vertex), "vertex heap");
+    vertexOwner_ = makeStorage(context, table, BINDING_VERTEX_OWNER, VkDeviceSize(vertexCapacity) * 4, "vertex owners");
+    vertexFree_ = makeStorage(context, table, BINDING_VERTEX_FREE, VkDeviceSize(vertexCapacity) * 4, "vertex free stack");
+    chunkTriangles_ = makeStorage(context, table, BINDING_CHUNK_TRIANGLES, VkDeviceSize(chunkCapacity) * CHUNK_WORDS * 4, "triangle chunks");
+    chunkFree_ = makeStorage(context, table, BINDING_CHUNK_FREE, VkDeviceSize(chunkCapacity) * 4, "chunk free stack");
+    reset(counters);
+}
+
+void CubeMesh::reset(CounterBuffer& counters) {
+    vk::CommandRecorder recorder(context_);
+    VkCommandBuffer cmd = recorder.begin();
+    vkCmdFillBuffer(cmd, cubeState_.handle(), 0, VK_WHOLE_SIZE, 0);
+    for (const vk::Buffer& b : edgeVertex_) vkCmdFillBuffer(cmd, b.handle(), 0, VK_WHOLE_SIZE, EMPTY_SLOT);
+    vkCmdFillBuffer(cmd, vertices_.handle(), 0, VK_WHOLE_SIZE, kDeadVertexWord);
+    vkCmdFillBuffer(cmd, chunkTriangles_.handle(), 0, VK_WHOLE_SIZE, INVALID_INDEX);   // every triangle slot empty
+    vk::memoryBarrier(cmd);
+    recorder.submitAndWait();
+    fillFreeStack(context_, vertexFree_, vertexCapacity_);
+    fillFreeStack(context_, chunkFree_, chunkCapacity_);
+    counters.update([&](Counters& k) {
+        k.vertexFreeTop = vertexCapacity_;
+        k.verticesInUse = k.vertexHighWater = 0;
+        k.chunkFreeTop = chunkCapacity_;
+        k.chunksInUse = k.chunkHighWater = 0;
+        k.liveTriangles = 0;
+    });
+}
+
+void CubeMesh::growCubes(uint32_t blockCapacity) {
+    if (blockCapacity <= blockCapacity_) return;
+    const VkDeviceSize cubes = VkDeviceSize(blockCapacity) * VOXELS_PER_BLOCK;
+    std::vector<vk::Buffer> retired;
+    vk::CommandRecorder recorder(context_);
+    VkCommandBuffer cmd = recorder.begin();
+    growStorage(cmd, context_, table_, BINDING_CUBE_STATE, cubeState_, cubes * 4, 0, retired);
+    for (int a = 0; a < 3; ++a) growStorage(cmd, context_, table_, kEdgeBindings[a], edgeVertex_[a], cubes * 4, EMPTY_SLOT, retired);
+    vk::memoryBarrier(cmd);
+    recorder.submitAndWait();
+    blockCapacity_ = blockCapacity;
+}
+
+void CubeMesh::growHeaps(uint32_t vertexCapacity, uint32_t chunkCapacity, CounterBuffer& counters) {
+    vertexCapacity = std::max(vertexCapacity, vertexCapacity_);
+    chunkCapacity = std::max(chunkCapacity, chunkCapacity_);
+    if (vertexCapacity == vertexCapacity_ && chunkCapacity == chunkCapacity_) return;
+    const Counters k = counters.read();
+    std::vector<vk::Buffer> retired;
+    vk::CommandRecorder recorder(context_);
+    VkCommandBuffer cmd = recorder.begin();
+    if (vertexCapacity > vertexCapacity_) {
+        // New entries: free vertices (refcount DEAD), owners unset.
+        growStorage(cmd, context_, table_, BINDING_VERTICES, vertices_, VkDeviceSize(vertexCapacity) * sizeof(Vertex), kDeadVertexWord, retired);
+        growStorage(cmd, context_, table_, BINDING_VERTEX_OWNER, vertexOwner_, VkDeviceSize(vertexCapacity) * 4, 0, retired);
+    }
+    if (chunkCapacity > chunkCapacity_)   // new chunks: no triangle
+        growStorage(cmd, context_, table_, BINDING_CHUNK_TRIANGLES, chunkTriangles_, VkDeviceSize(chunkCapacity) * CHUNK_WORDS * 4,
+                    INVALID_INDEX, retired);
+    vk::memoryBarrier(cmd);
+    recorder.submitAndWait();
+    retired.clear();
+    if (vertexCapacity > vertexCapacity_)
+        growFreeStack(context_, table_, BINDING_VERTEX_FREE, vertexFree_, k.vertexFreeTop, vertexCapacity_, vertexCapacity);
+    if (chunkCapacity > chunkCapacity_)
+        growFreeStack(context_, table_, BINDING_CHUNK_FREE, chunkFree_, k.chunkFreeTop, chunkCapacity_, chunkCapacity);
+    const uint32_t addedVertices = vertexCapacity - vertexCapacity_, addedChunks = chunkCapacity - chunkCapacity_;
+    counters.update([&](Counters& c) {
+        c.vertexFreeTop += addedVertices;
+        c.chunkFreeTop += addedChunks;
+    });
+    vertexCapacity_ = vertexCapacity;
+    chunkCapacity_ = chunkCapacity;
+}
+
+MeshStateSnapshot CubeMesh::download(const Counters& counters) const {
+    MeshStateSnapshot s;
+    s.counters = counters;
+    s.vertices.resize(vertexCapacity_);
+    vk::downloadFromBuffer(context_, vertices_, s.vertices.data(), s.vertices.size() * sizeof(Vertex));
+    s.vertexOwner.resize(vertexCapacity_);
+    vk::downloadFromBuffer(context_, vertexOwner_, s.vertexOwner.data(), s.vertexOwner.size() * 4);
+    const size_t cubes = size_t(blockCapacity_) * VOXELS_PER_BLOCK;
+    s.edgeVertex.resize(cubes * 3);
+    std::vector<uint32_t> axis(cubes);
+    for (int a = 0; a < 3; ++a) {
+        vk::downloadFromBuffer(context_, edgeVertex_[a], axis.data(), cubes * 4);
+        for (size_t i = 0; i < cubes; ++i) s.edgeVertex[i * 3 + a] = axis[i];
+    }
+    std::vector<uint32_t> state(cubes), chunks(size_t(chunkCapacity_) * CHUNK_WORDS);
+    vk::downloadFromBuffer(context_, cubeState_, state.data(), state.size() * 4);
+    vk::downloadFromBuffer(context_, chunkTriangles_, chunks.data(), chunks.size() * 4);
+    const MarchingCubesTables& tables = marchingCubesTables();
+    for (uint32_t st : state) {
+        const uint32_t chunk = st >> CUBE_CHUNK_SHIFT;   // chunk index + 1, 0 = none
+        if (!chunk) continue;
+        for (uint32_t t = 0; t < tables.triangleCount[st & CUBE_TYPE_MASK]; ++t) {
+            const uint32_t* tri = &chunks[size_t(chunk - 1) * CHUNK_WORDS + 3 * t];
+            if (tri[0] != INVALID_INDEX) s.liveTriangles.push_back({tri[0], tri[1], tri[2]});
+        }
+    }
+    return s;
+}
+
+std::array<uint64_t, 256> CubeMesh::surfaceCubeTypes() const {
+    std::vector<uint32_t> state(size_t(blockCapacity_) * VOXELS_PER_BLOCK);
+    vk::downloadFromBuffer(context_, cubeState_, state.data(), state.size() * 4);
+    std::array<uint64_t, 256> histogram{};
+    for (uint32_t st : state)
+        if ((st >> CUBE_CHUNK_SHIFT) != 0) ++histogram[st & CUBE_TYPE_MASK];
+    return histogram;
+}
+
+}  // namespace vkmesh::gpu

@@ -1,0 +1,55 @@
+#include "gpu/structure/frame_lists.h"
+
+#include <algorithm>
+
+namespace vkmesh::gpu {
+namespace {
+VkDeviceSize garbageBytes(const FrameListCapacities& c) { return (VkDeviceSize(c.vertices) + c.chunks) * 4; }
+}  // namespace
+
+FrameLists::FrameLists(const vk::Context& context, const vk::BindingTable& table, const FrameListCapacities& c)
+    : context_(context), table_(table), capacities_(c) {
+    touched_ = makeStorage(context, table, BINDING_TOUCHED, VkDeviceSize(c.touched) * 4, "touched list");
+    blockList_ = makeStorage(context, table, BINDING_BLOCK_LIST, VkDeviceSize(c.blocks) * 4, "block list");
+    meshStamps_ = makeStorage(context, table, BINDING_MESH_STAMPS, VkDeviceSize(c.blocks) * 4, "mesh stamps");
+    dirtyList_ = makeStorage(context, table, BINDING_DIRTY_LIST, VkDeviceSize(c.blocks) * 4, "dirty list");
+    retypeMask_ = makeStorage(context, table, BINDING_RETYPE_MASK, VkDeviceSize(c.blocks) * MASK_WORDS * 4, "retype masks");
+    retypeList_ = makeStorage(context, table, BINDING_RETYPE_LIST, VkDeviceSize(c.retype) * 4, "retype list");
+    garbage_ = makeStorage(context, table, BINDING_GARBAGE, garbageBytes(c), "garbage lists");
+    vk::CommandRecorder recorder(context);
+    VkCommandBuffer cmd = recorder.begin();
+    recordReset(cmd);
+    recorder.submitAndWait();
+}
+
+void FrameLists::recordReset(VkCommandBuffer cmd) const {
+    vkCmdFillBuffer(cmd, meshStamps_.handle(), 0, VK_WHOLE_SIZE, 0);
+    vkCmdFillBuffer(cmd, retypeMask_.handle(), 0, VK_WHOLE_SIZE, 0);
+    vk::memoryBarrier(cmd);
+}
+
+void FrameLists::grow(const FrameListCapacities& wanted) {
+    FrameListCapacities c = capacities_;
+    c.blocks = std::max(c.blocks, wanted.blocks);
+    c.touched = std::max(c.touched, wanted.touched);
+    c.retype = std::max(c.retype, wanted.retype);
+    c.vertices = std::max(c.vertices, wanted.vertices);
+    c.chunks = std::max(c.chunks, wanted.chunks);
+    if (c.blocks > capacities_.blocks) {
+        std::vector<vk::Buffer> retired;
+        vk::CommandRecorder recorder(context_);
+        VkCommandBuffer cmd = recorder.begin();
+        growStorage(cmd, context_, table_, BINDING_MESH_STAMPS, meshStamps_, VkDeviceSize(c.blocks) * 4, 0, retired);
+        growStorage(cmd, context_, table_, BINDING_RETYPE_MASK, retypeMask_, VkDeviceSize(c.blocks) * MASK_WORDS * 4, 0, retired);
+        vk::memoryBarrier(cmd);
+        recorder.submitAndWait();
+        blockList_ = makeStorage(context_, table_, BINDING_BLOCK_LIST, VkDeviceSize(c.blocks) * 4, "block list");
+        dirtyList_ = makeStorage(context_, table_, BINDING_DIRTY_LIST, VkDeviceSize(c.blocks) * 4, "dirty list");
+    }
+    if (c.touched > capacities_.touched) touched_ = makeStorage(context_, table_, BINDING_TOUCHED, VkDeviceSize(c.touched) * 4, "touched list");
+    if (c.retype > capacities_.retype) retypeList_ = makeStorage(context_, table_, BINDING_RETYPE_LIST, VkDeviceSize(c.retype) * 4, "retype list");
+    if (garbageBytes(c) > garbageBytes(capacities_)) garbage_ = makeStorage(context_, table_, BINDING_GARBAGE, garbageBytes(c), "garbage lists");
+    capacities_ = c;
+}
+
+}  // namespace vkmesh::gpu

@@ -1,0 +1,47 @@
+// Component: the per-frame lists, what one pass hands the next within a frame (GLSL:
+// shaders_comp/structure/frame_lists.glsl; their lengths are in Counters):
+//   touched      the blocks the frame's depth touched (allocate -> fuse, mark_dirty);
+//   block list   every live block (collect_blocks -> recycling, hash rebuild, whole-volume passes);
+//   dirty list   the blocks to re-mesh, deduplicated with per-block mesh stamps (mark_dirty -> retype);
+//   retype masks one bit per cube that may change type; persistent: bits left over (deferred or
+//                INCOMPLETE cubes) wait for the next pass (fuse, recycling -> collect_retype);
+//   retype list  the cubes of this pass (collect_retype -> claim, triangulate);
+//   garbage      GC candidate vertices and released chunks (claim, triangulate -> mesh_gc).
+#pragma once
+
+#include "gpu/structure/component.h"
+#include "gpu/layout.h"
+
+namespace vkmesh::gpu {
+
+struct FrameListCapacities {
+    uint32_t blocks = 0;     // the block pool: block list, dirty list, stamps, masks
+    uint32_t touched = 0;    // blocks one frame may touch
+    uint32_t retype = 0;     // cubes one mesh pass may retype
+    uint32_t vertices = 0;   // the vertex heap (GC candidates)
+    uint32_t chunks = 0;     // the chunk heap (released chunks)
+};
+
+class FrameLists {
+public:
+    FrameLists(const vk::Context& context, const vk::BindingTable& table, const FrameListCapacities& capacities);
+
+    const FrameListCapacities& capacities() const { return capacities_; }
+    const vk::Buffer& retypeMasks() const { return retypeMask_; }
+    // Clears the stamps and masks (a new or reset mesh).
+    void recordReset(VkCommandBuffer cmd) const;
+    // Between frames: lists for larger capacities (never smaller). The persistent parts (mesh stamps,
+    // retype masks) keep their contents; the rest only ever holds the current frame's entries.
+    void grow(const FrameListCapacities& capacities);
+    void pools(std::vector<PoolInfo>& out) const {
+        listPools(out, {&touched_, &blockList_, &meshStamps_, &dirtyList_, &retypeMask_, &retypeList_, &garbage_});
+    }
+
+private:
+    const vk::Context& context_;
+    const vk::BindingTable& table_;
+    FrameListCapacities capacities_;
+    vk::Buffer touched_, blockList_, meshStamps_, dirtyList_, retypeMask_, retypeList_, garbage_;
+};
+
+}  // namespace vkmesh::gpu

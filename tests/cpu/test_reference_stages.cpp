@@ -1,0 +1,379 @@
+// The CPU reference's stages one at a time, on inputs small enough to know the answer: allocation (the band
+// walk and the touched list, with and without the hash), fusion (the update rule, flipped corners, the cubes
+// around them), recycling, the baseline mesh, and the incremental mesher's passes (claim, vertex update,
+// triangulation, garbage collection).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+#include <set>
+
+#include "core/camera.h"
+#include "cpu/reference_allocation.h"
+#include "cpu/reference_baseline.h"
+#include "cpu/reference_fusion.h"
+#include "cpu/reference_mesher.h"
+#include "cpu/reference_recycling.h"
+#include "cpu/reference_volume.h"
+#include "test_support.h"
+
+namespace vkmesh {
+namespace {
+
+using cpu::BlockCoord;
+
+using test::joined;
+
+// A camera at the origin looking along +z at a wall at `depth` metres filling the image.
+struct WallView {
+    Intrinsics intrinsics{100.0f, 100.0f, 64.0f, 64.0f, 128, 128};
+    Pose pose = Pose::Identity();
+    DepthImage depth;
+    explicit WallView(float wall) : depth{128, 128, std::vector<float>(128 * 128, wall)} {}
+};
+
+VolumeParams smallVoxels() {
+    VolumeParams p;
+    p.voxelSize = 0.05f;
+    p.allocationStride = 1;
+    return p;
+}
+
+// ---- allocation ---------------------------------------------------------------------------------
+
+TEST(ReferenceAllocation, BandWalkVisitsTheBlocksAlongAnAxis) {
+    std::vector<BlockCoord> cells;
+    EXPECT_TRUE(cpu::walkBand({0.5f, 0.5f, 0.5f}, {3.5f, 0.5f, 0.5f}, [&](const BlockCoord& c) { cells.push_back(c); }));
+    EXPECT_EQ(cells, (std::vector<BlockCoord>{{0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {3, 0, 0}}));
+    cells.clear();
+    EXPECT_TRUE(cpu::walkBand({-0.5f, 2.2f, 0.1f}, {-0.5f, 0.7f, 0.1f}, [&](const BlockCoord& c) { cells.push_back(c); }));
+    EXPECT_EQ(cells, (std::vector<BlockCoord>{{-1, 2, 0}, {-1, 1, 0}, {-1, 0, 0}}));
+}
+
+TEST(ReferenceAllocation, BandWalkStepsToFaceNeighboursAndStopsAtTheBound) {
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<float> coord(-4.0f, 4.0f);
+    for (int i = 0; i < 200; ++i) {
+        const Eigen::Vector3f a(coord(rng), coord(rng), coord(rng)), b(coord(rng), coord(rng), coord(rng));
+        std::vector<BlockCoord> cells;
+        const bool complete = cpu::walkBand(a, b, [&](const BlockCoord& c) { cells.push_back(c); });
+        ASSERT_FALSE(cells.empty());
+        EXPECT_EQ(cells.front(), (BlockCoord{int(std::floor(a.x())), int(std::floor(a.y())), int(std::floor(a.z()))}));
+        EXPECT_TRUE(complete) << "at most 3 * 8 + 1 blocks between two points of an 8-block cube";
+        for (size_t k = 1; k < cells.size(); ++k) {
+            int steps = 0;
+            for (int axis = 0; axis < 3; ++axis) steps += std::abs(cells[k][axis] - cells[k - 1][axis]);
+            EXPECT_EQ(steps, 1) << "walk " << i << " step " << k;
+        }
+    }
+    std::vector<BlockCoord> cells;
+    EXPECT_FALSE(cpu::walkBand({0.5f, 0.5f, 0.5f}, {40.5f, 0.5f, 0.5f}, [&](const BlockCoord& c) { cells.push_back(c); }));
+    EXPECT_EQ(cells.size(), gpu::RAY_MAX_BLOCKS);
+}
+
+TEST(ReferenceAllocation, TouchedBlocksInsertIntoTheHashOnceAndStampIt) {
+    const WallView view(1.1f);
+    const VolumeParams params = smallVoxels();
+    cpu::ReferenceHash hash(4096);
+    cpu::AllocationStats first, second, plain;
+    const auto touched = cpu::touchedBlocks(view.depth, view.intrinsics, view.pose, params, 0.0f, &first, &hash, 1);
+    ASSERT_GT(touched.size(), 4u);
+    EXPECT_EQ(first.validPixels, 128u * 128u);
+    EXPECT_EQ(first.touchedCount, touched.size());
+    EXPECT_EQ(first.blocksInserted, touched.size());
+    EXPECT_EQ(first.hashFull, 0u);
+    EXPECT_EQ(first.blocksFound + first.blocksInserted, first.blockRequests - first.outOfRange - first.outsideRadius);
+    EXPECT_GT(first.blocksFound, first.blocksInserted) << "most pixels' bands cross blocks other pixels inserted";
+    EXPECT_EQ(hash.entries(), touched.size());
+    std::set<int> layers;
+    for (const auto& c : touched) {
+        const uint32_t slot = hash.find(c);
+        ASSERT_NE(slot, gpu::NO_BLOCK);
+        EXPECT_EQ(hash.stamp(slot), 1u);
+        layers.insert(c[2]);
+    }
+    // The wall at z = 1.1 m with a 0.2 m band: z from 0.9 to 1.3 m, blocks of 0.4 m: block layers 2 and 3.
+    EXPECT_EQ(layers, (std::set<int>{2, 3}));
+    EXPECT_EQ(cpu::touchedBlocks(view.depth, view.intrinsics, view.pose, params, 0.0f, &second, &hash, 2), touched);
+    EXPECT_EQ(second.blocksInserted, 0u);
+    EXPECT_EQ(second.blocksFound, first.blocksFound + first.blocksInserted);
+    for (const auto& c : touched) EXPECT_EQ(hash.stamp(hash.find(c)), 2u);
+    // Without a hash: the same blocks in the same order.
+    EXPECT_EQ(cpu::touchedBlocks(view.depth, view.intrinsics, view.pose, params, 0.0f, &plain), touched);
+    EXPECT_EQ(plain.blocksFound + plain.blocksInserted + plain.hashFull, 0u);
+}
+
+TEST(ReferenceAllocation, AFullHashLeavesBlocksUntouchedAndCountsThem) {
+    const WallView view(1.0f);
+    cpu::ReferenceHash hash(4);
+    cpu::AllocationStats stats;
+    const auto touched = cpu::touchedBlocks(view.depth, view.intrinsics, view.pose, smallVoxels(), 0.0f, &stats, &hash, 1);
+    EXPECT_EQ(touched.size(), 4u);
+    EXPECT_GT(stats.hashFull, 0u);
+    EXPECT_EQ(hash.entries(), 4u);
+    for (const auto& c : touched) EXPECT_NE(hash.find(c), gpu::NO_BLOCK);
+}
+
+TEST(ReferenceAllocation, KeepRadiusLeavesFarBlocksOut) {
+    const WallView view(2.0f);
+    VolumeParams params = smallVoxels();
+    cpu::AllocationStats all, near;
+    const auto every = cpu::touchedBlocks(view.depth, view.intrinsics, view.pose, params, 0.0f, &all);
+    const float radius = 2.2f;
+    const auto kept = cpu::touchedBlocks(view.depth, view.intrinsics, view.pose, params, radius, &near);
+    EXPECT_EQ(all.outsideRadius, 0u);
+    EXPECT_GT(near.outsideRadius, 0u);
+    EXPECT_LT(kept.size(), every.size());
+    EXPECT_GT(kept.size(), 0u);
+    const std::set<BlockCoord> everySet(every.begin(), every.end());
+    for (const auto& c : kept) {
+        EXPECT_TRUE(everySet.count(c));
+        double d2 = 0;
+        for (int k = 0; k < 3; ++k) d2 += std::pow((c[k] + 0.5) * 0.4, 2);
+        EXPECT_LE(std::sqrt(d2), radius + 1e-4);
+    }
+}
+
+// ---- fusion -------------------------------------------------------------------------------------
+
+TEST(ReferenceFusion, CornerFlipRule) {
+    cpu::FusionRule rule;
+    rule.minMeshWeight = 1.0f;
+    EXPECT_TRUE(cpu::cornerFlipped(0.1f, 0.0f, 0.1f, 1.0f, rule)) << "becomes observed";
+    EXPECT_TRUE(cpu::cornerFlipped(0.1f, 2.0f, 0.1f, 0.5f, rule)) << "no longer observed";
+    EXPECT_FALSE(cpu::cornerFlipped(0.1f, 1.0f, 0.05f, 2.0f, rule));
+    EXPECT_TRUE(cpu::cornerFlipped(0.1f, 1.0f, -0.05f, 2.0f, rule)) << "sign change";
+    EXPECT_FALSE(cpu::cornerFlipped(0.1f, 0.0f, -0.05f, 0.5f, rule)) << "sign change while unobserved";
+    EXPECT_FALSE(cpu::cornerFlipped(0.1f, 1.0f, 0.01f, 2.0f, rule));
+    rule.refine = true;
+    rule.refineEpsilon = 0.02f;
+    EXPECT_TRUE(cpu::cornerFlipped(0.1f, 1.0f, 0.01f, 2.0f, rule)) << "crosses |sdf| < epsilon with refinement";
+    EXPECT_FALSE(cpu::cornerFlipped(0.1f, 1.0f, 0.05f, 2.0f, rule));
+}
+
+TEST(ReferenceFusion, FusingAWallAveragesTruncatedDistances) {
+    const VolumeParams params = smallVoxels();
+    const cpu::FusionRule rule{params.voxelSize, params.truncation(), params.maxWeight, 1.0f, false, 0.0f};
+    const WallView view(1.0f);
+    const gpu::FramePush push = makeFramePush(view.intrinsics, view.pose, params, 1);
+    cpu::ReferenceBlock block;
+    const BlockCoord coord{0, 0, 2};   // corners at z = 0.80 .. 1.15 m: all within the band
+    std::vector<std::array<int, 3>> flipped;
+    EXPECT_EQ(cpu::fuseBlock(block, coord, view.depth, push, rule, &flipped), gpu::VOXELS_PER_BLOCK);
+    EXPECT_EQ(flipped.size(), gpu::VOXELS_PER_BLOCK) << "every corner becomes observed";
+    EXPECT_EQ(flipped.front(), (std::array<int, 3>{0, 0, 16}));
+    for (uint32_t v = 0; v < gpu::VOXELS_PER_BLOCK; ++v) {
+        const float z = float(16 + cpu::localCoords(v)[2]) * params.voxelSize;
+        EXPECT_EQ(block.weight[v], 1.0f);
+        EXPECT_EQ(block.sdf[v], std::min(1.0f - z, params.truncation())) << v;
+    }
+    // The same frame again: the average stays, the weights grow, nothing flips.
+    const cpu::ReferenceBlock once = block;
+    flipped.clear();
+    EXPECT_EQ(cpu::fuseBlock(block, coord, view.depth, push, rule, &flipped), gpu::VOXELS_PER_BLOCK);
+    EXPECT_TRUE(flipped.empty());
+    for (uint32_t v = 0; v < gpu::VOXELS_PER_BLOCK; ++v) {
+        EXPECT_EQ(block.weight[v], 2.0f);
+        EXPECT_EQ(block.sdf[v], once.sdf[v]);
+    }
+    // A nearer wall: the corners more than a truncation behind it (z = 1.10 and 1.15 m) keep their values.
+    const WallView nearer(0.88f);
+    EXPECT_EQ(cpu::fuseBlock(block, coord, nearer.depth, push, rule, nullptr), gpu::VOXELS_PER_BLOCK - 128);
+    for (uint32_t v = 0; v < gpu::VOXELS_PER_BLOCK; ++v)
+        EXPECT_EQ(block.weight[v], cpu::localCoords(v)[2] >= 6 ? 2.0f : 3.0f) << v;
+    // Behind the camera nothing is updated.
+    cpu::ReferenceBlock behind;
+    EXPECT_EQ(cpu::fuseBlock(behind, {0, 0, -1}, view.depth, push, rule, nullptr), 0u);
+}
+
+TEST(ReferenceFusion, CubesAroundAFlippedCornerInTheBlocksThatExist) {
+    std::map<BlockCoord, cpu::ReferenceBlock> blocks;
+    blocks[{0, 0, 0}];
+    auto cubes = cpu::cubesAroundCorners({{0, 0, 0}}, blocks);
+    ASSERT_EQ(cubes.size(), 1u) << "the 7 other cubes lie in blocks that do not exist";
+    EXPECT_EQ(cubes.at({0, 0, 0}).count(), 1u);
+    EXPECT_TRUE(cubes.at({0, 0, 0}).test(0));
+    for (int o = 1; o < 8; ++o) blocks[{-(o & 1), -((o >> 1) & 1), -((o >> 2) & 1)}];
+    cubes = cpu::cubesAroundCorners({{0, 0, 0}}, blocks);
+    EXPECT_EQ(cubes.size(), 8u);
+    EXPECT_TRUE(cubes.at({-1, -1, -1}).test(cpu::localIndex(7, 7, 7)));
+    EXPECT_TRUE(cubes.at({-1, 0, 0}).test(cpu::localIndex(7, 0, 0)));
+    // An interior corner: its 8 cubes in its own block.
+    cubes = cpu::cubesAroundCorners({{3, 4, 5}}, blocks);
+    ASSERT_EQ(cubes.size(), 1u);
+    EXPECT_EQ(cubes.at({0, 0, 0}).count(), 8u);
+    EXPECT_TRUE(cubes.at({0, 0, 0}).test(cpu::localIndex(2, 3, 4)));
+    EXPECT_TRUE(cubes.at({0, 0, 0}).test(cpu::localIndex(3, 4, 5)));
+}
+
+// ---- recycling ----------------------------------------------------------------------------------
+
+TEST(ReferenceRecycling, KeepRadiusMeasuresFromTheBlockCentre) {
+    const float atOrigin[3][4] = {{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}};
+    // Block (0,0,0) of 0.8 m has its centre at (0.4, 0.4, 0.4): 0.69 m away.
+    EXPECT_TRUE(cpu::blockOutsideKeepRadius({0, 0, 0}, 0.1f, 0.6f, atOrigin));
+    EXPECT_FALSE(cpu::blockOutsideKeepRadius({0, 0, 0}, 0.1f, 0.7f, atOrigin));
+    EXPECT_FALSE(cpu::blockOutsideKeepRadius({50, 0, 0}, 0.1f, 0.0f, atOrigin)) << "0: no radius";
+    const float away[3][4] = {{1, 0, 0, 40.4f}, {0, 1, 0, 0.4f}, {0, 0, 1, 0.4f}};
+    EXPECT_FALSE(cpu::blockOutsideKeepRadius({50, 0, 0}, 0.1f, 0.1f, away));
+}
+
+TEST(ReferenceRecycling, StarvingBlocksLoseWeightUntilFreed) {
+    const float camera[3][4] = {{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}};
+    const cpu::RecyclingRule rule{0.0f, 2, 1.0f};
+    std::map<BlockCoord, cpu::ReferenceBlock> blocks;
+    std::map<BlockCoord, uint32_t> lastTouched;
+    blocks[{0, 0, 0}].weight.fill(3.0f);
+    blocks[{1, 0, 0}].weight.fill(3.0f);
+    blocks[{1, 0, 0}].weight[5] = 0.5f;
+    lastTouched[{0, 0, 0}] = 1;
+    lastTouched[{1, 0, 0}] = 1;
+    auto s = cpu::recycleBlocks(blocks, lastTouched, 2, rule, 0.1f, camera);
+    EXPECT_EQ(s.blocksStarved, 0u) << "idle for 1 frame < 2";
+    s = cpu::recycleBlocks(blocks, lastTouched, 3, rule, 0.1f, camera);
+    EXPECT_EQ(s.blocksStarved, 2u);
+    EXPECT_EQ(blocks.at({0, 0, 0}).weight[0], 2.0f);
+    EXPECT_EQ(blocks.at({1, 0, 0}).weight[5], 0.0f) << "clamped at 0";
+    lastTouched[{1, 0, 0}] = 4;   // touched again: it stops starving
+    s = cpu::recycleBlocks(blocks, lastTouched, 4, rule, 0.1f, camera);
+    EXPECT_EQ(s.blocksStarved, 1u);
+    EXPECT_EQ(s.blocksFreed, 0u);
+    s = cpu::recycleBlocks(blocks, lastTouched, 5, rule, 0.1f, camera);
+    EXPECT_EQ(s.blocksStarved, 1u);
+    EXPECT_EQ(s.blocksFreed, 1u);
+    EXPECT_EQ(blocks.count({0, 0, 0}), 0u);
+    EXPECT_EQ(lastTouched.count({0, 0, 0}), 0u);
+    EXPECT_EQ(blocks.at({1, 0, 0}).weight[0], 2.0f);
+}
+
+TEST(ReferenceRecycling, RetiredBlocksAreZeroedAndFreed) {
+    const float camera[3][4] = {{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}};
+    std::map<BlockCoord, cpu::ReferenceBlock> blocks;
+    std::map<BlockCoord, uint32_t> lastTouched;
+    blocks[{0, 0, 0}].weight.fill(5.0f);
+    blocks[{20, 0, 0}].weight.fill(5.0f);
+    lastTouched[{0, 0, 0}] = lastTouched[{20, 0, 0}] = 1;
+    EXPECT_EQ(cpu::recycleBlocks(blocks, lastTouched, 2, {}, 0.1f, camera).blocksRetired, 0u) << "recycling off";
+    EXPECT_EQ(blocks.size(), 2u);
+    const auto s = cpu::recycleBlocks(blocks, lastTouched, 2, {3.0f, 0, 0.0f}, 0.1f, camera);
+    EXPECT_EQ(s.blocksRetired, 1u);
+    EXPECT_EQ(s.blocksFreed, 1u);
+    EXPECT_EQ(blocks.count({20, 0, 0}), 0u);
+    EXPECT_EQ(blocks.at({0, 0, 0}).weight[0], 5.0f);
+}
+
+// ---- baseline and incremental mesh on a plane -------------------------------------------------
+
+// A block whose TSDF is the plane z = planeZ (voxel units, local), every corner observed.
+cpu::ReferenceBlock planeBlock(float planeZ, float voxelSize, float weight = 1.0f) {
+    cpu::ReferenceBlock b;
+    for (uint32_t v = 0; v < gpu::VOXELS_PER_BLOCK; ++v) {
+        b.sdf[v] = (float(cpu::localCoords(v)[2]) - planeZ) * voxelSize;
+        b.weight[v] = weight;
+    }
+    return b;
+}
+
+TEST(ReferenceBaseline, APlaneGivesTwoTrianglesPerCubeItCrosses) {
+    const float voxel = 0.05f;
+    std::map<BlockCoord, cpu::ReferenceBlock> blocks;
+    blocks[{0, 0, 0}] = planeBlock(3.5f, voxel);
+    auto soup = cpu::baselineMesh(blocks, voxel, 1.0f);
+    // Without neighbours only the cubes with local x, y <= 6 have 8 corners: 7 x 7 cubes in the z = 3 layer.
+    EXPECT_EQ(soup.size(), 3u * 2u * 49u);
+    for (const auto& p : soup) EXPECT_EQ(p.z(), 3.5f * voxel);
+    blocks[{0, 0, 0}].weight[cpu::localIndex(3, 3, 3)] = 0.5f;   // unobserved: its 4 surface cubes go
+    EXPECT_EQ(cpu::baselineMesh(blocks, voxel, 1.0f).size(), 3u * 2u * 45u);
+    EXPECT_EQ(cpu::baselineMesh(blocks, voxel, 0.5f).size(), 3u * 2u * 49u);
+    blocks[{0, 0, 0}] = planeBlock(3.5f, voxel);
+    blocks[{1, 0, 0}] = planeBlock(3.5f, voxel);   // the +x neighbour completes the cubes at local x = 7
+    EXPECT_EQ(cpu::baselineMesh(blocks, voxel, 1.0f).size(), 3u * 2u * (49u + 7u + 49u));
+}
+
+TEST(ReferenceMesherPasses, ClaimUpdateTriangulateAndCollectOnAPlane) {
+    VolumeParams params;
+    params.voxelSize = 0.05f;
+    cpu::ReferenceVolume volume(params);
+    const BlockCoord coord{0, 0, 0};
+    volume.setBlock(coord, planeBlock(3.5f, params.voxelSize));
+    cpu::ReferenceMesher mesher(params, 1.0f, 1024, 1024);
+
+    // Claim + triangulate: 49 cubes of 2 triangles share the 8 x 8 vertices on the z edges at z = 3.
+    // The 3 x 49 cubes below the plane take type 255 (all corners inside), which has no triangles.
+    auto s = mesher.updateAll(volume, 1);
+    EXPECT_EQ(s.dirtyBlocks, 1u);
+    EXPECT_EQ(s.cubesRetyped, 4u * 49u);
+    EXPECT_EQ(s.verticesAllocated, 64u);
+    EXPECT_EQ(s.trianglesCreated, 98u);
+    EXPECT_EQ(s.chunksAllocated, 49u);
+    EXPECT_EQ(s.verticesFreed, 0u);
+    EXPECT_EQ(mesher.liveVertices(), 64u);
+    EXPECT_EQ(mesher.liveChunks(), 49u);
+    auto problems = mesher.checkInvariants();
+    EXPECT_TRUE(problems.empty()) << joined(problems);
+    Mesh mesh = mesher.exportMesh(1);
+    ASSERT_EQ(mesh.positions.size(), 64u);
+    EXPECT_EQ(mesh.triangles.size(), 98u);
+    for (size_t i = 0; i < mesh.positions.size(); ++i) {
+        EXPECT_EQ(mesh.positions[i].z(), 3.5f * params.voxelSize);
+        EXPECT_EQ(mesh.normals[i], Eigen::Vector3f(0, 0, 1)) << "the gradient of d = z - 3.5";
+        EXPECT_EQ(mesh.vertexAge[i], 0u);
+    }
+
+    // Vertex update: the plane moves within the same cubes; no cube changes type, every vertex moves.
+    volume.setBlock(coord, planeBlock(3.25f, params.voxelSize));
+    s = mesher.update(volume, {coord}, 2, cpu::RetypeScope::AllCubes);
+    EXPECT_EQ(s.cubesListed, gpu::VOXELS_PER_BLOCK);
+    EXPECT_EQ(s.cubesRetyped, 0u);
+    EXPECT_EQ(s.trianglesCreated + s.trianglesReleased + s.verticesAllocated, 0u);
+    mesh = mesher.exportMesh(2);
+    for (size_t i = 0; i < mesh.positions.size(); ++i) {
+        EXPECT_EQ(mesh.positions[i].z(), 3.25f * params.voxelSize);
+        EXPECT_EQ(mesh.vertexAge[i], 1u);
+    }
+
+    // Garbage collection: the corners lose their observations; every triangle, vertex and chunk goes back.
+    volume.setBlock(coord, planeBlock(3.25f, params.voxelSize, 0.0f));
+    s = mesher.update(volume, {coord}, 3, cpu::RetypeScope::AllCubes);
+    EXPECT_EQ(s.cubesRetyped, 4u * 49u);
+    EXPECT_EQ(s.trianglesReleased, 98u);
+    EXPECT_EQ(s.verticesFreed, 64u);
+    EXPECT_EQ(s.chunksFreed, 49u);
+    EXPECT_EQ(mesher.liveVertices(), 0u);
+    EXPECT_EQ(mesher.liveChunks(), 0u);
+    EXPECT_EQ(mesher.vertexHighWater(), 64u);
+    for (uint32_t slot : mesher.blockStates().at(coord).edgeVertex) EXPECT_EQ(slot, gpu::EMPTY_SLOT);
+    problems = mesher.checkInvariants();
+    EXPECT_TRUE(problems.empty()) << joined(problems);
+}
+
+TEST(ReferenceMesherPasses, ExhaustedHeapsLeaveIncompleteCubesAndConsistentState) {
+    VolumeParams params;
+    params.voxelSize = 0.05f;
+    cpu::ReferenceVolume volume(params);
+    volume.setBlock({0, 0, 0}, planeBlock(3.5f, params.voxelSize));
+
+    cpu::ReferenceMesher fewChunks(params, 1.0f, 1024, 5);
+    auto s = fewChunks.updateAll(volume, 1);
+    EXPECT_EQ(s.chunksAllocated, 5u);
+    EXPECT_EQ(s.chunkExhausted, 44u);
+    EXPECT_EQ(s.trianglesCreated, 10u);
+    EXPECT_EQ(s.trianglesInvalid, 88u);
+    EXPECT_EQ(fewChunks.incompleteCubes(), 44u);
+    auto problems = fewChunks.checkInvariants();
+    EXPECT_TRUE(problems.empty()) << joined(problems);
+
+    cpu::ReferenceMesher fewVertices(params, 1.0f, 10, 1024);
+    s = fewVertices.updateAll(volume, 1);
+    EXPECT_EQ(s.verticesAllocated, 10u);
+    EXPECT_GT(s.vertexExhausted, 0u);
+    EXPECT_GT(s.trianglesInvalid, 0u);
+    EXPECT_LT(s.trianglesCreated, 98u);
+    EXPECT_GT(fewVertices.incompleteCubes(), 0u);
+    EXPECT_LE(fewVertices.liveVertices(), 10u);
+    problems = fewVertices.checkInvariants();
+    EXPECT_TRUE(problems.empty()) << joined(problems);
+}
+
+}  // namespace
+}  // namespace vkmesh
