@@ -16,6 +16,7 @@
 #include <string>
 
 #include "core/mesh_analysis.h"
+#include "cpu/reference_hash.h"
 #include "cpu/reference_volume.h"
 #include "gpu/structure/block_hash.h"
 #include "gpu/gpu_volume.h"
@@ -76,10 +77,18 @@ protected:
 
 std::string pathName(const ::testing::TestParamInfo<bool>& info) { return info.param ? "Int64Atomics" : "Atomics32"; }
 
-// The shaders' home slot (structure/block_hash.glsl), to build keys that collide.
-uint32_t homeSlot(const Coord& c, uint32_t capacity) {
-    uint32_t h = (uint32_t(c[0]) * 73856093u) ^ (uint32_t(c[1]) * 19349669u) ^ (uint32_t(c[2]) * 83492791u);
-    return h & (capacity - 1);
+// The shaders' home slot (structure/block_hash.glsl, the CPU reference's), to build keys that collide.
+uint32_t homeSlot(const Coord& c, uint32_t capacity) { return cpu::hashHomeSlot(cpu::BlockCoord{c[0], c[1], c[2]}, capacity); }
+
+// The CPU reference hash (src/cpu/reference_hash.h) fed the same entries serially: how many were found,
+// inserted, full. Concurrent GPU insertions end in other slots, but these counts are the same.
+std::array<uint32_t, 3> referenceCounts(cpu::ReferenceHash& ref, const std::vector<Coord>& entries) {
+    std::array<uint32_t, 3> n{};
+    for (const Coord& c : entries) {
+        const cpu::HashInsert outcome = ref.insert(cpu::BlockCoord{c[0], c[1], c[2]}).outcome;
+        ++n[outcome == cpu::HashInsert::Found ? 0 : outcome == cpu::HashInsert::Inserted ? 1 : 2];
+    }
+    return n;
 }
 
 // The hash with the few buffers its passes touch, driven by hash/test_hash_access.comp: entry i of the
@@ -225,6 +234,9 @@ TEST_P(PathTest, HashUnderContentionInsertLookupRemoveRebuildGrow) {
     EXPECT_EQ(k.blocksInserted, keys.size()) << "exactly one invocation inserts each key";
     EXPECT_EQ(k.hashFull, 0u);
     EXPECT_EQ(k.blocksFound + k.blocksInserted, entries.size());
+    cpu::ReferenceHash reference(kCapacity);
+    EXPECT_EQ((std::array<uint32_t, 3>{k.blocksFound, k.blocksInserted, k.hashFull}), referenceCounts(reference, entries));
+    EXPECT_TRUE(reference.checkInvariants().empty());
 
     // The table holds every key exactly once, and every invocation of a key got that key's slot.
     auto checkTable = [&](const std::set<Coord>& expected, const char* when) {
@@ -321,6 +333,8 @@ TEST_P(PathTest, FullHashIsCountedNotWaitedFor) {
     EXPECT_EQ(k.blocksInserted, 64u);
     EXPECT_EQ(k.blocksInserted + k.blocksFound + k.hashFull, entries.size());
     EXPECT_EQ(h.hash().downloadEntries().size(), 64u);
+    cpu::ReferenceHash reference(64);
+    EXPECT_EQ((std::array<uint32_t, 3>{k.blocksFound, k.blocksInserted, k.hashFull}), referenceCounts(reference, entries));
 }
 
 INSTANTIATE_TEST_SUITE_P(BothAtomicPaths, PathTest, ::testing::Bool(), pathName);
