@@ -1,5 +1,7 @@
-#include "eval_command.h"
-
+// `vkmesh eval`: quality of a mesh (or point cloud) against ground-truth surface points.
+//   vkmesh eval MESH.ply --gt GT.ply [--dataset DIR [--frame-stride K]] [--spacing 0.005]
+//               [--thresholds 0.01,0.02,0.05] [--max-distance 0.2] [--json out.json]
+// Prints accuracy, completeness and precision / recall / F-score per threshold; see src/eval/evaluate.h.
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
@@ -15,12 +17,13 @@
 #include <string>
 #include <vector>
 
+#include "commands.h"
 #include "core/types.h"
 #include "eval/evaluate.h"
 #include "io/dataset.h"
 #include "io/ply.h"
 
-namespace vkmesh {
+namespace vkmesh::cli {
 namespace {
 
 using json = nlohmann::json;
@@ -237,7 +240,7 @@ int runEval(const EvalArgs& args) {
 
 }  // namespace
 
-std::function<int()> addEvalCommand(CLI::App& app) {
+Run addEvalCommand(CLI::App& app) {
     auto args = std::make_shared<EvalArgs>();
     CLI::App* cmd = app.add_subcommand(
         "eval", "accuracy, completeness, precision/recall/F-score of a mesh against ground-truth points");
@@ -271,4 +274,4 @@ std::function<int()> addEvalCommand(CLI::App& app) {
     return [args] { return runEval(*args); };
 }
 
-}  // namespace vkmesh
+}  // namespace vkmesh::cli

@@ -1,14 +1,20 @@
-#include "render_command.h"
-
+// `vkmesh render`: headless offscreen rendering of a mesh to a PNG with a Vulkan graphics pipeline.
+//   vkmesh render MESH.ply -o view.png [--width 800 --height 600]
+//                 [--camera eye_x,eye_y,eye_z,target_x,target_y,target_z] [--color shade|normal|age]
+// The work is done by vkmesh::render::renderMeshFile (src/render/mesh_renderer.h), which the tests call too,
+// and io::writePng (src/io/png.h).
 #include <CLI/CLI.hpp>
 
 #include <iostream>
 #include <memory>
 
+#include "cli_options.h"
+#include "commands.h"
+#include "io/png.h"
 #include "render/mesh_renderer.h"
 #include "vk/context.h"
 
-namespace vkmesh {
+namespace vkmesh::cli {
 
 namespace {
 struct RenderArgs {
@@ -18,12 +24,11 @@ struct RenderArgs {
     int height = 600;
     std::string camera;
     std::string color = "shade";
-    int device = -1;
-    bool validation = false;
+    DeviceArgs device;
 };
 }  // namespace
 
-std::function<int()> addRenderCommand(CLI::App& app) {
+Run addRenderCommand(CLI::App& app) {
     auto args = std::make_shared<RenderArgs>();
     auto* cmd = app.add_subcommand("render", "render a mesh offscreen to a PNG (Vulkan graphics pipeline)");
     cmd->add_option("MESH", args->mesh, "mesh file (.ply)")->required();
@@ -35,20 +40,20 @@ std::function<int()> addRenderCommand(CLI::App& app) {
                     "default: a three-quarter view from outside the mesh's bounding box)");
     // Checked by parseColorMode so that a bad value is reported like every other vkmesh error.
     cmd->add_option("--color", args->color, "shade (Phong, headlight), normal (normal as RGB) or age (red new .. blue old)");
-    cmd->add_option("--device", args->device, "Vulkan device index (see `vkmesh devices`)");
-    cmd->add_flag("--validation", args->validation, "enable the Khronos validation layer (or VKMESH_VALIDATION=1)");
+    args->device.add(cmd);
     return [args]() {
         render::RenderOptions options;
         options.width = args->width;
         options.height = args->height;
         options.color = render::parseColorMode(args->color);
         if (!args->camera.empty()) options.camera = render::parseCamera(args->camera);
-        vk::Context context({args->device, args->validation});
-        render::Image image = render::renderMeshFile(context, args->mesh, args->output, options);
+        vk::Context context(args->device.contextOptions());
+        render::Image image = render::renderMeshFile(context, args->mesh, options);
+        io::writePng(args->output, image);
         std::cout << "vkmesh render: " << args->mesh << " -> " << args->output << " (" << image.width << "x" << image.height
                   << ", " << args->color << ") on " << context.info().name << "\n";
         return 0;
     };
 }
 
-}  // namespace vkmesh
+}  // namespace vkmesh::cli

@@ -1,5 +1,8 @@
-#include "soak_command.h"
-
+// `vkmesh soak`: a long run over the synthetic room with revisits, recording per frame how full the hash,
+// the block pool and the mesh heaps are, to show that bounded maps (--keep-radius, --recycle) keep them flat.
+//   vkmesh soak -o soak.csv [--frames 3000 --laps 6 --width 160 --height 120 --voxel 0.05]
+//               [--keep-radius 2.0] [--recycle] [--summary summary.json]
+// bench/soak_plot.py draws the CSVs of several runs.
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
@@ -9,11 +12,14 @@
 #include <iostream>
 #include <memory>
 
+#include "cli_options.h"
+#include "commands.h"
 #include "gpu/gpu_volume.h"
 #include "synth/synthetic_scene.h"
 #include "vk/context.h"
 
-namespace vkmesh {
+namespace vkmesh::cli {
+
 namespace {
 
 struct SoakArgs {
@@ -22,16 +28,18 @@ struct SoakArgs {
     size_t laps = 6;
     size_t rooms = 1;
     int width = 160, height = 120;
-    float voxel = 0.05f;
     float maxDepth = 5.0f;
-    uint32_t blocks = 8192;
-    float keepRadius = 0.0f;
-    bool recycle = false;
-    uint32_t recycleAfter = gpu::GpuVolumeConfig{}.recycleAfterFrames;
-    float starveWeight = gpu::GpuVolumeConfig{}.starveWeight;
+    VolumeOptions volume = soakDefaults();
     bool noise = true;
-    int device = -1;
-    bool validation = false;
+    DeviceArgs device;
+
+    // A coarser voxel and a smaller pool than fuse's defaults: long runs at small image sizes.
+    static VolumeOptions soakDefaults() {
+        VolumeOptions v;
+        v.voxel = 0.05f;
+        v.blocks = 8192;
+        return v;
+    }
 };
 
 // What the CSV records of one frame; the high-water marks per lap are taken over these.
@@ -41,18 +49,8 @@ struct Occupancy {
 
 int runSoak(const SoakArgs& a) {
     if (a.laps == 0 || a.frames < a.laps) throw Error("soak needs at least one frame per lap");
-    vk::Context context({a.device, a.validation});
-    gpu::GpuVolumeConfig config;
-    config.params.voxelSize = a.voxel;
-    config.params.maxDepth = a.maxDepth;
-    config.blockCapacity = a.blocks;
-    config.imageWidth = a.width;
-    config.imageHeight = a.height;
-    config.keepRadius = a.keepRadius;
-    config.recycle = a.recycle;
-    config.recycleAfterFrames = a.recycleAfter;
-    config.starveWeight = a.starveWeight;
-    gpu::GpuVolume volume(context, config);
+    vk::Context context(a.device.contextOptions());
+    gpu::GpuVolume volume(context, a.volume.toConfig(a.maxDepth, a.width, a.height));
 
     const synth::SyntheticScene scene = synth::SyntheticScene::defaultRoom();
     const Intrinsics intrinsics = synth::kinectIntrinsics(a.width, a.height);
@@ -108,9 +106,9 @@ int runSoak(const SoakArgs& a) {
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
     std::cout << "vkmesh soak: " << framesPerLap * a.laps << " frames (" << a.laps << " laps of " << framesPerLap << "), "
-              << a.rooms << " room(s), " << a.width << "x" << a.height << ", voxel " << a.voxel << " m, keep radius "
-              << (a.keepRadius > 0 ? std::to_string(a.keepRadius) + " m" : std::string("off")) << ", recycling "
-              << (a.recycle ? "on" : "off") << ", " << seconds << " s\n"
+              << a.rooms << " room(s), " << a.width << "x" << a.height << ", voxel " << a.volume.voxel << " m, keep radius "
+              << (a.volume.keepRadius > 0 ? std::to_string(a.volume.keepRadius) + " m" : std::string("off")) << ", recycling "
+              << (a.volume.recycle ? "on" : "off") << ", " << seconds << " s\n"
               << "  high water per lap: hash entries / tombstones / blocks / vertices / chunks / triangles\n";
     nlohmann::json lapsJson = nlohmann::json::array();
     for (size_t l = 0; l < a.laps; ++l) {
@@ -123,8 +121,8 @@ int runSoak(const SoakArgs& a) {
     std::cout << "  blocks freed " << freed << ", hash rebuilds " << rebuilds << ", warnings " << warnings << "\n";
     if (!a.summaryPath.empty()) {
         nlohmann::json s = {{"frames", framesPerLap * a.laps}, {"laps", a.laps}, {"rooms", a.rooms}, {"width", a.width}, {"height", a.height},
-                            {"voxel", a.voxel}, {"keep_radius", a.keepRadius}, {"recycle", a.recycle},
-                            {"recycle_after_frames", a.recycleAfter}, {"starve_weight", a.starveWeight},
+                            {"voxel", a.volume.voxel}, {"keep_radius", a.volume.keepRadius}, {"recycle", a.volume.recycle},
+                            {"recycle_after_frames", a.volume.recycleAfter}, {"starve_weight", a.volume.starveWeight},
                             {"block_capacity", volume.config().blockCapacity}, {"hash_capacity", volume.config().hashCapacity},
                             {"high_water_per_lap", lapsJson}, {"blocks_freed", freed}, {"hash_rebuilds", rebuilds},
                             {"warnings", warnings}, {"seconds", seconds}, {"device", context.info().name}};
@@ -137,7 +135,7 @@ int runSoak(const SoakArgs& a) {
 
 }  // namespace
 
-std::function<int()> addSoakCommand(CLI::App& app) {
+Run addSoakCommand(CLI::App& app) {
     auto args = std::make_shared<SoakArgs>();
     CLI::App* cmd = app.add_subcommand("soak", "long run over the synthetic room with revisits: per-frame occupancy of the "
                                                 "hash, block pool and mesh heaps as CSV (bounded maps)");
@@ -150,19 +148,11 @@ std::function<int()> addSoakCommand(CLI::App& app) {
         ->check(CLI::PositiveNumber);
     cmd->add_option("--width", args->width, "image width")->check(CLI::Range(16, 4096));
     cmd->add_option("--height", args->height, "image height")->check(CLI::Range(16, 4096));
-    cmd->add_option("--voxel", args->voxel, "voxel size in metres");
     cmd->add_option("--max-depth", args->maxDepth, "ignore depth beyond M metres")->check(CLI::PositiveNumber);
-    cmd->add_option("--blocks", args->blocks, "block pool capacity")->check(CLI::PositiveNumber);
-    cmd->add_option("--keep-radius", args->keepRadius, "keep only blocks within R metres of the camera (0 = off)")
-        ->check(CLI::NonNegativeNumber);
-    cmd->add_flag("--recycle", args->recycle, "starve blocks not seen for a while and free them once empty");
-    cmd->add_option("--recycle-after", args->recycleAfter, "frames without a touch before a block starves")->check(CLI::PositiveNumber);
-    cmd->add_option("--starve-weight", args->starveWeight, "weight a starving block's corners lose per frame")
-        ->check(CLI::PositiveNumber);
+    args->volume.addCommon(cmd);
     cmd->add_flag("--noise,!--no-noise", args->noise, "Kinect-like depth noise (default on)");
-    cmd->add_option("--device", args->device, "Vulkan device index");
-    cmd->add_flag("--validation", args->validation, "enable the Khronos validation layer");
+    args->device.add(cmd);
     return [args]() { return runSoak(*args); };
 }
 
-}  // namespace vkmesh
+}  // namespace vkmesh::cli

@@ -5,8 +5,11 @@
 //   gpu::GpuVolume                the TSDF volume: integrate depth frames, export the mesh
 //   toMesh                        the exported mesh as a Mesh (for writePly, evaluation)
 //   render::MeshRenderer          offscreen pictures of a mesh
-//   Dataset, readPly/writePly     depth sequences on disk (TUM, ICL-NUIM, Redwood, 7-Scenes), meshes
+//   readPly/writePly              meshes on disk
 //   synth::SyntheticScene         synthetic depth with exact ground truth
+// All of it is in vkmesh::vkmesh (Vulkan, no OpenCV). Image and dataset I/O is the vkmesh::io library, with
+// headers of its own: io/dataset.h (Dataset: TUM, ICL-NUIM, Redwood, 7-Scenes), io/png.h, synth/tum_sequence.h,
+// eval/evaluate.h.
 // The other installed headers (core/, cpu/, eval/, ...) are the internals these include, or tools;
 // they may change between versions.
 #pragma once
@@ -17,7 +20,6 @@
 #include "core/types.h"
 #include "gpu/gpu_volume.h"
 #include "io/delta_stream.h"
-#include "io/dataset.h"
 #include "io/ply.h"
 #include "render/mesh_renderer.h"
 #include "synth/synthetic_scene.h"

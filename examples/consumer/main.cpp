@@ -36,7 +36,7 @@ int main(int argc, char** argv) {
                 return 1;
             }
             if (argc > 1) {  // optional: write the mesh as PLY
-                writePly(argv[1], toMesh(exported, volume.framesIntegrated()));
+                writePly(argv[1], toMesh(exported, volume.frameNumber()));
                 std::printf("wrote %s\n", argv[1]);
             }
         }

@@ -1,7 +1,9 @@
 // An application that owns its Vulkan device and embeds vkmesh (api/reconstructor.h): every frame it
 // hands vkmesh a depth image, then draws vkmesh's mesh straight from vkmesh's GPU buffers (no copy
-// through the host) from the sensor's viewpoint and writes the picture to a PNG. Depth comes from the
-// built-in synthetic room, so the example needs no data.
+// through the host) from the sensor's viewpoint and writes the picture to a file. Depth comes from the
+// built-in synthetic room, so the example needs no data. It links vkmesh::vkmesh only (Vulkan, no image
+// library), so the pictures are binary PPM, which takes a dozen lines to write; an application that wants
+// PNGs links vkmesh::io and calls io::writePng (io/png.h), as the vkmesh CLI does.
 //
 //   vkmesh_embed_example --frames 24 --out out/embed      (VKMESH_VALIDATION=1: validation layer on, and
 //                                                          any validation message makes it exit 1)
@@ -11,12 +13,28 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
+#include <stdexcept>
 
 #include "api/reconstructor.h"
 #include "app_device.h"
 #include "render/mesh_renderer.h"
 #include "synth/synthetic_scene.h"
+
+namespace {
+
+// Binary PPM (P6): a header and the RGB bytes, top row first; the renderer's alpha is dropped.
+void writePpm(const std::filesystem::path& path, const vkmesh::render::Image& image) {
+    std::ofstream out(path, std::ios::binary | std::ios::trunc);
+    out << "P6\n" << image.width << " " << image.height << "\n255\n";
+    for (int y = 0; y < image.height; ++y)
+        for (int x = 0; x < image.width; ++x) out.write(reinterpret_cast<const char*>(image.pixel(x, y)), 3);
+    out.close();
+    if (!out) throw std::runtime_error("cannot write " + path.string());
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
     CLI::App cli("vkmesh embedding example: fuse a synthetic room, draw each frame from vkmesh's GPU buffers");
@@ -25,7 +43,7 @@ int main(int argc, char** argv) {
     cli.add_option("--frames", frames, "frames to fuse")->check(CLI::Range(1, 10000));
     cli.add_option("--width", width, "depth and picture width")->check(CLI::Range(16, 4096));
     cli.add_option("--height", height, "depth and picture height")->check(CLI::Range(16, 4096));
-    cli.add_option("--out", outDir, "folder for frame_NNN.png");
+    cli.add_option("--out", outDir, "folder for frame_NNN.ppm");
     CLI11_PARSE(cli, argc, argv);
     const char* env = std::getenv("VKMESH_VALIDATION");
     const bool validation = env && *env && std::strcmp(env, "0") != 0;
@@ -67,9 +85,9 @@ int main(int argc, char** argv) {
                 Eigen::Vector3f eye = pose.block<3, 1>(0, 3).cast<float>();
                 Eigen::Vector3f reach = Eigen::Vector3f::Constant(options.volume.params.maxDepth);
                 char name[32];
-                std::snprintf(name, sizeof(name), "frame_%03d.png", i);
+                std::snprintf(name, sizeof(name), "frame_%03d.ppm", i);
                 if (mesh.triangleCount > 0)
-                    vkmesh::render::writePng(std::filesystem::path(outDir) / name, renderer.render(mesh, eye - reach, eye + reach, view));
+                    writePpm(std::filesystem::path(outDir) / name, renderer.render(mesh, eye - reach, eye + reach, view));
                 const vkmesh::MeshDelta& delta = reconstructor.lastDelta();
                 std::printf("frame %3d: %7u triangles, %7u vertices; delta +%zu ~%zu -%zu records\n", i + 1, mesh.triangleCount,
                             mesh.vertexCount, delta.count(vkmesh::DeltaKind::Added), delta.count(vkmesh::DeltaKind::Changed),

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # CI job: vkmesh as an installed package. Builds the library without tests, `cmake --install`s it into a
-# temporary prefix, checks what was installed (no tests, no paths into this checkout), then builds
-# examples/consumer against it with find_package(vkmesh) and runs it on lavapipe with validation on.
+# temporary prefix, checks what was installed (no tests, no paths into this checkout, the data files), then
+# builds examples/consumer against it with find_package(vkmesh) and runs it on lavapipe with validation on,
+# and checks that the installed CLI finds its data relative to itself.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 scripts/install_deps.sh
@@ -28,7 +29,7 @@ if grep -rIl -F -e "$src" "$prefix"; then
   grep -rIn -F -e "$src" "$prefix" | head -20 >&2
   exit 1
 fi
-for f in include/vkmesh/vkmesh.h include/vkmesh/shared_layout.h bin/vkmesh; do
+for f in include/vkmesh/vkmesh.h include/vkmesh/shared_layout.h bin/vkmesh share/vkmesh/cameras/tum_fr1/camera.json; do
   [[ -e "$prefix/$f" ]] || { echo "error: $f was not installed" >&2; exit 1; }
 done
 config="$(find "$prefix" -name vkmeshConfig.cmake)"
@@ -40,4 +41,16 @@ cmake -S examples/consumer -B build-consumer -DCMAKE_BUILD_TYPE=Release -DCMAKE_
 cmake --build build-consumer -j"$jobs"
 VKMESH_VALIDATION=1 build-consumer/vkmesh_consumer
 "$prefix/bin/vkmesh" --help >/dev/null
+# The installed CLI finds its data (camera presets) relative to itself, in $prefix/share/vkmesh: a TUM folder
+# without a camera.json gets the installed fr1 preset, altered here so that it cannot be mistaken for the
+# source tree's copy.
+seq="$prefix/check/rgbd_dataset_freiburg1_check"
+"$prefix/bin/vkmesh" synth "$seq" --frames 2 2>/dev/null
+rm "$seq/camera.json"
+sed -i 's/"fx": 517.3/"fx": 517.25/' "$prefix/share/vkmesh/cameras/tum_fr1/camera.json"
+"$prefix/bin/vkmesh" frames "$seq" -o "$prefix/check/frames.json" 2>/dev/null
+grep -q '"fx": 517.25' "$prefix/check/frames.json" || {
+  echo "error: the installed vkmesh did not read its camera preset from $prefix/share/vkmesh" >&2
+  exit 1
+}
 echo "30-install-consumer: OK"

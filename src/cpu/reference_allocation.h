@@ -1,4 +1,4 @@
-// The CPU reference of block allocation (shaders_comp/allocate_blocks.comp, paper §V.A): every valid pixel
+// The CPU reference of block allocation (shaders_comp/allocate/allocate_blocks.comp, paper §V.A): every valid pixel
 // (of every allocationStride-th row and column) walks the blocks its truncation band crosses, a 3D DDA in
 // block units from depth d - trunc to d + trunc along the pixel's ray, with the shader's float operations.
 #pragma once

@@ -1,4 +1,4 @@
-// The CPU reference of the baseline mesh (shaders_comp/mesh_baseline.comp): every observed cube's marching-
+// The CPU reference of the baseline mesh (shaders_comp/baseline_mesh/mesh_baseline.comp): every observed cube's marching-
 // cubes triangles with 3 vertices of their own (a triangle soup). Its vertex positions are the float
 // operations the incremental mesh's vertices use too, so the two agree bit for bit.
 #pragma once

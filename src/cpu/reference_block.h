@@ -38,7 +38,7 @@ inline int blockOf(int a) {
 }
 
 // x' = R x + t with the rows of [R | t] (gpu::FramePush's layout), the operations in the order of
-// common.glsl's transformPoint so that both round alike.
+// structure/frame.glsl's transformPoint so that both round alike.
 template <typename Vec3>
 Vec3 transformRows(const float rows[3][4], const Vec3& p) {
     Vec3 q;

@@ -1,6 +1,6 @@
 // The CPU reference of TSDF fusion (shaders_comp/fuse_depth.comp): the projective running-average update of
 // a touched block's corners, the rule that says which corners "flipped" (what the incremental mesh must
-// re-evaluate), and the cubes around the flipped corners (common.glsl markCornerRetype), with the shader's
+// re-evaluate), and the cubes around the flipped corners (structure/retype_marks.glsl markCornerRetype), with the shader's
 // float operations in the shader's order.
 #pragma once
 

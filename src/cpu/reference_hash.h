@@ -1,4 +1,4 @@
-// The CPU reference of the GPU's spatial block hash (docs/MESH.md): block keys (common.glsl packBlockKey),
+// The CPU reference of the GPU's spatial block hash (docs/MESH.md): block keys (structure/block_hash.glsl packBlockKey),
 // the spatial hash of Teschner et al. (hashSlot), insertion with linear probing (allocate_blocks.comp
 // insertKey), read-only lookup (findSlot), removal by tombstone (recycle_free.comp) and the rebuild that
 // drops tombstones (rehash_save / rehash_insert / commit_rehash.comp), serially. Slots hold a key
@@ -47,7 +47,7 @@ public:
     // insertKey of allocate_blocks.comp: probes from the home slot; a tombstone is never reused (a key's
     // probe sequence must not change under a concurrent lookup), only an EMPTY slot is claimed.
     HashInsertResult insert(const BlockCoord& c);
-    // findSlot of common.glsl: the slot holding the key, or NO_BLOCK (probes past tombstones, stops at
+    // findSlot of structure/block_hash.glsl: the slot holding the key, or NO_BLOCK (probes past tombstones, stops at
     // EMPTY or after HASH_MAX_PROBES).
     uint32_t find(const BlockCoord& c) const;
     // findBlock: the block index stored with the key, or NO_BLOCK.

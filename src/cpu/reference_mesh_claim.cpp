@@ -1,4 +1,4 @@
-// Claim (docs/MESH.md, pass 1; shaders_comp/mesh_claim.comp): every edge a dirty cube's new type needs
+// Claim (docs/MESH.md, pass 1; shaders_comp/claim_vertices/mesh_claim.comp): every edge a dirty cube's new type needs
 // gets a vertex from the heap, block by block or in the lock-free parity passes.
 #include "cpu/reference_mesh_internal.h"
 

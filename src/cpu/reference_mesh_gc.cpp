@@ -1,4 +1,4 @@
-// Garbage collection (docs/MESH.md, pass 4; shaders_comp/free_vertices.comp, free_chunks.comp): the frame's
+// Garbage collection (docs/MESH.md, pass 4; shaders_comp/mesh_gc/free_vertices.comp, free_chunks.comp): the frame's
 // candidates still without a triangle go back to the vertex heap, released chunks to the chunk heap.
 #include "cpu/reference_mesh_internal.h"
 

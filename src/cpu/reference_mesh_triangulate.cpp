@@ -1,4 +1,4 @@
-// Triangulation (docs/MESH.md, pass 3; shaders_comp/mesh_triangulate.comp): a cube whose type changed (or
+// Triangulation (docs/MESH.md, pass 3; shaders_comp/triangulate/mesh_triangulate.comp): a cube whose type changed (or
 // that is INCOMPLETE) releases its triangles and builds its new type's on its edge vertices, in its chunk.
 #include "cpu/reference_mesh_internal.h"
 

@@ -18,7 +18,7 @@ struct RecyclingRule {
     bool enabled() const { return keepRadius > 0.0f || starveAfterFrames > 0; }
 };
 
-// blockOutsideKeepRadius of common.glsl, the same float operations in the same order: whether the block's
+// blockOutsideKeepRadius of structure/frame.glsl, the same float operations in the same order: whether the block's
 // centre lies farther than keepRadius (> 0) from the camera position (the last column of cameraToWorld rows).
 bool blockOutsideKeepRadius(const BlockCoord& c, float voxelSize, float keepRadius, const float cameraToWorld[3][4]);
 

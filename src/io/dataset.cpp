@@ -1,4 +1,5 @@
 #include "io/dataset.h"
+#include "io/data_dir.h"
 #include "io/parsers.h"
 
 #include <Eigen/Geometry>
@@ -456,9 +457,11 @@ struct Candidate {
 
 struct Layout {
     DatasetKind kind = DatasetKind::TUM;
-    Intrinsics intrinsics;          // the layout's default
+    // The layout's default calibration: a camera preset (data/cameras/<name>/camera.json), read by
+    // Dataset::open only when the folder's camera.json and the options leave a value to it.
+    std::string preset;
+    std::optional<Intrinsics> folderIntrinsics;  // the sequence's own calibration file (7-Scenes)
     std::string intrinsicsWarning;  // set when the default is a guess rather than the sequence's calibration
-    double depthScale = 5000.0;
     std::optional<uint16_t> invalidRaw;
     std::vector<FrameInfo> frames;  // frames with a pose, in time order
     std::vector<std::string> warnings;
@@ -575,21 +578,17 @@ Layout readTum(const fs::path& folder, const std::string& folderName) {
     // the name says which TUM sensor recorded the sequence.
     bool icl = containsWord(folderName, "icl") || (tumSensor == 0 && timestampsAreFrameIndices(depth));
     layout.kind = icl ? DatasetKind::ICLNUIM : DatasetKind::TUM;
-    layout.depthScale = 5000.0;
+    // The default calibration is a preset in data/cameras/ (ICL-NUIM's fy is negative: its poses are for a
+    // camera whose image y axis points up).
     if (icl) {
-        // fy is negative: ICL-NUIM's poses are for a camera whose image y axis points up.
-        layout.intrinsics = {481.2f, -480.0f, 319.5f, 239.5f, 0, 0};
-    } else if (tumSensor == 1) {
-        layout.intrinsics = {517.3f, 516.5f, 318.6f, 255.3f, 0, 0};
-    } else if (tumSensor == 2) {
-        layout.intrinsics = {520.9f, 521.0f, 325.1f, 249.7f, 0, 0};
-    } else if (tumSensor == 3) {
-        layout.intrinsics = {535.4f, 539.2f, 320.1f, 247.6f, 0, 0};
+        layout.preset = "icl_nuim";
+    } else if (tumSensor != 0) {
+        layout.preset = "tum_fr" + std::to_string(tumSensor);
     } else {
-        layout.intrinsics = {525.0f, 525.0f, 319.5f, 239.5f, 0, 0};
+        layout.preset = "tum_default";
+        // Dataset::open appends the preset's values.
         layout.intrinsicsWarning = "folder name '" + folderName +
-                                   "' names no TUM sensor (freiburg1/2/3 or fr1/2/3); using the default "
-                                   "intrinsics 525 525 319.5 239.5 (give --intrinsics or a camera.json)";
+                                   "' names no TUM sensor (freiburg1/2/3 or fr1/2/3); using the default intrinsics";
     }
 
     // TUM's motion capture runs at ~100 Hz, so a pose within 20 ms exists unless tracking dropped out;
@@ -640,8 +639,7 @@ std::vector<fs::path> filesWithExtension(const fs::path& dir, const std::string&
 Layout readRedwood(const fs::path& folder, const fs::path& logFile) {
     Layout layout;
     layout.kind = DatasetKind::Redwood;
-    layout.depthScale = 1000.0;
-    layout.intrinsics = {525.0f, 525.0f, 319.5f, 239.5f, 0, 0};
+    layout.preset = "redwood";  // PrimeSense defaults, depth in millimetres
 
     std::vector<fs::path> images = filesWithExtension(folder / "depth", ".png");
     if (images.empty()) throw Error("Redwood layout: " + (folder / "depth").string() + " holds no .png depth images");
@@ -722,9 +720,8 @@ std::vector<double> readNumbers(const fs::path& file, size_t count, const std::s
 Layout readSevenScenes(const fs::path& folder, const std::vector<SevenScenesFrame>& images) {
     Layout layout;
     layout.kind = DatasetKind::SevenScenes;
-    layout.depthScale = 1000.0;
+    layout.preset = "seven_scenes";  // depth in millimetres
     layout.invalidRaw = 65535;  // the Kinect's "no reading" marker in 7-Scenes, besides 0
-    layout.intrinsics = {585.0f, 585.0f, 320.0f, 240.0f, 0, 0};
 
     // Calibration may sit beside the frames or, for a seq-XX folder, in the scene folder above it.
     for (const fs::path& dir : {folder, folder.parent_path()}) {
@@ -736,7 +733,7 @@ Layout readSevenScenes(const fs::path& folder, const std::vector<SevenScenesFram
             if (!std::isfinite(v)) throw Error(kFile.string() + ": value " + fmt(v) + " is not finite");
         if (K[0] <= 0 || K[4] <= 0)
             throw Error(kFile.string() + ": focal length fx=" + fmt(K[0]) + " fy=" + fmt(K[4]) + " must be positive");
-        layout.intrinsics = {float(K[0]), float(K[4]), float(K[2]), float(K[5]), 0, 0};
+        layout.folderIntrinsics = Intrinsics{float(K[0]), float(K[4]), float(K[2]), float(K[5]), 0, 0};
         break;
     }
 
@@ -825,6 +822,25 @@ std::string toString(DatasetKind kind) {
         case DatasetKind::SevenScenes: return "7-Scenes";
     }
     return "unknown";
+}
+
+CameraPreset loadCameraPreset(const std::string& name) {
+    CameraPreset preset;
+    preset.name = name;
+    preset.file = io::findDataFile("cameras/" + name + "/camera.json");
+    std::ifstream in = openText(preset.file);
+    const io::CameraJson c = io::parseCameraJson(in, preset.file.string());
+    // A preset is the product's own file: every value stated, nothing unknown (a typo must not fall back).
+    std::string missing;
+    for (const auto& [key, value] : {std::pair<const char*, bool>{"fx", bool(c.fx)}, {"fy", bool(c.fy)}, {"cx", bool(c.cx)},
+                                     {"cy", bool(c.cy)}, {"depth_scale", bool(c.depthScale)}})
+        if (!value) missing += (missing.empty() ? "" : ", ") + std::string(key);
+    if (!missing.empty()) throw Error(preset.file.string() + ": a camera preset must give fx, fy, cx, cy and depth_scale; missing " + missing);
+    if (!c.ignoredKeys.empty()) throw Error(preset.file.string() + ": unknown key " + c.ignoredKeys.front() + " in a camera preset");
+    preset.intrinsics = {float(*c.fx), float(*c.fy), float(*c.cx), float(*c.cy), c.width.value_or(0), c.height.value_or(0)};
+    checkIntrinsics(preset.intrinsics, preset.file.string());
+    preset.depthScale = *c.depthScale;
+    return preset;
 }
 
 Intrinsics parseIntrinsics(const std::string& text) {
@@ -935,37 +951,47 @@ std::unique_ptr<Dataset> Dataset::open(const fs::path& folderIn, const DatasetOp
     ds->warnings_ = std::move(layout.warnings);
     ds->skippedFrames_ = layout.skipped;
 
-    // --- calibration: DatasetOptions > camera.json > layout default ---
-    Intrinsics k = layout.intrinsics;
-    double scale = layout.depthScale;
-    bool guessed = !layout.intrinsicsWarning.empty();
+    // --- calibration: DatasetOptions > camera.json > the sequence's own file (7-Scenes) > the layout's preset ---
     fs::path cameraJson = folder / "camera.json";
     std::optional<io::CameraJson> camera;
     if (fs::is_regular_file(cameraJson, ec)) {
         camera = readCameraJson(cameraJson);
-        const io::CameraJson& c = *camera;
-        if (!c.ignoredKeys.empty()) {
+        if (!camera->ignoredKeys.empty()) {
             std::string keys;
-            for (const auto& key : c.ignoredKeys) keys += (keys.empty() ? "" : ", ") + key;
+            for (const auto& key : camera->ignoredKeys) keys += (keys.empty() ? "" : ", ") + key;
             ds->warnings_.push_back(cameraJson.string() + ": ignored unknown keys " + keys +
                                     " (known: fx, fy, cx, cy, depth_scale, width, height)");
         }
+    }
+    // The preset is read only when something is left to it, so that a fully calibrated folder needs no data files.
+    const bool intrinsicsGiven = options.intrinsics || (camera && camera->hasAllIntrinsics()) || layout.folderIntrinsics;
+    const bool scaleGiven = options.depthScale || (camera && camera->depthScale);
+    Intrinsics k;
+    double scale = 0;
+    if (!intrinsicsGiven || !scaleGiven) {
+        const CameraPreset preset = loadCameraPreset(layout.preset);
+        k = preset.intrinsics;
+        scale = preset.depthScale;
+        if (!intrinsicsGiven && !layout.intrinsicsWarning.empty())
+            ds->warnings_.push_back(layout.intrinsicsWarning + " " + fmt(k.fx) + " " + fmt(k.fy) + " " + fmt(k.cx) + " " +
+                                    fmt(k.cy) + " (give --intrinsics or a camera.json)");
+    }
+    if (layout.folderIntrinsics) k = *layout.folderIntrinsics;
+    if (camera) {
+        const io::CameraJson& c = *camera;
         if (c.fx) k.fx = float(*c.fx);
         if (c.fy) k.fy = float(*c.fy);
         if (c.cx) k.cx = float(*c.cx);
         if (c.cy) k.cy = float(*c.cy);
         if (c.depthScale) scale = *c.depthScale;
-        if (c.hasAllIntrinsics()) guessed = false;
     }
     if (options.intrinsics) {
         k.fx = options.intrinsics->fx;
         k.fy = options.intrinsics->fy;
         k.cx = options.intrinsics->cx;
         k.cy = options.intrinsics->cy;
-        guessed = false;
     }
     if (options.depthScale) scale = *options.depthScale;
-    if (guessed) ds->warnings_.push_back(layout.intrinsicsWarning);
     // A negative fy flips the image vertically: right for ICL-NUIM's poses (its default has one), a mirrored
     // reconstruction anywhere else.
     if (k.fy < 0 && layout.kind != DatasetKind::ICLNUIM)

@@ -9,6 +9,11 @@
 //   7-Scenes      frame-NNNNNN.depth.png (mm, 0 and 65535 invalid) + frame-NNNNNN.pose.txt.
 // Any layout may carry a camera.json ({"fx","fy","cx","cy","depth_scale"}, all optional).
 // Precedence of calibration values: DatasetOptions > camera.json > the layout's default.
+// The layouts' defaults are camera presets in vkmesh's data folder (data/cameras/<name>/camera.json, the
+// same format; found as io/data_dir.h says): tum_fr1, tum_fr2, tum_fr3 (chosen by freiburgN / frN in the
+// folder name), tum_default (a TUM folder that names no sensor), icl_nuim, redwood, seven_scenes. A preset
+// is read only when the folder and the options leave a value to it: a fully calibrated folder needs no data.
+// Part of the vkmesh_io library (OpenCV reads the PNGs).
 #pragma once
 
 #include "core/types.h"
@@ -80,6 +85,17 @@ private:
     std::vector<std::string> warnings_;
     size_t skippedFrames_ = 0;
 };
+
+// A camera preset: data/cameras/<name>/camera.json with all of fx, fy, cx, cy and depth_scale.
+struct CameraPreset {
+    std::string name;
+    std::filesystem::path file;  // where it was read
+    Intrinsics intrinsics;       // width/height 0 unless the file states them
+    double depthScale = 0;       // raw units per metre
+};
+// Reads preset `name`. Throws Error naming the missing file and the folders searched (io/data_dir.h), or the
+// file and the value at fault when it is incomplete or invalid.
+CameraPreset loadCameraPreset(const std::string& name);
 
 // Parses "fx,fy,cx,cy" (as given to --intrinsics); width and height stay 0. Throws Error naming the bad
 // value: not four numbers, a non-number, non-finite values, or fx/fy equal to 0.

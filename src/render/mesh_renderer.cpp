@@ -1,8 +1,6 @@
 #include "render/mesh_renderer.h"
 
 #include <Eigen/Geometry>
-#include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -572,39 +570,14 @@ Image MeshRenderer::draw(const Geometry& geometry, const RenderPush& push, int w
     return image;
 }
 
-void writePng(const std::filesystem::path& path, const Image& image) {
-    if (image.width <= 0 || image.height <= 0 || image.rgba.size() != size_t(image.width) * image.height * 4)
-        throw Error("cannot write " + path.string() + ": the image is empty or inconsistent");
-    cv::Mat bgr(image.height, image.width, CV_8UC3);
-    for (int y = 0; y < image.height; ++y) {
-        uint8_t* row = bgr.ptr<uint8_t>(y);
-        for (int x = 0; x < image.width; ++x) {
-            const uint8_t* p = image.pixel(x, y);
-            row[3 * x + 0] = p[2];
-            row[3 * x + 1] = p[1];
-            row[3 * x + 2] = p[0];
-        }
-    }
-    bool ok = false;
-    try {
-        ok = cv::imwrite(path.string(), bgr);
-    } catch (const cv::Exception& e) {
-        throw Error("cannot write " + path.string() + ": " + e.what());
-    }
-    if (!ok) throw Error("cannot write " + path.string());
-}
-
-Image renderMeshFile(const vk::Context& context, const std::filesystem::path& meshPath, const std::filesystem::path& pngPath,
-                     const RenderOptions& options) {
+Image renderMeshFile(const vk::Context& context, const std::filesystem::path& meshPath, const RenderOptions& options) {
     if (!std::filesystem::exists(meshPath)) throw Error("mesh file " + meshPath.string() + " does not exist");
     Mesh mesh = readPly(meshPath);  // throws Error naming the file when it is unreadable
     if (mesh.positions.empty() || mesh.triangles.empty())
         throw Error("mesh file " + meshPath.string() + " is empty (" + std::to_string(mesh.positions.size()) + " vertices, " +
                     std::to_string(mesh.triangles.size()) + " triangles): nothing to render");
     MeshRenderer renderer(context);
-    Image image = renderer.render(mesh, options);
-    writePng(pngPath, image);
-    return image;
+    return renderer.render(mesh, options);
 }
 
 }  // namespace vkmesh::render

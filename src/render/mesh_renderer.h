@@ -1,6 +1,7 @@
 // Headless, offscreen rendering of a triangle mesh with a Vulkan graphics pipeline (classic render pass +
 // framebuffer, so Vulkan 1.2 is enough): colour R8G8B8A8_UNORM + depth D32_SFLOAT, one indexed draw, the
-// image copied back to the host. Used by `vkmesh render` (see renderMeshFile) and the tests.
+// image copied back to the host. Used by `vkmesh render` (see renderMeshFile) and the tests. PNG writing is
+// not here (the renderer links no image library): io::writePng in io/png.h.
 #pragma once
 
 #include <Eigen/Core>
@@ -15,6 +16,7 @@
 #include "core/types.h"
 #include "gpu/gpu_volume.h"
 #include "io/ply.h"
+#include "render/image.h"
 #include "vk/commands.h"
 #include "vk/context.h"
 
@@ -49,14 +51,6 @@ struct RenderOptions {
     int height = 600;
     std::optional<Camera> camera;  // none: defaultCamera(mesh, width, height)
     ColorMode color = ColorMode::Shade;
-};
-
-// An RGBA8 image, row-major, top row first.
-struct Image {
-    int width = 0;
-    int height = 0;
-    std::vector<uint8_t> rgba;
-    const uint8_t* pixel(int x, int y) const { return &rgba[(static_cast<size_t>(y) * width + x) * 4]; }
 };
 
 // Parses "shade" / "normal" / "age"; throws Error naming the value otherwise.
@@ -113,13 +107,8 @@ private:
     VkPipeline pipeline_ = VK_NULL_HANDLE;
 };
 
-// Writes an RGBA image as an 8-bit PNG (alpha dropped: the renderer's output is opaque). Throws Error
-// naming the path when it cannot be written.
-void writePng(const std::filesystem::path& path, const Image& image);
-
-// What `vkmesh render` does: reads the mesh (PLY), renders it and writes the PNG. Throws Error naming the
-// file for a missing, unreadable or empty mesh.
-Image renderMeshFile(const vk::Context& context, const std::filesystem::path& meshPath,
-                     const std::filesystem::path& pngPath, const RenderOptions& options);
+// What `vkmesh render` does before writing the PNG (io::writePng, io/png.h, in the vkmesh_io library):
+// reads the mesh (PLY) and renders it. Throws Error naming the file for a missing, unreadable or empty mesh.
+Image renderMeshFile(const vk::Context& context, const std::filesystem::path& meshPath, const RenderOptions& options);
 
 }  // namespace vkmesh::render

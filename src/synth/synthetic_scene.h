@@ -1,6 +1,7 @@
 // Synthetic RGB-D input with exact ground truth: an analytic scene (a signed distance function built from
 // a few primitives), a sphere-tracing depth renderer with an optional Kinect-like noise model, smooth camera
-// paths, and a writer for the TUM RGB-D folder layout that vkmesh's dataset reader opens.
+// paths. The writer for the TUM RGB-D folder layout that vkmesh's dataset reader opens is synth/tum_sequence.h
+// (part of the vkmesh_io library: it writes PNGs).
 //
 // Conventions (the same as everywhere in vkmesh):
 //   * world z is up; metres; poses are camera-to-world;
@@ -137,32 +138,9 @@ enum class PathKind {
 // det +1). Throws Error for frames = 0.
 std::vector<Pose> cameraPath(size_t frames, PathKind kind = PathKind::Orbit);
 
-struct SequenceOptions {
-    size_t frames = 60;
-    int width = 640, height = 480;
-    // intrinsics.width/height must equal width/height above (writeTumSequence throws otherwise, rather than
-    // guess how calibration made for one image size applies to another): use kinectIntrinsics(w, h).
-    Intrinsics intrinsics = kinectIntrinsics(640, 480);
-    bool noise = false;
-    uint32_t seed = 1;  // frame i is rendered with a seed derived from (seed, i)
-    PathKind path = PathKind::Orbit;
-    float maxRange = 8;
-    double gtPointSpacing = 0.005;  // metres between ground-truth surface samples in gt_points.ply
-};
-
-// Writes a TUM-layout sequence of `scene` seen along cameraPath(options.frames, options.path) into `dir`
-// (created if needed). The path is made for defaultRoom(); another scene is seen from the same poses (they
-// circle the world z axis at ~1.5 m height, looking down at a point ~0.55 m above the origin). Files:
-//   depth/NNNNNN.png   uint16, metres x 5000 rounded, 0 = no measurement;
-//   depth.txt          "timestamp depth/NNNNNN.png", timestamps 1.0, 1.033, ...;
-//   groundtruth.txt    "timestamp tx ty tz qx qy qz qw", camera-to-world, the same timestamps;
-//   camera.json        {"fx","fy","cx","cy","depth_scale":5000,"width","height"};
-//   gt_points.ply      binary little-endian point cloud (float x y z nx ny nz) sampled uniformly by area
-//                      on the visible-from-free-space surface of every object;
-//   scene.json         the objects and their parameters;  README.txt  what all this is.
-// Throws Error naming the folder, file or value at fault (frames = 0, bad intrinsics, unwritable folder).
-void writeTumSequence(const std::filesystem::path& dir, const SyntheticScene& scene,
-                      const SequenceOptions& options = {});
+// The seed frame `frame` of a sequence seeded `seed` is rendered with (writeTumSequence, synth/tum_sequence.h):
+// well mixed, so neighbouring frames' noise is unrelated.
+uint32_t frameSeed(uint32_t seed, size_t frame);
 
 // A surface point with its outward unit normal.
 struct SurfaceSample {

@@ -9,6 +9,8 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include <algorithm>
+#include <cstdlib>
+#include <optional>
 #include <cmath>
 #include <fstream>
 #include <functional>
@@ -771,4 +773,93 @@ TEST(DatasetReal, IclNuimOfficeTraj0) {
         EXPECT_GE(p1, 0.3f) << i;
         EXPECT_LE(p99, 6.0f) << i;
     }
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Camera presets (data/cameras/<name>/camera.json) and where they are found (io/data_dir.h).
+
+namespace {
+
+// Sets VKMESH_DATA_DIR for one test and restores what was there before.
+class DataDirOverride {
+public:
+    explicit DataDirOverride(const fs::path& dir) {
+        if (const char* old = std::getenv("VKMESH_DATA_DIR")) previous_ = old;
+        setenv("VKMESH_DATA_DIR", dir.c_str(), 1);
+    }
+    ~DataDirOverride() {
+        if (previous_)
+            setenv("VKMESH_DATA_DIR", previous_->c_str(), 1);
+        else
+            unsetenv("VKMESH_DATA_DIR");
+    }
+
+private:
+    std::optional<std::string> previous_;
+};
+
+}  // namespace
+
+TEST(CameraPresets, HoldTheSensorsCalibration) {
+    struct Case { std::string name; Intrinsics k; double depthScale; };
+    for (const Case& c : {Case{"tum_fr1", {517.3f, 516.5f, 318.6f, 255.3f}, 5000}, Case{"tum_fr2", {520.9f, 521.0f, 325.1f, 249.7f}, 5000},
+                          Case{"tum_fr3", {535.4f, 539.2f, 320.1f, 247.6f}, 5000}, Case{"tum_default", {525, 525, 319.5f, 239.5f}, 5000},
+                          Case{"icl_nuim", {481.2f, -480.0f, 319.5f, 239.5f}, 5000}, Case{"redwood", {525, 525, 319.5f, 239.5f}, 1000},
+                          Case{"seven_scenes", {585, 585, 320, 240}, 1000}}) {
+        const CameraPreset p = loadCameraPreset(c.name);
+        EXPECT_EQ(p.file.parent_path().filename(), c.name);
+        EXPECT_FLOAT_EQ(p.intrinsics.fx, c.k.fx) << c.name;
+        EXPECT_FLOAT_EQ(p.intrinsics.fy, c.k.fy) << c.name;
+        EXPECT_FLOAT_EQ(p.intrinsics.cx, c.k.cx) << c.name;
+        EXPECT_FLOAT_EQ(p.intrinsics.cy, c.k.cy) << c.name;
+        EXPECT_DOUBLE_EQ(p.depthScale, c.depthScale) << c.name;
+    }
+    EXPECT_NE(errorMessageOf([] { loadCameraPreset("no_such_sensor"); }).find("cameras/no_such_sensor/camera.json"),
+              std::string::npos);
+}
+
+TEST(CameraPresets, TheDataDirVariableWins) {
+    const fs::path data = test::makeTempDir("data_dir");
+    writeText(data / "cameras" / "tum_fr1" / "camera.json",
+              R"({"fx": 111, "fy": 112, "cx": 4, "cy": 3, "depth_scale": 1000})");
+    TumFixture f = makeTum("tum_fr1_rpy");
+    DataDirOverride override(data);
+    auto ds = Dataset::open(f.dir);
+    EXPECT_FLOAT_EQ(ds->intrinsics().fx, 111.0f);
+    EXPECT_FLOAT_EQ(ds->intrinsics().cy, 3.0f);
+    EXPECT_DOUBLE_EQ(ds->depthScale(), 1000.0);
+    // A folder's camera.json still overrides the preset.
+    writeText(f.dir / "camera.json", R"({"fx": 600.5})");
+    EXPECT_FLOAT_EQ(Dataset::open(f.dir)->intrinsics().fx, 600.5f);
+    EXPECT_FLOAT_EQ(Dataset::open(f.dir)->intrinsics().fy, 112.0f);
+}
+
+TEST(CameraPresets, AMissingOrBrokenPresetIsAClearError) {
+    const fs::path data = test::makeTempDir("data_dir_bad");
+    TumFixture f = makeTum("tum_fr2_desk");
+    DataDirOverride override(data);
+    std::string message = errorMessageOf([&] { Dataset::open(f.dir); });
+    EXPECT_NE(message.find((data / "cameras" / "tum_fr2" / "camera.json").string()), std::string::npos) << message;
+    EXPECT_NE(message.find("VKMESH_DATA_DIR"), std::string::npos) << message;
+    // Incomplete: a preset must state every value.
+    writeText(data / "cameras" / "tum_fr2" / "camera.json", R"({"fx": 520.9, "fy": 521.0, "cx": 325.1, "cy": 249.7})");
+    message = errorMessageOf([&] { Dataset::open(f.dir); });
+    EXPECT_NE(message.find("missing depth_scale"), std::string::npos) << message;
+    // A typo is not silently ignored.
+    writeText(data / "cameras" / "tum_fr2" / "camera.json",
+              R"({"fx": 520.9, "fy": 521.0, "cx": 325.1, "cy": 249.7, "depth_scale": 5000, "depth_sclae": 1})");
+    message = errorMessageOf([&] { Dataset::open(f.dir); });
+    EXPECT_NE(message.find("depth_sclae"), std::string::npos) << message;
+}
+
+TEST(CameraPresets, AFullyCalibratedFolderNeedsNoPreset) {
+    const fs::path empty = test::makeTempDir("data_dir_empty");
+    TumFixture f = makeTum("tum_fr3_office");
+    writeText(f.dir / "camera.json", R"({"fx": 500, "fy": 501, "cx": 4, "cy": 3, "depth_scale": 5000})");
+    DataDirOverride override(empty);
+    auto ds = Dataset::open(f.dir);
+    EXPECT_FLOAT_EQ(ds->intrinsics().fy, 501.0f);
+    // Without depth_scale the preset is needed again, and missing.
+    writeText(f.dir / "camera.json", R"({"fx": 500, "fy": 501, "cx": 4, "cy": 3})");
+    EXPECT_NE(errorMessageOf([&] { Dataset::open(f.dir); }).find("cameras/tum_fr3/camera.json"), std::string::npos);
 }

@@ -6,6 +6,7 @@
 #include "io/dataset.h"
 #include "io/ply.h"
 #include "synth/synthetic_scene.h"
+#include "synth/tum_sequence.h"
 #include "test_support.h"
 
 #include <gtest/gtest.h>
@@ -344,7 +345,7 @@ bool cliHasEval() {
 }  // namespace
 
 TEST(EvalCli, ScoresAMeshAndWritesJson) {
-    if (!cliHasEval()) GTEST_SKIP() << VKMESH_CLI << " has no `eval` command yet (host/main.cpp must add it)";
+    if (!cliHasEval()) GTEST_SKIP() << VKMESH_CLI << " has no `eval` command yet (host/commands.h must list it)";
     const fs::path dir = test::makeTempDir("eval_cli_plane");
     Mesh gt;
     gt.positions = latticeSquare(0.005);
@@ -370,7 +371,7 @@ TEST(EvalCli, ScoresAMeshAndWritesJson) {
 }
 
 TEST(EvalCli, DatasetRestrictsTheGroundTruth) {
-    if (!cliHasEval()) GTEST_SKIP() << VKMESH_CLI << " has no `eval` command yet (host/main.cpp must add it)";
+    if (!cliHasEval()) GTEST_SKIP() << VKMESH_CLI << " has no `eval` command yet (host/commands.h must list it)";
     const SphereSequence& s = sphereSequence();
     const fs::path out = test::makeTempDir("eval_cli_seen");
     // The GT cloud itself as the "reconstruction": all the seen GT is found, so recall is 1.
@@ -397,7 +398,7 @@ TEST(EvalCli, DatasetRestrictsTheGroundTruth) {
 }
 
 TEST(EvalCli, BadInputNamesTheFile) {
-    if (!cliHasEval()) GTEST_SKIP() << VKMESH_CLI << " has no `eval` command yet (host/main.cpp must add it)";
+    if (!cliHasEval()) GTEST_SKIP() << VKMESH_CLI << " has no `eval` command yet (host/commands.h must list it)";
     const fs::path dir = test::makeTempDir("eval_cli_bad");
     writePly(dir / "mesh.ply", rectangle(0, 1, 0, 1));
     writePly(dir / "empty.ply", Mesh{});

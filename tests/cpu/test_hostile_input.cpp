@@ -1,6 +1,6 @@
 // Broken and hostile input (issue 5): each case writes one broken file into an otherwise valid dataset (or
 // a mesh) and checks the outcome is a clear vkmesh::Error naming the file and the offending value, never a
-// crash and never a silently wrong result. The conventions followed (src/io/dataset.cpp, host/main.cpp):
+// crash and never a silently wrong result. The conventions followed (src/io/dataset.cpp, host/*_command.cpp):
 //   - a bad index, trajectory or calibration file rejects the whole dataset at Dataset::open (exit code 2
 //     in `vkmesh fuse`): every frame depends on it;
 //   - a bad depth image after frame 0 is an Error from loadDepth, which `vkmesh fuse` reports as a warning

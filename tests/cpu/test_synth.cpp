@@ -1,6 +1,7 @@
 // Synthetic scenes: the signed distance function, the sphere-tracing renderer, the noise model, the camera
 // path and the TUM-layout writer, each checked against closed-form ground truth.
 #include "synth/synthetic_scene.h"
+#include "synth/tum_sequence.h"
 #include "test_support.h"
 
 #include <gtest/gtest.h>

@@ -218,27 +218,32 @@ TEST_F(GpuTest, ExhaustedVertexHeapIsReportedAndFilledInAfterGrowth) { heapExhau
 
 TEST_F(GpuTest, ExhaustedChunkHeapIsReportedAndFilledInAfterGrowth) { heapExhaustionAndGrowth(context(), false); }
 
-// The CLI prints the warnings and its --stats JSON carries the counts.
+// The CLI prints the warnings and its --stats JSON carries the counts (--no-grow: fixed capacities). By
+// default the same tiny capacities grow: no warning, and the mesh of ample capacities.
 TEST_F(GpuTest, CliReportsCapacityEvents) {
     auto dir = test::makeTempDir("capacity_cli");
     auto synthRun = test::runCli("synth " + (dir / "seq").string() + " --frames 3 --width 160 --height 120");
     ASSERT_EQ(synthRun.exitCode, 0) << synthRun.err;
+    const std::string tiny = " --voxel 0.04 --vertices 256 --chunks 256 --blocks 64 -q";
     auto run = test::runCli("fuse " + (dir / "seq").string() + " -o " + (dir / "mesh.ply").string() + " --stats " +
-                            (dir / "stats.json").string() + " --voxel 0.04 --vertices 256 --chunks 256 --blocks 64 -q");
+                            (dir / "stats.json").string() + tiny + " --no-grow");
     ASSERT_EQ(run.exitCode, 0) << run.err;
     EXPECT_NE(run.err.find("block pool exhausted"), std::string::npos) << run.err;
     EXPECT_NE(run.err.find("vertex heap exhausted"), std::string::npos) << run.err;
     const std::string stats = test::readText(dir / "stats.json");
     for (const char* key : {"\"pool_exhausted\"", "\"vertex_heap_exhausted\"", "\"chunk_heap_exhausted\"", "\"triangles_not_built\"",
-                            "\"hash_full\"", "\"blocks_freed\""})
+                            "\"hash_full\"", "\"blocks_freed\"", "\"frames_deferred\"", "\"capacity_growth\""})
         EXPECT_NE(stats.find(key), std::string::npos) << key;
-    // With --grow-heaps the full heaps are grown and the final mesh is complete: the same as with ample heaps.
     auto grown = test::runCli("fuse " + (dir / "seq").string() + " -o " + (dir / "grown.ply").string() + " --stats " +
-                              (dir / "grown.json").string() + " --voxel 0.04 --vertices 256 --chunks 256 --grow-heaps -q");
+                              (dir / "grown.json").string() + tiny);
     ASSERT_EQ(grown.exitCode, 0) << grown.err;
-    EXPECT_NE(grown.err.find("mesh heaps grown to"), std::string::npos) << grown.err;
-    auto ample = test::runCli("fuse " + (dir / "seq").string() + " -o " + (dir / "ample.ply").string() + " --voxel 0.04 -q");
+    EXPECT_EQ(grown.err.find("warning"), std::string::npos) << grown.err;
+    const std::string grownStats = test::readText(dir / "grown.json");
+    EXPECT_NE(grownStats.find("block pool 64 -> "), std::string::npos) << grownStats;
+    // The deprecated --grow-heaps is accepted and says so.
+    auto ample = test::runCli("fuse " + (dir / "seq").string() + " -o " + (dir / "ample.ply").string() + " --voxel 0.04 -q --grow-heaps");
     ASSERT_EQ(ample.exitCode, 0) << ample.err;
+    EXPECT_NE(ample.err.find("deprecated"), std::string::npos) << ample.err;
     Mesh a = readPly(dir / "grown.ply"), b = readPly(dir / "ample.ply");
     EXPECT_EQ(a.positions.size(), b.positions.size());
     EXPECT_EQ(canonicalTriangles(a), canonicalTriangles(b));

@@ -40,7 +40,7 @@ protected:
             options.noise = true;   // noise moves vertices from frame to frame: CHANGED records
             options.seed = uint32_t(i + 1);
             gpu::FrameReport report = volume.integrate(scene.renderDepth(intr, poses[i % poses.size()], options), intr, poses[i % poses.size()]);
-            EXPECT_EQ(report.delta.frame, volume.framesIntegrated());
+            EXPECT_EQ(report.delta.frame, volume.frameNumber());
             replica.apply(report.delta);
             for (int k = 0; k < 3; ++k) kinds_[k] += report.delta.count(DeltaKind(k));
             exhausted_ += report.counters.vertexExhausted + report.counters.chunkExhausted;

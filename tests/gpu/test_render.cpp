@@ -9,6 +9,7 @@
 
 #include "gpu_fixture.h"
 #include "io/ply.h"
+#include "io/png.h"
 #include "render/mesh_renderer.h"
 #include "test_support.h"
 
@@ -198,7 +199,7 @@ TEST_F(Render, CommandPathWritesPngOfTheRequestedSize) {
     options.width = 123;
     options.height = 77;
     options.color = ColorMode::Age;
-    render::renderMeshFile(context(), dir / "square.ply", dir / "view.png", options);
+    io::writePng(dir / "view.png", render::renderMeshFile(context(), dir / "square.ply", options));
     cv::Mat png = cv::imread((dir / "view.png").string(), cv::IMREAD_UNCHANGED);
     ASSERT_FALSE(png.empty());
     EXPECT_EQ(png.cols, 123);
@@ -217,15 +218,15 @@ TEST_F(Render, ErrorsNameTheValue) {
         }
     };
     const auto missing = dir / "missing.ply";
-    expectError([&] { render::renderMeshFile(context(), missing, dir / "a.png", {}); }, missing.string());
+    expectError([&] { render::renderMeshFile(context(), missing, {}); }, missing.string());
     {
         std::ofstream(dir / "garbage.ply") << "not a ply file\n";
     }
-    expectError([&] { render::renderMeshFile(context(), dir / "garbage.ply", dir / "a.png", {}); }, "garbage.ply");
+    expectError([&] { render::renderMeshFile(context(), dir / "garbage.ply", {}); }, "garbage.ply");
     Mesh points;
     points.positions = {{0, 0, 0}, {1, 0, 0}};
     writePly(dir / "points.ply", points);
-    expectError([&] { render::renderMeshFile(context(), dir / "points.ply", dir / "a.png", {}); }, "points.ply");
+    expectError([&] { render::renderMeshFile(context(), dir / "points.ply", {}); }, "points.ply");
     expectError([] { render::parseCamera("1,2,3,4,5"); }, "1,2,3,4,5");
     expectError([] { render::parseCamera("1,2,x,4,5,6"); }, "1,2,x,4,5,6");
     expectError([] { render::parseCamera("1,1,1,1,1,1"); }, "1,1,1,1,1,1");

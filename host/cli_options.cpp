@@ -1,0 +1,96 @@
+#include "cli_options.h"
+
+#include <CLI/CLI.hpp>
+
+namespace vkmesh::cli {
+
+void DatasetArgs::add(CLI::App* cmd) {
+    cmd->add_option("DATASET", dataset, "dataset folder (TUM, ICL-NUIM, Redwood, 7-Scenes layout)")->required();
+    cmd->add_option("--frames", frames, "use at most N frames (0 = all)");
+    cmd->add_option("--max-depth", maxDepth, "ignore depth beyond M metres")->check(CLI::PositiveNumber);
+    cmd->add_option("--intrinsics", intrinsics, "override the camera: fx,fy,cx,cy");
+    cmd->add_option("--depth-scale", depthScale, "raw depth units per metre (5000 TUM, 1000 mm)")->check(CLI::PositiveNumber);
+}
+
+std::unique_ptr<Dataset> DatasetArgs::open() const {
+    DatasetOptions options;
+    if (!intrinsics.empty()) options.intrinsics = parseIntrinsics(intrinsics);
+    if (depthScale > 0) options.depthScale = depthScale;
+    options.maxDepth = maxDepth;
+    options.maxFrames = frames;
+    return Dataset::open(dataset, options);
+}
+
+void VolumeOptions::addCommon(CLI::App* cmd) {
+    cmd->add_option("--voxel", voxel, "voxel (cube) size in metres");
+    cmd->add_option("--blocks", blocks, "initial block pool capacity (8x8x8 voxels each); grows when nearly full")->check(CLI::PositiveNumber);
+    cmd->add_flag("--no-grow", noGrow,
+                  "keep every capacity (--blocks, --vertices, --chunks, --hash-slots) fixed: what does not fit is reported "
+                  "and skipped instead of grown past");
+    cmd->add_option("--keep-radius", keepRadius,
+                    "bounded map: keep only blocks within R metres of the camera; farther ones are not allocated and are "
+                    "freed with their mesh (0 = off, the default)")
+        ->check(CLI::NonNegativeNumber);
+    cmd->add_flag("--recycle", recycle,
+                  "bounded map: blocks not seen for --recycle-after frames lose --starve-weight per frame and are freed "
+                  "(with their mesh) once empty (off by default)");
+    cmd->add_option("--recycle-after", recycleAfter, "frames without a touch before a block starves")->check(CLI::PositiveNumber);
+    cmd->add_option("--starve-weight", starveWeight, "weight a starving block's corners lose per frame")
+        ->check(CLI::PositiveNumber);
+}
+
+void VolumeOptions::addTuning(CLI::App* cmd) {
+    cmd->add_option("--mode", mode,
+                    "incremental: one shared-vertex mesh updated every frame (default); "
+                    "baseline: marching cubes at the end, every triangle with its own 3 vertices")
+        ->check(CLI::IsMember({"incremental", "baseline"}));
+    cmd->add_flag("--refine,!--no-refine", refine,
+                  "Hamming-distance refinement of cube types (paper §V.F; off by default: it opens cracks between "
+                  "refined and unrefined cubes, see docs/REFINEMENT.md)");
+    cmd->add_option("--refine-eps", refineEps, "refinement: corners within this many voxels of the surface may flip")
+        ->check(CLI::Range(0.0f, 1.0f));
+    cmd->add_flag("--lock-free", lockFree, "claim edge vertices in 4 parity-class passes without atomics (paper's lock-free)");
+    cmd->add_option("--vertices", vertices, "initial vertex heap capacity (grows when nearly full)")->check(CLI::PositiveNumber);
+    cmd->add_option("--chunks", chunks, "initial triangle chunk heap capacity (5 triangles each; grows when nearly full)")->check(CLI::PositiveNumber);
+    cmd->add_option("--hash-slots", hashSlots, "initial spatial hash capacity, a power of two (0 = 2x --blocks; grows when half full)");
+    cmd->add_option("--trunc", truncVoxels, "truncation distance in voxels");
+    cmd->add_option("--max-weight", maxWeight, "cap of the TSDF weight");
+    cmd->add_option("--min-weight", minWeight, "a cube is meshed when its 8 corners have at least this weight")
+        ->check(CLI::Range(1.0f, 255.0f));
+    cmd->add_option("--alloc-stride", allocStride,
+                    "allocate blocks from every Nth pixel in x and y (1 = every pixel, as the paper; Open3D uses 4)")
+        ->check(CLI::Range(1, 64));
+}
+
+gpu::GpuVolumeConfig VolumeOptions::toConfig(float maxDepth, int width, int height) const {
+    gpu::GpuVolumeConfig config;
+    config.params.voxelSize = voxel;
+    config.params.truncVoxels = truncVoxels;
+    config.params.maxWeight = maxWeight;
+    config.params.maxDepth = maxDepth;
+    config.params.allocationStride = allocStride;
+    config.minMeshWeight = minWeight;
+    config.meshMode = incremental() ? gpu::MeshMode::Incremental : gpu::MeshMode::Baseline;
+    config.refine = refine;
+    config.refineEpsilonVoxels = refineEps;
+    config.lockFree = lockFree;
+    config.blockCapacity = blocks;
+    config.vertexCapacity = vertices;
+    config.chunkCapacity = chunks;
+    config.hashCapacity = hashSlots;
+    config.keepRadius = keepRadius;
+    config.recycle = recycle;
+    config.recycleAfterFrames = recycleAfter;
+    config.starveWeight = starveWeight;
+    config.growCapacities = !noGrow;
+    config.imageWidth = width;
+    config.imageHeight = height;
+    return config;
+}
+
+void DeviceArgs::add(CLI::App* cmd) {
+    cmd->add_option("--device", device, "Vulkan device index (see `vkmesh devices`)");
+    cmd->add_flag("--validation", validation, "enable the Khronos validation layer (or VKMESH_VALIDATION=1)");
+}
+
+}  // namespace vkmesh::cli

@@ -1,0 +1,75 @@
+// Options more than one subcommand takes, each registered and mapped in one place:
+//   DatasetArgs    DATASET --frames --max-depth --intrinsics --depth-scale   (frames, fuse) -> Dataset::open
+//   VolumeOptions  --voxel --blocks, bounded maps; fuse adds the tuning ones  (fuse, soak)  -> GpuVolumeConfig
+//   DeviceArgs     --device --validation                                     (fuse, render, soak) -> vk::Context
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "gpu/gpu_volume.h"
+#include "io/dataset.h"
+#include "vk/context.h"
+
+namespace CLI {
+class App;
+}
+
+namespace vkmesh::cli {
+
+struct DatasetArgs {
+    std::string dataset;
+    size_t frames = 0;
+    float maxDepth = 4.0f;
+    std::string intrinsics;
+    double depthScale = 0;
+
+    void add(CLI::App* cmd);
+    std::unique_ptr<Dataset> open() const;
+};
+
+// The GPU volume's options. The defaults are GpuVolumeConfig's, so a command that offers only some of them
+// (soak) gets the library's values for the rest; a command may change a default before add*().
+struct VolumeOptions {
+    std::string mode = "incremental";   // "incremental" or "baseline"
+    float voxel = VolumeParams{}.voxelSize;
+    float truncVoxels = VolumeParams{}.truncVoxels;
+    float maxWeight = VolumeParams{}.maxWeight;
+    float minWeight = gpu::GpuVolumeConfig{}.minMeshWeight;
+    int allocStride = VolumeParams{}.allocationStride;
+    bool refine = gpu::GpuVolumeConfig{}.refine;
+    float refineEps = gpu::GpuVolumeConfig{}.refineEpsilonVoxels;
+    bool lockFree = gpu::GpuVolumeConfig{}.lockFree;
+    uint32_t blocks = gpu::GpuVolumeConfig{}.blockCapacity;
+    uint32_t vertices = gpu::GpuVolumeConfig{}.vertexCapacity;
+    uint32_t chunks = gpu::GpuVolumeConfig{}.chunkCapacity;
+    uint32_t hashSlots = gpu::GpuVolumeConfig{}.hashCapacity;   // 0: twice the block capacity, a power of two
+    float keepRadius = gpu::GpuVolumeConfig{}.keepRadius;
+    bool recycle = gpu::GpuVolumeConfig{}.recycle;
+    uint32_t recycleAfter = gpu::GpuVolumeConfig{}.recycleAfterFrames;
+    float starveWeight = gpu::GpuVolumeConfig{}.starveWeight;
+    bool noGrow = !gpu::GpuVolumeConfig{}.growCapacities;
+
+    // --voxel, --blocks, --no-grow and the bounded-map options (--keep-radius, --recycle, --recycle-after,
+    // --starve-weight).
+    void addCommon(CLI::App* cmd);
+    // The rest (fuse): --mode, --refine, --refine-eps, --lock-free, --vertices, --chunks, --hash-slots,
+    // --trunc, --max-weight, --min-weight, --alloc-stride.
+    void addTuning(CLI::App* cmd);
+
+    bool incremental() const { return mode != "baseline"; }
+    // The volume configuration for images of width x height, depth used up to maxDepth metres.
+    gpu::GpuVolumeConfig toConfig(float maxDepth, int width, int height) const;
+};
+
+struct DeviceArgs {
+    int device = -1;
+    bool validation = false;
+
+    void add(CLI::App* cmd);
+    vk::ContextOptions contextOptions() const { return {device, validation}; }
+};
+
+}  // namespace vkmesh::cli

@@ -1,0 +1,362 @@
+// `vkmesh fuse DATASET -o mesh.ply`: fuses a depth sequence on the GPU and writes its mesh, optionally with
+// the --stats JSON (counts, timings, memory: keys read by users' scripts, never renamed or dropped), pictures
+// while fusing (--render-every) and the mesh-delta stream (--deltas).
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <limits>
+#include <map>
+#include <memory>
+#include <numeric>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "api/exported_mesh.h"
+#include "cli_options.h"
+#include "commands.h"
+#include "core/mesh_analysis.h"
+#include "core/refinement.h"
+#include "gpu/gpu_volume.h"
+#include "io/dataset.h"
+#include "io/delta_stream.h"
+#include "io/ply.h"
+#include "io/png.h"
+#include "render/mesh_renderer.h"
+#include "vk/context.h"
+
+namespace vkmesh::cli {
+
+namespace {
+
+using json = nlohmann::json;
+
+struct FuseArgs {
+    DatasetArgs data;
+    VolumeOptions volume;
+    DeviceArgs device;
+    std::string output;
+    std::string statsPath;
+    bool growHeaps = false;
+    bool quiet = false;
+    // Pictures while fusing (drawn from the GPU mesh buffers) and the mesh-delta stream.
+    uint32_t renderEvery = 0;
+    std::string renderDir;
+    std::string renderView = "sensor";
+    std::string renderColor = "shade";
+    std::string deltasPath;
+};
+
+json statsOf(std::vector<double> values) {
+    if (values.empty()) return json{{"median", nullptr}, {"mean", nullptr}, {"max", nullptr}};
+    double mean = std::accumulate(values.begin(), values.end(), 0.0) / values.size();
+    std::sort(values.begin(), values.end());
+    double median = values.size() % 2 ? values[values.size() / 2]
+                                      : 0.5 * (values[values.size() / 2 - 1] + values[values.size() / 2]);
+    return json{{"median", median}, {"mean", mean}, {"max", values.back()}};
+}
+
+int runFuse(const FuseArgs& args) {
+    if (args.growHeaps)
+        std::cerr << "note: --grow-heaps is deprecated and has no effect: capacities grow by default (--no-grow keeps them fixed)\n";
+    auto dataset = args.data.open();
+    for (const auto& w : dataset->warnings()) std::cerr << "warning: " << w << "\n";
+    if (dataset->size() == 0) throw Error("no usable frame in " + args.data.dataset);
+    const Intrinsics& intrinsics = dataset->intrinsics();
+
+    vk::Context context(args.device.contextOptions());
+    gpu::GpuVolumeConfig config = args.volume.toConfig(args.data.maxDepth, intrinsics.width, intrinsics.height);
+    const bool rendering = args.renderEvery > 0;
+    if ((rendering || !args.deltasPath.empty()) && config.meshMode != gpu::MeshMode::Incremental)
+        throw Error("--render-every and --deltas need --mode incremental (the baseline keeps no mesh between frames)");
+    if (rendering && args.renderDir.empty()) throw Error("--render-every needs --render-dir");
+    config.publishMesh = rendering;
+    config.trackDeltas = !args.deltasPath.empty();
+    gpu::GpuVolume volume(context, config);
+    std::optional<render::MeshRenderer> renderer;
+    render::RenderOptions renderOptions;
+    if (rendering) {
+        std::filesystem::create_directories(args.renderDir);
+        renderer.emplace(context);
+        renderOptions.width = intrinsics.width;
+        renderOptions.height = intrinsics.height;
+        renderOptions.color = render::parseColorMode(args.renderColor);
+    }
+    std::optional<DeltaStreamWriter> deltaStream;
+    if (!args.deltasPath.empty()) deltaStream.emplace(args.deltasPath);
+    size_t picturesWritten = 0;
+    // Near/far planes of the sensor view: everything the sensor can see lies within maxDepth of a camera.
+    Eigen::Vector3f seenMin = Eigen::Vector3f::Constant(std::numeric_limits<float>::max()), seenMax = -seenMin;
+
+    const bool tty = isatty(STDERR_FILENO);
+    std::map<std::string, std::vector<double>> stageMs, perFrame;
+    std::vector<double> frameWallMs;
+    size_t integrated = 0, skipped = 0;
+    uint64_t hashFull = 0, poolExhausted = 0, touchedOverflow = 0;
+    // Every other capacity event and the recycling counts, summed over the frames (the --stats JSON).
+    std::map<std::string, uint64_t> events;
+    size_t framesDeferred = 0;
+    std::vector<std::string> growth;   // what grew, frame by frame (the library's policy, --stats "capacity_growth")
+    std::vector<std::string> warnings;
+    auto warn = [&](const std::string& w) {
+        if (warnings.size() < 1000) warnings.push_back(w);
+        if (tty && !args.quiet) std::cerr << "\n";
+        std::cerr << "warning: " << w << "\n";
+    };
+    const auto start = std::chrono::steady_clock::now();
+    for (size_t i = 0; i < dataset->size(); ++i) {
+        DepthImage depth;
+        try {
+            depth = dataset->loadDepth(i);
+        } catch (const Error& e) {
+            warn(std::string("frame ") + std::to_string(i) + " skipped: " + e.what());
+            ++skipped;
+            continue;
+        }
+        size_t valid = std::count_if(depth.meters.begin(), depth.meters.end(), [&](float d) { return d > 0.0f; });
+        if (valid == 0) {
+            warn("frame " + std::to_string(i) + " skipped: no valid depth in " + dataset->frame(i).depthPath.string());
+            ++skipped;
+            continue;
+        }
+        auto t0 = std::chrono::steady_clock::now();
+        gpu::FrameReport report = volume.integrate(depth, intrinsics, dataset->frame(i).cameraToWorld);
+        frameWallMs.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+        ++integrated;
+        double meshMs = 0;
+        for (const auto& [name, ms] : report.stageMs) {
+            stageMs[name].push_back(ms);
+            if (name.rfind("mesh_", 0) == 0) meshMs += ms;
+        }
+        if (config.meshMode == gpu::MeshMode::Incremental) stageMs["mesh_total"].push_back(meshMs);
+        perFrame["touched_blocks"].push_back(report.counters.touchedCount);
+        perFrame["dirty_blocks"].push_back(report.counters.dirtyCount);
+        perFrame["cubes_retyped"].push_back(report.counters.cubesRetyped);
+        perFrame["triangles_created"].push_back(report.counters.trianglesCreated);
+        hashFull += report.counters.hashFull;
+        poolExhausted += report.counters.poolExhausted;
+        touchedOverflow += report.counters.touchedCount > volume.config().touchedCapacity;
+        const gpu::Counters& c = report.counters;
+        for (const auto& [name, value] :
+             {std::pair<const char*, uint32_t>{"vertex_heap_exhausted", c.vertexExhausted},
+              {"chunk_heap_exhausted", c.chunkExhausted},
+              {"triangles_not_built", c.trianglesInvalid},
+              {"retype_deferred", c.retypeDeferred},
+              {"gc_candidates_dropped", c.candidateCount > volume.config().vertexCapacity ? c.candidateCount - volume.config().vertexCapacity : 0u},
+              {"out_of_range", c.outOfRange},
+              {"ray_truncated", c.rayTruncated},
+              {"outside_keep_radius", c.outsideRadius},
+              {"blocks_retired", c.blocksRetired},
+              {"blocks_starved", c.blocksStarved},
+              {"blocks_freed", c.blocksFreed},
+              {"recycle_deferred", c.recycleDeferred},
+              {"hash_rebuilds", c.hashRebuilt},
+              {"rehash_lost", c.rehashLost}})
+            events[name] += value;
+        for (const auto& w : report.warnings) warn("frame " + std::to_string(i) + ": " + w);
+        for (const auto& g : report.growth) {
+            growth.push_back("frame " + std::to_string(i) + ": " + g);
+            if (report.growth.size() + growth.size() < 1000 && !args.quiet) {
+                if (tty) std::cerr << "\n";
+                std::cerr << "note: frame " << i << ": grew " << g << "\n";
+            }
+        }
+        events["heap_growths"] += std::count_if(report.growth.begin(), report.growth.end(),
+                                                [](const std::string& g) { return g.rfind("mesh heaps", 0) == 0; });
+        framesDeferred += report.deferredAttempts;
+        if (deltaStream) deltaStream->write(report.delta);
+        if (rendering) {
+            const Pose& pose = dataset->frame(i).cameraToWorld;
+            Eigen::Vector3f eye = pose.block<3, 1>(0, 3).cast<float>();
+            seenMin = seenMin.cwiseMin(eye - Eigen::Vector3f::Constant(args.data.maxDepth));
+            seenMax = seenMax.cwiseMax(eye + Eigen::Vector3f::Constant(args.data.maxDepth));
+        }
+        if (rendering && integrated % args.renderEvery == 0 && volume.meshBuffers().triangleCount > 0) {
+            Eigen::Vector3f lo = seenMin, hi = seenMax;
+            if (args.renderView == "sensor") {
+                renderOptions.camera = render::sensorCamera(dataset->frame(i).cameraToWorld, intrinsics);
+            } else {
+                // The overview frames the mesh built so far, so its bounds are read (one small download).
+                gpu::ExportedMesh sofar = volume.exportMesh();
+                lo = Eigen::Vector3f::Constant(std::numeric_limits<float>::max()), hi = -lo;
+                for (const auto& v : sofar.vertices) lo = lo.cwiseMin(Eigen::Vector3f(v.px, v.py, v.pz)), hi = hi.cwiseMax(Eigen::Vector3f(v.px, v.py, v.pz));
+                renderOptions.camera = render::defaultCamera(lo, hi, renderOptions.width, renderOptions.height);
+            }
+            char name[32];
+            std::snprintf(name, sizeof(name), "frame_%06zu.png", i);
+            io::writePng(std::filesystem::path(args.renderDir) / name, renderer->render(volume.meshBuffers(), lo, hi, renderOptions));
+            ++picturesWritten;
+        }
+        if (!args.quiet && (tty || (i + 1) % 50 == 0 || i + 1 == dataset->size())) {
+            std::fprintf(stderr, "%sframe %zu/%zu  blocks %u  %.1f ms/frame%s", tty ? "\r" : "", i + 1, dataset->size(),
+                         report.counters.blocksInUse, frameWallMs.back(), tty ? "   " : "\n");
+        }
+    }
+    if (tty && !args.quiet) std::cerr << "\n";
+    if (integrated == 0) throw Error("none of the " + std::to_string(dataset->size()) + " frames could be fused");
+    const double fuseSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+    // The mesh: the persistent shared-vertex mesh compacted on the GPU, or the baseline soup. The baseline's
+    // vertex count is measured on the same TSDF either way (the paper's memory comparison).
+    std::vector<std::pair<std::string, double>> meshMs;
+    auto t0 = std::chrono::steady_clock::now();
+    Mesh mesh;
+    size_t baselineVertices = 0;
+    uint32_t unreferenced = 0;
+    double sliverTriangleShare = 0, irregularCubeShare = 0;
+    if (config.meshMode == gpu::MeshMode::Incremental) {
+        gpu::ExportedMesh exported = volume.exportMesh(&meshMs);
+        unreferenced = exported.unreferencedVertices;
+        mesh = toMesh(exported, volume.frameNumber());   // ages in the GPU's frame numbers, as createdFrame
+        baselineVertices = volume.countBaselineVertices();
+        // Regularity (what refinement improves): sliver triangles, and surface cubes whose type is not one of
+        // the six half-cube types.
+        sliverTriangleShare = triangleRegularity(mesh).sliverShare();
+        auto types = volume.surfaceCubeTypes();
+        uint64_t surface = 0, irregular = 0;
+        for (int t = 0; t < 256; ++t) {
+            surface += types[t];
+            if (!isRegularType(t)) irregular += types[t];
+        }
+        irregularCubeShare = surface ? double(irregular) / double(surface) : 0.0;
+    } else {
+        gpu::TriangleSoup soup = volume.extractBaselineMesh(&meshMs);
+        mesh.positions = soup.vertices;
+        for (uint32_t t = 0; t < soup.triangleCount(); ++t) mesh.triangles.push_back({3 * t, 3 * t + 1, 3 * t + 2});
+        baselineVertices = soup.vertices.size();
+    }
+    double meshWallMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    std::filesystem::path out(args.output);
+    if (out.extension() == ".obj")
+        writeObj(out, mesh);
+    else
+        writePly(out, mesh);
+
+    gpu::Counters k = volume.readCounters();
+    json stats;
+    stats["dataset"] = {{"path", std::filesystem::absolute(dataset->folder()).string()},
+                        {"kind", toString(dataset->kind())},
+                        {"frames_available", dataset->size()}};
+    stats["device"] = context.info().name;
+    stats["int64_atomics"] = context.int64Atomics();   // the block hash's path (docs/HASH.md)
+    stats["mode"] = args.volume.mode;
+    stats["refine"] = args.volume.refine;
+    stats["refine_epsilon_voxels"] = args.volume.refineEps;
+    stats["lock_free"] = args.volume.lockFree;
+    stats["frames"] = {{"integrated", integrated}, {"skipped", skipped}};
+    stats["voxel_size"] = args.volume.voxel;
+    stats["truncation_m"] = config.params.truncation();
+    stats["allocation_stride"] = args.volume.allocStride;
+    stats["max_depth"] = args.data.maxDepth;
+    stats["blocks"] = {{"in_use", k.blocksInUse}, {"capacity", volume.config().blockCapacity},
+                       {"hash_capacity", volume.config().hashCapacity}, {"hash_entries", k.hashEntries},
+                       {"hash_tombstones", k.hashTombstones}};
+    stats["recycling"] = {{"keep_radius", args.volume.keepRadius}, {"recycle", args.volume.recycle},
+                          {"recycle_after_frames", args.volume.recycleAfter}, {"starve_weight", args.volume.starveWeight}};
+    stats["mesh"] = {{"vertices", mesh.positions.size()},
+                     {"triangles", mesh.triangles.size()},
+                     {"path", out.string()},
+                     {"baseline_vertices", baselineVertices},
+                     {"vertices_vs_baseline", baselineVertices ? double(mesh.positions.size()) / baselineVertices : 0.0},
+                     {"unreferenced_vertices", unreferenced},
+                     {"sliver_triangle_share", sliverTriangleShare},   // smallest angle < 10 degrees
+                     {"irregular_cube_share", irregularCubeShare}};
+    if (config.meshMode == gpu::MeshMode::Incremental) {
+        const gpu::GpuVolumeConfig& c = volume.config();
+        stats["heaps"] = {{"vertices", {{"capacity", c.vertexCapacity}, {"live", k.verticesInUse}, {"free", k.vertexFreeTop},
+                                        {"high_water", k.vertexHighWater}}},
+                          {"triangle_chunks", {{"capacity", c.chunkCapacity}, {"live", k.chunksInUse}, {"free", k.chunkFreeTop},
+                                               {"high_water", k.chunkHighWater}}},
+                          {"live_triangles", k.liveTriangles}};
+    }
+    // Persistent state per cube: TSDF (sdf + weight) + cube state + 3 edge-vertex slots.
+    stats["bytes_per_cube"] = config.meshMode == gpu::MeshMode::Incremental ? 24 : 8;
+    json gpuMs = json::object();
+    for (const auto& [name, values] : stageMs) gpuMs[name] = statsOf(values);
+    stats["gpu_ms_per_frame"] = gpuMs;
+    if (stageMs.count("mesh_total")) {
+        // The end of the sequence: the mesh is largest there (the peer's full extraction is timed there too).
+        const auto& m = stageMs["mesh_total"];
+        std::vector<double> tail(m.end() - std::max<ptrdiff_t>(1, ptrdiff_t(m.size()) / 10), m.end());
+        stats["gpu_ms_mesh_last_10pct_frames"] = statsOf(tail);
+    }
+    json counts = json::object();
+    for (const auto& [name, values] : perFrame) counts[name] = statsOf(values);
+    stats["per_frame_counts"] = counts;
+    json meshStage = json::object();
+    for (const auto& [name, ms] : meshMs) meshStage[name] = ms;
+    stats["gpu_ms_mesh_export"] = meshStage;
+    stats["wall_ms_per_frame"] = statsOf(frameWallMs);
+    stats["wall_ms_mesh_export"] = meshWallMs;
+    stats["wall_s_fusion_total"] = fuseSeconds;
+    json pools = json::object();
+    size_t total = 0;
+    for (const auto& p : volume.pools()) pools[p.name] = p.bytes, total += p.bytes;
+    stats["gpu_pool_bytes"] = pools;
+    stats["gpu_bytes_total"] = total;
+    json capacityEvents = {{"hash_full", hashFull}, {"pool_exhausted", poolExhausted},
+                           {"frames_touching_more_than_capacity", touchedOverflow}};
+    for (const auto& [name, total] : events) capacityEvents[name] = total;
+    capacityEvents["frames_deferred"] = framesDeferred;   // run again after growing what their allocation overflowed
+    stats["capacity_events"] = capacityEvents;
+    stats["capacity_growth"] = growth;
+    const gpu::GpuVolumeConfig& grownTo = volume.config();
+    stats["capacities"] = {{"grow", grownTo.growCapacities}, {"blocks", grownTo.blockCapacity}, {"hash_slots", grownTo.hashCapacity},
+                           {"touched", grownTo.touchedCapacity}, {"retype", grownTo.retypeCapacity},
+                           {"vertices", grownTo.vertexCapacity}, {"triangle_chunks", grownTo.chunkCapacity}};
+    stats["warnings"] = warnings;
+    if (!args.statsPath.empty()) {
+        std::ofstream file(args.statsPath);
+        if (!file) throw Error("cannot write " + args.statsPath);
+        file << stats.dump(2) << "\n";
+    }
+    auto median = [&](const char* name) { return stageMs.count(name) ? statsOf(stageMs[name])["median"].get<double>() : 0.0; };
+    std::cout << "vkmesh fuse: " << integrated << " frames (" << skipped << " skipped) from " << args.data.dataset << " on "
+              << context.info().name << "\n"
+              << "  voxel " << args.volume.voxel << " m, " << k.blocksInUse << " blocks, mesh (" << args.volume.mode << "): "
+              << mesh.positions.size() << " vertices (baseline " << baselineVertices << "), " << mesh.triangles.size()
+              << " triangles -> " << out.string() << "\n"
+              << "  GPU per frame (median): allocate " << median("allocate") << " ms, fuse " << median("fuse") << " ms, mesh "
+              << median("mesh_total") << " ms; "
+              << "wall " << statsOf(frameWallMs)["median"].get<double>() << " ms/frame\n";
+    if (rendering) std::cout << "  " << picturesWritten << " pictures (" << args.renderView << " view) -> " << args.renderDir << "\n";
+    if (deltaStream) std::cout << "  mesh deltas: " << deltaStream->bytesWritten() << " bytes -> " << args.deltasPath << "\n";
+    if (!warnings.empty()) std::cout << "  " << warnings.size() << " warnings (see stderr)\n";
+    return 0;
+}
+
+}  // namespace
+
+Run addFuseCommand(CLI::App& app) {
+    auto args = std::make_shared<FuseArgs>();
+    auto* cmd = app.add_subcommand("fuse", "fuse a depth sequence into a TSDF on the GPU and write its mesh");
+    args->data.add(cmd);
+    cmd->add_option("-o,--output", args->output, "mesh file (.ply binary, or .obj)")->required();
+    cmd->add_option("--stats", args->statsPath, "write counts, timings and memory as JSON");
+    args->volume.addCommon(cmd);
+    args->volume.addTuning(cmd);
+    cmd->add_flag("--grow-heaps", args->growHeaps,
+                  "deprecated, no effect: every capacity grows by default (--no-grow keeps them fixed)");
+    args->device.add(cmd);
+    cmd->add_flag("-q,--quiet", args->quiet, "no progress line");
+    cmd->add_option("--render-every", args->renderEvery, "write a picture of the mesh every N frames (drawn from the GPU buffers)")
+        ->check(CLI::PositiveNumber);
+    cmd->add_option("--render-dir", args->renderDir, "folder for the --render-every pictures (frame_NNNNNN.png)");
+    cmd->add_option("--render-view", args->renderView, "sensor: from the frame's camera; overview: framing the mesh so far")
+        ->check(CLI::IsMember({"sensor", "overview"}));
+    cmd->add_option("--render-color", args->renderColor, "shade, normal or age (warm = new, cold = old)")
+        ->check(CLI::IsMember({"shade", "normal", "age"}));
+    cmd->add_option("--deltas", args->deltasPath, "write every frame's mesh changes to this stream file (docs/DELTAS.md)");
+    return [args] { return runFuse(*args); };
+}
+
+}  // namespace vkmesh::cli

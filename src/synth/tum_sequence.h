@@ -1,0 +1,42 @@
+// The TUM RGB-D folder writer for synthetic sequences (`vkmesh synth`). Part of the vkmesh_io library, not of
+// the CPU core: it writes 16-bit PNGs (io/png.h). The scene, renderer and camera paths it uses are in
+// synth/synthetic_scene.h.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+
+#include "core/types.h"
+#include "synth/synthetic_scene.h"
+
+namespace vkmesh::synth {
+
+struct SequenceOptions {
+    size_t frames = 60;
+    int width = 640, height = 480;
+    // intrinsics.width/height must equal width/height above (writeTumSequence throws otherwise, rather than
+    // guess how calibration made for one image size applies to another): use kinectIntrinsics(w, h).
+    Intrinsics intrinsics = kinectIntrinsics(640, 480);
+    bool noise = false;
+    uint32_t seed = 1;  // frame i is rendered with a seed derived from (seed, i)
+    PathKind path = PathKind::Orbit;
+    float maxRange = 8;
+    double gtPointSpacing = 0.005;  // metres between ground-truth surface samples in gt_points.ply
+};
+
+// Writes a TUM-layout sequence of `scene` seen along cameraPath(options.frames, options.path) into `dir`
+// (created if needed). The path is made for defaultRoom(); another scene is seen from the same poses (they
+// circle the world z axis at ~1.5 m height, looking down at a point ~0.55 m above the origin). Files:
+//   depth/NNNNNN.png   uint16, metres x 5000 rounded, 0 = no measurement;
+//   depth.txt          "timestamp depth/NNNNNN.png", timestamps 1.0, 1.033, ...;
+//   groundtruth.txt    "timestamp tx ty tz qx qy qz qw", camera-to-world, the same timestamps;
+//   camera.json        {"fx","fy","cx","cy","depth_scale":5000,"width","height"};
+//   gt_points.ply      binary little-endian point cloud (float x y z nx ny nz) sampled uniformly by area
+//                      on the visible-from-free-space surface of every object;
+//   scene.json         the objects and their parameters;  README.txt  what all this is.
+// Throws Error naming the folder, file or value at fault (frames = 0, bad intrinsics, unwritable folder).
+void writeTumSequence(const std::filesystem::path& dir, const SyntheticScene& scene,
+                      const SequenceOptions& options = {});
+
+}  // namespace vkmesh::synth
