@@ -2,12 +2,16 @@
 # validates each with spirv-val, and gathers them into one static library with a name -> SPIR-V registry.
 # Nothing is read from disk at run time, so a stale .spv can never be picked up.
 #
-#   vkmesh_embed_shaders(target files...)           compute shaders, vkmesh::shaders::all(), keyed "fuse_depth"
+#   vkmesh_embed_shaders(target files...)           compute shaders, vkmesh::shaders::all(), keyed "fuse_depth";
+#                                                   each is compiled a second time with -DVKMESH_HASH32 (the
+#                                                   32-bit hash path, docs/HASH.md), keyed "fuse_depth@hash32"
 #   vkmesh_embed_graphics_shaders(target files...)  graphics shaders, vkmesh::shaders::graphics(), keyed
 #                                                   "mesh.vert" (glslang takes the stage from the extension)
 
-# registry: the C++ function returning the table; key_with_extension: key by file name with its extension.
-function(_vkmesh_embed_spirv target registry key_with_extension)
+# registry: the C++ function returning the table; key_with_extension: key by file name with its extension;
+# variants: the list of variant names compiled besides the plain one, each with -DVKMESH_<NAME in upper
+# case> and keyed "<key>@<name>".
+function(_vkmesh_embed_spirv target registry key_with_extension variants)
   set(gen_dir ${CMAKE_CURRENT_BINARY_DIR}/shaders_gen_${registry})
   file(MAKE_DIRECTORY ${gen_dir})
   set(headers)
@@ -15,29 +19,41 @@ function(_vkmesh_embed_spirv target registry key_with_extension)
   set(entries "")
   foreach(src ${ARGN})
     if(key_with_extension)
-      get_filename_component(key ${src} NAME)
+      get_filename_component(base_key ${src} NAME)
     else()
-      get_filename_component(key ${src} NAME_WE)
+      get_filename_component(base_key ${src} NAME_WE)
     endif()
     get_filename_component(src_dir ${src} DIRECTORY)
-    string(MAKE_C_IDENTIFIER "vkmesh_spv_${registry}_${key}" ident)
-    set(spv ${gen_dir}/${key}.spv)
-    set(hdr ${gen_dir}/${key}.spv.h)
-    # The header-writing run emits the depfile, so its target is this command's OUTPUT and an edit of an
-    # included .glsl/.h rebuilds the shader.
-    add_custom_command(
-      OUTPUT ${hdr}
-      COMMAND ${Vulkan_GLSLANG_VALIDATOR_EXECUTABLE} --target-env vulkan1.2 -V -I${src_dir} -I${CMAKE_SOURCE_DIR}/shaders_comp -o ${spv} ${src}
-      COMMAND ${SPIRV_VAL} --target-env vulkan1.2 ${spv}
-      COMMAND ${Vulkan_GLSLANG_VALIDATOR_EXECUTABLE} --target-env vulkan1.2 -V -I${src_dir} -I${CMAKE_SOURCE_DIR}/shaders_comp
-              --vn ${ident} --depfile ${gen_dir}/${key}.d -o ${hdr} ${src}
-      DEPENDS ${src}
-      DEPFILE ${gen_dir}/${key}.d
-      COMMENT "GLSL -> SPIR-V (validated): ${key}"
-      VERBATIM)
-    list(APPEND headers ${hdr})
-    string(APPEND includes "#include \"${key}.spv.h\"\n")
-    string(APPEND entries "    {\"${key}\", {${ident}, sizeof(${ident}) / sizeof(uint32_t)}},\n")
+    foreach(variant "" ${variants})
+      if(variant STREQUAL "")
+        set(key ${base_key})
+        set(file_key ${base_key})
+        set(defines)
+      else()
+        string(TOUPPER ${variant} upper)
+        set(key "${base_key}@${variant}")
+        set(file_key "${base_key}_${variant}")
+        set(defines -DVKMESH_${upper})
+      endif()
+      string(MAKE_C_IDENTIFIER "vkmesh_spv_${registry}_${file_key}" ident)
+      set(spv ${gen_dir}/${file_key}.spv)
+      set(hdr ${gen_dir}/${file_key}.spv.h)
+      # The header-writing run emits the depfile, so its target is this command's OUTPUT and an edit of an
+      # included .glsl/.h rebuilds the shader.
+      add_custom_command(
+        OUTPUT ${hdr}
+        COMMAND ${Vulkan_GLSLANG_VALIDATOR_EXECUTABLE} --target-env vulkan1.2 -V ${defines} -I${src_dir} -I${CMAKE_SOURCE_DIR}/shaders_comp -o ${spv} ${src}
+        COMMAND ${SPIRV_VAL} --target-env vulkan1.2 ${spv}
+        COMMAND ${Vulkan_GLSLANG_VALIDATOR_EXECUTABLE} --target-env vulkan1.2 -V ${defines} -I${src_dir} -I${CMAKE_SOURCE_DIR}/shaders_comp
+                --vn ${ident} --depfile ${gen_dir}/${file_key}.d -o ${hdr} ${src}
+        DEPENDS ${src}
+        DEPFILE ${gen_dir}/${file_key}.d
+        COMMENT "GLSL -> SPIR-V (validated): ${key}"
+        VERBATIM)
+      list(APPEND headers ${hdr})
+      string(APPEND includes "#include \"${file_key}.spv.h\"\n")
+      string(APPEND entries "    {\"${key}\", {${ident}, sizeof(${ident}) / sizeof(uint32_t)}},\n")
+    endforeach()
   endforeach()
   set(source ${gen_dir}/embedded_${registry}.cpp)
   file(CONFIGURE OUTPUT ${source} CONTENT
@@ -60,9 +76,9 @@ ${entries}  };
 endfunction()
 
 function(vkmesh_embed_shaders target)
-  _vkmesh_embed_spirv(${target} all FALSE ${ARGN})
+  _vkmesh_embed_spirv(${target} all FALSE "hash32" ${ARGN})
 endfunction()
 
 function(vkmesh_embed_graphics_shaders target)
-  _vkmesh_embed_spirv(${target} graphics TRUE ${ARGN})
+  _vkmesh_embed_spirv(${target} graphics TRUE "" ${ARGN})
 endfunction()

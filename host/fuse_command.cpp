@@ -247,6 +247,7 @@ int runFuse(const FuseArgs& args) {
                         {"kind", toString(dataset->kind())},
                         {"frames_available", dataset->size()}};
     stats["device"] = context.info().name;
+    stats["int64_atomics"] = context.int64Atomics();   // the block hash's path (docs/HASH.md)
     stats["mode"] = args.volume.mode;
     stats["refine"] = args.volume.refine;
     stats["refine_epsilon_voxels"] = args.volume.refineEps;

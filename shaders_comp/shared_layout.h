@@ -34,10 +34,16 @@ VKM_CONST KEY_AXIS_MASK = 2097151u;        // 2^21 - 1
 #ifdef __cplusplus
 inline constexpr uint64_t KEY_EMPTY = ~uint64_t(0);
 inline constexpr uint64_t KEY_TOMBSTONE = ~uint64_t(0) - 1;
-#else
+#elif !defined(VKMESH_HASH32)
 const uint64_t KEY_EMPTY = ~uint64_t(0u);
 const uint64_t KEY_TOMBSTONE = ~uint64_t(0u) - uint64_t(1u);
 #endif
+// The 32-bit hash path (devices without 64-bit atomics or integers; shaders compiled with -DVKMESH_HASH32,
+// docs/HASH.md): a key is HASH32_KEY_WORDS words per slot, the biased x, y and z (21 bits each), each word
+// claimed with its own 32-bit atomicCompSwap. Neither value below is a 21-bit coordinate.
+VKM_CONST HASH32_KEY_WORDS = 3u;
+VKM_CONST HASH32_WORD_EMPTY = 0xFFFFFFFFu;      // every word of an empty slot (also what a fill writes)
+VKM_CONST HASH32_WORD_TOMBSTONE = 0xFFFFFFFEu;  // the first word of a removed key's slot
 
 // Values stored beside each key: a block index into the pool, or NO_BLOCK while the key holds no block
 // (just inserted this frame, or the pool was exhausted when it was inserted; the assign stage retries).
@@ -62,7 +68,7 @@ VKM_CONST VOXELS_PER_INVOCATION = 4u;      // VOXELS_PER_BLOCK / WG_BLOCK
 // ---- descriptor bindings (set 0, shared by all compute stages) --------------------------------
 VKM_CONST BINDING_PARAMS = 0u;         // uniform VolumeParamsGpu
 VKM_CONST BINDING_COUNTERS = 1u;       // Counters (also the indirect-dispatch arguments)
-VKM_CONST BINDING_HASH_KEYS = 2u;      // uint64 key per slot
+VKM_CONST BINDING_HASH_KEYS = 2u;      // uint64 key per slot (32-bit path: HASH32_KEY_WORDS uints per slot)
 VKM_CONST BINDING_HASH_VALUES = 3u;    // uint block index per slot
 VKM_CONST BINDING_HASH_STAMPS = 4u;    // uint: frame number that last touched the slot
 VKM_CONST BINDING_BLOCK_COORDS = 5u;   // ivec4 per block: block coordinate, w = hash slot

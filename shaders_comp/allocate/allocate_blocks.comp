@@ -13,22 +13,15 @@ layout(local_size_x = WG_PIXELS_X, local_size_y = WG_PIXELS_Y) in;
 
 uint requests = 0u, found = 0u, inserted = 0u, full = 0u, outOfRange = 0u, outsideRadius = 0u;
 
-// Claims `cell`'s key without waiting on anyone: one compare-and-swap per probed slot. A slot that
-// already holds the key needs no atomic (keys are never removed during this dispatch, so a plain read
-// equal to the key is final). Returns the slot, or NO_BLOCK if none was free within the probe bound.
+// Claims `cell`'s key without waiting on anyone (structure/block_hash.glsl). Returns the slot, or
+// NO_BLOCK if none was free within the probe bound.
 uint insertKey(ivec3 cell) {
-    uint64_t key = packBlockKey(cell);
-    uint slot = hashSlot(cell);
-    // Fast path: nearly every visit finds its key already at its home slot.
-    if (hashKeys[slot] == key) { ++found; return slot; }
-    for (uint probe = 0u; probe < HASH_MAX_PROBES; ++probe) {
-        uint64_t prev = atomicCompSwap(hashKeys[slot], KEY_EMPTY, key);
-        if (prev == KEY_EMPTY) { ++inserted; return slot; }
-        if (prev == key) { ++found; return slot; }
-        slot = (slot + 1u) & (params.hashCapacity - 1u);
-    }
-    ++full;
-    return NO_BLOCK;
+    bool isNew;
+    uint slot = hashInsertKey(cell, isNew);
+    if (slot == NO_BLOCK) ++full;
+    else if (isNew) ++inserted;
+    else ++found;
+    return slot;
 }
 
 void touchBlock(ivec3 cell) {

@@ -25,7 +25,7 @@ void main() {
             if (rank < counters.freeTop) {
                 block = freeList[counters.freeTop - 1u - rank];
                 hashValues[slot] = block;
-                blockCoords[block] = ivec4(unpackBlockKey(hashKeys[slot]), int(slot));
+                blockCoords[block] = ivec4(hashSlotCoord(slot), int(slot));
                 touched[i] = block | FRESH_BLOCK;
             } else {
                 // Pool exhausted: the key stays in the table without a block and asks again the next

@@ -10,7 +10,7 @@ layout(local_size_x = WG_LIST) in;
 
 void main() {
     uint slot = gl_GlobalInvocationID.x;
-    if (slot < params.hashCapacity && hashKeys[slot] != KEY_EMPTY) {
+    if (slot < params.hashCapacity && hashSlotUsed(slot)) {
         uint block = hashValues[slot];
         if (block != NO_BLOCK) blockList[atomicAdd(counters.liveBlockCount, 1u)] = block;
     }

@@ -1,6 +1,8 @@
 // The delta passes' own descriptor set (shared_layout.h, "mesh deltas"): the heaps, their shadows as
 // last reported, and the record lists. Same rules as structure/frame.glsl: no waiting, bounded loops.
+#ifndef VKMESH_HASH32
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require   // shared_layout.h declares 64-bit constants
+#endif
 #extension GL_KHR_shader_subgroup_basic : require
 
 #include "shared_layout.h"

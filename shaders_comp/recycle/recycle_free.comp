@@ -46,8 +46,7 @@ void main() {
     if (gl_LocalInvocationIndex < MASK_WORDS) retypeMask[block * MASK_WORDS + gl_LocalInvocationIndex] = 0u;
     if (gl_LocalInvocationIndex == 0u) {
         uint slot = uint(blockCoords[block].w);
-        hashKeys[slot] = KEY_TOMBSTONE;
-        hashValues[slot] = NO_BLOCK;
+        hashRemoveKey(slot);
         freeList[counters.freeTop + atomicAdd(counters.blocksFreed, 1u)] = block;
     }
 }

@@ -9,8 +9,12 @@
 //   - float expressions that the CPU reference must reproduce bit for bit are `precise`.
 #ifndef VKMESH_FRAME_GLSL
 #define VKMESH_FRAME_GLSL
+// The 32-bit hash variant (VKMESH_HASH32, docs/HASH.md) uses no 64-bit type at all: it runs on devices
+// without shaderInt64 / shaderBufferInt64Atomics.
+#ifndef VKMESH_HASH32
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 #extension GL_EXT_shader_atomic_int64 : require
+#endif
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
 #extension GL_KHR_shader_subgroup_ballot : require

@@ -90,7 +90,8 @@ std::string mib(uint64_t bytes) { return std::to_string((bytes + (1u << 20) - 1)
 
 }  // namespace
 
-void checkCapacities(const GpuVolumeConfig& c, uint64_t maxBufferBytes, uint64_t deviceMemoryBytes, const std::string& deviceName) {
+void checkCapacities(const GpuVolumeConfig& c, uint64_t maxBufferBytes, uint64_t deviceMemoryBytes, const std::string& deviceName,
+                     uint32_t hashKeyBytesPerSlot) {
     struct Planned {
         const char* buffer;
         uint64_t bytesPerUnit;
@@ -102,7 +103,7 @@ void checkCapacities(const GpuVolumeConfig& c, uint64_t maxBufferBytes, uint64_t
     std::vector<Planned> planned = {
         {"voxel sdf", 4ull * VOXELS_PER_BLOCK, c.blockCapacity, "blockCapacity (--blocks)"},
         {"voxel weight", 4ull * VOXELS_PER_BLOCK, c.blockCapacity, "blockCapacity (--blocks)"},
-        {"hash keys", 8, hashSlots, "hashCapacity (2 x blockCapacity by default, --blocks)"},
+        {"hash keys", hashKeyBytesPerSlot, hashSlots, "hashCapacity (2 x blockCapacity by default, --blocks)"},
         {"depth image", 4, uint64_t(c.imageWidth) * uint64_t(c.imageHeight), "the image size"},
     };
     if (mesh) {
@@ -146,7 +147,8 @@ namespace {
 // The resolved configuration, checked against the device before any buffer is created.
 GpuVolumeConfig checkedFor(const vk::Context& context, const GpuVolumeConfig& config) {
     GpuVolumeConfig c = resolved(config);
-    checkCapacities(c, context.maxStorageBufferRange(), deviceLocalHeapBytes(context), context.info().name);
+    checkCapacities(c, context.maxStorageBufferRange(), deviceLocalHeapBytes(context), context.info().name,
+                    BlockHash::keyBytesPerSlot(context.int64Atomics()));
     return c;
 }
 }  // namespace
@@ -223,6 +225,7 @@ GpuVolume::GpuVolume(const vk::Context& context, const GpuVolumeConfig& config)
       table_(context, sizeof(FramePush)),
       counters_(context, table_),
       params_(context, table_, initialParams(config_)),
+      hash_(context, table_, config_.hashCapacity),
       store_(context, table_, config_.blockCapacity, counters_),
       mesh_(context, table_, config_.blockCapacity, config_.vertexCapacity, config_.chunkCapacity, counters_),
       lists_(context, table_, listCapacities(config_)),
@@ -238,14 +241,10 @@ GpuVolume::GpuVolume(const vk::Context& context, const GpuVolumeConfig& config)
       triangulate_(context, table_),
       meshGc_(context, table_),
       recycle_(context, table_),
-      rehashSave_(context, table_, "rehash_save"),
-      rehashInsert_(context, table_, "rehash_insert"),
-      rehashCommit_(context, table_, "commit_rehash"),
       recorder_(context),
       timer_(context) {
     const GpuVolumeConfig& c = config_;
     touchedFollowsPool_ = config.touchedCapacity == 0;
-    createHash(c.hashCapacity);
     depth_ = makeStorage(context, table_, BINDING_DEPTH, VkDeviceSize(c.imageWidth) * c.imageHeight * 4, "depth image");
     depthStaging_ = vk::Buffer(context, depth_.size(), VK_BUFFER_USAGE_TRANSFER_SRC_BIT, vk::MemoryUse::Upload, "depth staging");
     mcTables_ = vk::Buffer(context, MC_TABLE_WORDS * 4, VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, vk::MemoryUse::Device, "marching cubes tables");
@@ -267,38 +266,13 @@ VkCommandBuffer GpuVolume::beginSubmission() {
 
 // ---- the block hash -------------------------------------------------------------------------------
 
-void GpuVolume::createHash(uint32_t slots) {
-    hashKeys_ = makeStorage(context_, table_, BINDING_HASH_KEYS, VkDeviceSize(slots) * 8, "hash keys");
-    hashValues_ = makeStorage(context_, table_, BINDING_HASH_VALUES, VkDeviceSize(slots) * 4, "hash values");
-    hashStamps_ = makeStorage(context_, table_, BINDING_HASH_STAMPS, VkDeviceSize(slots) * 4, "hash stamps");
-    vk::CommandRecorder recorder(context_);
-    VkCommandBuffer cmd = recorder.begin();
-    vkCmdFillBuffer(cmd, hashKeys_.handle(), 0, VK_WHOLE_SIZE, 0xFFFFFFFFu);   // KEY_EMPTY in both words
-    vkCmdFillBuffer(cmd, hashValues_.handle(), 0, VK_WHOLE_SIZE, NO_BLOCK);
-    vkCmdFillBuffer(cmd, hashStamps_.handle(), 0, VK_WHOLE_SIZE, 0);
-    vk::memoryBarrier(cmd);
-    recorder.submitAndWait();
-    params_.edit().hashCapacity = slots;
-    config_.hashCapacity = slots;
-}
-
 void GpuVolume::recordRebuildHash(VkCommandBuffer cmd, const FramePush& push) {
-    // The live blocks keep their hash stamp in their coordinate's w (rehash_save) while the table is
-    // cleared, then are re-inserted, one CAS each (rehash_insert); tombstones are gone.
     blockList_.record(cmd, push, counters_, config_.hashCapacity);
-    rehashSave_.dispatchItems(cmd, &push, config_.blockCapacity);
-    vk::memoryBarrier(cmd);
-    vkCmdFillBuffer(cmd, hashKeys_.handle(), 0, VK_WHOLE_SIZE, 0xFFFFFFFFu);   // KEY_EMPTY
-    vkCmdFillBuffer(cmd, hashValues_.handle(), 0, VK_WHOLE_SIZE, NO_BLOCK);
-    vk::memoryBarrier(cmd);
-    rehashInsert_.dispatchItems(cmd, &push, config_.blockCapacity);
-    vk::memoryBarrier(cmd);
-    rehashCommit_.dispatch(cmd, &push, 1);
-    vk::memoryBarrier(cmd);
+    hash_.recordRebuild(cmd, push, config_.blockCapacity);
 }
 
 void GpuVolume::growHash(uint32_t slots, FrameReport& report) {
-    const uint64_t maxSlots = std::min<uint64_t>(context_.maxStorageBufferRange() / 8, 1u << 31);
+    const uint64_t maxSlots = std::min<uint64_t>(context_.maxStorageBufferRange() / BlockHash::keyBytesPerSlot(context_.int64Atomics()), 1u << 31);
     slots = uint32_t(std::min<uint64_t>(nextPowerOfTwo(slots), maxSlots));
     const uint32_t oldSlots = config_.hashCapacity;
     if (slots <= oldSlots) {
@@ -309,20 +283,15 @@ void GpuVolume::growHash(uint32_t slots, FrameReport& report) {
     VkCommandBuffer cmd = beginSubmission();
     counters_.recordClear(cmd, offsetof(Counters, rehashLost), 1);
     blockList_.record(cmd, lastPush_, counters_, oldSlots);
-    rehashSave_.dispatchItems(cmd, &lastPush_, config_.blockCapacity);
-    vk::memoryBarrier(cmd);
+    hash_.recordSaveStamps(cmd, lastPush_, config_.blockCapacity);
     recorder_.submitAndWait();
-    // The new, empty table; every live block re-inserted under the new capacity.
-    std::vector<vk::Buffer> retired;
-    retired.push_back(std::move(hashKeys_));
-    retired.push_back(std::move(hashValues_));
-    retired.push_back(std::move(hashStamps_));
-    createHash(slots);
+    // The new, empty table (BlockHash::grow's parts, so that the new hashCapacity reaches the GPU with the
+    // parameters at the start of the next submission); every live block re-inserted under it.
+    hash_.replace(slots);
+    params_.edit().hashCapacity = slots;
+    config_.hashCapacity = slots;
     cmd = beginSubmission();
-    rehashInsert_.dispatchItems(cmd, &lastPush_, config_.blockCapacity);
-    vk::memoryBarrier(cmd);
-    rehashCommit_.dispatch(cmd, &lastPush_, 1);
-    vk::memoryBarrier(cmd);
+    hash_.recordReinsert(cmd, lastPush_, config_.blockCapacity);
     counters_.recordReadback(cmd);
     recorder_.submitAndWait();
     report.growth.push_back("block hash " + std::to_string(oldSlots) + " -> " + std::to_string(slots) + " slots");
@@ -348,7 +317,8 @@ void GpuVolume::growBlockPool(uint32_t blocks, FrameReport& report) {
     if (touchedFollowsPool_) next.touchedCapacity = blocks;
     next.hashCapacity = std::max(config_.hashCapacity, nextPowerOfTwo(2 * blocks));
     try {
-        checkCapacities(next, context_.maxStorageBufferRange(), deviceLocalHeapBytes(context_), context_.info().name);
+        checkCapacities(next, context_.maxStorageBufferRange(), deviceLocalHeapBytes(context_), context_.info().name,
+                        BlockHash::keyBytesPerSlot(context_.int64Atomics()));
     } catch (const Error& e) {
         report.warnings.push_back(std::string("the block pool cannot grow past ") + std::to_string(old) + " blocks: " + e.what());
         return;
@@ -841,13 +811,9 @@ MeshStateSnapshot GpuVolume::downloadMeshState() const { return mesh_.download(c
 std::array<uint64_t, 256> GpuVolume::surfaceCubeTypes() const { return mesh_.surfaceCubeTypes(); }
 
 std::vector<BlockSnapshot> GpuVolume::downloadBlocks() const {
-    std::vector<uint64_t> keys(config_.hashCapacity);
-    std::vector<uint32_t> values(config_.hashCapacity);
-    vk::downloadFromBuffer(context_, hashKeys_, keys.data(), keys.size() * 8);
-    vk::downloadFromBuffer(context_, hashValues_, values.data(), values.size() * 4);
     std::vector<uint32_t> blocks;
-    for (uint32_t s = 0; s < config_.hashCapacity; ++s)
-        if (keys[s] != KEY_EMPTY && values[s] != NO_BLOCK) blocks.push_back(values[s]);
+    for (const BlockHash::Entry& e : hash_.downloadEntries())
+        if (e.block != NO_BLOCK) blocks.push_back(e.block);
     return store_.download(blocks);
 }
 
@@ -855,7 +821,7 @@ std::vector<PoolInfo> GpuVolume::pools() const {
     std::vector<PoolInfo> out;
     params_.pools(out);
     counters_.pools(out);
-    listPools(out, {&hashKeys_, &hashValues_, &hashStamps_});
+    hash_.pools(out);
     store_.pools(out);
     mesh_.pools(out);
     lists_.pools(out);

@@ -18,7 +18,7 @@
 #include "core/mesh_delta.h"
 #include "core/types.h"
 #include "gpu/layout.h"
-#include "gpu/stages.h"
+#include "gpu/stages/allocate_blocks_stage.h"
 #include "gpu/stages/baseline_mesh_stage.h"
 #include "gpu/stages/block_list_stage.h"
 #include "gpu/stages/claim_vertices_stage.h"
@@ -31,6 +31,7 @@
 #include "gpu/stages/retype_stage.h"
 #include "gpu/stages/triangulate_stage.h"
 #include "gpu/stages/update_vertices_stage.h"
+#include "gpu/structure/block_hash.h"
 #include "gpu/structure/block_store.h"
 #include "gpu/structure/counter_buffer.h"
 #include "gpu/structure/cube_mesh.h"
@@ -146,8 +147,9 @@ struct ExportedMesh {
 // buffer binding (maxBufferBytes: maxStorageBufferRange) and that all of them fit in the device's largest
 // device-local memory heap. Throws Error naming the buffer, the setting that sizes it (config field and CLI
 // option) and the largest value that fits. Called by the GpuVolume constructor; exposed for tests.
+// hashKeyBytesPerSlot: BlockHash::keyBytesPerSlot of the device's hash path.
 void checkCapacities(const GpuVolumeConfig& config, uint64_t maxBufferBytes, uint64_t deviceMemoryBytes,
-                     const std::string& deviceName);
+                     const std::string& deviceName, uint32_t hashKeyBytesPerSlot = 8);
 
 class GpuVolume {
 public:
@@ -221,8 +223,7 @@ private:
     // Compacts the mesh in its own submission, growing the buffers until it fits; returns the counters.
     Counters runExport(std::vector<std::pair<std::string, double>>* stageMs);
     void warnAboutCapacities(const Counters& k, FrameReport& report) const;
-    // Hash buffers and rebuild (until the hash becomes a component of its own).
-    void createHash(uint32_t slots);
+    // The live block list, then BlockHash::recordRebuild (tombstones dropped).
     void recordRebuildHash(VkCommandBuffer cmd, const FramePush& push);
 
     const vk::Context& context_;
@@ -230,7 +231,7 @@ private:
     vk::BindingTable table_;
     CounterBuffer counters_;
     ParamsBuffer params_;
-    vk::Buffer hashKeys_, hashValues_, hashStamps_;
+    BlockHash hash_;
     BlockStore store_;
     CubeMesh mesh_;
     FrameLists lists_;
@@ -247,7 +248,6 @@ private:
     TriangulateStage triangulate_;
     MeshGcStage meshGc_;
     RecycleStage recycle_;
-    vk::ComputePipeline rehashSave_, rehashInsert_, rehashCommit_;
     std::optional<ExportMeshStage> exportMesh_;
     std::optional<MeshDeltaStage> deltas_;
     vk::CommandRecorder recorder_;

@@ -5,6 +5,7 @@
 #include <cstring>
 #include <iostream>
 #include <optional>
+#include <sstream>
 #include <utility>
 
 #include "vk/check.h"
@@ -107,10 +108,18 @@ std::optional<uint32_t> computeQueueFamily(VkPhysicalDevice device) {
     return std::nullopt;
 }
 
-// What vkmesh needs from a device: Vulkan 1.2, a compute queue, 64-bit integers and 64-bit buffer
-// atomics (hash keys are claimed with one 64-bit compare-and-swap), and basic/arithmetic/ballot
-// subgroup operations in compute shaders (counters are aggregated per subgroup).
+constexpr const char* kPretendableFeatures[] = {"shaderInt64", "shaderBufferInt64Atomics"};
+
+bool pretendMissing(const std::vector<std::string>& missing, const char* feature) {
+    return std::find(missing.begin(), missing.end(), feature) != missing.end();
+}
+
+// What vkmesh needs from a device (README, "Requirements"): Vulkan 1.2, a compute queue, basic/arithmetic/
+// ballot subgroup operations in compute shaders (counters are aggregated per subgroup) and the limits below.
+// 64-bit integers and 64-bit buffer atomics are optional: with both, a hash key is claimed with one 64-bit
+// compare-and-swap; without, the hash takes its 32-bit path (docs/HASH.md).
 DeviceInfo describe(VkPhysicalDevice device, uint32_t index) {
+    const std::vector<std::string> pretended = pretendedMissingFeatures();
     VkPhysicalDeviceProperties props{};
     vkGetPhysicalDeviceProperties(device, &props);
     VkPhysicalDeviceDriverProperties driver{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DRIVER_PROPERTIES};
@@ -135,11 +144,28 @@ DeviceInfo describe(VkPhysicalDevice device, uint32_t index) {
         VkPhysicalDeviceFeatures2 f{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2};
         f.pNext = &f12;
         vkGetPhysicalDeviceFeatures2(device, &f);
-        if (!f.features.shaderInt64) missing.push_back("shaderInt64");
-        if (!f12.shaderBufferInt64Atomics) missing.push_back("shaderBufferInt64Atomics");
+        std::vector<std::string> no64;
+        if (!f.features.shaderInt64 || pretendMissing(pretended, "shaderInt64")) no64.push_back("shaderInt64");
+        if (!f12.shaderBufferInt64Atomics || pretendMissing(pretended, "shaderBufferInt64Atomics"))
+            no64.push_back("shaderBufferInt64Atomics");
+        info.int64Atomics = no64.empty();
+        info.hashPath = "64-bit atomics";
+        if (!no64.empty()) {
+            info.hashPath = "32-bit atomics (no ";
+            for (size_t i = 0; i < no64.size(); ++i) info.hashPath += (i ? ", " : "") + no64[i];
+            info.hashPath += ")";
+        }
         VkSubgroupFeatureFlags need = VK_SUBGROUP_FEATURE_BASIC_BIT | VK_SUBGROUP_FEATURE_ARITHMETIC_BIT | VK_SUBGROUP_FEATURE_BALLOT_BIT;
         if ((subgroup.supportedOperations & need) != need || !(subgroup.supportedStages & VK_SHADER_STAGE_COMPUTE_BIT))
             missing.push_back("subgroup basic+arithmetic+ballot operations in compute shaders");
+        // Limits above Vulkan's guaranteed minimums that the compute pipelines rely on: up to
+        // kMaxStorageBuffersPerPipeline (vk/pipeline.h) storage buffers per pipeline, 16 x 16 pixel workgroups.
+        const VkPhysicalDeviceLimits& l = props.limits;
+        auto atLeast = [&](uint64_t have, uint64_t need, const char* limit) {
+            if (have < need) missing.push_back(std::string(limit) + " >= " + std::to_string(need) + " (has " + std::to_string(have) + ")");
+        };
+        atLeast(l.maxPerStageDescriptorStorageBuffers, 16, "maxPerStageDescriptorStorageBuffers");
+        atLeast(l.maxComputeWorkGroupInvocations, 256, "maxComputeWorkGroupInvocations");
     }
     info.suitable = missing.empty();
     for (size_t i = 0; i < missing.size(); ++i) info.whyNot += (i ? ", " : "missing ") + missing[i];
@@ -147,6 +173,26 @@ DeviceInfo describe(VkPhysicalDevice device, uint32_t index) {
 }
 
 }  // namespace
+
+std::vector<std::string> pretendedMissingFeatures() {
+    const char* env = std::getenv("VKMESH_PRETEND_MISSING");
+    std::vector<std::string> out;
+    if (!env) return out;
+    std::stringstream list(env);
+    std::string name;
+    while (std::getline(list, name, ',')) {
+        name.erase(0, name.find_first_not_of(" \t"));
+        name.erase(name.find_last_not_of(" \t") + 1);
+        if (name.empty()) continue;
+        if (std::find(std::begin(kPretendableFeatures), std::end(kPretendableFeatures), name) == std::end(kPretendableFeatures)) {
+            std::string known;
+            for (const char* k : kPretendableFeatures) known += std::string(known.empty() ? "" : ", ") + k;
+            throw Error("VKMESH_PRETEND_MISSING names '" + name + "', which is not a Vulkan feature vkmesh can do without; known: " + known);
+        }
+        out.push_back(name);
+    }
+    return out;
+}
 
 std::vector<DeviceInfo> Context::listDevices() {
     VkInstance instance = createInstance(false);
@@ -224,7 +270,7 @@ Context::Context(const ContextOptions& options) {
         VkPhysicalDeviceVulkan12Features f12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
         VkPhysicalDeviceFeatures2 features{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2};
         features.pNext = &f12;
-        enableRequiredFeatures(features, f12);
+        enableRequiredFeatures(physical_, features, f12);
         VkDeviceCreateInfo deviceInfo{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO};
         deviceInfo.pNext = &features;
         deviceInfo.queueCreateInfoCount = 1;
@@ -285,6 +331,13 @@ void Context::initDeviceState(uint32_t queueIndex) {
 void Context::enableRequiredFeatures(VkPhysicalDeviceFeatures2& features, VkPhysicalDeviceVulkan12Features& f12) {
     features.features.shaderInt64 = VK_TRUE;
     f12.shaderBufferInt64Atomics = VK_TRUE;
+}
+
+void Context::enableRequiredFeatures(VkPhysicalDevice device, VkPhysicalDeviceFeatures2& features,
+                                     VkPhysicalDeviceVulkan12Features& f12) {
+    // Only for the 64-bit hash path; a device on the 32-bit path (or pretending to be) gets neither, so the
+    // validation layer reports any shader that would still use a 64-bit type.
+    if (describe(device, 0).int64Atomics) enableRequiredFeatures(features, f12);
 }
 
 DeviceInfo Context::describeDevice(VkPhysicalDevice device) { return describe(device, 0); }

@@ -25,7 +25,16 @@ struct DeviceInfo {
     std::string driver;       // driver name and info where the device reports them
     bool suitable = false;
     std::string whyNot;       // what is missing when not suitable
+    // The block hash's path (docs/HASH.md): 64-bit atomics when the device has shaderInt64 and
+    // shaderBufferInt64Atomics (and VKMESH_PRETEND_MISSING names neither), else 32-bit atomics only.
+    bool int64Atomics = false;
+    std::string hashPath;     // "64-bit atomics" or "32-bit atomics (no ...)", for `vkmesh devices`
 };
+
+// The Vulkan feature names that VKMESH_PRETEND_MISSING (a comma list) may name: vkmesh then behaves as on
+// a device without them, so CI tests the fallback paths on a device that has everything. Throws
+// vkmesh::Error naming an unknown name and the known ones.
+std::vector<std::string> pretendedMissingFeatures();
 
 // An application's own Vulkan objects, for running vkmesh on them instead of creating its own
 // (api/reconstructor.h). The application keeps owning them and destroys them after vkmesh. The device
@@ -52,9 +61,13 @@ public:
 
     // Lists the physical devices and whether vkmesh can run on each.
     static std::vector<DeviceInfo> listDevices();
-    // Sets the features vkmesh needs in an application's VkDeviceCreateInfo chain (features.pNext must
-    // reach f12): shaderInt64 and shaderBufferInt64Atomics. Vulkan 1.2 instance and device required.
+    // Sets the features vkmesh uses in an application's VkDeviceCreateInfo chain (features.pNext must
+    // reach f12): shaderInt64 and shaderBufferInt64Atomics, which are optional (without them the block hash
+    // takes its 32-bit path): this overload sets them unconditionally (device creation fails where they are
+    // missing); the one taking the physical device sets only what the device has. Vulkan 1.2 required.
     static void enableRequiredFeatures(VkPhysicalDeviceFeatures2& features, VkPhysicalDeviceVulkan12Features& f12);
+    static void enableRequiredFeatures(VkPhysicalDevice device, VkPhysicalDeviceFeatures2& features,
+                                       VkPhysicalDeviceVulkan12Features& f12);
     // Whether the physical device can run vkmesh (DeviceInfo::whyNot says what is missing).
     static DeviceInfo describeDevice(VkPhysicalDevice device);
     // A compute queue family of the device, preferring one that also does graphics; throws if none.
@@ -70,6 +83,8 @@ public:
     const VkPhysicalDeviceProperties& properties() const { return properties_; }
     const DeviceInfo& info() const { return info_; }
     bool validationEnabled() const { return validation_; }
+    // Whether the block hash uses 64-bit atomics on this device (else its 32-bit path; docs/HASH.md).
+    bool int64Atomics() const { return info_.int64Atomics; }
 
     // Memory type with all `required` flags (and `preferred` ones when possible); throws if none.
     uint32_t findMemoryType(uint32_t typeBits, VkMemoryPropertyFlags required, VkMemoryPropertyFlags preferred = 0) const;

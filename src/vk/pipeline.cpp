@@ -5,6 +5,7 @@
 #include <unordered_map>
 
 #include "vk/check.h"
+#include "vk/shader_registry.h"
 
 namespace vkmesh::vk {
 namespace {
@@ -118,11 +119,9 @@ void BindingTable::bind(uint32_t binding, const Buffer& buffer) const {
 ComputePipeline::ComputePipeline(const Context& context, const BindingTable& table, const std::string& shaderName,
                                  std::optional<uint32_t> specialization)
     : context_(context), table_(table), name_(shaderName) {
-    const auto& registry = shaders::all();
-    auto it = registry.find(shaderName);
-    if (it == registry.end()) throw Error("No embedded shader named '" + shaderName + "'");
-    bindings_ = reflectBindings(it->second, shaderName);
-    workgroupSize_ = reflectWorkgroupSize(it->second, shaderName);
+    const std::span<const uint32_t> code = shaders::computeShaderFor(context, shaderName);   // the device's hash build
+    bindings_ = reflectBindings(code, shaderName);
+    workgroupSize_ = reflectWorkgroupSize(code, shaderName);
     const uint32_t storage = uint32_t(std::count_if(bindings_.begin(), bindings_.end(),
                                                     [](const ShaderBinding& b) { return b.type == VK_DESCRIPTOR_TYPE_STORAGE_BUFFER; }));
     const uint32_t deviceLimit = context.properties().limits.maxPerStageDescriptorStorageBuffers;
@@ -168,8 +167,8 @@ ComputePipeline::ComputePipeline(const Context& context, const BindingTable& tab
     }
 
     VkShaderModuleCreateInfo moduleInfo{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
-    moduleInfo.codeSize = it->second.size() * sizeof(uint32_t);
-    moduleInfo.pCode = it->second.data();
+    moduleInfo.codeSize = code.size() * sizeof(uint32_t);
+    moduleInfo.pCode = code.data();
     VkShaderModule module = VK_NULL_HANDLE;
     check(vkCreateShaderModule(device, &moduleInfo, nullptr, &module), ("vkCreateShaderModule(" + name_ + ")").c_str());
     VkComputePipelineCreateInfo info{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};

@@ -1,4 +1,4 @@
-#include "gpu/stages.h"
+#include "gpu/stages/allocate_blocks_stage.h"
 
 #include <cstddef>
 

@@ -1,0 +1,26 @@
+// Stage: block allocation (shaders_comp/allocate/), the first half of paper §V.A.
+#pragma once
+
+#include "gpu/layout.h"
+#include "vk/buffer.h"
+#include "vk/context.h"
+#include "vk/pipeline.h"
+
+namespace vkmesh::gpu {
+
+// Pixels walk their truncation bands and claim block keys in the hash (allocate_blocks, through
+// structure/block_hash.glsl's hashInsertKey: either atomic path), the touched list is sized (plan_frame),
+// touched keys without memory get a block from the free list (assign_blocks), and the free list is shrunk
+// by what was handed out (commit_allocation). Four dispatches, because a free list may not be read and
+// shrunk in one. Reads the depth image; writes the hash, the touched list (hash slots, then block indices),
+// the block coordinates of new blocks and Counters::assignDispatch / blockDispatch (the fuse stage's).
+class AllocateBlocksStage {
+public:
+    AllocateBlocksStage(const vk::Context& context, const vk::BindingTable& layout);
+    void record(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters, uint32_t pixelStride) const;
+
+private:
+    vk::ComputePipeline allocate_, plan_, assign_, commit_;
+};
+
+}  // namespace vkmesh::gpu
