@@ -276,7 +276,9 @@ void GpuVolume::growHash(uint32_t slots, FrameReport& report) {
     slots = uint32_t(std::min<uint64_t>(nextPowerOfTwo(slots), maxSlots));
     const uint32_t oldSlots = config_.hashCapacity;
     if (slots <= oldSlots) {
-        report.warnings.push_back("the block hash cannot grow past " + std::to_string(oldSlots) + " slots on this device");
+        if (!(limitsReported_ & kHashLimit))
+            report.warnings.push_back("the block hash cannot grow past " + std::to_string(oldSlots) + " slots on this device");
+        limitsReported_ |= kHashLimit;
         return;
     }
     // With the old table: list the live blocks, keep each one's stamp in its coordinate's w.
@@ -308,8 +310,10 @@ void GpuVolume::growBlockPool(uint32_t blocks, FrameReport& report) {
     const uint64_t maxBlocks = std::min<uint64_t>(context_.maxStorageBufferRange() / (4ull * VOXELS_PER_BLOCK), 1u << 30);
     blocks = uint32_t(std::min<uint64_t>(blocks, maxBlocks));
     if (blocks <= old) {
-        report.warnings.push_back("the block pool cannot grow past " + std::to_string(old) +
-                                  " blocks: one storage buffer binding holds at most that many blocks' TSDF on this device");
+        if (!(limitsReported_ & kPoolLimit))
+            report.warnings.push_back("the block pool cannot grow past " + std::to_string(old) +
+                                      " blocks: one storage buffer binding holds at most that many blocks' TSDF on this device");
+        limitsReported_ |= kPoolLimit;
         return;
     }
     GpuVolumeConfig next = config_;
@@ -320,7 +324,9 @@ void GpuVolume::growBlockPool(uint32_t blocks, FrameReport& report) {
         checkCapacities(next, context_.maxStorageBufferRange(), deviceLocalHeapBytes(context_), context_.info().name,
                         BlockHash::keyBytesPerSlot(context_.int64Atomics()));
     } catch (const Error& e) {
-        report.warnings.push_back(std::string("the block pool cannot grow past ") + std::to_string(old) + " blocks: " + e.what());
+        if (!(limitsReported_ & kPoolLimit))
+            report.warnings.push_back(std::string("the block pool cannot grow past ") + std::to_string(old) + " blocks: " + e.what());
+        limitsReported_ |= kPoolLimit;
         return;
     }
     store_.grow(blocks, counters_);

@@ -255,6 +255,9 @@ private:
     uint32_t frameNumber_ = 0, framesIntegrated_ = 0;
     bool touchedFollowsPool_ = false;   // touchedCapacity was left at its default (the pool's size)
     bool meshPublished_ = false;
+    // Capacities that reached a device limit and said so (once each; the frames' own warnings still count).
+    static constexpr uint32_t kPoolLimit = 1, kHashLimit = 2;
+    uint32_t limitsReported_ = 0;
     bool retryPending_ = false;   // next frame: dirty every block with retype bits left (see growMeshHeaps)
     FramePush lastPush_{};
 };

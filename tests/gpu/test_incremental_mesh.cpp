@@ -218,8 +218,20 @@ TEST_P(CpuReferenceTest, MatchesCpuReferenceMesherFrameByFrame) {
         const Pose& pose = poses[(frame * 2) % poses.size()];
         DepthImage depth = scene.renderDepth(intr, pose, render);
         gpu::FrameReport r = volume.integrate(depth, intr, pose);
-        referenceVolume.integrate(depth, intr, pose);
+        const cpu::ReferenceFrameStats f = referenceVolume.integrate(depth, intr, pose);
         cpu::MeshFrameStats s = mesher.update(referenceVolume, referenceVolume.lastTouched(), frame);
+        // Stage by stage, each named in the failure, so that a failing stage says which it is.
+        const gpu::Counters& k = r.counters;
+        EXPECT_EQ(k.touchedCount, f.touchedCount) << "allocate stage, frame " << frame;
+        EXPECT_EQ(k.blocksInserted, f.blocksInserted) << "allocate stage, frame " << frame;
+        EXPECT_EQ(k.updatedVoxels, f.updatedVoxels) << "fuse stage, frame " << frame;
+        EXPECT_EQ(k.dirtyCount, s.dirtyBlocks) << "mark_dirty stage, frame " << frame;
+        EXPECT_EQ(k.retypeCount, s.cubesListed) << "retype stage, frame " << frame;
+        EXPECT_EQ(k.vertexAllocRequests - k.vertexExhausted, s.verticesAllocated) << "claim_vertices stage, frame " << frame;
+        EXPECT_EQ(k.cubesRetyped, s.cubesRetyped) << "triangulate stage, frame " << frame;
+        EXPECT_EQ(k.chunkAllocRequests - k.chunkExhausted, s.chunksAllocated) << "triangulate stage, frame " << frame;
+        EXPECT_EQ(k.vertexPushes, s.verticesFreed) << "mesh_gc stage, frame " << frame;
+        EXPECT_EQ(k.chunkPushes, s.chunksFreed) << "mesh_gc stage, frame " << frame;
         // The same cubes change type and the same triangles come and go.
         EXPECT_EQ(r.counters.trianglesCreated, s.trianglesCreated) << "frame " << frame;
         EXPECT_EQ(r.counters.trianglesReleased, s.trianglesReleased) << "frame " << frame;
