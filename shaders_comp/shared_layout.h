@@ -104,6 +104,7 @@ VKM_CONST BINDING_EDGE_VERTEX_Y = 30u; // ... +y edge (one array per axis keeps 
 VKM_CONST BINDING_EDGE_VERTEX_Z = 31u; // ... +z edge
 VKM_CONST BINDING_COUNT = 32u;
 VKM_CONST MASK_WORDS = 16u;            // VOXELS_PER_BLOCK / 32
+VKM_CONST MASK_ALL_CUBES = 0xFFFFFFFFu; // a retype-mask word with each of its 32 cubes listed
 
 VKM_CONST EMPTY_SLOT = 0xFFFFFFFFu;    // an edge with no vertex
 VKM_CONST CLAIMED_SLOT = 0xFFFFFFFEu;  // claimed, the winner is allocating (within one dispatch only)
@@ -166,7 +167,7 @@ struct Vertex {
 // Counters the GPU keeps; the host reads this struct back after every frame (it is small).
 // The first three groups are indirect-dispatch arguments (x, y, z) and must stay 16-byte aligned.
 struct Counters {
-    uint assignDispatch[4];     // over the touched list, WG_LIST per group
+    uint touchedListDispatch[4]; // over the touched list, WG_LIST per group (plan_frame): assign_blocks, mark_dirty
     uint blockDispatch[4];      // one workgroup per touched block
     uint listDispatch[4];       // over the live block list, one workgroup per block
     uint collectDispatch[4];    // over the dirty blocks' retype-mask words, WG_LIST per group

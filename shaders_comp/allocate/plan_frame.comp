@@ -8,9 +8,9 @@ layout(local_size_x = 1) in;
 
 void main() {
     uint n = min(counters.touchedCount, params.touchedCapacity);
-    counters.assignDispatch[0] = (n + WG_LIST - 1u) / WG_LIST;
-    counters.assignDispatch[1] = 1u;
-    counters.assignDispatch[2] = 1u;
+    counters.touchedListDispatch[0] = (n + WG_LIST - 1u) / WG_LIST;
+    counters.touchedListDispatch[1] = 1u;
+    counters.touchedListDispatch[2] = 1u;
     counters.blockDispatch[0] = n;
     counters.blockDispatch[1] = 1u;
     counters.blockDispatch[2] = 1u;

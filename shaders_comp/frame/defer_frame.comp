@@ -17,5 +17,5 @@ void main() {
     if (params.deferOnOverflow == 0u || !overflow) return;
     counters.frameDeferred = 1u;
     counters.blockDispatch[0] = 0u;    // fuse_depth
-    counters.assignDispatch[0] = 0u;   // mark_dirty (assign_blocks already ran)
+    counters.touchedListDispatch[0] = 0u;   // mark_dirty (assign_blocks already ran)
 }

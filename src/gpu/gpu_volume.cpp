@@ -783,7 +783,7 @@ void GpuVolume::rebuildMesh() {
     // leaves the rest of the bits set, so passes repeat until none is left.
     VkCommandBuffer cmd = beginSubmission();
     lists_.recordReset(cmd);
-    vkCmdFillBuffer(cmd, lists_.retypeMasks().handle(), 0, VK_WHOLE_SIZE, 0xFFFFFFFFu);
+    vkCmdFillBuffer(cmd, lists_.retypeMasks().handle(), 0, VK_WHOLE_SIZE, MASK_ALL_CUBES);
     vk::memoryBarrier(cmd);
     recorder_.submitAndWait();
     retryPending_ = false;

@@ -9,7 +9,7 @@ namespace vkmesh::gpu {
 
 static_assert(sizeof(VolumeParamsGpu) == 96, "VolumeParamsGpu: std140 layout of 24 scalars");
 static_assert(sizeof(Counters) % 16 == 0);
-static_assert(offsetof(Counters, assignDispatch) == 0 && offsetof(Counters, blockDispatch) == 16 &&
+static_assert(offsetof(Counters, touchedListDispatch) == 0 && offsetof(Counters, blockDispatch) == 16 &&
               offsetof(Counters, listDispatch) == 32 && offsetof(Counters, collectDispatch) == 48 &&
               offsetof(Counters, retypeDispatch) == 64 && offsetof(Counters, vertexDispatch) == 80 &&
               offsetof(Counters, heapDispatch) == 96 && offsetof(Counters, candidateDispatch) == 112 &&

@@ -20,7 +20,7 @@ void AllocateBlocksStage::record(VkCommandBuffer cmd, const FramePush& push, con
     vk::memoryBarrier(cmd);
     plan_.dispatch(cmd, &push, 1);
     vk::memoryBarrier(cmd);
-    assign_.dispatchIndirect(cmd, &push, counters, offsetof(Counters, assignDispatch));
+    assign_.dispatchIndirect(cmd, &push, counters, offsetof(Counters, touchedListDispatch));
     vk::memoryBarrier(cmd);
     commit_.dispatch(cmd, &push, 1);
     vk::memoryBarrier(cmd);

@@ -13,7 +13,7 @@ namespace vkmesh::gpu {
 // touched keys without memory get a block from the free list (assign_blocks), and the free list is shrunk
 // by what was handed out (commit_allocation). Four dispatches, because a free list may not be read and
 // shrunk in one. Reads the depth image; writes the hash, the touched list (hash slots, then block indices),
-// the block coordinates of new blocks and Counters::assignDispatch / blockDispatch (the fuse stage's).
+// the block coordinates of new blocks and Counters::touchedListDispatch / blockDispatch (the fuse stage's).
 class AllocateBlocksStage {
 public:
     AllocateBlocksStage(const vk::Context& context, const vk::BindingTable& layout);

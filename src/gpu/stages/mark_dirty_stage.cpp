@@ -8,7 +8,7 @@ MarkDirtyStage::MarkDirtyStage(const vk::Context& context, const vk::BindingTabl
     : touched_(context, table, "mark_dirty"), all_(context, table, "mark_all_dirty"), pending_(context, table, "mark_pending_dirty") {}
 
 void MarkDirtyStage::recordTouched(VkCommandBuffer cmd, const FramePush& push, const CounterBuffer& counters) const {
-    touched_.dispatchIndirect(cmd, &push, counters.buffer(), offsetof(Counters, assignDispatch));
+    touched_.dispatchIndirect(cmd, &push, counters.buffer(), offsetof(Counters, touchedListDispatch));
     vk::memoryBarrier(cmd);
 }
 

@@ -47,7 +47,7 @@ void BlockHash::allocate(uint32_t capacity) {
 void BlockHash::recordClear(VkCommandBuffer cmd) const {
     // All-ones is KEY_EMPTY in the 64-bit layout and HASH32_WORD_EMPTY in every word of the 32-bit one.
     static_assert(HASH32_WORD_EMPTY == 0xFFFFFFFFu);
-    vkCmdFillBuffer(cmd, keys_.handle(), 0, VK_WHOLE_SIZE, 0xFFFFFFFFu);
+    vkCmdFillBuffer(cmd, keys_.handle(), 0, VK_WHOLE_SIZE, HASH32_WORD_EMPTY);
     vkCmdFillBuffer(cmd, values_.handle(), 0, VK_WHOLE_SIZE, NO_BLOCK);
     vkCmdFillBuffer(cmd, stamps_.handle(), 0, VK_WHOLE_SIZE, 0);
 }
