@@ -119,6 +119,42 @@ TEST_F(GpuTest, TinyCapacitiesGrowToTheMeshOfAmpleOnes) {
     EXPECT_EQ(canonicalTriangles(grownRun.replica.toMesh()), canonicalTriangles(soupOf(grownMesh)));
 }
 
+// A deferred frame must not run the whole-volume passes: with a keep radius, retiring and freeing blocks twice
+// (or for a frame that fused nothing) would change the map. Tiny capacities and a bounded map end with the map
+// of ample capacities: the same blocks, TSDF and triangles.
+TEST_F(GpuTest, GrowthWithABoundedMapKeepsTheMapOfAmpleCapacities) {
+    const size_t frames = 8;
+    gpu::GpuVolumeConfig ampleConfig = test::smallRoomConfig();
+    ampleConfig.keepRadius = 2.0f;
+    gpu::GpuVolume ample(context(), ampleConfig);
+    FusedFrames ampleRun = fuse(ample, nullptr, frames);
+    gpu::GpuVolumeConfig tiny = tinyConfig();
+    tiny.keepRadius = 2.0f;
+    tiny.trackDeltas = false;
+    gpu::GpuVolume grown(context(), tiny);
+    FusedFrames grownRun = fuse(grown, nullptr, frames);
+    uint32_t freed = 0, deferred = 0;
+    for (size_t i = 0; i < frames; ++i) {
+        EXPECT_TRUE(grownRun.reports[i].warnings.empty()) << "frame " << i << ": " << grownRun.reports[i].warnings.front();
+        freed += grownRun.reports[i].counters.blocksFreed;
+        deferred += grownRun.reports[i].deferredAttempts;
+        EXPECT_EQ(grownRun.reports[i].counters.blocksFreed, ampleRun.reports[i].counters.blocksFreed) << "frame " << i;
+    }
+    EXPECT_GT(deferred, 0u);
+    EXPECT_GT(freed, 0u) << "the path must leave blocks behind";
+    auto a = byCoord(ample.downloadBlocks()), g = byCoord(grown.downloadBlocks());
+    ASSERT_EQ(a.size(), g.size());
+    size_t differing = 0;
+    for (const auto& [coord, block] : a) {
+        auto it = g.find(coord);
+        ASSERT_NE(it, g.end());
+        differing += std::memcmp(block.sdf.data(), it->second.sdf.data(), block.sdf.size() * 4) != 0 ||
+                     std::memcmp(block.weight.data(), it->second.weight.data(), block.weight.size() * 4) != 0;
+    }
+    EXPECT_EQ(differing, 0u);
+    EXPECT_EQ(canonicalTriangles(soupOf(grown.exportMesh())), canonicalTriangles(soupOf(ample.exportMesh())));
+}
+
 TEST_F(GpuTest, FixedCapacitiesStayFixedAndReport) {
     gpu::GpuVolumeConfig fixed = tinyConfig();
     fixed.growCapacities = false;
