@@ -50,8 +50,12 @@ if [[ $parts == all || $parts == gpu-av ]]; then
     MeshDeltas.FollowHeapExhaustionGrowthAndRecycling          # deltas (diff_*, plan_deltas), heap growth, pending dirty
     OwnDevice.PublishedMeshEqualsTheExportAndSurvivesARebuild  # published mesh: export to draw-ready buffers
     GpuTest.TinyCapacitiesGrowToTheMeshOfAmpleOnes             # every capacity grows (rebound buffers), deferred frames
+    BothAtomicPaths/PathTest.HashUnderContentionInsertLookupRemoveRebuildGrow/Int64Atomics  # the hash alone (test_hash_access)
+    BothAtomicPaths/PathTest.HashUnderContentionInsertLookupRemoveRebuildGrow/Atomics32     # ... and its 32-bit build
   )
-  regex="^($(IFS='|'; echo "${gpu_av_tests[*]}" | sed 's/\./\\./g'))\$"
+  # Parameterized tests are named "Suite/Test.Name/Param  # GetParam() = ..." by gtest_discover_tests: a name
+  # ends at the end of the string or at a space.
+  regex="^($(IFS='|'; echo "${gpu_av_tests[*]}" | sed 's/\./\\./g'))(\$| )"
   # A renamed test would otherwise drop out silently (ctest -R runs what matches, even nothing).
   found=$(cd build && ctest -N -R "$regex" | sed -n 's/^Total Tests: //p')
   if [[ $found != "${#gpu_av_tests[@]}" ]]; then
