@@ -32,6 +32,15 @@ struct DepthImage {
     float at(int x, int y) const { return meters[static_cast<size_t>(y) * width + x]; }
 };
 
+// An 8-bit RGB image registered to the depth image it came with (same size, same pixel grid), row-major,
+// 3 bytes a pixel (red, green, blue). Empty when a frame has no usable colour.
+struct ColorImage {
+    int width = 0, height = 0;
+    std::vector<uint8_t> rgb;
+    bool empty() const { return rgb.empty(); }
+    const uint8_t* at(int x, int y) const { return &rgb[(static_cast<size_t>(y) * width + x) * 3]; }
+};
+
 // Parameters of the TSDF volume, identical for the GPU pipeline and the CPU reference.
 struct VolumeParams {
     float voxelSize = 0.03f;       // metres between two TSDF samples (cube side)

@@ -18,6 +18,7 @@ struct Mesh {
     std::vector<Eigen::Vector3f> positions;
     std::vector<Eigen::Vector3f> normals;          // empty, or one per vertex
     std::vector<uint32_t> vertexAge;               // empty, or one per vertex: frames since the vertex was created
+    std::vector<std::array<uint8_t, 3>> colors;    // empty, or one per vertex: red, green, blue
     std::vector<std::array<uint32_t, 3>> triangles;  // vertex indices, counter-clockwise seen from outside
 };
 
