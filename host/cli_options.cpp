@@ -60,9 +60,16 @@ void VolumeOptions::addTuning(CLI::App* cmd) {
     cmd->add_option("--alloc-stride", allocStride,
                     "allocate blocks from every Nth pixel in x and y (1 = every pixel, as the paper; Open3D uses 4)")
         ->check(CLI::Range(1, 64));
+    cmd->add_flag("--no-color", noColor, "fuse depth only, even when the dataset has colour images (4 bytes per cube less)");
+    cmd->add_option("--color-mode", colorMode,
+                    "average: running average of the colour with the TSDF's weights (default); recent: exponential "
+                    "average that follows lighting changes (--color-recency)")
+        ->check(CLI::IsMember({"average", "recent"}));
+    cmd->add_option("--color-recency", colorRecency, "--color-mode recent: share of the newest colour, in (0, 1]")
+        ->check(CLI::Range(0.001f, 1.0f));
 }
 
-gpu::GpuVolumeConfig VolumeOptions::toConfig(float maxDepth, int width, int height) const {
+gpu::GpuVolumeConfig VolumeOptions::toConfig(float maxDepth, int width, int height, bool inputHasColor) const {
     gpu::GpuVolumeConfig config;
     config.params.voxelSize = voxel;
     config.params.truncVoxels = truncVoxels;
@@ -85,6 +92,10 @@ gpu::GpuVolumeConfig VolumeOptions::toConfig(float maxDepth, int width, int heig
     config.growCapacities = !noGrow;
     config.imageWidth = width;
     config.imageHeight = height;
+    config.params.colorFusion = !inputHasColor || noColor ? ColorFusion::Off
+                                : colorMode == "recent"   ? ColorFusion::Recent
+                                                          : ColorFusion::Average;
+    config.params.colorRecency = colorRecency;
     return config;
 }
 

@@ -51,17 +51,21 @@ struct VolumeOptions {
     uint32_t recycleAfter = gpu::GpuVolumeConfig{}.recycleAfterFrames;
     float starveWeight = gpu::GpuVolumeConfig{}.starveWeight;
     bool noGrow = !gpu::GpuVolumeConfig{}.growCapacities;
+    bool noColor = false;                  // --no-color: depth only even when the dataset has colour
+    std::string colorMode = "average";     // --color-mode average|recent
+    float colorRecency = VolumeParams{}.colorRecency;
 
     // --voxel, --blocks, --no-grow and the bounded-map options (--keep-radius, --recycle, --recycle-after,
     // --starve-weight).
     void addCommon(CLI::App* cmd);
     // The rest (fuse): --mode, --refine, --refine-eps, --lock-free, --vertices, --chunks, --hash-slots,
-    // --trunc, --max-weight, --min-weight, --alloc-stride.
+    // --trunc, --max-weight, --min-weight, --alloc-stride, --no-color, --color-mode, --color-recency.
     void addTuning(CLI::App* cmd);
 
     bool incremental() const { return mode != "baseline"; }
-    // The volume configuration for images of width x height, depth used up to maxDepth metres.
-    gpu::GpuVolumeConfig toConfig(float maxDepth, int width, int height) const;
+    // The volume configuration for images of width x height, depth used up to maxDepth metres; colour is
+    // fused (colorMode) when the input has colour and --no-color was not given.
+    gpu::GpuVolumeConfig toConfig(float maxDepth, int width, int height, bool inputHasColor = false) const;
 };
 
 struct DeviceArgs {

@@ -52,7 +52,7 @@ struct FuseArgs {
     uint32_t renderEvery = 0;
     std::string renderDir;
     std::string renderView = "sensor";
-    std::string renderColor = "shade";
+    std::string renderColor = "auto";
     std::string deltasPath;
 };
 
@@ -74,7 +74,8 @@ int runFuse(const FuseArgs& args) {
     const Intrinsics& intrinsics = dataset->intrinsics();
 
     vk::Context context(args.device.contextOptions());
-    gpu::GpuVolumeConfig config = args.volume.toConfig(args.data.maxDepth, intrinsics.width, intrinsics.height);
+    gpu::GpuVolumeConfig config = args.volume.toConfig(args.data.maxDepth, intrinsics.width, intrinsics.height, dataset->hasColor());
+    const bool fuseColor = config.params.colorFusion != ColorFusion::Off;
     const bool rendering = args.renderEvery > 0;
     if ((rendering || !args.deltasPath.empty()) && config.meshMode != gpu::MeshMode::Incremental)
         throw Error("--render-every and --deltas need --mode incremental (the baseline keeps no mesh between frames)");
@@ -90,6 +91,7 @@ int runFuse(const FuseArgs& args) {
         renderOptions.width = intrinsics.width;
         renderOptions.height = intrinsics.height;
         renderOptions.color = render::parseColorMode(args.renderColor);
+        if (renderOptions.color == render::ColorMode::Auto) renderOptions.color = fuseColor ? render::ColorMode::Rgb : render::ColorMode::Shade;
     }
     std::optional<DeltaStreamWriter> deltaStream;
     if (!args.deltasPath.empty()) deltaStream.emplace(args.deltasPath);
@@ -100,7 +102,7 @@ int runFuse(const FuseArgs& args) {
     const bool tty = isatty(STDERR_FILENO);
     std::map<std::string, std::vector<double>> stageMs, perFrame;
     std::vector<double> frameWallMs;
-    size_t integrated = 0, skipped = 0;
+    size_t integrated = 0, skipped = 0, framesWithColor = 0;
     uint64_t hashFull = 0, poolExhausted = 0, touchedOverflow = 0;
     // Every other capacity event and the recycling counts, summed over the frames (the --stats JSON).
     std::map<std::string, uint64_t> events;
@@ -128,8 +130,15 @@ int runFuse(const FuseArgs& args) {
             ++skipped;
             continue;
         }
+        ColorImage color;
+        if (fuseColor) {
+            std::string problem;
+            color = dataset->loadColor(i, &problem);
+            if (color.empty() && !problem.empty()) warn("frame " + std::to_string(i) + " fused without colour: " + problem);
+            framesWithColor += !color.empty();
+        }
         auto t0 = std::chrono::steady_clock::now();
-        gpu::FrameReport report = volume.integrate(depth, intrinsics, dataset->frame(i).cameraToWorld);
+        gpu::FrameReport report = volume.integrate(depth, &color, intrinsics, dataset->frame(i).cameraToWorld);
         frameWallMs.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
         ++integrated;
         double meshMs = 0;
@@ -278,8 +287,14 @@ int runFuse(const FuseArgs& args) {
                                                {"high_water", k.chunkHighWater}}},
                           {"live_triangles", k.liveTriangles}};
     }
-    // Persistent state per cube: TSDF (sdf + weight) + cube state + 3 edge-vertex slots.
-    stats["bytes_per_cube"] = config.meshMode == gpu::MeshMode::Incremental ? 24 : 8;
+    // Persistent state per cube: TSDF (sdf + weight) + cube state + 3 edge-vertex slots (+ colour).
+    stats["bytes_per_cube"] = (config.meshMode == gpu::MeshMode::Incremental ? 24 : 8) + (fuseColor ? 4 : 0);
+    stats["color"] = {{"fused", fuseColor},
+                      {"mode", fuseColor ? args.volume.colorMode : std::string("off")},
+                      {"recency", args.volume.colorRecency},
+                      {"dataset_has_color", dataset->hasColor()},
+                      {"frames_with_color", framesWithColor},
+                      {"mesh_has_color", !mesh.colors.empty()}};
     json gpuMs = json::object();
     for (const auto& [name, values] : stageMs) gpuMs[name] = statsOf(values);
     stats["gpu_ms_per_frame"] = gpuMs;
@@ -353,8 +368,10 @@ Run addFuseCommand(CLI::App& app) {
     cmd->add_option("--render-dir", args->renderDir, "folder for the --render-every pictures (frame_NNNNNN.png)");
     cmd->add_option("--render-view", args->renderView, "sensor: from the frame's camera; overview: framing the mesh so far")
         ->check(CLI::IsMember({"sensor", "overview"}));
-    cmd->add_option("--render-color", args->renderColor, "shade, normal or age (warm = new, cold = old)")
-        ->check(CLI::IsMember({"shade", "normal", "age"}));
+    cmd->add_option("--render-color", args->renderColor,
+                    "shade, normal, age (warm = new, cold = old) or rgb (the fused colours); default: rgb when colour is "
+                    "fused, else shade")
+        ->check(CLI::IsMember({"shade", "normal", "age", "rgb", "auto"}));
     cmd->add_option("--deltas", args->deltasPath, "write every frame's mesh changes to this stream file (docs/DELTAS.md)");
     return [args] { return runFuse(*args); };
 }

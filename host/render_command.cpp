@@ -1,6 +1,6 @@
 // `vkmesh render`: headless offscreen rendering of a mesh to a PNG with a Vulkan graphics pipeline.
 //   vkmesh render MESH.ply -o view.png [--width 800 --height 600]
-//                 [--camera eye_x,eye_y,eye_z,target_x,target_y,target_z] [--color shade|normal|age]
+//                 [--camera eye_x,eye_y,eye_z,target_x,target_y,target_z] [--color shade|normal|age|rgb]
 // The work is done by vkmesh::render::renderMeshFile (src/render/mesh_renderer.h), which the tests call too,
 // and io::writePng (src/io/png.h).
 #include <CLI/CLI.hpp>
@@ -23,7 +23,7 @@ struct RenderArgs {
     int width = 800;
     int height = 600;
     std::string camera;
-    std::string color = "shade";
+    std::string color = "auto";
     DeviceArgs device;
 };
 }  // namespace
@@ -39,7 +39,8 @@ Run addRenderCommand(CLI::App& app) {
                     "eye_x,eye_y,eye_z,target_x,target_y,target_z (world z up, 60 degree vertical field of view; "
                     "default: a three-quarter view from outside the mesh's bounding box)");
     // Checked by parseColorMode so that a bad value is reported like every other vkmesh error.
-    cmd->add_option("--color", args->color, "shade (Phong, headlight), normal (normal as RGB) or age (red new .. blue old)");
+    cmd->add_option("--color", args->color, "shade (Phong, headlight), normal (normal as RGB), age (red new .. blue old) or rgb (the fused vertex "
+                    "colours); default: rgb when the mesh has colours, else shade");
     args->device.add(cmd);
     return [args]() {
         render::RenderOptions options;

@@ -76,7 +76,7 @@ VKM_CONST BINDING_VOXEL_SDF = 6u;      // float per TSDF corner, block-major
 VKM_CONST BINDING_VOXEL_WEIGHT = 7u;   // float per TSDF corner
 VKM_CONST BINDING_FREE_LIST = 8u;      // uint stack of free block indices
 VKM_CONST BINDING_TOUCHED = 9u;        // uint list of the frame's blocks (hash slot, then block index)
-VKM_CONST BINDING_DEPTH = 10u;         // float depth image in metres
+VKM_CONST BINDING_DEPTH = 10u;         // the frame's images: depth (float metres) per pixel, then colour (RGBA8 uint) per pixel
 VKM_CONST BINDING_MC_TABLES = 11u;     // uniform: marching-cubes tables as uint words (MC_TRIANGLE_WORDS_OFFSET)
 VKM_CONST BINDING_BLOCK_LIST = 12u;    // uint list of all live blocks (for whole-volume passes)
 VKM_CONST BINDING_MESH_VERTICES = 13u; // vec4 per vertex of the baseline mesh (3 per triangle)
@@ -94,7 +94,7 @@ VKM_CONST BINDING_VERTEX_FREE = 20u;   // uint stack of free vertex indices
 VKM_CONST BINDING_GARBAGE = 21u;
 VKM_CONST BINDING_CHUNK_TRIANGLES = 22u; // uint: 5 triangles x 3 vertex indices per chunk
 VKM_CONST BINDING_CHUNK_FREE = 23u;    // uint stack of free chunk indices
-VKM_CONST BINDING_UNUSED_24 = 24u;     // free (was the chunk release list, now part of BINDING_GARBAGE)
+VKM_CONST BINDING_VOXEL_COLOR = 24u;   // uint per TSDF corner: fused colour (VOXEL_COLOR_* encoding below)
 VKM_CONST BINDING_EXPORT_VERTICES = 25u; // Vertex: the compacted mesh's vertices
 VKM_CONST BINDING_EXPORT_INDICES = 26u;  // uint: the compacted mesh's triangles
 VKM_CONST BINDING_VERTEX_REMAP = 27u;    // uint per vertex: its index in the compacted mesh
@@ -149,19 +149,36 @@ struct VolumeParamsGpu {
     // 1: a frame whose allocation overflowed a capacity (pool, hash, touched list) is deferred: nothing is
     // fused, the host grows what overflowed and runs the frame again (docs/MESH.md, "Capacities").
     uint deferOnOverflow;
-    uint pad1, pad2;
+    uint colorMode;         // COLOR_MODE_*: how fusion folds a pixel's colour into a corner's
+    float colorRecency;     // COLOR_MODE_RECENT: the new colour's share, in (0, 1]
 };
+// Colour fusion (docs/COLOR.md). Off: no colour is fused (and the colour buffer is a placeholder).
+VKM_CONST COLOR_MODE_OFF = 0u;
+VKM_CONST COLOR_MODE_AVERAGE = 1u;     // running average with the TSDF's weight (the paper's and Open3D's rule)
+VKM_CONST COLOR_MODE_RECENT = 2u;      // exponential: c' = c + colorRecency (new - c), recent frames dominate
+// A corner's colour in one uint: red, green, blue in 10 bits each as 4 x the 8-bit value (0..1020, so a
+// running average keeps two bits below the input's precision; rounded with a deterministic dither so that
+// it is unbiased and does not stall once the weight is high), and bit 30 set once the corner has a colour.
+VKM_CONST VOXEL_COLOR_BITS = 10u;
+VKM_CONST VOXEL_COLOR_CHANNEL_MASK = 0x3FFu;
+VKM_CONST VOXEL_COLOR_SCALE = 4u;      // stored value = 4 x 8-bit value
+VKM_CONST VOXEL_COLOR_SET = 0x40000000u;
+// FramePush::imageSize: width | height << 16, and this bit when the frame comes with a colour image (the
+// RGBA8 words after the depth samples in BINDING_DEPTH).
+VKM_CONST FRAME_HAS_COLOR = 0x80000000u;
+VKM_CONST FRAME_HEIGHT_MASK = 0x7FFFu;
 VKM_CONST VERTEX_UPDATE_AUTO = 0u;     // whichever of the two visits fewer entries this frame
 VKM_CONST VERTEX_UPDATE_HEAP = 1u;     // scan the heap (update_heap_vertices)
 VKM_CONST VERTEX_UPDATE_DIRTY = 2u;    // the dirty blocks' cubes + new vertices (update_vertices, update_new_vertices)
 
-// One mesh vertex, as stored in the heap and in the compacted export (stride 32: a renderer reads the
-// position at offset 0 and the normal at offset 16).
+// One mesh vertex, as stored in the heap and in the compacted export (stride 36: a renderer reads the
+// position at offset 0, the normal at offset 16 and the colour at offset 32 as R8G8B8A8_UNORM).
 struct Vertex {
     float px, py, pz;
     uint refcount;          // live triangles using it; DEAD_REFCOUNT while free
     float nx, ny, nz;
     uint createdFrame;      // frame number that created it (its age is now - createdFrame)
+    uint color;             // red | green << 8 | blue << 16 | alpha << 24; alpha 255 when coloured, 0 when not
 };
 
 // Counters the GPU keeps; the host reads this struct back after every frame (it is small).
@@ -261,7 +278,7 @@ VKM_CONST DELTA_BINDING_COUNT = 8u;
 // the vertex/triangle lives, and reused after it is removed: ADDED gives an id new content (a new
 // vertex or triangle, possibly replacing one removed in the same frame).
 VKM_CONST DELTA_ADDED = 0u;
-VKM_CONST DELTA_CHANGED = 1u;                   // vertices only: position or normal moved
+VKM_CONST DELTA_CHANGED = 1u;                   // vertices only: position, normal or colour changed
 VKM_CONST DELTA_REMOVED = 2u;
 VKM_CONST DELTA_KIND_SHIFT = 30u;
 VKM_CONST DELTA_ID_MASK = 0x3FFFFFFFu;
@@ -283,6 +300,7 @@ struct DeltaVertexRecord {
     float px, py, pz;
     float nx, ny, nz;
     uint createdFrame;
+    uint color;                 // Vertex::color
 };
 
 struct DeltaTriangleRecord {
@@ -297,7 +315,7 @@ struct FramePush {
     VKM_ROWS3(worldToCamera);
     VKM_ROWS3(cameraToWorld);
     VKM_VEC4(intrinsics);       // fx, fy, cx, cy
-    uint imageSize;             // width | height << 16
+    uint imageSize;             // width | height << 16, | FRAME_HAS_COLOR when the frame has colour
     uint frameNumber;           // starts at 1; hash stamps start at 0
     float minDepth;             // depth samples outside [minDepth, maxDepth] are ignored
     float maxDepth;

@@ -3,6 +3,7 @@
 //   shade:  Phong with a headlight (light at the eye) + ambient, on a light grey
 //   normal: the interpolated vertex normal mapped to RGB (n * 0.5 + 0.5)
 //   age:    warm (red, age 0) to cold (blue, oldest) colormap of the normalised age, lightly shaded
+//   rgb:    the vertex colour, lightly shaded (grey where a vertex has none)
 // No culling: a back face (seen against its winding) is drawn at half brightness.
 #extension GL_GOOGLE_include_directive : require
 #include "mesh_render.h"
@@ -10,6 +11,7 @@
 layout(location = 0) in vec3 worldPos;
 layout(location = 1) in vec3 worldNormal;
 layout(location = 2) in float age;
+layout(location = 3) in vec4 vertexColor;
 
 layout(location = 0) out vec4 outColor;
 
@@ -41,6 +43,9 @@ void main() {
     vec3 color;
     if (pc.colorMode == RENDER_COLOR_NORMAL) {
         color = n * 0.5 + 0.5;
+    } else if (pc.colorMode == RENDER_COLOR_RGB) {
+        vec3 albedo = vertexColor.a > 0.0 ? vertexColor.rgb : vec3(0.5);
+        color = albedo * (0.55 + 0.45 * lambert);
     } else if (pc.colorMode == RENDER_COLOR_AGE) {
         color = warmToCold(age) * (0.45 + 0.55 * lambert);
     } else {

@@ -6,13 +6,15 @@
 #define RENDER_COLOR_SHADE 0u
 #define RENDER_COLOR_NORMAL 1u
 #define RENDER_COLOR_AGE 2u
+#define RENDER_COLOR_RGB 3u   // the vertex colour (fused from the colour images), lightly shaded
 
 // Vertex input locations. One interleaved binding in vkmesh's own Vertex layout (shaders_comp/
-// shared_layout.h: position at 0, normal at 16, createdFrame at 28, stride 32), so the renderer draws the
+// shared_layout.h: position at 0, normal at 16, createdFrame at 28, colour at 32, stride 36), so the renderer draws the
 // GPU mesh buffers as they are and host meshes are packed the same way.
 #define RENDER_LOC_POSITION 0
 #define RENDER_LOC_NORMAL 1
 #define RENDER_LOC_CREATED 2
+#define RENDER_LOC_COLOR 3
 
 #ifdef __cplusplus
 #include <cstdint>

@@ -46,7 +46,7 @@ void main() {
     uvec2 pixel = gl_GlobalInvocationID.xy * params.allocationStride;
     uint valid = 0u, truncated = 0u;
     if (all(lessThan(pixel, size))) {
-        float d = depth[pixel.y * size.x + pixel.x];
+        float d = depthAt(pixel.y * size.x + pixel.x);
         if (d >= frame.minDepth && d <= frame.maxDepth) {
             valid = 1u;
             // Camera-frame ray through the pixel, scaled so that its z is 1.

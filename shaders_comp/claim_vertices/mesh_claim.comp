@@ -25,6 +25,7 @@ uint allocateVertex(uint slot) {
     uint v = vertexFree[counters.vertexFreeTop - 1u - rank];
     vertices[v].refcount = 0u;
     vertices[v].createdFrame = frame.frameNumber;
+    vertices[v].color = 0u;                                    // until the vertex update gives it one
     vertexOwner[v] = slot;
     uint c = atomicAdd(counters.candidateCount, 1u);
     if (c < params.vertexCapacity) setGcCandidate(c, v);

@@ -26,7 +26,7 @@ void main() {
     } else if (isAlive) {
         uvec3 p0 = floatBitsToUint(vec3(now.px, now.py, now.pz)), p1 = floatBitsToUint(vec3(before.px, before.py, before.pz));
         uvec3 n0 = floatBitsToUint(vec3(now.nx, now.ny, now.nz)), n1 = floatBitsToUint(vec3(before.nx, before.ny, before.nz));
-        if (any(notEqual(p0, p1)) || any(notEqual(n0, n1))) kind = DELTA_CHANGED;
+        if (any(notEqual(p0, p1)) || any(notEqual(n0, n1)) || now.color != before.color) kind = DELTA_CHANGED;
     }
     if (kind == DELTA_NONE) return;
     uint at = atomicAdd(deltaState.vertexRecords, 1u);
@@ -36,6 +36,7 @@ void main() {
     r.px = now.px; r.py = now.py; r.pz = now.pz;
     r.nx = now.nx; r.ny = now.ny; r.nz = now.nz;
     r.createdFrame = now.createdFrame;
+    r.color = now.color;
     vertexRecords[at] = r;
     prevVertices[v] = now;
 }

@@ -1,13 +1,15 @@
 #version 460
 // Stage 3 (paper §V.A): one workgroup per touched block updates the TSDF at the block's 512 corners:
 // project the corner into the depth image (nearest pixel), take the projective distance
-// d(pixel) - z, truncate it, and fold it into the weighted running average (weight capped).
+// d(pixel) - z, truncate it, and fold it into the weighted running average (weight capped). With colour,
+// the pixel's colour is folded into the corner's in the same step with the same weight (voxel_color.glsl).
 #extension GL_GOOGLE_include_directive : require
 #include "structure/frame.glsl"
 #include "structure/block_store.glsl"
 #include "structure/frame_lists.glsl"
 #include "structure/retype_marks.glsl"
 #include "structure/depth_input.glsl"
+#include "structure/voxel_color.glsl"
 
 layout(local_size_x = WG_BLOCK) in;
 
@@ -24,6 +26,7 @@ void main() {
         ivec3 origin = blockCoords[block].xyz * int(BLOCK_SIDE);
         uvec2 size = frameImageSize();
         float trunc = params.truncation;
+        bool withColor = params.colorMode != COLOR_MODE_OFF && frameHasColor();
         uint flipped = 0u;   // which of this invocation's corners flipped (marked after the loop, which stays lean)
         for (uint k = 0u; k < VOXELS_PER_INVOCATION; ++k) {
             uint local = gl_LocalInvocationIndex + k * WG_BLOCK;
@@ -42,13 +45,22 @@ void main() {
                 precise float w = (cam.y * frame.intrinsics.y) / cam.z + frame.intrinsics.w;
                 float pu = floor(u + 0.5), pv = floor(w + 0.5);
                 if (pu >= 0.0 && pv >= 0.0 && pu < float(size.x) && pv < float(size.y)) {
-                    float d = depth[uint(pv) * size.x + uint(pu)];
+                    uint pixel = uint(pv) * size.x + uint(pu);
+                    float d = depthAt(pixel);
                     precise float sdf = d - cam.z;
                     if (d >= frame.minDepth && d <= frame.maxDepth && sdf >= -trunc) {
                         precise float tsdf = min(sdf, trunc);
                         newSdf = (oldSdf * oldWeight + tsdf) / (oldWeight + 1.0);
                         newWeight = min(oldWeight + 1.0, params.maxWeight);
                         ++updated;
+                        uint rgba = withColor ? colorAt(pixel, size.x * size.y) : 0u;
+                        if ((rgba >> 24) != 0u) {
+                            uint oldColor = fresh ? 0u : voxelColor[v];
+                            uvec3 rgb = uvec3(rgba, rgba >> 8, rgba >> 16) & 0xFFu;
+                            voxelColor[v] = foldVoxelColor(oldColor, oldWeight, rgb, origin + ivec3(l), frame.frameNumber);
+                        } else if (fresh && params.colorMode != COLOR_MODE_OFF) {
+                            voxelColor[v] = 0u;
+                        }
                     }
                 }
             }
@@ -59,6 +71,8 @@ void main() {
                 voxelSdf[v] = newSdf;
                 voxelWeight[v] = newWeight;
             }
+            // A fresh block's corners that this frame did not update still hold a previous owner's colour.
+            if (fresh && newWeight == 0.0 && params.colorMode != COLOR_MODE_OFF) voxelColor[v] = 0u;
         }
         if (params.incrementalMesh != 0u) {
             for (uint k = 0u; k < VOXELS_PER_INVOCATION && flipped != 0u; ++k) {

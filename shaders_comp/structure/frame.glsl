@@ -36,7 +36,7 @@ vec3 transformPoint(vec4 rows[3], vec3 p) {
     return q;
 }
 
-uvec2 frameImageSize() { return uvec2(frame.imageSize & 0xFFFFu, frame.imageSize >> 16); }
+uvec2 frameImageSize() { return uvec2(frame.imageSize & 0xFFFFu, (frame.imageSize >> 16) & FRAME_HEIGHT_MASK); }
 
 // Whether a block lies beyond the keep radius around the camera (its centre farther than keepRadius):
 // such blocks are neither allocated nor kept. The CPU reference (src/cpu/reference_volume.cpp) repeats

@@ -1,10 +1,12 @@
 // Moving a vertex to the current zero crossing of its edge (paper §V.B): the position interpolated along
 // the edge (extrapolated, within limits, on an edge that only a refined type uses), the normal from the
-// owner cube's TSDF gradient. Includes cube_access.glsl.
+// owner cube's TSDF gradient, the colour interpolated between the edge's corners (voxel_color.glsl) when
+// colour is fused. Includes cube_access.glsl.
 #ifndef VKMESH_VERTEX_UPDATE_GLSL
 #define VKMESH_VERTEX_UPDATE_GLSL
 #include "structure/cube_access.glsl"
 #include "structure/cube_mesh.glsl"
+#include "structure/voxel_color.glsl"
 
 // r: the owner cube with its corners loaded into d/present; axis: which of its 3 edges.
 void moveVertex(uint v, CubeRef r, uint axis, float d[8], bool present[8]) {
@@ -27,5 +29,11 @@ void moveVertex(uint v, CubeRef r, uint axis, float d[8], bool present[8]) {
     vertices[v].nx = n.x;
     vertices[v].ny = n.y;
     vertices[v].nz = n.z;
+    if (params.colorMode != COLOR_MODE_OFF) {
+        uvec3 local;
+        uint hiBlock = blockHolding(r, r.cube + cornerOffset(hi), local);
+        uint lo = voxelColor[voxelIndex(r.nb[0], r.cube)], high = voxelColor[voxelIndex(hiBlock, local)];
+        vertices[v].color = vertexColorOnEdge(lo, high, d[0], d[hi]);
+    }
 }
 #endif

@@ -10,7 +10,7 @@
 
 namespace vkmesh {
 
-// Positions, normals and triangles in the export's order. With the current frame number (the number of
+// Positions, normals, colours (when any vertex has one; grey for those without) and triangles in the export's order. With the current frame number (the number of
 // frames integrated), also each vertex's age: currentFrame - createdFrame (PLY's `age` property).
 Mesh toMesh(const gpu::ExportedMesh& exported, std::optional<uint32_t> currentFrame = std::nullopt);
 

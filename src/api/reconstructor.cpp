@@ -23,6 +23,11 @@ Reconstructor::~Reconstructor() { volume_.reset(); }
 
 gpu::FrameReport Reconstructor::integrate(const DepthImage& depth, const Intrinsics& intrinsics, const Pose& cameraToWorld,
                                           const vk::SubmitSync& sync) {
+    return integrate(depth, nullptr, intrinsics, cameraToWorld, sync);
+}
+
+gpu::FrameReport Reconstructor::integrate(const DepthImage& depth, const ColorImage* color, const Intrinsics& intrinsics,
+                                          const Pose& cameraToWorld, const vk::SubmitSync& sync) {
     if (!volume_) {
         if (depth.width <= 0 || depth.height <= 0) throw Error("the first depth image is empty");
         gpu::GpuVolumeConfig config = options_.volume;
@@ -30,7 +35,7 @@ gpu::FrameReport Reconstructor::integrate(const DepthImage& depth, const Intrins
         config.imageHeight = depth.height;
         volume_ = std::make_unique<gpu::GpuVolume>(*context_, config);
     }
-    gpu::FrameReport report = volume_->integrate(depth, intrinsics, cameraToWorld, sync);
+    gpu::FrameReport report = volume_->integrate(depth, color, intrinsics, cameraToWorld, sync);
     lastDelta_ = report.delta;
     return report;
 }

@@ -62,6 +62,10 @@ public:
     // in the report's warnings (nothing already fused is lost). See the contract above for `sync`.
     gpu::FrameReport integrate(const DepthImage& depth, const Intrinsics& intrinsics, const Pose& cameraToWorld,
                                const vk::SubmitSync& sync = {});
+    // The same with the frame's colour image registered to the depth image (same size), folded into the
+    // corners as options.volume.params.colorFusion says (docs/COLOR.md); nullptr: depth only this frame.
+    gpu::FrameReport integrate(const DepthImage& depth, const ColorImage* color, const Intrinsics& intrinsics,
+                               const Pose& cameraToWorld, const vk::SubmitSync& sync = {});
 
     // The compacted mesh of the last frame (empty handles before the first).
     gpu::MeshBuffers meshBuffers() const;

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <string>
 
+#include "core/voxel_color.h"
+
 namespace vkmesh {
 
 size_t MeshDelta::count(DeltaKind kind) const {
@@ -31,7 +33,7 @@ void MeshReplica::apply(const MeshDelta& delta) {
             throw Error(where + " has a vertex record of unknown kind " + std::to_string(uint32_t(kind)));
         if (kind == DeltaKind::Changed && !vertices_.count(id))
             throw Error(where + " changes vertex " + std::to_string(id) + ", which does not exist");
-        vertices_[id] = {{r.px, r.py, r.pz}, {r.nx, r.ny, r.nz}, r.createdFrame};
+        vertices_[id] = {{r.px, r.py, r.pz}, {r.nx, r.ny, r.nz}, r.createdFrame, r.color};
     }
     for (const auto& r : delta.triangles) {
         DeltaKind kind = deltaKind(r.idKind);
@@ -61,7 +63,11 @@ Mesh MeshReplica::toMesh() const {
         mesh.positions.push_back(v.position);
         mesh.normals.push_back(v.normal);
         mesh.vertexAge.push_back(lastFrame_ >= v.createdFrame ? lastFrame_ - v.createdFrame : 0);
+        mesh.colors.push_back(vertexHasColor(v.color) ? vertexColorRgb(v.color) : std::array<uint8_t, 3>{128, 128, 128});
     }
+    // As toMesh(ExportedMesh): colours only when some vertex has one.
+    if (std::none_of(vertexIds.begin(), vertexIds.end(), [&](uint32_t id) { return vertexHasColor(vertices_.at(id).color); }))
+        mesh.colors.clear();
     std::vector<uint32_t> triangleIds;
     for (const auto& [id, t] : triangles_) triangleIds.push_back(id);
     std::sort(triangleIds.begin(), triangleIds.end());

@@ -15,7 +15,7 @@ namespace vkmesh {
 
 enum class DeltaKind : uint32_t {
     Added = gpu::DELTA_ADDED,      // a new vertex/triangle under this id (replaces what the id held, if anything)
-    Changed = gpu::DELTA_CHANGED,  // vertices only: new position and/or normal
+    Changed = gpu::DELTA_CHANGED,  // vertices only: new position, normal and/or colour
     Removed = gpu::DELTA_REMOVED,
 };
 
@@ -25,7 +25,7 @@ inline uint32_t deltaId(uint32_t idKind) { return idKind & gpu::DELTA_ID_MASK; }
 // One frame's changes, records in no particular order; at most one record per id and list.
 struct MeshDelta {
     uint32_t frame = 0;                                 // frame number (1 = first integrated frame)
-    std::vector<gpu::DeltaVertexRecord> vertices;       // Added/Changed carry position, normal, createdFrame
+    std::vector<gpu::DeltaVertexRecord> vertices;       // Added/Changed carry position, normal, createdFrame, colour
     std::vector<gpu::DeltaTriangleRecord> triangles;    // Added carry the 3 vertex ids
     size_t count(DeltaKind kind) const;                 // vertices + triangles of that kind
 };
@@ -36,6 +36,7 @@ public:
     struct VertexData {
         Eigen::Vector3f position, normal;
         uint32_t createdFrame = 0;
+        uint32_t color = 0;   // gpu::Vertex::color (alpha 0: none)
     };
 
     // Applies one frame: removals first, then additions and changes. Throws Error naming the frame and
@@ -45,7 +46,8 @@ public:
     size_t vertexCount() const { return vertices_.size(); }
     size_t triangleCount() const { return triangles_.size(); }
     uint32_t lastFrame() const { return lastFrame_; }
-    // Dense copy (vertices ordered by id, triangles by id) with normals and vertex ages (lastFrame - created).
+    // Dense copy (vertices ordered by id, triangles by id) with normals, vertex ages (lastFrame - created) and
+    // colours (as toMesh(ExportedMesh) gives them).
     Mesh toMesh() const;
 
 private:

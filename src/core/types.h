@@ -41,6 +41,13 @@ struct ColorImage {
     const uint8_t* at(int x, int y) const { return &rgb[(static_cast<size_t>(y) * width + x) * 3]; }
 };
 
+// How fusion folds colour into the corners (docs/COLOR.md); the values are gpu::COLOR_MODE_*.
+enum class ColorFusion : uint32_t {
+    Off = 0,      // depth only: no colour buffer, grey meshes
+    Average = 1,  // running average with the TSDF's weight (as Open3D, InfiniTAM and the paper's code)
+    Recent = 2,   // exponential average, c' = c + colorRecency (new - c): follows lighting changes (as nvblox)
+};
+
 // Parameters of the TSDF volume, identical for the GPU pipeline and the CPU reference.
 struct VolumeParams {
     float voxelSize = 0.03f;       // metres between two TSDF samples (cube side)
@@ -52,6 +59,10 @@ struct VolumeParams {
     // every pixel. 1 follows the paper (every valid pixel); Open3D's VoxelBlockGrid uses 4. 2 costs a
     // quarter of 1 and changes under 0.1 % of the baseline triangles on the real datasets (docs/RESULTS.md).
     int allocationStride = 2;
+    // Colour: frames that come with a colour image fold it into the corners they update (same weights);
+    // frames without one fuse depth only. Off allocates no colour (4 bytes per corner less).
+    ColorFusion colorFusion = ColorFusion::Average;
+    float colorRecency = 0.2f;     // ColorFusion::Recent: the share of the newest colour, in (0, 1]
     float truncation() const { return truncVoxels * voxelSize; }
 };
 

@@ -12,10 +12,12 @@ namespace vkmesh::cpu {
 
 using BlockCoord = std::array<int, 3>;
 
-// The TSDF corners of one block, index x + BLOCK_SIDE (y + BLOCK_SIDE z) (the GPU's voxel order).
+// The TSDF corners of one block, index x + BLOCK_SIDE (y + BLOCK_SIDE z) (the GPU's voxel order), with their
+// colour words (structure/voxel_color.glsl; 0 = no colour).
 struct ReferenceBlock {
     std::array<float, gpu::VOXELS_PER_BLOCK> sdf{};
     std::array<float, gpu::VOXELS_PER_BLOCK> weight{};
+    std::array<uint32_t, gpu::VOXELS_PER_BLOCK> color{};
 };
 
 // One bit per cube (or corner) of a block, same index.

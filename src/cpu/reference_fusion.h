@@ -19,6 +19,8 @@ struct FusionRule {
     float minMeshWeight = 1.0f;   // a corner is observed (meshable) from this weight on
     bool refine = false;          // with mesh refinement, a corner crossing |sdf| < refineEpsilon also flips
     float refineEpsilon = 0.0f;
+    ColorFusion colorFusion = ColorFusion::Average;
+    float colorRecency = 0.2f;
 };
 
 // With o/n the old/new weight and sdf, observed = weight >= minMeshWeight, a corner flips when
@@ -28,10 +30,13 @@ bool cornerFlipped(float oldSdf, float oldWeight, float newSdf, float newWeight,
 
 // Fuses the frame (push: its camera and depth range) into one block at `coord`: every corner that projects
 // into the image onto a valid depth d with sdf = d - z >= -truncation gets sdf' = (sdf w + min(sdf, trunc)) /
-// (w + 1), w' = min(w + 1, maxWeight). Appends the corners that flipped (global voxel coordinates) to
-// `flipped` in corner order; returns the number of corners updated.
+// (w + 1), w' = min(w + 1, maxWeight), and, when `color` is given and colour fusion is on, its colour at the
+// same pixel folded into the corner's (foldVoxelColor, core/voxel_color.h; frameNumber seeds the dither).
+// Appends the corners that flipped (global voxel coordinates) to `flipped` in corner order; returns the
+// number of corners updated.
 uint32_t fuseBlock(ReferenceBlock& block, const BlockCoord& coord, const DepthImage& depth, const gpu::FramePush& push,
-                   const FusionRule& rule, std::vector<std::array<int, 3>>* flipped);
+                   const FusionRule& rule, std::vector<std::array<int, 3>>* flipped, const ColorImage* color = nullptr,
+                   uint32_t frameNumber = 1);
 
 // For every flipped corner (global voxel coordinates), the 8 cubes around it (corner - o, o in {0,1}^3) in
 // whatever block they lie, for the blocks in `blocks`: the cubes whose MC (or refined) type may have changed.

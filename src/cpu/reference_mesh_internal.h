@@ -47,6 +47,7 @@ inline std::array<const ReferenceBlock*, 8> tsdfNeighbourhood(const ReferenceVol
 // The 8 TSDF corners of one cube.
 struct CubeCorners {
     float d[8] = {};
+    uint32_t color[8] = {};  // colour words (0 = none)
     bool exists[8] = {};   // the corner's block is allocated
     bool observed = true;  // all 8 exist and have weight >= minMeshWeight
 };
@@ -64,6 +65,7 @@ inline CubeCorners readCorners(const std::array<const ReferenceBlock*, 8>& n, ui
         }
         out.exists[c] = true;
         out.d[c] = block->sdf[w.cube];
+        out.color[c] = block->color[w.cube];
         if (block->weight[w.cube] < minMeshWeight) out.observed = false;
     }
     return out;

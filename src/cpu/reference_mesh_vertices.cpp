@@ -1,6 +1,9 @@
 // Vertex update (docs/MESH.md, pass 2; shaders_comp/update_*vertices.comp): positions and normals of the
-// vertices the dirty blocks own and of those claimed this frame, with the baseline's float operations.
+// vertices the dirty blocks own and of those claimed this frame, with the baseline's float operations, and
+// their colours.
 #include "cpu/reference_mesh_internal.h"
+
+#include "core/voxel_color.h"
 
 #include <algorithm>
 #include <cmath>
@@ -71,6 +74,8 @@ void ReferenceMesher::updateVertex(const TsdfBlocks& tsdf, const BlockMeshState&
     vertex.nx = n[0];
     vertex.ny = n[1];
     vertex.nz = n[2];
+    // Colour: interpolated between the edge's corners like the position (structure/voxel_color.glsl).
+    if (params_.colorFusion != ColorFusion::Off) vertex.color = vertexColorOnEdge(corners.color[0], corners.color[hi], dLo, dHi);
 }
 
 }  // namespace vkmesh::cpu

@@ -3,6 +3,7 @@
 #include "cpu/reference_mesh_internal.h"
 
 #include "core/refinement.h"
+#include "core/voxel_color.h"
 
 namespace vkmesh::cpu {
 
@@ -102,7 +103,13 @@ Mesh ReferenceMesher::exportMesh(uint32_t currentFrame) const {
         mesh.positions.emplace_back(vertex.px, vertex.py, vertex.pz);
         mesh.normals.emplace_back(vertex.nx, vertex.ny, vertex.nz);
         mesh.vertexAge.push_back(currentFrame - vertex.createdFrame);
+        mesh.colors.push_back(vertexHasColor(vertex.color) ? vertexColorRgb(vertex.color) : std::array<uint8_t, 3>{128, 128, 128});
     }
+    // The GPU export's rule (api/exported_mesh.cpp): colours only when some vertex has one.
+    bool anyColor = false;
+    for (uint32_t v = 0; v < vertexCapacity_ && !anyColor; ++v)
+        anyColor = vertices_[v].refcount != gpu::DEAD_REFCOUNT && vertices_[v].refcount != 0 && vertexHasColor(vertices_[v].color);
+    if (!anyColor) mesh.colors.clear();
     for (const auto& [coord, state] : blocks_) {
         for (uint32_t cube = 0; cube < VOXELS_PER_BLOCK; ++cube) {
             const uint32_t chunk = state.cubeState[cube] >> gpu::CUBE_CHUNK_SHIFT;

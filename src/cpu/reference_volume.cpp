@@ -44,19 +44,21 @@ std::vector<BlockCoord> ReferenceVolume::blocksTouchedBy(const DepthImage& depth
     return touched;
 }
 
-ReferenceFrameStats ReferenceVolume::integrate(const DepthImage& depth, const Intrinsics& intrinsics, const Pose& cameraToWorld) {
+ReferenceFrameStats ReferenceVolume::integrate(const DepthImage& depth, const Intrinsics& intrinsics, const Pose& cameraToWorld,
+                                               const ColorImage* color) {
     // 1. Allocation: the blocks the frame's truncation bands cross.
     ReferenceFrameStats stats;
     std::vector<BlockCoord> touched = blocksTouchedBy(depth, intrinsics, cameraToWorld, &stats);
 
     // 2. Fusion of every touched block; a new block starts at sdf 0, weight 0.
     const gpu::FramePush push = makeFramePush(intrinsics, cameraToWorld, params_, 1);
-    const FusionRule rule{params_.voxelSize, params_.truncation(), params_.maxWeight, minMeshWeight_, refine_, refineEpsilon_};
+    const FusionRule rule{params_.voxelSize, params_.truncation(), params_.maxWeight, minMeshWeight_, refine_, refineEpsilon_,
+                          params_.colorFusion, params_.colorRecency};
     lastFlipped_.clear();
     for (const BlockCoord& c : touched) {
         auto [it, inserted] = blocks_.try_emplace(c);
         if (inserted) ++stats.blocksInserted;
-        stats.updatedVoxels += fuseBlock(it->second, c, depth, push, rule, &lastFlipped_);
+        stats.updatedVoxels += fuseBlock(it->second, c, depth, push, rule, &lastFlipped_, color, frame_ + 1);
     }
     lastTouched_ = std::move(touched);
 

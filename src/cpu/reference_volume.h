@@ -56,7 +56,9 @@ public:
     // (lastFlipped() and retypeCubes() do not include the corners recycling changes.)
     void setRecycling(float keepRadius, uint32_t starveAfterFrames, float starveWeight);
 
-    ReferenceFrameStats integrate(const DepthImage& depth, const Intrinsics& intrinsics, const Pose& cameraToWorld);
+    // color: the frame's colour registered to depth (or nullptr), folded in as params.colorFusion says.
+    ReferenceFrameStats integrate(const DepthImage& depth, const Intrinsics& intrinsics, const Pose& cameraToWorld,
+                                  const ColorImage* color = nullptr);
 
     // Blocks in coordinate order.
     const std::map<BlockCoord, ReferenceBlock>& blocks() const { return blocks_; }

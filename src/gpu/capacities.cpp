@@ -49,8 +49,11 @@ void checkCapacities(const GpuVolumeConfig& c, uint64_t maxBufferBytes, uint64_t
         {"voxel sdf", 4ull * VOXELS_PER_BLOCK, c.blockCapacity, "blockCapacity (--blocks)"},
         {"voxel weight", 4ull * VOXELS_PER_BLOCK, c.blockCapacity, "blockCapacity (--blocks)"},
         {"hash keys", hashKeyBytesPerSlot, hashSlots, "hashCapacity (2 x blockCapacity by default, --blocks)"},
-        {"depth image", 4, uint64_t(c.imageWidth) * uint64_t(c.imageHeight), "the image size"},
+        {"frame images", c.params.colorFusion != ColorFusion::Off ? 8u : 4u, uint64_t(c.imageWidth) * uint64_t(c.imageHeight),
+         "the image size"},
     };
+    if (c.params.colorFusion != ColorFusion::Off)
+        planned.push_back({"voxel colour", 4ull * VOXELS_PER_BLOCK, c.blockCapacity, "blockCapacity (--blocks; --no-color saves it)"});
     if (mesh) {
         planned.push_back({"cube state", 4ull * VOXELS_PER_BLOCK, c.blockCapacity, "blockCapacity (--blocks)"});
         for (const char* axis : {"edge vertex slots x", "edge vertex slots y", "edge vertex slots z"})

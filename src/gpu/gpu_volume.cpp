@@ -39,6 +39,10 @@ void validateConfig(const GpuVolumeConfig& c) {
     if (p.allocationStride < 1 || p.allocationStride > 64)
         throw Error("allocation stride " + std::to_string(p.allocationStride) + " must be in [1, 64]");
     if (c.blockCapacity == 0 || c.blockCapacity > (1u << 30)) throw Error("block capacity must be in [1, 2^30]");
+    if (p.colorFusion != ColorFusion::Off && p.colorFusion != ColorFusion::Average && p.colorFusion != ColorFusion::Recent)
+        throw Error("colour fusion mode " + std::to_string(uint32_t(p.colorFusion)) + " is not one of off, average, recent");
+    if (!(p.colorRecency > 0.0f && p.colorRecency <= 1.0f))
+        throw Error("colour recency " + std::to_string(p.colorRecency) + " must be in (0, 1]");
     if (c.imageWidth <= 0 || c.imageHeight <= 0 || c.imageWidth > 65535 || c.imageHeight > 65535)
         throw Error("image size " + std::to_string(c.imageWidth) + "x" + std::to_string(c.imageHeight) + " is not supported");
 }
@@ -99,6 +103,8 @@ VolumeParamsGpu initialParams(const GpuVolumeConfig& c) {
     gp.starveAfterFrames = c.recycle ? c.recycleAfterFrames : 0u;
     gp.starveWeight = c.starveWeight;
     gp.deferOnOverflow = c.growCapacities ? 1u : 0u;
+    gp.colorMode = uint32_t(c.params.colorFusion);
+    gp.colorRecency = c.params.colorRecency;
     return gp;   // the export capacities are set by ExportMeshStage
 }
 
@@ -145,7 +151,7 @@ GpuVolume::GpuVolume(const vk::Context& context, const GpuVolumeConfig& config)
       counters_(context, table_),
       params_(context, table_, initialParams(config_)),
       hash_(context, table_, config_.hashCapacity),
-      store_(context, table_, config_.blockCapacity, counters_),
+      store_(context, table_, config_.blockCapacity, counters_, config_.params.colorFusion != ColorFusion::Off),
       mesh_(context, table_, config_.blockCapacity, config_.vertexCapacity, config_.chunkCapacity, counters_),
       lists_(context, table_, listCapacities(config_)),
       allocate_(context, table_),
@@ -164,7 +170,9 @@ GpuVolume::GpuVolume(const vk::Context& context, const GpuVolumeConfig& config)
       timer_(context) {
     const GpuVolumeConfig& c = config_;
     touchedFollowsPool_ = config.touchedCapacity == 0;
-    depth_ = makeStorage(context, table_, BINDING_DEPTH, VkDeviceSize(c.imageWidth) * c.imageHeight * 4, "depth image");
+    // The depth image, then (when colour is fused) the colour image's RGBA8 words: one binding for both.
+    const VkDeviceSize pixels = VkDeviceSize(c.imageWidth) * c.imageHeight;
+    depth_ = makeStorage(context, table_, BINDING_DEPTH, pixels * 4 * (fusesColor() ? 2 : 1), "frame images");
     depthStaging_ = vk::Buffer(context, depth_.size(), VK_BUFFER_USAGE_TRANSFER_SRC_BIT, vk::MemoryUse::Upload, "depth staging");
     mcTables_ = vk::Buffer(context, MC_TABLE_WORDS * 4, VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, vk::MemoryUse::Device, "marching cubes tables");
     table_.bind(BINDING_MC_TABLES, mcTables_);
@@ -223,7 +231,8 @@ void GpuVolume::recordFrame(VkCommandBuffer cmd, const FramePush& push, bool reb
     vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_ALL_COMMANDS_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT | VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
                          0, 0, nullptr, 0, nullptr, 0, nullptr);
     params_.recordUpload(cmd);   // what grew since the last submission
-    VkBufferCopy region{0, 0, depthStaging_.size()};
+    const VkDeviceSize pixelBytes = VkDeviceSize(config_.imageWidth) * config_.imageHeight * 4;
+    VkBufferCopy region{0, 0, (push.imageSize & FRAME_HAS_COLOR) ? 2 * pixelBytes : pixelBytes};
     vkCmdCopyBuffer(cmd, depthStaging_.handle(), depth_.handle(), 1, &region);
     counters_.recordClearFrame(cmd);
     timer_.mark(cmd, "start");
@@ -278,6 +287,11 @@ void GpuVolume::recordMeshPasses(VkCommandBuffer cmd, const FramePush& push, vk:
 
 FrameReport GpuVolume::integrate(const DepthImage& depth, const Intrinsics& intrinsics, const Pose& cameraToWorld,
                                  const vk::SubmitSync& sync) {
+    return integrate(depth, nullptr, intrinsics, cameraToWorld, sync);
+}
+
+FrameReport GpuVolume::integrate(const DepthImage& depth, const ColorImage* color, const Intrinsics& intrinsics,
+                                 const Pose& cameraToWorld, const vk::SubmitSync& sync) {
     if (depth.width != config_.imageWidth || depth.height != config_.imageHeight ||
         depth.meters.size() != size_t(depth.width) * depth.height)
         throw Error("depth image is " + std::to_string(depth.width) + "x" + std::to_string(depth.height) +
@@ -287,6 +301,19 @@ FrameReport GpuVolume::integrate(const DepthImage& depth, const Intrinsics& intr
         throw Error("intrinsics are for " + std::to_string(intrinsics.width) + "x" + std::to_string(intrinsics.height) +
                     " images but the depth image is " + std::to_string(depth.width) + "x" + std::to_string(depth.height));
     std::memcpy(depthStaging_.mapped(), depth.meters.data(), depth.meters.size() * sizeof(float));
+    const bool withColor = fusesColor() && color && !color->empty();
+    if (withColor) {
+        if (color->width != depth.width || color->height != depth.height ||
+            color->rgb.size() != size_t(color->width) * color->height * 3)
+            throw Error("colour image is " + std::to_string(color->width) + "x" + std::to_string(color->height) +
+                        " but the depth image is " + std::to_string(depth.width) + "x" + std::to_string(depth.height) +
+                        " (colour must be registered to depth)");
+        // RGBA8 words after the depth samples; alpha 255: every pixel of the image has a colour.
+        auto* words = static_cast<uint32_t*>(depthStaging_.mapped()) + depth.meters.size();
+        const uint8_t* rgb = color->rgb.data();
+        for (size_t i = 0; i < depth.meters.size(); ++i, rgb += 3)
+            words[i] = uint32_t(rgb[0]) | uint32_t(rgb[1]) << 8 | uint32_t(rgb[2]) << 16 | 0xFF000000u;
+    }
     FrameReport report;
     if (config_.growCapacities && framesIntegrated_ > 0) growBeforeFrame(report);
     if (config_.publishMesh) {
@@ -311,7 +338,8 @@ FrameReport GpuVolume::integrate(const DepthImage& depth, const Intrinsics& intr
     for (int attempt = 0;; ++attempt) {
         const bool mayDefer = config_.growCapacities && attempt < kMaxDeferrals;
         if (params_.values().deferOnOverflow != uint32_t(mayDefer)) params_.edit().deferOnOverflow = mayDefer ? 1u : 0u;
-        const FramePush push = makeFramePush(intrinsics, cameraToWorld, config_.params, ++frameNumber_);
+        FramePush push = makeFramePush(intrinsics, cameraToWorld, config_.params, ++frameNumber_);
+        if (withColor) push.imageSize |= FRAME_HAS_COLOR;
         lastPush_ = push;
         VkCommandBuffer cmd = recorder_.begin();
         timer_.reset(cmd);

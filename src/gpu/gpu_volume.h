@@ -59,7 +59,7 @@ struct GpuVolumeConfig {
     uint32_t meshVertexCapacity = 1u << 20;  // baseline mesh buffer (grown on demand)
     float minMeshWeight = 1.0f;          // a cube is meshed when all its corners have this weight
     MeshMode meshMode = MeshMode::Incremental;
-    uint32_t vertexCapacity = 1u << 20;  // shared-vertex heap (32 B each)
+    uint32_t vertexCapacity = 1u << 20;  // shared-vertex heap (36 B each)
     uint32_t chunkCapacity = 1u << 19;   // triangle chunks, 5 triangles each (60 B)
     uint32_t retypeCapacity = 1u << 20;  // cubes one mesh pass can retype (more wait for the next pass)
     // Hamming-distance refinement of cube types (docs/REFINEMENT.md). Off by default: as the paper specifies
@@ -111,8 +111,9 @@ struct FrameReport {
 // exportMesh() or rebuildMesh(), which may reallocate them when the mesh outgrows them: query again after
 // each. Synchronisation contract: see recordMeshReadBarrier() and api/reconstructor.h.
 struct MeshBuffers {
-    VkBuffer vertices = VK_NULL_HANDLE;   // Vertex[vertexCount], stride 32: position (3 x float) at 0,
-                                          // normal (3 x float) at 16, createdFrame (uint) at 28
+    VkBuffer vertices = VK_NULL_HANDLE;   // Vertex[vertexCount], stride 36: position (3 x float) at 0,
+                                          // normal (3 x float) at 16, createdFrame (uint) at 28,
+                                          // colour (R8G8B8A8_UNORM, alpha 0 = no colour) at 32
     VkBuffer indices = VK_NULL_HANDLE;    // uint32 triangle list, 3 per triangle
     VkBuffer drawIndirect = VK_NULL_HANDLE;   // a VkDrawIndexedIndirectCommand at drawIndirectOffset
     VkDeviceSize drawIndirectOffset = 0;
@@ -123,6 +124,7 @@ struct MeshBuffers {
     static constexpr uint32_t kPositionOffset = 0;
     static constexpr uint32_t kNormalOffset = 16;
     static constexpr uint32_t kCreatedFrameOffset = 28;
+    static constexpr uint32_t kColorOffset = 32;
 };
 
 // Records the barrier that makes vkmesh's writes of the mesh buffers (compute shaders, transfers of any
@@ -138,7 +140,7 @@ struct TriangleSoup {
 
 // The compacted shared-vertex mesh, and what the compaction saw.
 struct ExportedMesh {
-    std::vector<Vertex> vertices;                 // position, normal, createdFrame (refcount as it was)
+    std::vector<Vertex> vertices;                 // position, normal, createdFrame, colour (refcount as it was)
     std::vector<std::array<uint32_t, 3>> triangles;
     uint32_t unreferencedVertices = 0;            // allocated vertices with no triangle (0 unless GC fell behind)
 };
@@ -161,6 +163,12 @@ public:
     // frame's MeshBuffers on another queue); integrate() returns once the GPU has finished the frame.
     FrameReport integrate(const DepthImage& depth, const Intrinsics& intrinsics, const Pose& cameraToWorld,
                           const vk::SubmitSync& sync = {});
+    // The same with the frame's colour image, registered to the depth image (same size and pixel grid);
+    // nullptr or an empty image: this frame fuses depth only. Ignored when colour fusion is off.
+    FrameReport integrate(const DepthImage& depth, const ColorImage* color, const Intrinsics& intrinsics,
+                          const Pose& cameraToWorld, const vk::SubmitSync& sync = {});
+    // Whether the volume keeps colour (params.colorFusion != Off).
+    bool fusesColor() const { return config_.params.colorFusion != ColorFusion::Off; }
 
     // Marching cubes over every block, each triangle with its own 3 vertices. Never truncated: if the
     // mesh buffer was too small it is grown to the exact size the GPU counted and the pass re-run.

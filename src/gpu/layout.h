@@ -3,6 +3,7 @@
 
 #include <cstddef>
 
+#include "core/types.h"
 #include "shared_layout.h"
 
 namespace vkmesh::gpu {
@@ -15,15 +16,18 @@ static_assert(offsetof(Counters, touchedListDispatch) == 0 && offsetof(Counters,
               offsetof(Counters, heapDispatch) == 96 && offsetof(Counters, candidateDispatch) == 112 &&
               offsetof(Counters, releaseDispatch) == 128,
               "indirect arguments at 16-byte offsets");
-static_assert(sizeof(Vertex) == 32, "Vertex: 32-byte stride for renderers");
+static_assert(sizeof(Vertex) == 36 && offsetof(Vertex, nx) == 16 && offsetof(Vertex, color) == 32,
+              "Vertex: 36-byte stride for renderers, normal at 16, colour at 32");
 static_assert(offsetof(Counters, meshVerticesDropped) == offsetof(Counters, liveBlockCount) + 8);
 static_assert(offsetof(Counters, exportUnreferenced) == offsetof(Counters, exportVertices) + 8);
 static_assert(offsetof(Counters, validPixels) == COUNTERS_PER_FRAME_OFFSET);
 static_assert(offsetof(Counters, freeTop) == COUNTERS_PER_FRAME_OFFSET + COUNTERS_PER_FRAME_SIZE,
               "per-frame counters are one contiguous range, cleared with one fill");
 static_assert(offsetof(Counters, drawIndexed) % 4 == 0 && sizeof(Counters) == 416);
-static_assert(sizeof(DeltaState) == 64 && sizeof(DeltaVertexRecord) == 32 && sizeof(DeltaTriangleRecord) == 16);
+static_assert(sizeof(DeltaState) == 64 && sizeof(DeltaVertexRecord) == 36 && sizeof(DeltaTriangleRecord) == 16);
 static_assert(sizeof(FramePush) == 128, "push constants: 128 bytes is all lavapipe guarantees");
+static_assert(uint32_t(ColorFusion::Off) == COLOR_MODE_OFF && uint32_t(ColorFusion::Average) == COLOR_MODE_AVERAGE &&
+              uint32_t(ColorFusion::Recent) == COLOR_MODE_RECENT);
 static_assert(VOXELS_PER_BLOCK == BLOCK_SIDE * BLOCK_SIDE * BLOCK_SIDE);
 static_assert(VOXELS_PER_INVOCATION * WG_BLOCK == VOXELS_PER_BLOCK);
 

@@ -72,6 +72,10 @@ public:
     // single-channel image, or not the size of frame 0.
     DepthImage loadDepth(size_t i) const;
 
+    // Colour (being written on the color-io branch; until then no layout reports colour).
+    bool hasColor() const { return false; }
+    ColorImage loadColor(size_t, std::string* = nullptr) const { return {}; }
+
 private:
     Dataset() = default;
 

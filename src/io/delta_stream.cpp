@@ -49,6 +49,9 @@ void readDeltaStream(const std::filesystem::path& path, const std::function<void
         throw Error(path.string() + " is not a vkmesh delta stream (no VKMDELTA magic)");
     if (!in.read(reinterpret_cast<char*>(header), sizeof(header)))
         throw Error(path.string() + ": truncated header");
+    if (header[0] == 1)
+        throw Error(path.string() + ": delta stream version 1 (written before vertex colours, 32-byte vertex records); this vkmesh "
+                    "reads version " + std::to_string(kDeltaStreamVersion) + ": write the stream again with this vkmesh");
     if (header[0] != kDeltaStreamVersion)
         throw Error(path.string() + ": delta stream version " + std::to_string(header[0]) + ", this vkmesh reads version " +
                     std::to_string(kDeltaStreamVersion));

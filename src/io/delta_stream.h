@@ -13,7 +13,9 @@
 namespace vkmesh {
 
 inline constexpr char kDeltaStreamMagic[8] = {'V', 'K', 'M', 'D', 'E', 'L', 'T', 'A'};
-inline constexpr uint32_t kDeltaStreamVersion = 1;
+// Version 2: vertex records carry the vertex colour (36 bytes); version 1 streams (32-byte records, no colour)
+// are rejected with a message saying so.
+inline constexpr uint32_t kDeltaStreamVersion = 2;
 
 class DeltaStreamWriter {
 public:

@@ -117,6 +117,8 @@ void checkMesh(const Mesh& mesh) {
         throw Error("the mesh has " + std::to_string(mesh.normals.size()) + " normals for " + std::to_string(n) + " vertices");
     if (!mesh.vertexAge.empty() && mesh.vertexAge.size() != n)
         throw Error("the mesh has " + std::to_string(mesh.vertexAge.size()) + " ages for " + std::to_string(n) + " vertices");
+    if (!mesh.colors.empty() && mesh.colors.size() != n)
+        throw Error("the mesh has " + std::to_string(mesh.colors.size()) + " colours for " + std::to_string(n) + " vertices");
     for (const auto& t : mesh.triangles)
         for (uint32_t i : t)
             if (i >= n) throw Error("triangle index " + std::to_string(i) + " out of range (" + std::to_string(n) + " vertices)");
@@ -145,7 +147,9 @@ std::vector<Vertex> vertexData(const Mesh& mesh, uint32_t* newestFrame) {
     for (size_t i = 0; i < n; ++i) {
         const Eigen::Vector3f& p = mesh.positions[i];
         Eigen::Vector3f nn = normals[i].allFinite() ? normals[i] : Eigen::Vector3f::Zero();
-        out[i] = Vertex{p.x(), p.y(), p.z(), 0u, nn.x(), nn.y(), nn.z(), mesh.vertexAge.empty() ? maxAge : maxAge - mesh.vertexAge[i]};
+        uint32_t color = 0;   // alpha 0: no colour
+        if (!mesh.colors.empty()) color = mesh.colors[i][0] | mesh.colors[i][1] << 8 | mesh.colors[i][2] << 16 | 0xFF000000u;
+        out[i] = Vertex{p.x(), p.y(), p.z(), 0u, nn.x(), nn.y(), nn.z(), mesh.vertexAge.empty() ? maxAge : maxAge - mesh.vertexAge[i], color};
     }
     return out;
 }
@@ -158,7 +162,10 @@ RenderPush makePush(const Camera& camera, const Eigen::Vector3f& lo, const Eigen
     push.eye[0] = camera.eye.x();
     push.eye[1] = camera.eye.y();
     push.eye[2] = camera.eye.z();
-    push.colorMode = color == ColorMode::Normal ? RENDER_COLOR_NORMAL : color == ColorMode::Age ? RENDER_COLOR_AGE : RENDER_COLOR_SHADE;
+    push.colorMode = color == ColorMode::Normal ? RENDER_COLOR_NORMAL
+                     : color == ColorMode::Age  ? RENDER_COLOR_AGE
+                     : color == ColorMode::Rgb  ? RENDER_COLOR_RGB
+                                                : RENDER_COLOR_SHADE;
     push.newestFrame = newestFrame;
     push.ageScale = largestAge ? 1.0f / float(largestAge) : 0.0f;
     return push;
@@ -176,7 +183,9 @@ ColorMode parseColorMode(const std::string& text) {
     if (text == "shade") return ColorMode::Shade;
     if (text == "normal") return ColorMode::Normal;
     if (text == "age") return ColorMode::Age;
-    throw Error("unknown colour mode '" + text + "' (expected shade, normal or age)");
+    if (text == "rgb") return ColorMode::Rgb;
+    if (text == "auto") return ColorMode::Auto;
+    throw Error("unknown colour mode '" + text + "' (expected shade, normal, age, rgb or auto)");
 }
 
 Camera parseCamera(const std::string& text) {
@@ -366,17 +375,19 @@ MeshRenderer::MeshRenderer(const vk::Context& context) : context_(context) {
         stages[1].pName = "main";
 
         VkVertexInputBindingDescription binding{0, sizeof(Vertex), VK_VERTEX_INPUT_RATE_VERTEX};
-        VkVertexInputAttributeDescription attributes[3] = {
+        VkVertexInputAttributeDescription attributes[4] = {
             {RENDER_LOC_POSITION, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(Vertex, px)},
             {RENDER_LOC_NORMAL, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(Vertex, nx)},
             {RENDER_LOC_CREATED, 0, VK_FORMAT_R32_UINT, offsetof(Vertex, createdFrame)},
+            {RENDER_LOC_COLOR, 0, VK_FORMAT_R8G8B8A8_UNORM, offsetof(Vertex, color)},
         };
         static_assert(offsetof(Vertex, px) == gpu::MeshBuffers::kPositionOffset && offsetof(Vertex, nx) == gpu::MeshBuffers::kNormalOffset &&
-                      offsetof(Vertex, createdFrame) == gpu::MeshBuffers::kCreatedFrameOffset);
+                      offsetof(Vertex, createdFrame) == gpu::MeshBuffers::kCreatedFrameOffset &&
+                      offsetof(Vertex, color) == gpu::MeshBuffers::kColorOffset);
         VkPipelineVertexInputStateCreateInfo vertexInput{VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
         vertexInput.vertexBindingDescriptionCount = 1;
         vertexInput.pVertexBindingDescriptions = &binding;
-        vertexInput.vertexAttributeDescriptionCount = 3;
+        vertexInput.vertexAttributeDescriptionCount = 4;
         vertexInput.pVertexAttributeDescriptions = attributes;
         VkPipelineInputAssemblyStateCreateInfo assembly{VK_STRUCTURE_TYPE_PIPELINE_INPUT_ASSEMBLY_STATE_CREATE_INFO};
         assembly.topology = VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST;
@@ -453,7 +464,8 @@ Image MeshRenderer::render(const Mesh& mesh, const RenderOptions& options) {
     bounds(mesh, lo, hi);
     uint32_t newestFrame = 0;
     std::vector<Vertex> vertices = vertexData(mesh, &newestFrame);
-    RenderPush push = makePush(camera, lo, hi, width, height, options.color, newestFrame, newestFrame);
+    const ColorMode color = options.color != ColorMode::Auto ? options.color : mesh.colors.empty() ? ColorMode::Shade : ColorMode::Rgb;
+    RenderPush push = makePush(camera, lo, hi, width, height, color, newestFrame, newestFrame);
 
     // Geometry: staged and copied to device-local buffers in the same command buffer as the draw.
     const VkDeviceSize vertexBytes = vertices.size() * sizeof(Vertex);

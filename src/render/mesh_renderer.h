@@ -28,6 +28,8 @@ enum class ColorMode {
     Shade,   // Phong (headlight + ambient) on a light grey
     Normal,  // vertex normal mapped to RGB: n * 0.5 + 0.5
     Age,     // warm (age 0, red) to cold (oldest, blue), normalised by the mesh's largest age
+    Rgb,     // the vertex colours (fused from the colour images), lightly shaded; grey without
+    Auto,    // Rgb for a mesh with colours, else Shade (a host mesh; GPU mesh buffers take Shade)
 };
 
 constexpr float kVerticalFovDegrees = 60.0f;
@@ -53,7 +55,7 @@ struct RenderOptions {
     ColorMode color = ColorMode::Shade;
 };
 
-// Parses "shade" / "normal" / "age"; throws Error naming the value otherwise.
+// Parses "shade" / "normal" / "age" / "rgb" / "auto"; throws Error naming the value otherwise.
 ColorMode parseColorMode(const std::string& text);
 // Parses "eye_x,eye_y,eye_z,target_x,target_y,target_z" (6 finite numbers, eye != target); throws Error
 // naming the value otherwise.

@@ -1,6 +1,7 @@
 // Component: the block store. A pool of blockCapacity blocks, each the TSDF at its 512 cube corners
 // (distance and weight, block-major, x fastest), the block's coordinate and hash slot, and the free list of
-// unused blocks (a stack popped from its top; its top is Counters::freeTop). A block on the free list holds
+// unused blocks (a stack popped from its top; its top is Counters::freeTop); with colour fusion, a colour
+// word per corner (structure/voxel_color.glsl). A block on the free list holds
 // weight 0 at every corner, so a block handed out needs no clearing. GLSL: shaders_comp/structure/block_store.glsl.
 #pragma once
 
@@ -17,12 +18,15 @@ struct BlockSnapshot {
     Eigen::Vector3i coord;
     uint32_t index = 0;               // its block in the pool
     std::vector<float> sdf, weight;   // VOXELS_PER_BLOCK each, x fastest
+    std::vector<uint32_t> color;      // VOXELS_PER_BLOCK colour words (voxel_color.glsl), empty without colour
 };
 
 class BlockStore {
 public:
-    // Every block free; counters.freeTop set to the capacity.
-    BlockStore(const vk::Context& context, const vk::BindingTable& table, uint32_t capacity, CounterBuffer& counters);
+    // Every block free; counters.freeTop set to the capacity. withColor: keep a colour word per corner (else
+    // the colour binding gets a small placeholder that no shader touches).
+    BlockStore(const vk::Context& context, const vk::BindingTable& table, uint32_t capacity, CounterBuffer& counters,
+               bool withColor);
 
     uint32_t capacity() const { return capacity_; }
     // Grows the pool between frames; blocks keep their index and TSDF, the new ones go on the free list
@@ -30,15 +34,18 @@ public:
     void grow(uint32_t newCapacity, CounterBuffer& counters);
     // The TSDF of the given blocks with their coordinates (index = block index).
     std::vector<BlockSnapshot> download(const std::vector<uint32_t>& blocks) const;
-    void pools(std::vector<PoolInfo>& out) const { listPools(out, {&coords_, &sdf_, &weight_, &freeList_}); }
+    void pools(std::vector<PoolInfo>& out) const { listPools(out, {&coords_, &sdf_, &weight_, &color_, &freeList_}); }
+    bool hasColor() const { return withColor_; }
 
     static constexpr uint64_t kBytesPerBlock = 16 + 2ull * 4 * VOXELS_PER_BLOCK + 4;
+    static constexpr uint64_t kColorBytesPerBlock = 4ull * VOXELS_PER_BLOCK;
 
 private:
     const vk::Context& context_;
     const vk::BindingTable& table_;
     uint32_t capacity_;
-    vk::Buffer coords_, sdf_, weight_, freeList_;
+    bool withColor_;
+    vk::Buffer coords_, sdf_, weight_, color_, freeList_;
 };
 
 }  // namespace vkmesh::gpu

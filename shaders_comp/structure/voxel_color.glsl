@@ -1,0 +1,60 @@
+// Colour at the TSDF corners (docs/COLOR.md): how fusion folds a pixel's colour into a corner's, and how a
+// vertex takes its colour from the two corners of its edge. src/core/voxel_color.h is the CPU twin of every
+// function here, with the same float operations in the same order (the tests compare them bit for bit).
+#ifndef VKMESH_VOXEL_COLOR_GLSL
+#define VKMESH_VOXEL_COLOR_GLSL
+#include "structure/frame.glsl"
+
+vec3 unpackVoxelColor(uint word) {
+    return vec3(uvec3(word, word >> VOXEL_COLOR_BITS, word >> (2u * VOXEL_COLOR_BITS)) & VOXEL_COLOR_CHANNEL_MASK);
+}
+
+uint packVoxelColor(uvec3 q) {
+    return q.x | (q.y << VOXEL_COLOR_BITS) | (q.z << (2u * VOXEL_COLOR_BITS)) | VOXEL_COLOR_SET;
+}
+
+// A value in [0, 1) from the corner's grid position and the frame number (a fixed integer hash), so that
+// rounding a running average to the stored precision is unbiased, yet every run (and the CPU reference)
+// rounds alike: the position, unlike the corner's place in the pool, does not depend on thread scheduling.
+float colorDither(ivec3 corner, uint frameNumber) {
+    uvec3 c = uvec3(corner);
+    uint h = (c.x * 0x9E3779B1u) ^ (c.y * 0x85EBCA77u) ^ (c.z * 0xC2B2AE3Du) ^ (frameNumber * 0x27D4EB2Fu);
+    h ^= h >> 16;
+    h *= 0x7FEB352Du;
+    h ^= h >> 15;
+    h *= 0x846CA68Bu;
+    h ^= h >> 16;
+    return float(h >> 8) * (1.0 / 16777216.0);
+}
+
+// The corner's colour word after one more observation `rgb` (8-bit), `oldWeight` being the corner's TSDF
+// weight before this frame's update: the running average with the TSDF's weights, or the exponential one.
+// A corner without a colour yet, or without weight (a block handed out again, or emptied by recycling), takes
+// the pixel's.
+uint foldVoxelColor(uint old, float oldWeight, uvec3 rgb, ivec3 corner, uint frameNumber) {
+    vec3 target = vec3(rgb * VOXEL_COLOR_SCALE);
+    if ((old & VOXEL_COLOR_SET) == 0u || oldWeight == 0.0) return packVoxelColor(rgb * VOXEL_COLOR_SCALE);
+    vec3 prev = unpackVoxelColor(old);
+    precise vec3 mixed;
+    if (params.colorMode == COLOR_MODE_RECENT) {
+        mixed = prev + (target - prev) * params.colorRecency;
+    } else {
+        mixed = (prev * oldWeight + target) / (oldWeight + 1.0);
+    }
+    precise vec3 dithered = mixed + colorDither(corner, frameNumber);
+    return packVoxelColor(uvec3(min(floor(dithered), vec3(float(255u * VOXEL_COLOR_SCALE)))));
+}
+
+// A vertex's colour (Vertex::color, RGBA8, alpha 255) from the colours of its edge's corners, interpolated
+// like its position (t clamped to the edge); 0 (alpha 0) when neither corner has a colour.
+uint vertexColorOnEdge(uint lo, uint hi, float dLo, float dHi) {
+    bool hasLo = (lo & VOXEL_COLOR_SET) != 0u, hasHi = (hi & VOXEL_COLOR_SET) != 0u;
+    if (!hasLo && !hasHi) return 0u;
+    vec3 a = unpackVoxelColor(hasLo ? lo : hi), b = unpackVoxelColor(hasHi ? hi : lo);
+    precise float t = clamp(dLo / (dLo - dHi), 0.0, 1.0);
+    precise vec3 c = a + (b - a) * t;
+    precise vec3 rounded = c * (1.0 / float(VOXEL_COLOR_SCALE)) + 0.5;
+    uvec3 o = uvec3(min(floor(rounded), vec3(255.0)));
+    return o.x | (o.y << 8) | (o.z << 16) | (255u << 24);
+}
+#endif
