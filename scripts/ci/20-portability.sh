@@ -44,6 +44,7 @@ if [[ $parts == all || $parts == gpu-av ]]; then
     GpuTest.FusedTsdfMatchesReference                          # allocation + fusion against the CPU reference
     GpuTest.BaselineMeshMatchesReference                       # baseline marching cubes (mesh_baseline)
     GpuTest.IncrementalMeshEqualsRebuildFromScratch            # incremental mesh, mark-all-dirty rebuild, export
+    GpuTest.VertexColoursMatchReferenceMesherAndRebuild        # colour: fused corner colours, vertex colours
     GpuTest.BothVertexUpdatePathsGiveTheSameMesh               # both vertex-update modes
     GpuTest.RecyclingWithLockFreeClaims                        # lock-free claims, recycling, hash rebuild (rehash_*)
     GpuTest.RefinementHalvesIrregularityOnASlantedPlane        # refinement (retype passes)
