@@ -514,14 +514,16 @@ SyntheticScene SyntheticScene::defaultRoom() {
     Object room{.name = "room", .kind = ObjectKind::RoomInterior};
     room.objectToWorld = inRoom({0, 0, kRoomHalfExtents.z()}, Eigen::Matrix3d::Identity());
     room.halfExtents = kRoomHalfExtents;
-    room.texture = {Texture::Pattern::Checker, 0.25, 2, 0.05, {200, 180, 140}, {90, 70, 50}};
+    // Offsets are odd fractions of a millimetre so that no flat face and no row of GT samples (laid out on
+    // round-number grids) sits on a band edge, where float rounding of a position would flip its colour.
+    room.texture = {Texture::Pattern::Checker, 0.25, 2, 0.0537, {200, 180, 140}, {90, 70, 50}};
     objects.push_back(room);
 
     // Floating, so that every part of it is in free space and can be seen.
     Object sphere{.name = "sphere", .kind = ObjectKind::Sphere};
     sphere.objectToWorld = inRoom({0.55, 0.25, 0.75}, Eigen::Matrix3d::Identity());
     sphere.radius = 0.35;
-    sphere.texture = {Texture::Pattern::Stripes, 0.008, 2, 0.001, {220, 40, 40}, {240, 240, 240}};  // finer than a voxel
+    sphere.texture = {Texture::Pattern::Stripes, 0.008, 2, 0.00137, {220, 40, 40}, {240, 240, 240}};  // finer than a voxel
     objects.push_back(sphere);
 
     // Floating and tilted, so that its hole and both faces show from the orbit.
@@ -530,13 +532,13 @@ SyntheticScene SyntheticScene::defaultRoom() {
                                                         rotationAbout(Eigen::Vector3d::UnitX(), degrees(55)));
     torus.radius = 0.3;
     torus.tubeRadius = 0.1;
-    torus.texture = {Texture::Pattern::Checker, 0.04, 2, 0.007, {40, 160, 60}, {230, 210, 40}};
+    torus.texture = {Texture::Pattern::Checker, 0.04, 2, 0.00731, {40, 160, 60}, {230, 210, 40}};
     objects.push_back(torus);
 
     Object roundedBox{.name = "rounded_box", .kind = ObjectKind::RoundedBox};
     roundedBox.halfExtents = {0.25, 0.18, 0.25};
     roundedBox.edgeRadius = 0.04;
-    roundedBox.texture = {Texture::Pattern::Stripes, 0.015, 0, 0.003, {40, 70, 200}, {250, 250, 250}};
+    roundedBox.texture = {Texture::Pattern::Stripes, 0.015, 0, 0.00313, {40, 70, 200}, {250, 250, 250}};
     roundedBox.objectToWorld = inRoom({0.1, -0.45, roundedBox.halfExtents.z()}, rotationAbout(up, degrees(30)));
     objects.push_back(roundedBox);
 
@@ -544,7 +546,7 @@ SyntheticScene SyntheticScene::defaultRoom() {
     // the floor, as a ramp resting on the ground would.
     Object ramp{.name = "ramp", .kind = ObjectKind::RoundedBox};
     ramp.halfExtents = {0.45, 0.25, 0.015};
-    ramp.texture = {Texture::Pattern::Checker, 0.1, 2, 0.02, {240, 130, 20}, {30, 30, 30}};
+    ramp.texture = {Texture::Pattern::Checker, 0.1, 2, 0.0219, {240, 130, 20}, {30, 30, 30}};
     ramp.objectToWorld = inRoom({-0.75, -0.5, 0.225}, rotationAbout(up, degrees(-15)) *
                                                           rotationAbout(Eigen::Vector3d::UnitY(), degrees(-30)));
     objects.push_back(ramp);
@@ -552,7 +554,7 @@ SyntheticScene SyntheticScene::defaultRoom() {
     // The thin part: an upright panel 2.5 cm thick, only a few voxels across at usual voxel sizes.
     Object plate{.name = "thin_plate", .kind = ObjectKind::RoundedBox};
     plate.halfExtents = {0.25, 0.0125, 0.35};
-    plate.texture = {Texture::Pattern::Stripes, 0.12, 2, 0.03, {150, 60, 170}, {120, 120, 120}};
+    plate.texture = {Texture::Pattern::Stripes, 0.12, 2, 0.0313, {150, 60, 170}, {120, 120, 120}};
     plate.objectToWorld = inRoom({0.05, 0.8, plate.halfExtents.z()}, rotationAbout(up, degrees(10)));
     objects.push_back(plate);
 
