@@ -99,7 +99,8 @@ def main():
             m = o3d["methods"][method]
             row = {"method": "Open3D " + method, "integrate_median_ms": m["median_ms"],
                    "vertices": m["vertices"], "mesh": m.get("mesh_path")}
-            if row["mesh"]:
+            # The grey vbg mesh has only geometry to score, which needs a GT.
+            if row["mesh"] and (method == "vbg_color" or gt):
                 row["eval"] = evaluate(args, row["mesh"], ds, gt, out / f"{name}_eval_{method}.json",
                                        color=method == "vbg_color")
             entry["rows"].append(row)

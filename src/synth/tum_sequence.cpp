@@ -91,6 +91,12 @@ nlohmann::json sceneJson(const SyntheticScene& scene) {
         nlohmann::json rotation = nlohmann::json::array();
         for (int row = 0; row < 3; ++row) rotation.push_back(vectorJson(object.objectToWorld.linear().row(row).transpose()));
         entry["rotation"] = rotation;  // object-to-world, row-major; local axes are its columns
+        const Texture& t = object.texture;
+        const char* pattern = t.pattern == Texture::Pattern::Stripes   ? "stripes"
+                              : t.pattern == Texture::Pattern::Checker ? "checker"
+                                                                       : "uniform";
+        entry["texture"] = {{"pattern", pattern}, {"period", t.period}, {"axis", t.axis}, {"offset", t.offset},
+                            {"a", t.a}, {"b", t.b}};  // solid texture in the local frame (synthetic_scene.h)
         switch (object.kind) {
             case ObjectKind::RoomInterior: entry["half_extents"] = vectorJson(object.halfExtents); break;
             case ObjectKind::HalfSpace:

@@ -42,7 +42,7 @@ struct SequenceOptions {
 //   gt_points.ply      binary little-endian point cloud (float x y z nx ny nz, uchar red green blue: the
 //                      exact texture colour at gain 1) sampled uniformly by area on the visible-from-free-space
 //                      surface of every object;
-//   scene.json         the objects and their parameters;  README.txt  what all this is.
+//   scene.json         the objects, their parameters and textures;  README.txt  what all this is.
 // Throws Error naming the folder, file or value at fault (frames = 0, bad intrinsics, unwritable folder).
 void writeTumSequence(const std::filesystem::path& dir, const SyntheticScene& scene,
                       const SequenceOptions& options = {});
