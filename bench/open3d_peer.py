@@ -17,7 +17,9 @@ import statistics
 import sys
 import time
 
-METHODS = ("vbg", "scalable")
+# vbg_color: the same VoxelBlockGrid with a third attribute, `color` (float32 x 3), fused from each frame's
+# colour image (`color_path` in the frames JSON); the mesh it writes has vertex colours.
+METHODS = ("vbg", "vbg_color", "scalable")
 DEFAULT_MAX_DEPTH = 4.0
 # Pre-sized VoxelBlockGrid capacity when --block-count is not given: 2^25 voxels (~256 MiB of float32
 # tsdf + weight), i.e. 65536 blocks of 8^3 or 8192 blocks of 16^3. A too-small capacity is not an error
@@ -46,7 +48,8 @@ def parse_args(argv=None):
     p.add_argument("--scalable-unit-resolution", type=int, default=16,
                    help="ScalableTSDFVolume volume_unit_resolution (default 16, Open3D's default; see README)")
     p.add_argument("--methods", default="vbg,scalable",
-                   help="comma-separated subset of: %s (default: both)" % ",".join(METHODS))
+                   help="comma-separated subset of: %s (default: vbg,scalable; vbg_color needs frames with "
+                        "color_path)" % ",".join(METHODS))
     p.add_argument("--weight-threshold", type=float, default=1.0,
                    help="VoxelBlockGrid extraction weight threshold (default 1 = 'observed at least once', "
                         "which is what the legacy volume uses; Open3D's own default is 3)")
@@ -178,7 +181,7 @@ def extraction_points(n_frames, every):
     return {i for i in range(every - 1, n_frames - 1, every)}
 
 
-def run_vbg(args, spec, cam, w2c, o3d, np):
+def run_vbg(args, spec, cam, w2c, o3d, np, color=False):
     o3c = o3d.core
     fx, fy, cx, cy = cam
     intrinsic = o3c.Tensor([[fx, 0.0, cx], [0.0, fy, cy], [0.0, 0.0, 1.0]], o3c.float64)
@@ -186,10 +189,14 @@ def run_vbg(args, spec, cam, w2c, o3d, np):
     depth_scale, depth_max, trunc = spec["depth_scale"], spec["max_depth"], args.trunc_voxels
 
     # Allocation of the block buffers happens here, outside any timed region.
+    names, dtypes, channels = ("tsdf", "weight"), (o3c.float32, o3c.float32), ((1,), (1,))
+    if color:
+        names, dtypes, channels = names + ("color",), dtypes + (o3c.float32,), channels + ((3,),)
     vbg = o3d.t.geometry.VoxelBlockGrid(
-        attr_names=("tsdf", "weight"), attr_dtypes=(o3c.float32, o3c.float32), attr_channels=((1,), (1,)),
+        attr_names=names, attr_dtypes=dtypes, attr_channels=channels,
         voxel_size=args.voxel, block_resolution=args.block_resolution, block_count=args.block_count,
         device=o3c.Device("CPU:0"))
+    frames_without_color = 0
 
     def extract():
         t0 = time.perf_counter()
@@ -208,11 +215,27 @@ def run_vbg(args, spec, cam, w2c, o3d, np):
         load_ms.append(ms_since(t0))
         if depth.is_empty() or depth.dtype != o3c.uint16:
             sys.exit("%s: not a 16-bit depth image" % fr["depth_path"])
+        rgb = None
+        if color and fr.get("color_path"):
+            # uint8 RGB as vkmesh's Dataset::loadColor gives it; Open3D scales it to 0..1 itself.
+            rgb = o3d.t.io.read_image(fr["color_path"])
+            if rgb.is_empty() or rgb.dtype != o3c.uint8 or rgb.channels != 3:
+                sys.exit("%s: not an 8-bit RGB image" % fr["color_path"])
+            if (rgb.rows, rgb.columns) != (depth.rows, depth.columns):
+                sys.exit("%s: %dx%d, but the depth is %dx%d (colour on another grid: vkmesh resamples it with "
+                         "camera.json's colour intrinsics, this peer does not)" % (
+                             fr["color_path"], rgb.columns, rgb.rows, depth.columns, depth.rows))
+        elif color:
+            frames_without_color += 1
+        load_ms[-1] = ms_since(t0)  # depth and colour reading
         extrinsic = extrinsics[i]
 
         t0 = time.perf_counter()
         blocks = vbg.compute_unique_block_coordinates(depth, intrinsic, extrinsic, depth_scale, depth_max, trunc)
-        vbg.integrate(blocks, depth, intrinsic, extrinsic, depth_scale, depth_max, trunc)
+        if rgb is not None:
+            vbg.integrate(blocks, depth, rgb, intrinsic, extrinsic, depth_scale, depth_max, trunc)
+        else:
+            vbg.integrate(blocks, depth, intrinsic, extrinsic, depth_scale, depth_max, trunc)
         integrate_ms.append(ms_since(t0))
 
         if i in checkpoints:
@@ -222,8 +245,14 @@ def run_vbg(args, spec, cam, w2c, o3d, np):
     mesh, ms, nv, nt = extract()
     extractions.append({"after_frames": len(spec["frames"]), "ms": ms, "vertices": nv, "triangles": nt})
     hashmap = vbg.hashmap()
+    legacy = mesh.to_legacy() if nv else None
+    if legacy is not None and color and legacy.has_vertex_colors():
+        # Legacy meshes hold colours in 0..1 (written as uchar 0..255); guard against a 0..255 grid.
+        c = np.asarray(legacy.vertex_colors)
+        if c.size and c.max() > 1.0 + 1e-6:
+            legacy.vertex_colors = o3d.utility.Vector3dVector(np.clip(c / 255.0, 0.0, 1.0))
     result = {
-        "api": "open3d.t.geometry.VoxelBlockGrid (CPU:0)",
+        "api": "open3d.t.geometry.VoxelBlockGrid (CPU:0)" + (", attribute color" if color else ""),
         "block_resolution": args.block_resolution,
         "block_count": args.block_count,
         "block_count_exceeded": hashmap.size() > args.block_count,
@@ -237,7 +266,9 @@ def run_vbg(args, spec, cam, w2c, o3d, np):
         "triangles": nt,
         "extractions": extractions,
     }
-    return result, (mesh.to_legacy() if nv else None)
+    if color:
+        result["frames_without_color"] = frames_without_color
+    return result, legacy
 
 
 def run_scalable(args, spec, cam, w2c, o3d, np):
@@ -367,7 +398,8 @@ def main(argv=None):
         "other_cpu_share_before": before,
         "methods": {},
     }
-    runners = {"vbg": run_vbg, "scalable": run_scalable}
+    runners = {"vbg": run_vbg, "scalable": run_scalable,
+               "vbg_color": lambda *a: run_vbg(*a, color=True)}
     for name in args.methods:
         result, mesh = runners[name](args, spec, cam, w2c, o3d, np)
         if args.mesh_out and mesh is not None:

@@ -1,11 +1,15 @@
 // `vkmesh eval`: quality of a mesh (or point cloud) against ground-truth surface points.
 //   vkmesh eval MESH.ply --gt GT.ply [--dataset DIR [--frame-stride K]] [--spacing 0.005]
 //               [--thresholds 0.01,0.02,0.05] [--max-distance 0.2] [--json out.json]
+//   vkmesh eval MESH.ply --dataset DIR --color-every K      (colour only, real data without GT)
 // Prints accuracy, completeness and precision / recall / F-score per threshold; see src/eval/evaluate.h.
+// Colour, when the mesh has vertex colours: against the GT points' colours when they have some (JSON
+// "color_vs_gt"), and against every Kth frame's colour image with --color-every K ("color_vs_frames").
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -13,6 +17,7 @@
 #include <fstream>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -45,7 +50,84 @@ struct EvalArgs {
     std::string jsonPath;
     std::string seenPath;
     std::string precisionAgainst = "all";
+    size_t colorEvery = 0;         // with --dataset: compare with every Kth frame's colour image; 0 = not
+    double colorDistance = 0.02;   // colour vs GT: GT points farther from every mesh vertex are left out
+    double colorTolerance = 0.03;  // colour vs frames: a vertex is seen where |its depth - measured| < this
 };
+
+json colorJson(const eval::ColorError& e) {
+    // PSNR is +infinity for identical colours: nlohmann writes null, which the text output says as "inf".
+    return {{"pairs", e.pairs},        {"mae_red", e.mae[0]}, {"mae_green", e.mae[1]},
+            {"mae_blue", e.mae[2]},    {"mae_mean", e.maeMean}, {"psnr", e.psnr}};
+}
+
+void printColor(const char* what, const eval::ColorError& e) {
+    std::printf("  colour %-10s MAE r %6.2f g %6.2f b %6.2f mean %6.2f (0-255)  PSNR %6.2f dB  (%zu pairs)\n", what,
+                e.mae[0], e.mae[1], e.mae[2], e.maeMean, e.psnr, e.pairs);
+}
+
+// Colour against a dataset's colour images, every Kth frame; null when not asked for.
+json colorVsFrames(const EvalArgs& args, const Mesh& mesh, const Dataset& dataset, std::vector<std::string>& warnings,
+                   std::optional<eval::ColorError>& out) {
+    if (args.colorEvery == 0) return nullptr;
+    if (mesh.colors.empty()) {
+        warnings.push_back("--color-every: mesh '" + args.mesh + "' has no vertex colours; no colour error");
+        return nullptr;
+    }
+    if (!dataset.hasColor()) {
+        warnings.push_back("--color-every: dataset '" + args.dataset + "' has no colour images; no colour error");
+        return nullptr;
+    }
+    size_t used = 0;
+    out = eval::colorErrorAgainstFrames(mesh, dataset, args.colorEvery, args.colorTolerance, &warnings, &used);
+    json j = colorJson(*out);
+    j["every"] = args.colorEvery;
+    j["frames_used"] = used;
+    j["depth_tolerance"] = args.colorTolerance;
+    j["definition"] = "mesh vertices seen by every Kth frame (inside the image, |camera depth - depth image| < "
+                      "depth_tolerance) vs that frame's colour pixel";
+    return j;
+}
+
+std::unique_ptr<Dataset> openDataset(const EvalArgs& args) {
+    DatasetOptions dopts;
+    if (!args.intrinsics.empty()) dopts.intrinsics = parseIntrinsics(args.intrinsics);
+    if (args.depthScale > 0) dopts.depthScale = args.depthScale;
+    dopts.maxDepth = args.maxDepth;
+    dopts.maxFrames = args.frames;
+    return Dataset::open(args.dataset, dopts);
+}
+
+// `vkmesh eval MESH --dataset D --color-every K` without --gt: the colour error only.
+int runColorOnly(const EvalArgs& args) {
+    std::vector<std::string> warnings;
+    const Mesh mesh = readPly(args.mesh);
+    if (mesh.positions.empty()) throw Error("mesh '" + args.mesh + "' is empty (no vertices)");
+    if (mesh.colors.empty()) throw Error("mesh '" + args.mesh + "' has no vertex colours (red, green, blue) to evaluate");
+    const auto dataset = openDataset(args);
+    for (const auto& w : dataset->warnings()) warnings.push_back(w);
+    if (!dataset->hasColor()) throw Error("dataset '" + args.dataset + "' has no colour images to compare with");
+    std::optional<eval::ColorError> frames;
+    json j;
+    j["mesh"] = {{"path", args.mesh}, {"vertices", mesh.positions.size()}, {"triangles", mesh.triangles.size()}};
+    j["dataset"] = {{"path", std::filesystem::absolute(args.dataset).string()},
+                    {"kind", toString(dataset->kind())},
+                    {"frames", dataset->size()}};
+    j["color_vs_gt"] = nullptr;
+    j["color_vs_frames"] = colorVsFrames(args, mesh, *dataset, warnings, frames);
+    j["warnings"] = warnings;
+    if (!args.jsonPath.empty()) {
+        std::ofstream file(args.jsonPath);
+        if (!file) throw Error("cannot write '" + args.jsonPath + "'");
+        file << j.dump(2) << "\n";
+        if (!file) throw Error("cannot write '" + args.jsonPath + "' (disk full?)");
+    }
+    for (const auto& w : warnings) std::cerr << "warning: " << w << "\n";
+    std::printf("vkmesh eval: %s vs the colour images of %s\n", args.mesh.c_str(), args.dataset.c_str());
+    if (frames) printColor("vs frames", *frames);
+    std::fflush(stdout);
+    return 0;
+}
 
 std::vector<double> parseThresholds(const std::string& text) {
     std::vector<double> values;
@@ -99,6 +181,13 @@ std::vector<Eigen::Vector3f> pointsOf(const std::string& path, const Mesh& mesh,
 }
 
 int runEval(const EvalArgs& args) {
+    if (args.gt.empty()) {
+        if (args.dataset.empty() || args.colorEvery == 0)
+            throw Error("--gt is required (without it: --dataset DIR --color-every K for the colour error alone)");
+        return runColorOnly(args);
+    }
+    if (!(std::isfinite(args.colorDistance) && args.colorDistance > 0))
+        throw Error("--color-distance " + std::to_string(args.colorDistance) + " must be positive");
     const auto start = std::chrono::steady_clock::now();
     std::vector<std::string> warnings;
     eval::EvalOptions options;
@@ -136,13 +225,10 @@ int runEval(const EvalArgs& args) {
     std::vector<bool> seen;
     size_t seenCount = gtAll.size();
     json datasetJson = nullptr;
+    json colorFramesJson = nullptr;
+    std::optional<eval::ColorError> colorFrames;
     if (!args.dataset.empty()) {
-        DatasetOptions dopts;
-        if (!args.intrinsics.empty()) dopts.intrinsics = parseIntrinsics(args.intrinsics);
-        if (args.depthScale > 0) dopts.depthScale = args.depthScale;
-        dopts.maxDepth = args.maxDepth;
-        dopts.maxFrames = args.frames;
-        const auto dataset = Dataset::open(args.dataset, dopts);
+        const auto dataset = openDataset(args);
         for (const auto& w : dataset->warnings()) warnings.push_back(w);
         if (dataset->size() == 0) throw Error("no usable frame in " + args.dataset);
         const size_t stride = std::max<size_t>(args.frameStride, 1);
@@ -166,6 +252,7 @@ int runEval(const EvalArgs& args) {
                 if (seen[i]) seenCloud.positions.push_back(gtAll[i]);
             writePly(args.seenPath, seenCloud);
         }
+        colorFramesJson = colorVsFrames(args, mesh, *dataset, warnings, colorFrames);
     }
     const double seenSeconds = secondsSince(t0);
 
@@ -186,6 +273,24 @@ int runEval(const EvalArgs& args) {
     result.gtPoints = gtAll.size();
     result.gtPointsSeen = seenCount;
     const double distanceSeconds = secondsSince(t0);
+
+    // Colour against the GT points' own colours, when both sides have colour. A GT given as a point cloud
+    // is used point for point (gtAll is its finite points, in order); a GT mesh's area samples carry none.
+    json colorGtJson = nullptr;
+    std::optional<eval::ColorError> colorGt;
+    if (!mesh.colors.empty() && !gtMesh.colors.empty() && gtMesh.triangles.empty()) {
+        std::vector<std::array<uint8_t, 3>> gtColors;
+        for (size_t i = 0; i < gtMesh.positions.size(); ++i)
+            if (gtMesh.positions[i].allFinite()) gtColors.push_back(gtMesh.colors[i]);
+        colorGt = eval::colorErrorAgainstGt(mesh, gtAll, gtColors, seen, args.colorDistance);
+        colorGtJson = colorJson(*colorGt);
+        colorGtJson["max_distance"] = args.colorDistance;
+        colorGtJson["definition"] = std::string(seen.empty() ? "every" : "every seen") +
+                                    " GT point with a mesh vertex within max_distance: the nearest vertex's colour "
+                                    "vs the point's";
+    } else if (!mesh.colors.empty() && !gtMesh.colors.empty()) {
+        warnings.push_back("ground truth '" + args.gt + "' is a mesh: its colours are not compared (give GT points)");
+    }
 
     json j;
     j["mesh"] = {{"path", args.mesh}, {"vertices", mesh.positions.size()}, {"triangles", mesh.triangles.size()}};
@@ -213,6 +318,8 @@ int runEval(const EvalArgs& args) {
                     {"seen_mask", seenSeconds},
                     {"distances", distanceSeconds},
                     {"total", secondsSince(start)}};
+    j["color_vs_gt"] = colorGtJson;
+    j["color_vs_frames"] = colorFramesJson;
     j["warnings"] = warnings;
     if (!args.jsonPath.empty()) {
         std::ofstream file(args.jsonPath);
@@ -234,6 +341,8 @@ int runEval(const EvalArgs& args) {
     std::printf("  %9s  %9s  %7s  %7s\n", "threshold", "precision", "recall", "F-score");
     for (const auto& s : result.scores)
         std::printf("  %6.1f mm  %9.4f  %7.4f  %7.4f\n", 1000 * s.threshold, s.precision, s.recall, s.fscore);
+    if (colorGt) printColor("vs GT", *colorGt);
+    if (colorFrames) printColor("vs frames", *colorFrames);
     std::fflush(stdout);
     return 0;
 }
@@ -246,8 +355,9 @@ Run addEvalCommand(CLI::App& app) {
         "eval", "accuracy, completeness, precision/recall/F-score of a mesh against ground-truth points");
     cmd->add_option("MESH", args->mesh, "reconstruction: a PLY mesh (sampled by area) or point cloud (used as is)")
         ->required();
-    cmd->add_option("--gt", args->gt, "ground truth PLY: points (e.g. a synthetic sequence's gt_points.ply) or a mesh")
-        ->required();
+    cmd->add_option("--gt", args->gt,
+                    "ground truth PLY: points (e.g. a synthetic sequence's gt_points.ply) or a mesh; required "
+                    "unless --dataset with --color-every (colour only)");
     cmd->add_option("--dataset", args->dataset,
                     "restrict the GT to what this sequence saw (the folder given to fuse; same layouts)");
     cmd->add_option("--frame-stride", args->frameStride, "with --dataset: check every Kth frame only (faster)")
@@ -271,6 +381,15 @@ Run addEvalCommand(CLI::App& app) {
     cmd->add_option("--max-distance", args->maxDistance, "distances are capped here (metres) for means and medians");
     cmd->add_option("--seed", args->seed, "seed of the area sampling");
     cmd->add_option("--json", args->jsonPath, "write every number as JSON");
+    cmd->add_option("--color-every", args->colorEvery,
+                    "with --dataset: colour error of the mesh's vertex colours against every Kth frame's colour image")
+        ->check(CLI::PositiveNumber);
+    cmd->add_option("--color-tolerance", args->colorTolerance,
+                    "with --color-every: a vertex is seen by a frame where |its depth - measured depth| < this (metres)")
+        ->check(CLI::PositiveNumber);
+    cmd->add_option("--color-distance", args->colorDistance,
+                    "colour vs GT: GT points with no mesh vertex within this (metres) are left out")
+        ->check(CLI::PositiveNumber);
     return [args] { return runEval(*args); };
 }
 

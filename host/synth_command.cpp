@@ -1,5 +1,5 @@
 // `vkmesh synth OUT_DIR`: renders the built-in synthetic room along a camera path into a TUM-layout folder
-// with exact ground truth (synth/tum_sequence.h says what it writes).
+// with exact ground truth, colour included (synth/tum_sequence.h says what it writes).
 #include <CLI/CLI.hpp>
 
 #include <iostream>
@@ -20,6 +20,8 @@ struct SynthArgs {
     int width = 640, height = 480;
     bool noise = false;
     uint32_t seed = 1;
+    double colorNoise = 0;
+    double exposureDrift = 0;
 };
 
 int runSynth(const SynthArgs& a) {
@@ -30,6 +32,8 @@ int runSynth(const SynthArgs& a) {
     options.intrinsics = synth::kinectIntrinsics(a.width, a.height);
     options.noise = a.noise;
     options.seed = a.seed;
+    options.colorNoise = a.colorNoise;
+    options.exposureDrift = a.exposureDrift;
     options.path = a.path == "revisit" ? synth::PathKind::Revisit : synth::PathKind::Orbit;
     synth::writeTumSequence(a.out, synth::SyntheticScene::defaultRoom(), options);
     std::cerr << "wrote " << a.frames << " frames of the synthetic room to " << a.out << "\n";
@@ -47,6 +51,11 @@ Run addSynthCommand(CLI::App& app) {
     cmd->add_option("--height", args->height, "image height")->check(CLI::Range(16, 4096));
     cmd->add_flag("--noise", args->noise, "Kinect-like noise and dropout");
     cmd->add_option("--seed", args->seed, "noise seed");
+    cmd->add_option("--color-noise", args->colorNoise, "Gaussian colour noise per pixel and channel, sigma in 0-255 units")
+        ->check(CLI::Range(0.0, 255.0));
+    cmd->add_option("--exposure-drift", args->exposureDrift,
+                    "colour gain varies as 1 + A sin(2 pi frame / frames) over the sequence (A in [0, 1))")
+        ->check(CLI::Range(0.0, 0.999));
     cmd->add_option("--path", args->path, "camera path")->check(CLI::IsMember({"orbit", "revisit"}));
     return [args] { return runSynth(*args); };
 }

@@ -105,15 +105,39 @@ public:
         sorted_.resize(points.size());
         {
             std::vector<uint32_t> fill(start_.begin(), start_.end() - 1);
-            for (size_t i = 0; i < points.size(); ++i) sorted_[fill[cellOf[i]]++] = points[i];
+            originalIndex_.resize(points.size());
+            for (size_t i = 0; i < points.size(); ++i) {
+                originalIndex_[fill[cellOf[i]]] = uint32_t(i);
+                sorted_[fill[cellOf[i]]++] = points[i];
+            }
         }
         buildDistanceTransform();
     }
 
-    // Distance to the nearest point, capped at maxDistance.
-    float nearest(const Eigen::Vector3f& q) const {
+    // Distance to the nearest point, capped at maxDistance; with `index`, that point's index in the
+    // constructor's `points` (UINT32_MAX when none lies strictly within maxDistance).
+    float nearest(const Eigen::Vector3f& q, uint32_t* index = nullptr) const {
+        if (index) *index = UINT32_MAX;
         if (sorted_.empty()) return maxDistance_;
         Query query{q, {}, {}, maxDistance_ * maxDistance_, 1.0 / (h_ * h_)};
+        const float result = search(query);
+        if (index && query.bestSorted != UINT32_MAX) *index = originalIndex_[query.bestSorted];
+        return result;
+    }
+
+private:
+    struct Query {
+        Eigen::Vector3f q;
+        double local[3];  // position in cell units from the grid origin
+        int cell[3];
+        float best2;      // squared best distance so far (metres)
+        double inv2;      // 1 / h^2
+        uint32_t bestSorted = UINT32_MAX;  // the point at best2, in sorted_ order
+        bool farther(double gapCells2) const { return gapCells2 >= best2 * inv2; }
+    };
+
+    float search(Query& query) const {
+        const Eigen::Vector3f& q = query.q;
         for (int a = 0; a < 3; ++a) {
             query.local[a] = (double(q[a]) - origin_[a]) / h_;
             if (!(query.local[a] >= 0 && query.local[a] < n_[a])) return maxDistance_;  // >= pad_ * h away
@@ -137,24 +161,16 @@ public:
         return std::min(std::sqrt(query.best2), maxDistance_);
     }
 
-private:
-    struct Query {
-        Eigen::Vector3f q;
-        double local[3];  // position in cell units from the grid origin
-        int cell[3];
-        float best2;      // squared best distance so far (metres)
-        double inv2;      // 1 / h^2
-        bool farther(double gapCells2) const { return gapCells2 >= best2 * inv2; }
-    };
-
     size_t index(int x, int y, int z) const { return (size_t(z) * n_[1] + y) * n_[0] + x; }
 
     // Distance in cells from a coordinate to the cell [i, i + 1) along one axis.
     static double gap(double l, int i) { return std::max({0.0, i - l, l - (i + 1)}); }
 
     void scanCell(Query& query, size_t cell) const {
-        for (uint32_t i = start_[cell], e = start_[cell + 1]; i < e; ++i)
-            query.best2 = std::min(query.best2, (sorted_[i] - query.q).squaredNorm());
+        for (uint32_t i = start_[cell], e = start_[cell + 1]; i < e; ++i) {
+            const float d2 = (sorted_[i] - query.q).squaredNorm();
+            if (d2 < query.best2) query.best2 = d2, query.bestSorted = i;
+        }
     }
 
     // Cells x0 .. x1 of row (y, z), from the one nearest the query outwards on each side, until they are
@@ -254,6 +270,7 @@ private:
     int n_[3] = {0, 0, 0};
     std::vector<uint32_t> start_;
     std::vector<Eigen::Vector3f> sorted_;
+    std::vector<uint32_t> originalIndex_;  // sorted_[i] is points[originalIndex_[i]]
     std::vector<uint8_t> dist_;
 };
 
@@ -500,6 +517,135 @@ std::vector<float> nearestDistances(const std::vector<Eigen::Vector3f>& points,
         for (size_t i = b; i < e; ++i) out[i] = grid.nearest(queries[i]);
     });
     return out;
+}
+
+std::vector<uint32_t> nearestIndices(const std::vector<Eigen::Vector3f>& points,
+                                     const std::vector<Eigen::Vector3f>& queries, double maxDistance) {
+    if (!(std::isfinite(maxDistance) && maxDistance > 0))
+        throw Error("max distance " + number(maxDistance) + " must be positive and finite");
+    checkFinite(points, "indexed");
+    checkFinite(queries, "query");
+    const PointGrid grid(points, maxDistance);
+    std::vector<uint32_t> out(queries.size());
+    parallelChunks(queries.size(), 4096, [&](size_t b, size_t e) {
+        for (size_t i = b; i < e; ++i) grid.nearest(queries[i], &out[i]);
+    });
+    return out;
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Colour
+
+void ColorErrorSum::add(const uint8_t* a, const uint8_t* b) {
+    for (int c = 0; c < 3; ++c) {
+        const double d = double(a[c]) - double(b[c]);
+        absolute_[c] += std::abs(d);
+        squared_ += d * d;
+    }
+    ++pairs_;
+}
+
+void ColorErrorSum::add(const std::array<uint8_t, 3>& a, const std::array<uint8_t, 3>& b) { add(a.data(), b.data()); }
+
+void ColorErrorSum::merge(const ColorErrorSum& o) {
+    pairs_ += o.pairs_;
+    for (int c = 0; c < 3; ++c) absolute_[c] += o.absolute_[c];
+    squared_ += o.squared_;
+}
+
+ColorError ColorErrorSum::result() const {
+    ColorError e;
+    e.pairs = pairs_;
+    if (pairs_ == 0) return e;
+    for (int c = 0; c < 3; ++c) e.mae[c] = absolute_[c] / double(pairs_);
+    e.maeMean = (e.mae[0] + e.mae[1] + e.mae[2]) / 3;
+    const double mse = squared_ / (3.0 * double(pairs_));
+    e.psnr = mse > 0 ? 10 * std::log10(255.0 * 255.0 / mse) : std::numeric_limits<double>::infinity();
+    return e;
+}
+
+ColorError colorErrorAgainstGt(const Mesh& mesh, const std::vector<Eigen::Vector3f>& gtPoints,
+                               const std::vector<std::array<uint8_t, 3>>& gtColors, const std::vector<bool>& seen,
+                               double maxDistance) {
+    if (mesh.colors.size() != mesh.positions.size() || mesh.colors.empty())
+        throw Error("colour error: the mesh has " + std::to_string(mesh.colors.size()) + " colours for " +
+                    std::to_string(mesh.positions.size()) + " vertices");
+    if (gtColors.size() != gtPoints.size())
+        throw Error("colour error: the ground truth has " + std::to_string(gtColors.size()) + " colours for " +
+                    std::to_string(gtPoints.size()) + " points");
+    if (!seen.empty() && seen.size() != gtPoints.size())
+        throw Error("colour error: seen mask of " + std::to_string(seen.size()) + " for " +
+                    std::to_string(gtPoints.size()) + " GT points");
+    std::vector<Eigen::Vector3f> queries;
+    std::vector<size_t> which;
+    for (size_t i = 0; i < gtPoints.size(); ++i)
+        if (seen.empty() || seen[i]) {
+            queries.push_back(gtPoints[i]);
+            which.push_back(i);
+        }
+    const std::vector<uint32_t> nearest = nearestIndices(mesh.positions, queries, maxDistance);
+    ColorErrorSum sum;
+    for (size_t q = 0; q < queries.size(); ++q)
+        if (nearest[q] != UINT32_MAX) sum.add(mesh.colors[nearest[q]], gtColors[which[q]]);
+    return sum.result();
+}
+
+ColorError colorErrorAgainstFrames(const Mesh& mesh, const Dataset& dataset, size_t every, double depthTolerance,
+                                   std::vector<std::string>* warnings, size_t* framesUsed) {
+    if (mesh.colors.size() != mesh.positions.size() || mesh.colors.empty())
+        throw Error("colour error: the mesh has " + std::to_string(mesh.colors.size()) + " colours for " +
+                    std::to_string(mesh.positions.size()) + " vertices");
+    if (every == 0) throw Error("colour error: every must be at least 1");
+    if (!(std::isfinite(depthTolerance) && depthTolerance > 0))
+        throw Error("colour error: depth tolerance " + number(depthTolerance) + " must be positive and finite");
+    const Intrinsics& k = dataset.intrinsics();
+    std::vector<size_t> frames;
+    for (size_t i = 0; i < dataset.size(); i += every) frames.push_back(i);
+    std::vector<ColorErrorSum> sums(frames.size());
+    std::vector<std::string> notes(frames.size());
+    // One frame per task: loading the images dominates, and each frame's sum is its own.
+    parallelChunks(frames.size(), 1, [&](size_t b, size_t e) {
+        for (size_t j = b; j < e; ++j) {
+            const size_t f = frames[j];
+            std::string why;
+            const ColorImage color = dataset.loadColor(f, &why);
+            if (color.empty()) {
+                notes[j] = why.empty() ? "frame " + std::to_string(f) + " has no colour image; not compared" : why;
+                continue;
+            }
+            DepthImage depth;
+            try {
+                depth = dataset.loadDepth(f);
+            } catch (const Error& error) {
+                notes[j] = std::string(error.what()) + "; frame " + std::to_string(f) + " not compared";
+                continue;
+            }
+            const Pose& c2w = dataset.frame(f).cameraToWorld;
+            const Eigen::Matrix3d rt = c2w.topLeftCorner<3, 3>().transpose();
+            const Eigen::Vector3d t = -rt * c2w.topRightCorner<3, 1>();
+            for (size_t v = 0; v < mesh.positions.size(); ++v) {
+                const Eigen::Vector3d p = rt * mesh.positions[v].cast<double>() + t;
+                if (!(p.z() > 0)) continue;
+                const long u = std::lround(k.fx * p.x() / p.z() + k.cx), w = std::lround(k.fy * p.y() / p.z() + k.cy);
+                if (u < 0 || w < 0 || u >= depth.width || w >= depth.height) continue;
+                const float d = depth.at(int(u), int(w));
+                if (!(d > 0) || std::abs(p.z() - d) >= depthTolerance) continue;
+                sums[j].add(mesh.colors[v].data(), color.at(int(u), int(w)));
+            }
+        }
+    });
+    ColorErrorSum total;
+    size_t used = 0;
+    for (size_t j = 0; j < frames.size(); ++j) {
+        if (!notes[j].empty()) {
+            if (warnings) warnings->push_back(notes[j]);
+            continue;
+        }
+        ++used;
+        total.merge(sums[j]);
+    }
+    if (framesUsed) *framesUsed = used;
+    return total.result();
 }
 
 namespace {

@@ -23,6 +23,7 @@
 
 #include <Eigen/Core>
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -102,5 +103,54 @@ EvalResult evaluate(const std::vector<Eigen::Vector3f>& reconstruction, const st
 // Throws Error as above, for a mask of another size than gt, or for a mask with nothing seen.
 EvalResult evaluate(const std::vector<Eigen::Vector3f>& reconstruction, const std::vector<Eigen::Vector3f>& gt,
                     const std::vector<bool>& seen, const EvalOptions& options = {});
+
+// For every query, the index of the nearest of `points` (ties: any one of them), or UINT32_MAX when none lies
+// within maxDistance. The same search and errors as nearestDistances.
+std::vector<uint32_t> nearestIndices(const std::vector<Eigen::Vector3f>& points,
+                                     const std::vector<Eigen::Vector3f>& queries, double maxDistance);
+
+// ---------------------------------------------------------------------------------------------------------
+// Colour. Errors are per channel on the 0-255 scale, over the pairs (reconstructed colour, reference colour)
+// a function compares:
+//   mae[c]   mean |a - b| of channel c (red, green, blue); maeMean is their average;
+//   psnr     10 log10(255^2 / MSE) dB, MSE over all three channels of all pairs; +infinity when every pair
+//            is equal (JSON writes it as null), 0 pairs: 0.
+struct ColorError {
+    size_t pairs = 0;
+    double mae[3] = {0, 0, 0};
+    double maeMean = 0;
+    double psnr = 0;
+};
+
+// Sums of colour differences, accumulated pair by pair and turned into a ColorError at the end.
+class ColorErrorSum {
+public:
+    void add(const std::array<uint8_t, 3>& reconstructed, const std::array<uint8_t, 3>& reference);
+    void add(const uint8_t* reconstructed, const uint8_t* reference);
+    void merge(const ColorErrorSum& other);
+    ColorError result() const;
+
+private:
+    size_t pairs_ = 0;
+    double absolute_[3] = {0, 0, 0};
+    double squared_ = 0;
+};
+
+// Colour of a mesh against coloured GT points: for every GT point with seen[i] (all when `seen` is empty)
+// whose nearest mesh VERTEX lies within maxDistance (metres), that vertex's colour against the point's. GT
+// points farther from the mesh are a completeness matter, not a colour one, and are left out. Throws Error
+// when the colours are missing or not one per point, for a mask of another size, or a non-finite point.
+ColorError colorErrorAgainstGt(const Mesh& mesh, const std::vector<Eigen::Vector3f>& gtPoints,
+                               const std::vector<std::array<uint8_t, 3>>& gtColors, const std::vector<bool>& seen,
+                               double maxDistance);
+
+// Colour of a mesh against a dataset's own colour images (real data, no GT): frames 0, every, 2 every, ...
+// Each mesh vertex the frame sees -- in front of the camera, projecting (nearest pixel) inside the image onto
+// a valid depth d with |z - d| < depthTolerance, z its camera depth -- is compared with that pixel of the
+// frame's colour image (Dataset::loadColor). Frames without usable colour or depth are skipped, the reason
+// in `warnings`; framesUsed (when given) counts the others. Throws Error for a mesh without colours, every
+// 0, or a tolerance that is not positive and finite.
+ColorError colorErrorAgainstFrames(const Mesh& mesh, const Dataset& dataset, size_t every, double depthTolerance = 0.03,
+                                   std::vector<std::string>* warnings = nullptr, size_t* framesUsed = nullptr);
 
 }  // namespace vkmesh::eval

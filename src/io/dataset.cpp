@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include <algorithm>
 #include <charconv>
@@ -16,6 +17,7 @@
 #include <fstream>
 #include <map>
 #include <sstream>
+#include <tuple>
 
 namespace vkmesh {
 
@@ -337,14 +339,22 @@ CameraJson parseCameraJson(std::istream& in, const std::string& source) {
     c.depthScale = get("depth_scale");
     c.width = getSize("width");
     c.height = getSize("height");
-    static const char* known[] = {"fx", "fy", "cx", "cy", "depth_scale", "width", "height"};
+    c.colorFx = get("color_fx");
+    c.colorFy = get("color_fy");
+    c.colorCx = get("color_cx");
+    c.colorCy = get("color_cy");
+    c.colorWidth = getSize("color_width");
+    c.colorHeight = getSize("color_height");
+    static const char* known[] = {"fx",       "fy",       "cx",       "cy",          "depth_scale",  "width", "height",
+                                  "color_fx", "color_fy", "color_cx", "color_cy", "color_width", "color_height"};
     for (const auto& item : j.items())
         if (std::find_if(std::begin(known), std::end(known), [&](const char* k) { return item.key() == k; }) ==
             std::end(known))
             c.ignoredKeys.push_back(quote(item.key()));
     // A file with none of the keys (another tool's format, e.g. Open3D's "intrinsic_matrix", or every key
     // misspelt) would otherwise be ignored in silence and the layout's default calibration used.
-    if (!c.fx && !c.fy && !c.cx && !c.cy && !c.depthScale && !c.width && !c.height) {
+    const bool anyColor = c.colorFx || c.colorFy || c.colorCx || c.colorCy || c.colorWidth || c.colorHeight;
+    if (!c.fx && !c.fy && !c.cx && !c.cy && !c.depthScale && !c.width && !c.height && !anyColor) {
         std::string found;
         for (const auto& k : c.ignoredKeys) found += (found.empty() ? "" : ", ") + k;
         throw Error(source + ": holds none of the keys fx, fy, cx, cy, depth_scale, width, height" +
@@ -358,6 +368,14 @@ CameraJson parseCameraJson(std::istream& in, const std::string& source) {
     if (c.fx && *c.fx < 0) throw Error(source + ": focal length \"fx\" = " + fmt(*c.fx) + " is negative; it must be positive");
     if (c.depthScale && *c.depthScale <= 0)
         throw Error(source + ": \"depth_scale\" = " + fmt(*c.depthScale) + "; it must be positive");
+    // Half a colour calibration cannot be completed from the depth camera's without guessing.
+    const bool allColor = c.colorFx && c.colorFy && c.colorCx && c.colorCy;
+    if ((c.colorFx || c.colorFy || c.colorCx || c.colorCy) && !allColor)
+        throw Error(source + ": colour intrinsics need all four of color_fx, color_fy, color_cx, color_cy");
+    if ((c.colorWidth || c.colorHeight) && !allColor)
+        throw Error(source + ": color_width/color_height given without color_fx, color_fy, color_cx, color_cy");
+    if (c.colorFx && !(*c.colorFx > 0)) throw Error(source + ": \"color_fx\" = " + fmt(*c.colorFx) + "; it must be positive");
+    if (c.colorFy && *c.colorFy == 0) throw Error(source + ": \"color_fy\" = 0; it must be non-zero");
     return c;
 }
 
@@ -441,6 +459,106 @@ DepthImage rawDepthToMeters(const cv::Mat& raw, double depthScale, std::optional
     return out;
 }
 
+namespace {
+
+uint32_t be16(std::string_view b, size_t o) { return uint32_t(uint8_t(b[o])) << 8 | uint32_t(uint8_t(b[o + 1])); }
+
+// Width and height from a JPEG's frame header (SOFn), found by walking the marker segments before the scan;
+// nothing when the segments are corrupt or end first.
+std::optional<std::pair<uint32_t, uint32_t>> jpegSize(std::string_view b) {
+    size_t o = 2;  // after the SOI marker FF D8
+    while (o + 4 <= b.size()) {
+        if (uint8_t(b[o]) != 0xFF) return std::nullopt;
+        const uint8_t marker = uint8_t(b[o + 1]);
+        if (marker == 0xFF) {  // fill byte
+            ++o;
+            continue;
+        }
+        if (marker == 0xD8 || (marker >= 0xD0 && marker <= 0xD7) || marker == 0x01) {  // no length
+            o += 2;
+            continue;
+        }
+        const uint32_t length = be16(b, o + 2);
+        if (length < 2) return std::nullopt;
+        const bool sof = marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 && marker != 0xC8 && marker != 0xCC;
+        if (sof) {
+            if (o + 9 > b.size()) return std::nullopt;
+            return std::make_pair(be16(b, o + 7), be16(b, o + 5));
+        }
+        if (marker == 0xDA || marker == 0xD9) return std::nullopt;  // scan or end before any frame header
+        o += 2 + length;
+    }
+    return std::nullopt;
+}
+
+}  // namespace
+
+ColorImage decodeColorImage(std::string_view bytes, const std::string& source) {
+    static const unsigned char png[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+    const bool isPng = bytes.size() >= 8 && std::memcmp(bytes.data(), png, 8) == 0;
+    const bool isJpeg = bytes.size() >= 3 && uint8_t(bytes[0]) == 0xFF && uint8_t(bytes[1]) == 0xD8 && uint8_t(bytes[2]) == 0xFF;
+    if (!isPng && !isJpeg)
+        throw Error("colour image " + source + " is neither a PNG nor a JPEG file" +
+                    (bytes.empty() ? std::string(" (it is empty)") : std::string(" (no PNG or JPEG signature)")));
+    // The size from the header, checked before the decoder allocates anything (as for depth).
+    uint32_t w = 0, h = 0;
+    if (isPng) {
+        if (bytes.size() < 8 + 8 + 13 || std::memcmp(bytes.data() + 12, "IHDR", 4) != 0)
+            throw Error("colour image " + source + " is truncated or corrupt (no PNG header chunk; " +
+                        std::to_string(bytes.size()) + " bytes)");
+        w = be16(bytes, 16) << 16 | be16(bytes, 18);
+        h = be16(bytes, 20) << 16 | be16(bytes, 22);
+        const int bitDepth = uint8_t(bytes[24]), colorType = uint8_t(bytes[25]);
+        if (bitDepth == 16)
+            throw Error("colour image " + source + " is " + describePng(bitDepth, colorType) +
+                        "; expected 8 bits per channel (is it a depth image?)");
+    } else {
+        const auto size = jpegSize(bytes);
+        if (!size) throw Error("colour image " + source + " is a truncated or corrupt JPEG (no frame header)");
+        std::tie(w, h) = *size;
+    }
+    const std::string size = std::to_string(w) + "x" + std::to_string(h);
+    if (w == 0 || h == 0) throw Error("colour image " + source + " is corrupt: its header says " + size + " pixels");
+    if (w > kMaxDepthImageSide || h > kMaxDepthImageSide || uint64_t(w) * h > kMaxDepthImagePixels)
+        throw Error("colour image " + source + " claims " + size + " pixels, more than vkmesh accepts (" +
+                    std::to_string(kMaxDepthImageSide) + " per side, " + std::to_string(kMaxDepthImagePixels >> 20) +
+                    " Mpixel)");
+    if (bytes.size() > size_t(std::numeric_limits<int>::max()))
+        throw Error("colour image " + source + " is " + std::to_string(bytes.size()) + " bytes, too large");
+    cv::Mat img;
+    try {
+        const cv::Mat buffer(1, int(bytes.size()), CV_8U, const_cast<char*>(bytes.data()));
+        // UNCHANGED: no EXIF rotation (the image must stay on the depth camera's grid), no silent 16 -> 8 bits.
+        img = cv::imdecode(buffer, cv::IMREAD_UNCHANGED);
+    } catch (const cv::Exception& e) {
+        throw Error("cannot decode colour image " + source + ": " + e.what());
+    }
+    if (img.empty()) throw Error("cannot decode colour image " + source + " (truncated or corrupt)");
+    if (img.depth() != CV_8U || (img.channels() != 1 && img.channels() != 3 && img.channels() != 4))
+        throw Error("colour image " + source + " is " + describeType(img) + " (" + std::to_string(img.cols) + "x" +
+                    std::to_string(img.rows) + "); expected 8-bit with 1, 3 or 4 channels");
+    ColorImage out;
+    out.width = img.cols;
+    out.height = img.rows;
+    out.rgb.resize(size_t(img.cols) * img.rows * 3);
+    const int c = img.channels();
+    for (int y = 0; y < img.rows; ++y) {
+        const uint8_t* row = img.ptr<uint8_t>(y);
+        uint8_t* dst = out.rgb.data() + size_t(y) * img.cols * 3;
+        for (int x = 0; x < img.cols; ++x, dst += 3) {
+            const uint8_t* p = row + size_t(x) * c;
+            if (c == 1) {
+                dst[0] = dst[1] = dst[2] = p[0];
+            } else {  // OpenCV's order is B, G, R (, A)
+                dst[0] = p[2];
+                dst[1] = p[1];
+                dst[2] = p[0];
+            }
+        }
+    }
+    return out;
+}
+
 }  // namespace io
 
 namespace {
@@ -466,10 +584,17 @@ struct Layout {
     std::vector<FrameInfo> frames;  // frames with a pose, in time order
     std::vector<std::string> warnings;
     size_t skipped = 0;
+    size_t framesWithoutColor = 0;  // in a layout that has colour
 };
 
 // Per-frame warnings are capped so that a sequence with a long tracking gap does not flood the log.
 constexpr size_t kMaxFrameWarnings = 20;
+
+// A depth frame that gets no colour image (it is fused without colour); capped like skipped frames.
+void warnNoColor(Layout& layout, const std::string& message) {
+    if (layout.framesWithoutColor < kMaxFrameWarnings) layout.warnings.push_back(message);
+    ++layout.framesWithoutColor;
+}
 
 void warnSkipped(Layout& layout, const std::string& message) {
     if (layout.skipped < kMaxFrameWarnings) layout.warnings.push_back(message);
@@ -620,6 +745,35 @@ Layout readTum(const fs::path& folder, const std::string& folderName) {
                     tolText + " in " + gtFile.string() + " (timestamps " + fmtTime(gt.front().t) + " .. " +
                     fmtTime(gt.back().t) + ")");
     summariseSkipped(layout, listed, "no pose within " + tolText + ", or a repeated timestamp");
+
+    // Colour: rgb.txt, the image nearest in time to each depth frame (the sensor streams are not
+    // synchronised in TUM; ICL-NUIM's share the frame index). Colour is optional: a broken rgb.txt costs
+    // the colour, not the reconstruction.
+    const fs::path rgbFile = folder / "rgb.txt";
+    if (fs::is_regular_file(rgbFile, ec)) {
+        std::vector<Stamped> rgb;
+        try {
+            rgb = readDepthList(folder, rgbFile);
+        } catch (const Error& e) {
+            layout.warnings.push_back(std::string(e.what()) + "; colour ignored");
+        }
+        sortAndDedupe(rgb, rgbFile, layout.warnings);
+        for (FrameInfo& f : layout.frames) {
+            if (rgb.empty()) break;
+            auto it = std::lower_bound(rgb.begin(), rgb.end(), f.timestamp, [](const Stamped& c, double t) { return c.t < t; });
+            const Stamped* best = it != rgb.end() ? &*it : nullptr;
+            if (it != rgb.begin() && (!best || f.timestamp - std::prev(it)->t < best->t - f.timestamp)) best = &*std::prev(it);
+            const double dt = std::abs(best->t - f.timestamp);
+            if (icl ? dt < tolerance : dt <= tolerance) {
+                f.colorPath = best->path;
+            } else {
+                warnNoColor(layout, rgbFile.string() + ": no colour image within " + tolText + " of depth frame " +
+                                        fmtTime(f.timestamp) + " (" + f.depthPath.filename().string() + "; nearest is " +
+                                        (icl ? fmt(dt) + " frames" : fmtFixed(dt * 1000.0, 1) + " ms") +
+                                        " away); that frame has no colour");
+            }
+        }
+    }
     return layout;
 }
 
@@ -683,6 +837,26 @@ Layout readRedwood(const fs::path& folder, const fs::path& logFile) {
                     " has a pose in " + logFile.string() + " (frame ids " + std::to_string(poses.begin()->first) +
                     " .. " + std::to_string(poses.rbegin()->first) + ")");
     summariseSkipped(layout, images.size(), "no pose in " + logFile.filename().string());
+
+    // Colour: color/ (Redwood) or rgb/ (some converters) beside depth/, paired by position in name order.
+    for (const char* name : {"color", "rgb"}) {
+        std::vector<fs::path> colors;
+        for (const char* ext : {".jpg", ".jpeg", ".png"})
+            for (fs::path& p : filesWithExtension(folder / name, ext)) colors.push_back(std::move(p));
+        if (colors.empty()) continue;
+        std::sort(colors.begin(), colors.end(), [](const fs::path& a, const fs::path& b) {
+            return naturalLess(a.filename().string(), b.filename().string());
+        });
+        if (colors.size() != images.size())
+            layout.warnings.push_back((folder / name).string() + " holds " + std::to_string(colors.size()) +
+                                      " colour images for " + std::to_string(images.size()) +
+                                      " depth images; paired by name order, extra depth frames have no colour");
+        for (FrameInfo& f : layout.frames) {
+            const size_t k = static_cast<size_t>(f.timestamp);  // the depth image's position in name order
+            if (k < colors.size()) f.colorPath = colors[k];
+        }
+        break;
+    }
     return layout;
 }
 
@@ -755,8 +929,18 @@ Layout readSevenScenes(const fs::path& folder, const std::vector<SevenScenesFram
         f.timestamp = static_cast<double>(img.number);
         f.depthPath = img.depth;
         f.cameraToWorld = T;
+        for (const char* ext : {".color.png", ".color.jpg"})
+            if (fs::is_regular_file(folder / (stem + ext), ec)) {
+                f.colorPath = folder / (stem + ext);
+                break;
+            }
+        if (f.colorPath.empty()) ++layout.framesWithoutColor;
         layout.frames.push_back(std::move(f));
     }
+    if (layout.framesWithoutColor > 0 && layout.framesWithoutColor < layout.frames.size())
+        layout.warnings.push_back(std::to_string(layout.framesWithoutColor) + " of " +
+                                  std::to_string(layout.frames.size()) +
+                                  " frames have no frame-NNNNNN.color.png or .color.jpg; they have no colour");
     if (layout.frames.empty())
         throw Error("none of the " + std::to_string(images.size()) + " frame-*.depth.png files in " + folder.string() +
                     " has a matching frame-*.pose.txt");
@@ -960,7 +1144,8 @@ std::unique_ptr<Dataset> Dataset::open(const fs::path& folderIn, const DatasetOp
             std::string keys;
             for (const auto& key : camera->ignoredKeys) keys += (keys.empty() ? "" : ", ") + key;
             ds->warnings_.push_back(cameraJson.string() + ": ignored unknown keys " + keys +
-                                    " (known: fx, fy, cx, cy, depth_scale, width, height)");
+                                    " (known: fx, fy, cx, cy, depth_scale, width, height, color_fx, color_fy, color_cx, color_cy, "
+                                    "color_width, color_height)");
         }
     }
     // The preset is read only when something is left to it, so that a fully calibrated folder needs no data files.
@@ -1009,6 +1194,26 @@ std::unique_ptr<Dataset> Dataset::open(const fs::path& folderIn, const DatasetOp
             throw Error("depth image " + layout.frames[i].depthPath.string() + " (frame " + std::to_string(i) +
                         ") does not exist");
     }
+    // Colour files that are listed but missing are found now, like depth, but cost only that frame's colour.
+    size_t withColor = 0, missingColor = 0;
+    for (FrameInfo& f : layout.frames) {
+        if (f.colorPath.empty()) continue;
+        if (fs::is_regular_file(f.colorPath, ec)) {
+            ++withColor;
+            continue;
+        }
+        if (missingColor++ < kMaxFrameWarnings)
+            ds->warnings_.push_back("colour image " + f.colorPath.string() + " (frame " + std::to_string(f.index) +
+                                    ") does not exist; that frame has no colour");
+        f.colorPath.clear();
+    }
+    if (missingColor > kMaxFrameWarnings)
+        ds->warnings_.push_back("... and " + std::to_string(missingColor - kMaxFrameWarnings) + " more missing colour images");
+    if (layout.framesWithoutColor > kMaxFrameWarnings)
+        ds->warnings_.push_back("... and " + std::to_string(layout.framesWithoutColor - kMaxFrameWarnings) +
+                                " more depth frames without a colour image");
+    ds->hasColor_ = withColor > 0;
+    if (!ds->hasColor_) ds->warnings_.push_back("no colour images: depth only");
     ds->frames_ = std::move(layout.frames);
 
     // The image size comes from frame 0; loadDepth holds every other frame to it.
@@ -1030,6 +1235,39 @@ std::unique_ptr<Dataset> Dataset::open(const fs::path& folderIn, const DatasetOp
                                 std::to_string(k.width) + "x" + std::to_string(k.height) + " depth images (" +
                                 firstName + "): are the intrinsics for another image size?");
     ds->intrinsics_ = k;
+
+    // A colour camera of its own (camera.json color_*): every depth pixel's ray, projected into it, gives the
+    // remap that puts colour on the depth grid. The colour images' size is the file's, or frame 0's image.
+    if (camera && camera->colorFx && ds->hasColor_) {
+        Intrinsics ck{float(*camera->colorFx), float(*camera->colorFy), float(*camera->colorCx), float(*camera->colorCy),
+                      camera->colorWidth.value_or(0), camera->colorHeight.value_or(0)};
+        if (ck.width == 0 || ck.height == 0) {
+            const auto withColor = std::find_if(ds->frames_.begin(), ds->frames_.end(),
+                                                [](const FrameInfo& f) { return !f.colorPath.empty(); });
+            try {
+                std::ifstream in(withColor->colorPath, std::ios::binary);
+                const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+                const ColorImage c = io::decodeColorImage(bytes, withColor->colorPath.string());
+                if (ck.width == 0) ck.width = c.width;
+                if (ck.height == 0) ck.height = c.height;
+            } catch (const Error& e) {
+                ds->warnings_.push_back(std::string(e.what()) + "; without color_width and color_height in " +
+                                        cameraJson.string() + " the colour images' size is unknown: depth only");
+                ds->hasColor_ = false;
+            }
+        }
+        if (ds->hasColor_) {
+            ds->colorIntrinsics_ = ck;
+            ds->colorMapX_.resize(size_t(k.width) * k.height);
+            ds->colorMapY_.resize(size_t(k.width) * k.height);
+            for (int v = 0; v < k.height; ++v)
+                for (int u = 0; u < k.width; ++u) {
+                    const size_t i = size_t(v) * k.width + u;
+                    ds->colorMapX_[i] = float(ck.fx * ((u - k.cx) / k.fx) + ck.cx);
+                    ds->colorMapY_[i] = float(ck.fy * ((v - k.cy) / k.fy) + ck.cy);
+                }
+        }
+    }
     return ds;
 }
 
@@ -1048,6 +1286,54 @@ DepthImage Dataset::loadDepth(size_t i) const {
                     std::to_string(raw.rows) + " but frame 0 (" + frames_.front().depthPath.filename().string() +
                     ") is " + std::to_string(intrinsics_.width) + "x" + std::to_string(intrinsics_.height));
     return io::rawDepthToMeters(raw, depthScale_, invalidRaw_, maxDepth_);
+}
+
+ColorImage Dataset::loadColor(size_t i, std::string* warning) const {
+    const FrameInfo& f = frame(i);
+    auto unusable = [&](const std::string& why) {
+        if (warning) *warning = why + "; frame " + std::to_string(i) + " has no colour";
+        return ColorImage{};
+    };
+    // A frame without an image is only worth a word when the sequence has colour elsewhere.
+    if (f.colorPath.empty())
+        return hasColor_ ? unusable("no colour image for depth image " + f.depthPath.filename().string()) : ColorImage{};
+    const std::string name = f.colorPath.string();
+    std::string bytes;
+    {
+        std::ifstream in(f.colorPath, std::ios::binary);
+        if (!in) return unusable("cannot open colour image " + name);
+        bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+        if (in.bad()) return unusable("error while reading colour image " + name);
+    }
+    ColorImage image;
+    try {
+        image = io::decodeColorImage(bytes, name);
+    } catch (const Error& e) {
+        return unusable(e.what());
+    }
+    const int w = colorIntrinsics_ ? colorIntrinsics_->width : intrinsics_.width;
+    const int h = colorIntrinsics_ ? colorIntrinsics_->height : intrinsics_.height;
+    if (image.width != w || image.height != h)
+        return unusable("colour image " + name + " is " + std::to_string(image.width) + "x" + std::to_string(image.height) +
+                        " but " + (colorIntrinsics_ ? "the colour calibration (camera.json) is for " : "the depth images are ") +
+                        std::to_string(w) + "x" + std::to_string(h));
+    if (!colorIntrinsics_) return image;
+
+    // Bilinear resampling onto the depth grid; depth pixels outside the colour camera's view get black.
+    const cv::Mat src(image.height, image.width, CV_8UC3, image.rgb.data());
+    const cv::Mat mapX(intrinsics_.height, intrinsics_.width, CV_32FC1, const_cast<float*>(colorMapX_.data()));
+    const cv::Mat mapY(intrinsics_.height, intrinsics_.width, CV_32FC1, const_cast<float*>(colorMapY_.data()));
+    ColorImage out;
+    out.width = intrinsics_.width;
+    out.height = intrinsics_.height;
+    out.rgb.resize(size_t(out.width) * out.height * 3);
+    cv::Mat dst(out.height, out.width, CV_8UC3, out.rgb.data());  // remap writes into out.rgb directly
+    try {
+        cv::remap(src, dst, mapX, mapY, cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(0, 0, 0));
+    } catch (const cv::Exception& e) {
+        return unusable("cannot resample colour image " + name + ": " + e.what());
+    }
+    return out;
 }
 
 }  // namespace vkmesh

@@ -7,7 +7,19 @@
 //                 timestamps that are small integers (frame indices). fy is negative (-480) with its poses.
 //   Redwood       a *.log trajectory (Zhou-Koltun format) + depth/*.png in millimetres.
 //   7-Scenes      frame-NNNNNN.depth.png (mm, 0 and 65535 invalid) + frame-NNNNNN.pose.txt.
-// Any layout may carry a camera.json ({"fx","fy","cx","cy","depth_scale"}, all optional).
+// Any layout may carry a camera.json ({"fx","fy","cx","cy","depth_scale"}, all optional; colour intrinsics
+// "color_fx","color_fy","color_cx","color_cy" and "color_width","color_height" when the colour camera differs).
+//
+// Colour (optional, per frame; FrameInfo::colorPath, loadColor):
+//   TUM, ICL-NUIM rgb.txt ("timestamp path"): the image nearest in time to the depth frame, within 20 ms (TUM)
+//                 or with the same frame index (ICL-NUIM).
+//   Redwood       color/ or rgb/ beside depth/: the k-th image (name order) goes with the k-th depth image.
+//   7-Scenes      frame-NNNNNN.color.png or frame-NNNNNN.color.jpg beside the depth image.
+// JPEG or PNG, 8-bit: 3-channel (BGR in the file as OpenCV decodes it, RGB in ColorImage), 4-channel (alpha
+// dropped) or grayscale (grey RGB). 16-bit images are rejected (usually a depth image listed by mistake).
+// Colour is registered to the depth grid: without colour intrinsics the images must be the depth images'
+// size and are taken pixel for pixel; with them, each depth pixel's ray is projected into the colour camera
+// (no baseline between the two) and the colour image resampled bilinearly there.
 // Precedence of calibration values: DatasetOptions > camera.json > the layout's default.
 // The layouts' defaults are camera presets in vkmesh's data folder (data/cameras/<name>/camera.json, the
 // same format; found as io/data_dir.h says): tum_fr1, tum_fr2, tum_fr3 (chosen by freiburgN / frN in the
@@ -42,6 +54,7 @@ struct FrameInfo {
     size_t index = 0;          // position in the Dataset (frame(i).index == i)
     double timestamp = 0;      // seconds (TUM), frame index (ICL-NUIM), frame number (Redwood, 7-Scenes)
     std::filesystem::path depthPath;  // absolute or relative to the working directory, ready to open
+    std::filesystem::path colorPath;  // the frame's colour image, as depthPath; empty when it has none
     Pose cameraToWorld = Pose::Identity();
 };
 
@@ -72,9 +85,15 @@ public:
     // single-channel image, or not the size of frame 0.
     DepthImage loadDepth(size_t i) const;
 
-    // Colour (being written on the color-io branch; until then no layout reports colour).
-    bool hasColor() const { return false; }
-    ColorImage loadColor(size_t, std::string* = nullptr) const { return {}; }
+    // Whether at least one frame has a colour image (open() checked that the file exists).
+    bool hasColor() const { return hasColor_; }
+
+    // Frame i's colour registered to the depth image grid (intrinsics().width x height, RGB8). Returns an
+    // empty image when the frame has none, or when its file is missing, unreadable, corrupt, 16-bit, or of
+    // another size than expected; then *warning (when given) names the file and the problem (it is left
+    // untouched otherwise). Never throws for a bad image; only for i out of range. Const and stateless, like
+    // loadDepth.
+    ColorImage loadColor(size_t i, std::string* warning = nullptr) const;
 
 private:
     Dataset() = default;
@@ -88,6 +107,11 @@ private:
     std::vector<FrameInfo> frames_;
     std::vector<std::string> warnings_;
     size_t skippedFrames_ = 0;
+    bool hasColor_ = false;
+    // Colour camera calibration from camera.json, when it differs from the depth camera's.
+    std::optional<Intrinsics> colorIntrinsics_;
+    // With colorIntrinsics_: for every depth pixel, where it lies in the colour image (x, y; cv::remap maps).
+    std::vector<float> colorMapX_, colorMapY_;
 };
 
 // A camera preset: data/cameras/<name>/camera.json with all of fx, fy, cx, cy and depth_scale.

@@ -58,11 +58,15 @@ std::vector<IndexedPose> parseRedwoodLog(std::istream& in, const std::string& so
 // 3x3 camera matrix); `what` names the expected content for the message.
 std::vector<double> parseNumbers(std::istream& in, const std::string& source, size_t count, const std::string& what);
 
-// camera.json: {"fx","fy","cx","cy","depth_scale","width","height"}, every key optional but at least one of
-// the calibration keys present. Unknown keys are returned in `ignoredKeys` (the caller warns).
+// camera.json: {"fx","fy","cx","cy","depth_scale","width","height"} and the colour camera's "color_fx",
+// "color_fy","color_cx","color_cy" (all four or none; fx, fy positive), "color_width","color_height"; every
+// key optional but at least one of the calibration keys present. Unknown keys are returned in `ignoredKeys` (the caller warns).
 struct CameraJson {
     std::optional<double> fx, fy, cx, cy, depthScale;
     std::optional<int> width, height;  // the image size the calibration is for, when the file says
+    // The colour camera's, when it differs from the depth camera's: all four or none (else Error).
+    std::optional<double> colorFx, colorFy, colorCx, colorCy;
+    std::optional<int> colorWidth, colorHeight;
     std::vector<std::string> ignoredKeys;
     bool hasAllIntrinsics() const { return fx && fy && cx && cy; }
 };
@@ -81,5 +85,15 @@ cv::Mat decodeDepthPng(std::string_view bytes, const std::string& source);
 
 // Raw samples to metres: 0 and `invalidRaw` mean "no measurement"; samples beyond maxDepth (> 0) become 0.
 DepthImage rawDepthToMeters(const cv::Mat& raw, double depthScale, std::optional<uint16_t> invalidRaw, float maxDepth);
+
+}  // namespace vkmesh::io
+
+namespace vkmesh::io {
+
+// Decodes a colour image (PNG or JPEG) held in memory into RGB8. 8-bit 3-channel images are taken as BGR (as
+// OpenCV decodes them), 4-channel ones lose their alpha, grayscale ones become grey RGB. Throws Error naming
+// `source` for bytes that are not a PNG or JPEG, a header claiming more than the depth limits above, a
+// 16-bit image, or corrupt / truncated data.
+ColorImage decodeColorImage(std::string_view bytes, const std::string& source);
 
 }  // namespace vkmesh::io

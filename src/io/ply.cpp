@@ -42,6 +42,8 @@ void checkMesh(const std::filesystem::path& path, const Mesh& mesh, const char* 
         bad(std::to_string(mesh.normals.size()) + " normals for " + std::to_string(n) + " vertices");
     if (!mesh.vertexAge.empty() && mesh.vertexAge.size() != n)
         bad(std::to_string(mesh.vertexAge.size()) + " ages for " + std::to_string(n) + " vertices");
+    if (!mesh.colors.empty() && mesh.colors.size() != n)
+        bad(std::to_string(mesh.colors.size()) + " colours for " + std::to_string(n) + " vertices");
     for (size_t i = 0; i < mesh.triangles.size(); ++i)
         for (uint32_t v : mesh.triangles[i])
             if (v >= n)
@@ -141,7 +143,18 @@ float toFloat(double v) {
     return float(v);
 }
 
-enum class Role { Skip, X, Y, Z, NX, NY, NZ, Age, Indices };
+// A colour channel as 0..255: integers as they are (ushort scaled down from 0..65535), floats as 0..1
+// (Open3D's and PCL's convention for float colours); out-of-range values are clamped and NaN is 0, since a
+// colour is not worth refusing a mesh for.
+uint8_t colorByte(Scalar type, double v) {
+    if (type == Scalar::U16) v /= 257.0;
+    else if (!isInteger(type)) v *= 255.0;
+    if (!(v > 0)) return 0;
+    if (v >= 255) return 255;
+    return uint8_t(std::lround(v));
+}
+
+enum class Role { Skip, X, Y, Z, NX, NY, NZ, Red, Green, Blue, Age, Indices };
 
 struct Property {
     std::string name;
@@ -242,20 +255,25 @@ void writePly(const std::filesystem::path& path, const Mesh& mesh) {
     checkMesh(path, mesh, "PLY");
     const bool hasNormals = !mesh.normals.empty();
     const bool hasAge = !mesh.vertexAge.empty();
+    const bool hasColors = !mesh.colors.empty();
     std::string out;
     out += "ply\nformat binary_little_endian 1.0\ncomment written by vkmesh\n";
     out += "element vertex " + std::to_string(mesh.positions.size()) + "\n";
     out += "property float x\nproperty float y\nproperty float z\n";
     if (hasNormals) out += "property float nx\nproperty float ny\nproperty float nz\n";
+    // uchar red/green/blue is the spelling Open3D, MeshLab and CloudCompare all read as vertex colour.
+    if (hasColors) out += "property uchar red\nproperty uchar green\nproperty uchar blue\n";
     if (hasAge) out += "property uint age\n";
     out += "element face " + std::to_string(mesh.triangles.size()) + "\n";
     out += "property list uchar uint vertex_indices\nend_header\n";
-    const size_t vertexBytes = 12 + (hasNormals ? 12 : 0) + (hasAge ? 4 : 0);
+    const size_t vertexBytes = 12 + (hasNormals ? 12 : 0) + (hasColors ? 3 : 0) + (hasAge ? 4 : 0);
     out.reserve(out.size() + mesh.positions.size() * vertexBytes + mesh.triangles.size() * 13);
     for (size_t i = 0; i < mesh.positions.size(); ++i) {
         for (int k = 0; k < 3; ++k) put<float>(out, mesh.positions[i][k]);
         if (hasNormals)
             for (int k = 0; k < 3; ++k) put<float>(out, mesh.normals[i][k]);
+        if (hasColors)
+            for (int k = 0; k < 3; ++k) put<uint8_t>(out, mesh.colors[i][k]);
         if (hasAge) put<uint32_t>(out, mesh.vertexAge[i]);
     }
     for (const auto& t : mesh.triangles) {
@@ -278,7 +296,24 @@ void writeObj(const std::filesystem::path& path, const Mesh& mesh) {
         }
         out += '\n';
     };
-    for (const auto& p : mesh.positions) vec("v", p);
+    // Colour as `v x y z r g b` with r, g, b in 0..1: not in the OBJ standard, but the extension MeshLab,
+    // Open3D and Blender read.
+    for (size_t i = 0; i < mesh.positions.size(); ++i) {
+        if (mesh.colors.empty()) {
+            vec("v", mesh.positions[i]);
+            continue;
+        }
+        out += 'v';
+        for (int k = 0; k < 3; ++k) {
+            out += ' ';
+            appendNumber(out, mesh.positions[i][k]);
+        }
+        for (int k = 0; k < 3; ++k) {
+            out += ' ';
+            appendNumber(out, float(mesh.colors[i][k]) / 255.0f);
+        }
+        out += '\n';
+    }
     if (hasNormals)
         for (const auto& n : mesh.normals) vec("vn", n);
     for (const auto& t : mesh.triangles) {
@@ -375,6 +410,7 @@ Mesh parsePly(std::string_view data, const std::filesystem::path& path) {
     // --- roles
     const Element* vertexElem = nullptr;
     bool hasNx = false, hasNy = false, hasNz = false, hasAge = false;
+    bool hasRed = false, hasGreen = false, hasBlue = false;
     bool hasX = false, hasY = false, hasZ = false;
     for (Element& e : elements) {
         if (e.name == "vertex") {
@@ -394,6 +430,10 @@ Mesh parsePly(std::string_view data, const std::filesystem::path& path) {
                 else if (p.name == "ny") set(Role::NY, hasNy);
                 else if (p.name == "nz") set(Role::NZ, hasNz);
                 else if (p.name == "age") set(Role::Age, hasAge);
+                // diffuse_* is the older spelling (some scanners, the Stanford repository's files).
+                else if (p.name == "red" || p.name == "diffuse_red") set(Role::Red, hasRed);
+                else if (p.name == "green" || p.name == "diffuse_green") set(Role::Green, hasGreen);
+                else if (p.name == "blue" || p.name == "diffuse_blue") set(Role::Blue, hasBlue);
             }
         } else if (e.name == "face") {
             bool found = false;
@@ -409,6 +449,7 @@ Mesh parsePly(std::string_view data, const std::filesystem::path& path) {
     if (!vertexElem) fail(path, "no 'vertex' element");
     if (!(hasX && hasY && hasZ)) fail(path, "the vertex element lacks one of x, y, z");
     const bool keepNormals = hasNx && hasNy && hasNz;
+    const bool keepColors = hasRed && hasGreen && hasBlue;
 
     // Sanity bound so a corrupt count cannot request absurd memory: each entry takes >= 1 byte (binary) or
     // >= 2 characters (ascii) per property.
@@ -424,6 +465,7 @@ Mesh parsePly(std::string_view data, const std::filesystem::path& path) {
     mesh.positions.resize(nv, Eigen::Vector3f::Zero());
     if (keepNormals) mesh.normals.resize(nv, Eigen::Vector3f::Zero());
     if (hasAge) mesh.vertexAge.resize(nv, 0);
+    if (keepColors) mesh.colors.resize(nv, {0, 0, 0});
 
     BodyReader in(path, data.substr(std::min(pos, data.size())), *format);
     std::vector<uint32_t> poly;
@@ -471,6 +513,10 @@ Mesh parsePly(std::string_view data, const std::filesystem::path& path) {
                     case Role::NX: if (keepNormals) mesh.normals[i].x() = toFloat(v); break;
                     case Role::NY: if (keepNormals) mesh.normals[i].y() = toFloat(v); break;
                     case Role::NZ: if (keepNormals) mesh.normals[i].z() = toFloat(v); break;
+                    case Role::Red: case Role::Green: case Role::Blue:
+                        if (keepColors)
+                            mesh.colors[i][p.role == Role::Red ? 0 : p.role == Role::Green ? 1 : 2] = colorByte(p.type, v);
+                        break;
                     case Role::Age:
                         if (v < 0 || v > double(std::numeric_limits<uint32_t>::max()))
                             fail(path, "corrupt: vertex " + std::to_string(i) + " has age " + numberText(v));

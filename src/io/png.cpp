@@ -52,4 +52,20 @@ void writePng(const std::filesystem::path& path, const render::Image& image) {
     encode(path, bgr, path.string());
 }
 
+void writeColorPng(const std::filesystem::path& path, const ColorImage& image) {
+    if (image.width <= 0 || image.height <= 0 || image.rgb.size() != size_t(image.width) * image.height * 3)
+        throw Error("cannot write colour image '" + path.string() + "': the image is empty or inconsistent");
+    cv::Mat bgr(image.height, image.width, CV_8UC3);
+    for (int y = 0; y < image.height; ++y) {
+        uint8_t* row = bgr.ptr<uint8_t>(y);
+        for (int x = 0; x < image.width; ++x) {
+            const uint8_t* p = image.at(x, y);
+            row[3 * x + 0] = p[2];
+            row[3 * x + 1] = p[1];
+            row[3 * x + 2] = p[0];
+        }
+    }
+    encode(path, bgr, "colour image '" + path.string() + "'");
+}
+
 }  // namespace vkmesh::io

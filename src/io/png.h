@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <vector>
 
+#include "core/types.h"
 #include "render/image.h"
 
 namespace vkmesh::io {
@@ -17,5 +18,9 @@ void writeDepthPng(const std::filesystem::path& path, int width, int height, con
 // An 8-bit RGB PNG of the renderer's RGBA image (alpha dropped). Throws Error naming the file for an empty
 // or inconsistent image or one that cannot be written.
 void writePng(const std::filesystem::path& path, const render::Image& image);
+
+// An 8-bit RGB PNG of a colour image. Throws Error naming the file for an empty or inconsistent image or one
+// that cannot be written.
+void writeColorPng(const std::filesystem::path& path, const ColorImage& image);
 
 }  // namespace vkmesh::io

@@ -114,6 +114,16 @@ private:
 };
 
 
+Rgb shade(const Rgb& c, double exposure, double noiseSigma, PixelRandom* random) {
+    Rgb out;
+    for (int k = 0; k < 3; ++k) {
+        double v = c[k] * exposure;
+        if (random) v += noiseSigma * random->gaussian();
+        out[k] = static_cast<uint8_t>(std::clamp(std::round(v), 0.0, 255.0));
+    }
+    return out;
+}
+
 void requireFinitePositive(double value, const Object& object, const char* what) {
     if (!std::isfinite(value) || value <= 0)
         throw Error("synthetic object '" + object.name + "' (" + std::string(kindName(object.kind)) + "): " + what +
@@ -127,6 +137,12 @@ void validateObject(const Object& object) {
     if (!object.objectToWorld.matrix().allFinite() || orthonormalError > 1e-9 || rotation.determinant() < 0)
         throw Error("synthetic object '" + object.name + "': objectToWorld is not a rigid transform (finite, "
                     "orthonormal rotation with determinant +1)");
+    const Texture& texture = object.texture;
+    if (texture.pattern != Texture::Pattern::Uniform &&
+        (!std::isfinite(texture.period) || texture.period <= 0 || !std::isfinite(texture.offset) || texture.axis < 0 ||
+         texture.axis > 2))
+        throw Error("synthetic object '" + object.name + "': texture period " + std::to_string(texture.period) +
+                    " must be positive and finite, offset finite, axis 0..2");
     switch (object.kind) {
         case ObjectKind::HalfSpace: break;
         case ObjectKind::Sphere: requireFinitePositive(object.radius, object, "radius"); break;
@@ -421,6 +437,16 @@ uint32_t frameSeed(uint32_t seed, size_t frame) {
     return static_cast<uint32_t>(mixer.next() >> 32);
 }
 
+Rgb Texture::at(const Eigen::Vector3d& q) const {
+    auto cell = [&](int axisIndex) { return static_cast<long long>(std::floor((q[axisIndex] + offset) / period)); };
+    switch (pattern) {
+        case Pattern::Uniform: return a;
+        case Pattern::Stripes: return (cell(axis) & 1) ? b : a;
+        case Pattern::Checker: return ((cell(0) + cell(1) + cell(2)) & 1) ? b : a;
+    }
+    return a;
+}
+
 std::string_view kindName(ObjectKind kind) {
     switch (kind) {
         case ObjectKind::RoomInterior: return "room_interior";
@@ -488,12 +514,16 @@ SyntheticScene SyntheticScene::defaultRoom() {
     Object room{.name = "room", .kind = ObjectKind::RoomInterior};
     room.objectToWorld = inRoom({0, 0, kRoomHalfExtents.z()}, Eigen::Matrix3d::Identity());
     room.halfExtents = kRoomHalfExtents;
+    // Offsets are odd fractions of a millimetre so that no flat face and no row of GT samples (laid out on
+    // round-number grids) sits on a band edge, where float rounding of a position would flip its colour.
+    room.texture = {Texture::Pattern::Checker, 0.25, 2, 0.0537, {200, 180, 140}, {90, 70, 50}};
     objects.push_back(room);
 
     // Floating, so that every part of it is in free space and can be seen.
     Object sphere{.name = "sphere", .kind = ObjectKind::Sphere};
     sphere.objectToWorld = inRoom({0.55, 0.25, 0.75}, Eigen::Matrix3d::Identity());
     sphere.radius = 0.35;
+    sphere.texture = {Texture::Pattern::Stripes, 0.008, 2, 0.00137, {220, 40, 40}, {240, 240, 240}};  // finer than a voxel
     objects.push_back(sphere);
 
     // Floating and tilted, so that its hole and both faces show from the orbit.
@@ -502,11 +532,13 @@ SyntheticScene SyntheticScene::defaultRoom() {
                                                         rotationAbout(Eigen::Vector3d::UnitX(), degrees(55)));
     torus.radius = 0.3;
     torus.tubeRadius = 0.1;
+    torus.texture = {Texture::Pattern::Checker, 0.04, 2, 0.00731, {40, 160, 60}, {230, 210, 40}};
     objects.push_back(torus);
 
     Object roundedBox{.name = "rounded_box", .kind = ObjectKind::RoundedBox};
     roundedBox.halfExtents = {0.25, 0.18, 0.25};
     roundedBox.edgeRadius = 0.04;
+    roundedBox.texture = {Texture::Pattern::Stripes, 0.015, 0, 0.00313, {40, 70, 200}, {250, 250, 250}};
     roundedBox.objectToWorld = inRoom({0.1, -0.45, roundedBox.halfExtents.z()}, rotationAbout(up, degrees(30)));
     objects.push_back(roundedBox);
 
@@ -514,6 +546,7 @@ SyntheticScene SyntheticScene::defaultRoom() {
     // the floor, as a ramp resting on the ground would.
     Object ramp{.name = "ramp", .kind = ObjectKind::RoundedBox};
     ramp.halfExtents = {0.45, 0.25, 0.015};
+    ramp.texture = {Texture::Pattern::Checker, 0.1, 2, 0.0219, {240, 130, 20}, {30, 30, 30}};
     ramp.objectToWorld = inRoom({-0.75, -0.5, 0.225}, rotationAbout(up, degrees(-15)) *
                                                           rotationAbout(Eigen::Vector3d::UnitY(), degrees(-30)));
     objects.push_back(ramp);
@@ -521,12 +554,14 @@ SyntheticScene SyntheticScene::defaultRoom() {
     // The thin part: an upright panel 2.5 cm thick, only a few voxels across at usual voxel sizes.
     Object plate{.name = "thin_plate", .kind = ObjectKind::RoundedBox};
     plate.halfExtents = {0.25, 0.0125, 0.35};
+    plate.texture = {Texture::Pattern::Stripes, 0.12, 2, 0.0313, {150, 60, 170}, {120, 120, 120}};
     plate.objectToWorld = inRoom({0.05, 0.8, plate.halfExtents.z()}, rotationAbout(up, degrees(10)));
     objects.push_back(plate);
 
     Object pole{.name = "pole", .kind = ObjectKind::Cylinder};
     pole.radius = 0.015;
     pole.halfHeight = 0.75;
+    pole.texture = {Texture::Pattern::Uniform, 0.1, 2, 0, {0, 200, 210}, {0, 200, 210}};
     // Between the orbit and the sphere (14 cm clear of it), so it often occludes: a thin occluder in front.
     pole.objectToWorld = inRoom({0.75, -0.2, pole.halfHeight}, Eigen::Matrix3d::Identity());
     objects.push_back(pole);
@@ -578,6 +613,17 @@ Eigen::Vector3d SyntheticScene::normal(const Eigen::Vector3d& p) const {
     return length > 0 ? Eigen::Vector3d(gradient / length) : Eigen::Vector3d::Zero();
 }
 
+Rgb SyntheticScene::color(const Eigen::Vector3d& p) const {
+    size_t nearest = 0;
+    double best = kInfinity;
+    for (size_t i = 0; i < objects_.size(); ++i) {
+        const double d = std::abs(objects_[i].sdf(p));
+        if (d < best) best = d, nearest = i;
+    }
+    const Object& object = objects_[nearest];
+    return object.texture.at(object.objectToWorld.inverse() * p);
+}
+
 const Object& SyntheticScene::object(std::string_view name) const {
     for (const Object& object : objects_)
         if (object.name == name) return object;
@@ -613,11 +659,19 @@ void validateIntrinsics(const Intrinsics& intrinsics) {
 }
 
 DepthImage SyntheticScene::renderDepth(const Intrinsics& intrinsics, const Pose& cameraToWorld,
-                                       const RenderOptions& options) const {
+                                       const RenderOptions& options, ColorImage* color) const {
     validateIntrinsics(intrinsics);
     validatePoseForRendering(cameraToWorld);
     if (!std::isfinite(options.maxRange) || options.maxRange <= 0)
         throw Error("renderDepth: maxRange = " + std::to_string(options.maxRange) + " must be positive and finite");
+    if (!std::isfinite(options.exposure) || options.exposure < 0 || !std::isfinite(options.colorNoise) || options.colorNoise < 0)
+        throw Error("renderDepth: exposure = " + std::to_string(options.exposure) + " and colorNoise = " +
+                    std::to_string(options.colorNoise) + " must be finite and >= 0");
+    if (color) {
+        color->width = intrinsics.width;
+        color->height = intrinsics.height;
+        color->rgb.assign(static_cast<size_t>(intrinsics.width) * intrinsics.height * 3, 0);
+    }
 
     DepthImage depth;
     depth.width = intrinsics.width;
@@ -640,6 +694,13 @@ DepthImage SyntheticScene::renderDepth(const Intrinsics& intrinsics, const Pose&
                 const size_t index = static_cast<size_t>(v) * depth.width + u;
                 depth.meters[index] = static_cast<float>(*hit / rayLengthPerDepth);
                 if (options.noise) cosIncidence[index] = std::abs(normal(origin + *hit * direction).dot(direction));
+                if (color) {
+                    // Its own random stream (seed mixed with a constant), so colour noise leaves depth noise as it was.
+                    PixelRandom random(options.seed ^ 0xC0102u, index);
+                    const Rgb c = shade(this->color(origin + *hit * direction), options.exposure, options.colorNoise,
+                                        options.colorNoise > 0 ? &random : nullptr);
+                    std::copy(c.begin(), c.end(), color->rgb.begin() + static_cast<std::ptrdiff_t>(index * 3));
+                }
             }
         }
     };
@@ -692,7 +753,10 @@ std::vector<SurfaceSample> sampleSurface(const SyntheticScene& scene, double spa
             bool visible = true;
             for (size_t j = 0; j < objects.size() && visible; ++j)
                 if (j != i && objects[j].sdf(sample.position) <= kContactTolerance) visible = false;
-            if (visible) kept.push_back(sample);
+            if (visible) {
+                kept.push_back(sample);
+                kept.back().color = objects[i].texture.at(objects[i].objectToWorld.inverse() * sample.position);
+            }
         }
     }
     return kept;

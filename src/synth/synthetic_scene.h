@@ -16,6 +16,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
@@ -41,6 +42,24 @@ enum class ObjectKind {
 // "room_interior", "half_space", "sphere", "torus", "rounded_box", "cylinder" (as written to scene.json).
 std::string_view kindName(ObjectKind kind);
 
+using Rgb = std::array<uint8_t, 3>;
+
+// A solid texture: the colour of a surface point is a function of its position in the object's local frame,
+// so it is exact at every point (a rendered pixel, a ground-truth sample) and needs no uv mapping.
+//   Uniform  colour `a` everywhere;
+//   Stripes  bands `period` metres wide across local axis `axis`, alternately a and b;
+//   Checker  cubes of side `period` (a 3D checkerboard: squares on planes, patches on curved surfaces).
+// `offset` shifts the pattern along every axis (metres), so that no flat face lies on a band boundary.
+struct Texture {
+    enum class Pattern { Uniform, Stripes, Checker };
+    Pattern pattern = Pattern::Uniform;
+    double period = 0.1;
+    int axis = 2;
+    double offset = 0;
+    Rgb a{180, 180, 180}, b{180, 180, 180};
+    Rgb at(const Eigen::Vector3d& localPoint) const;
+};
+
 // One primitive of a scene. Only the parameters its kind uses (see ObjectKind) are meaningful; the others
 // stay 0.
 struct Object {
@@ -52,6 +71,7 @@ struct Object {
     double tubeRadius = 0;
     double edgeRadius = 0;
     double halfHeight = 0;
+    Texture texture;  // its surface colour (uniform grey unless set)
 
     Eigen::Vector3d center() const { return objectToWorld.translation(); }
     // Signed distance from a world point to this primitive alone (exact for every kind).
@@ -65,6 +85,11 @@ struct RenderOptions {
     float maxRange = 8;    // metres of camera-frame depth; pixels whose surface is farther (or absent) get 0
     bool noise = false;    // Kinect-like axial noise and dropout (see renderDepth)
     uint32_t seed = 1;     // the noise is a pure function of (seed, pixel), whatever the thread count
+    // Colour only (renderDepth with a ColorImage): the camera's gain (1 = the texture's own colours) and
+    // Gaussian per-pixel, per-channel noise of this sigma (0-255 units), drawn from (seed, pixel) apart from
+    // the depth noise. The result is rounded and clamped to 0..255.
+    double exposure = 1;
+    double colorNoise = 0;
 };
 
 class SyntheticScene {
@@ -82,7 +107,10 @@ public:
     //   "ramp"        a 3 cm board slanted 30 degrees, its lower edge sunk into the floor;
     //   "thin_plate"  an upright 2.5 cm thick panel standing on the floor;
     //   "pole"        a 3 cm diameter, 1.5 m tall vertical cylinder standing on the floor.
-    // No two objects touch, apart from the standing ones with the floor.
+    // No two objects touch, apart from the standing ones with the floor. Every object has its own colours
+    // and pattern, from finer than a 2 cm voxel to coarse: room 25 cm beige/brown checker, sphere 8 mm
+    // red/white stripes, torus 4 cm green/yellow checker, rounded_box 15 mm blue/white stripes, ramp 10 cm
+    // orange/black checker, thin_plate 12 cm purple/grey stripes, pole uniform cyan.
     static SyntheticScene defaultRoom();
     // A single sphere in empty space (everything outside it is free space).
     static SyntheticScene singleSphere(const Eigen::Vector3d& center, double radius);
@@ -96,6 +124,8 @@ public:
     // Unit outward (towards free space) normal by central differences of sdf(); zero where the gradient
     // vanishes (e.g. a sphere's centre).
     Eigen::Vector3d normal(const Eigen::Vector3d& p) const;
+    // The colour at surface point p: the texture of the object nearest to p (smallest sdf).
+    Rgb color(const Eigen::Vector3d& p) const;
 
     const std::vector<Object>& objects() const { return objects_; }
     // The object called `name`; throws Error naming it (and the names there are) when there is none.
@@ -110,8 +140,12 @@ public:
     //     discontinuity (a 4-neighbour empty or more than 4 % nearer/farther).
     // Quantisation to the sensor's 1/5000 m step is left to the writer. Throws Error for bad intrinsics or
     // a non-finite pose.
+    // With `color`, also the colour image on the same grid: color(hit point) of the ray's exact hit (before
+    // depth noise; a pixel whose depth the noise drops keeps its colour, as a real camera's would), scaled
+    // by options.exposure plus options.colorNoise; black where the ray hits nothing. The depth is the same
+    // with or without it.
     DepthImage renderDepth(const Intrinsics& intrinsics, const Pose& cameraToWorld,
-                           const RenderOptions& options = {}) const;
+                           const RenderOptions& options = {}, ColorImage* color = nullptr) const;
 
 private:
     std::vector<Object> objects_;
@@ -146,6 +180,7 @@ uint32_t frameSeed(uint32_t seed, size_t frame);
 struct SurfaceSample {
     Eigen::Vector3d position;
     Eigen::Vector3d normal;
+    Rgb color{0, 0, 0};  // the scene's colour there (SyntheticScene::color)
 };
 
 // Samples every object's surface uniformly by area, about `spacing` metres apart, keeping only points not

@@ -38,9 +38,9 @@ std::string formatTimestamp(size_t frame) {
     return text;
 }
 
-std::string frameFileName(size_t frame) {
-    char text[32];
-    std::snprintf(text, sizeof text, "depth/%06zu.png", frame);
+std::string frameFileName(size_t frame, const char* folder = "depth") {
+    char text[48];
+    std::snprintf(text, sizeof text, "%s/%06zu.png", folder, frame);
     return text;
 }
 
@@ -66,12 +66,14 @@ void writeGroundTruthPly(const std::filesystem::path& path, const std::vector<Su
         << "comment vkmesh synthetic ground truth: true surface sampled uniformly by area, spacing " << spacing
         << " m\nelement vertex " << samples.size()
         << "\nproperty float x\nproperty float y\nproperty float z\n"
-           "property float nx\nproperty float ny\nproperty float nz\nend_header\n";
+           "property float nx\nproperty float ny\nproperty float nz\n"
+           "property uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n";
     std::string bytes;
-    bytes.reserve(samples.size() * 24);
+    bytes.reserve(samples.size() * 27);
     for (const SurfaceSample& sample : samples) {
         for (int i = 0; i < 3; ++i) appendLittleEndianFloat(bytes, sample.position[i]);
         for (int i = 0; i < 3; ++i) appendLittleEndianFloat(bytes, sample.normal[i]);
+        for (int i = 0; i < 3; ++i) bytes.push_back(static_cast<char>(sample.color[i]));
     }
     out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
     finishWriting(out, path);
@@ -89,6 +91,12 @@ nlohmann::json sceneJson(const SyntheticScene& scene) {
         nlohmann::json rotation = nlohmann::json::array();
         for (int row = 0; row < 3; ++row) rotation.push_back(vectorJson(object.objectToWorld.linear().row(row).transpose()));
         entry["rotation"] = rotation;  // object-to-world, row-major; local axes are its columns
+        const Texture& t = object.texture;
+        const char* pattern = t.pattern == Texture::Pattern::Stripes   ? "stripes"
+                              : t.pattern == Texture::Pattern::Checker ? "checker"
+                                                                       : "uniform";
+        entry["texture"] = {{"pattern", pattern}, {"period", t.period}, {"axis", t.axis}, {"offset", t.offset},
+                            {"a", t.a}, {"b", t.b}};  // solid texture in the local frame (synthetic_scene.h)
         switch (object.kind) {
             case ObjectKind::RoomInterior: entry["half_extents"] = vectorJson(object.halfExtents); break;
             case ObjectKind::HalfSpace:
@@ -124,16 +132,20 @@ const char* kReadmeText =
     "Synthetic depth sequence written by vkmesh (src/synth/tum_sequence.cpp).\n"
     "\n"
     "An analytic scene (see scene.json) rendered by sphere tracing its signed distance function, so the\n"
-    "camera poses and the surface are known exactly. The layout is TUM RGB-D's, depth only:\n"
+    "camera poses, the surface and its colours are known exactly. The layout is TUM RGB-D's:\n"
     "\n"
     "  depth/NNNNNN.png  16-bit depth, metres x 5000, 0 = no measurement. Camera-frame z, not ray length.\n"
     "  depth.txt         timestamp and depth file per frame (timestamps 1.0 s, then every 0.033 s).\n"
+    "  rgb/NNNNNN.png    8-bit colour on the depth image's grid (same camera, same instant): the objects'\n"
+    "                    solid textures (stripes, checkers), with exposure drift and noise if asked for.\n"
+    "  rgb.txt           timestamp and colour file per frame (the depth timestamps).\n"
     "  groundtruth.txt   timestamp tx ty tz qx qy qz qw: camera-to-world pose (exact), one per frame.\n"
     "  camera.json       pinhole intrinsics fx fy cx cy (pixel centres at integer coordinates), depth_scale,\n"
     "                    image size. Camera looks along +z, x right, y down.\n"
     "  gt_points.ply     ground-truth surface: points sampled uniformly by area on every object's surface\n"
     "                    with outward normals, leaving out what is hidden inside or in contact with another\n"
-    "                    object. Points, not a mesh; binary little-endian float x y z nx ny nz.\n"
+    "                    object. Points, not a mesh; binary little-endian float x y z nx ny nz,\n"
+    "                    uchar red green blue (the exact texture colour, at the exposure of frame 0).\n"
     "  scene.json        the primitives (name, kind, centre, rotation, sizes) the scene is made of.\n"
     "\n";
 
@@ -157,20 +169,31 @@ void writeTumSequence(const std::filesystem::path& dir, const SyntheticScene& sc
     }
     if (!std::isfinite(options.gtPointSpacing) || options.gtPointSpacing <= 0)
         throw Error(where + "gtPointSpacing = " + std::to_string(options.gtPointSpacing) + " must be positive");
+    if (!std::isfinite(options.colorNoise) || options.colorNoise < 0)
+        throw Error(where + "colour noise " + std::to_string(options.colorNoise) + " must be >= 0");
+    if (!std::isfinite(options.exposureDrift) || options.exposureDrift < 0 || options.exposureDrift >= 1)
+        throw Error(where + "exposure drift " + std::to_string(options.exposureDrift) + " must be in [0, 1)");
 
     std::error_code error;
-    std::filesystem::create_directories(dir / "depth", error);
-    if (error || !std::filesystem::is_directory(dir / "depth"))
-        throw Error("cannot create folder '" + (dir / "depth").string() + "': " +
-                    (error ? error.message() : std::string("not a directory")));
+    for (const char* sub : {"depth", "rgb"}) {
+        std::filesystem::create_directories(dir / sub, error);
+        if (error || !std::filesystem::is_directory(dir / sub))
+            throw Error("cannot create folder '" + (dir / sub).string() + "': " +
+                        (error ? error.message() : std::string("not a directory")));
+    }
 
     const std::vector<Pose> poses = cameraPath(options.frames, options.path);
     RenderOptions renderOptions;
     renderOptions.maxRange = options.maxRange;
     renderOptions.noise = options.noise;
+    renderOptions.colorNoise = options.colorNoise;
     for (size_t frame = 0; frame < poses.size(); ++frame) {
         renderOptions.seed = frameSeed(options.seed, frame);
-        writeDepthPng(dir / frameFileName(frame), scene.renderDepth(options.intrinsics, poses[frame], renderOptions));
+        renderOptions.exposure =
+            1 + options.exposureDrift * std::sin(2 * 3.14159265358979323846 * double(frame) / double(poses.size()));
+        ColorImage color;
+        writeDepthPng(dir / frameFileName(frame), scene.renderDepth(options.intrinsics, poses[frame], renderOptions, &color));
+        io::writeColorPng(dir / frameFileName(frame, "rgb"), color);
     }
 
     // The index files come last: a folder with a depth.txt is complete.
@@ -218,7 +241,16 @@ void writeTumSequence(const std::filesystem::path& dir, const SyntheticScene& sc
         out << kReadmeText << "Frames: " << options.frames << ", " << options.width << "x" << options.height
             << ", noise: " << (options.noise ? "Kinect-like (seed " + std::to_string(options.seed) + ")" : "none")
             << ", path: " << (options.path == PathKind::Revisit ? "revisit (the loop driven 3 times)" : "orbit")
+            << ", colour noise sigma: " << options.colorNoise << ", exposure drift: " << options.exposureDrift
             << ".\n";
+        finishWriting(out, path);
+    }
+    {
+        const std::filesystem::path path = dir / "rgb.txt";
+        std::ofstream out = openForWriting(path);
+        out << "# color images, vkmesh synthetic scene\n# timestamp filename\n";
+        for (size_t frame = 0; frame < poses.size(); ++frame)
+            out << formatTimestamp(frame) << " " << frameFileName(frame, "rgb") << "\n";
         finishWriting(out, path);
     }
     {

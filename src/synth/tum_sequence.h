@@ -23,6 +23,10 @@ struct SequenceOptions {
     PathKind path = PathKind::Orbit;
     float maxRange = 8;
     double gtPointSpacing = 0.005;  // metres between ground-truth surface samples in gt_points.ply
+    double colorNoise = 0;     // sigma of per-pixel colour noise, 0-255 units (RenderOptions::colorNoise)
+    // Exposure change over the sequence: frame i's gain is 1 + exposureDrift * sin(2 pi i / frames), so the
+    // loop ends where it began; 0 = none. In [0, 1).
+    double exposureDrift = 0;
 };
 
 // Writes a TUM-layout sequence of `scene` seen along cameraPath(options.frames, options.path) into `dir`
@@ -30,11 +34,15 @@ struct SequenceOptions {
 // circle the world z axis at ~1.5 m height, looking down at a point ~0.55 m above the origin). Files:
 //   depth/NNNNNN.png   uint16, metres x 5000 rounded, 0 = no measurement;
 //   depth.txt          "timestamp depth/NNNNNN.png", timestamps 1.0, 1.033, ...;
+//   rgb/NNNNNN.png     8-bit RGB on the depth grid (the same camera): the scene's textures, with the
+//                      exposure drift and colour noise of the options;
+//   rgb.txt            "timestamp rgb/NNNNNN.png", the depth frames' timestamps;
 //   groundtruth.txt    "timestamp tx ty tz qx qy qz qw", camera-to-world, the same timestamps;
 //   camera.json        {"fx","fy","cx","cy","depth_scale":5000,"width","height"};
-//   gt_points.ply      binary little-endian point cloud (float x y z nx ny nz) sampled uniformly by area
-//                      on the visible-from-free-space surface of every object;
-//   scene.json         the objects and their parameters;  README.txt  what all this is.
+//   gt_points.ply      binary little-endian point cloud (float x y z nx ny nz, uchar red green blue: the
+//                      exact texture colour at gain 1) sampled uniformly by area on the visible-from-free-space
+//                      surface of every object;
+//   scene.json         the objects, their parameters and textures;  README.txt  what all this is.
 // Throws Error naming the folder, file or value at fault (frames = 0, bad intrinsics, unwritable folder).
 void writeTumSequence(const std::filesystem::path& dir, const SyntheticScene& scene,
                       const SequenceOptions& options = {});

@@ -9,6 +9,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cstdlib>
 #include <optional>
 #include <cmath>
@@ -862,4 +863,236 @@ TEST(CameraPresets, AFullyCalibratedFolderNeedsNoPreset) {
     // Without depth_scale the preset is needed again, and missing.
     writeText(f.dir / "camera.json", R"({"fx": 500, "fy": 501, "cx": 4, "cy": 3})");
     EXPECT_NE(errorMessageOf([&] { Dataset::open(f.dir); }).find("cameras/tum_fr3/camera.json"), std::string::npos);
+}
+
+// ------------------------------------------------------------------------------------------ colour
+
+namespace {
+
+// A colour image whose pixel (x, y) is rgb(x, y), written as OpenCV writes it (BGR in memory); .png or .jpg.
+void writeColor(const fs::path& file, const std::function<std::array<uint8_t, 3>(int, int)>& rgb, int w = W, int h = H) {
+    fs::create_directories(file.parent_path());
+    cv::Mat m(h, w, CV_8UC3);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const auto c = rgb(x, y);
+            m.at<cv::Vec3b>(y, x) = cv::Vec3b(c[2], c[1], c[0]);
+        }
+    ASSERT_TRUE(cv::imwrite(file.string(), m)) << file;
+}
+
+// Distinct in every channel, and per frame: red follows x, green y, blue the frame.
+std::array<uint8_t, 3> colorRamp(int frame, int x, int y) {
+    return {uint8_t(10 * x + 1), uint8_t(20 * y + 2), uint8_t(200 + frame)};
+}
+
+void expectColorRamp(const ColorImage& c, int frame) {
+    ASSERT_EQ(c.width, W);
+    ASSERT_EQ(c.height, H);
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            const auto e = colorRamp(frame, x, y);
+            ASSERT_EQ(c.at(x, y)[0], e[0]) << x << "," << y;
+            ASSERT_EQ(c.at(x, y)[1], e[1]) << x << "," << y;
+            ASSERT_EQ(c.at(x, y)[2], e[2]) << x << "," << y;
+        }
+}
+
+size_t countContaining(const std::vector<std::string>& lines, const std::string& needle) {
+    return size_t(std::count_if(lines.begin(), lines.end(), [&](const std::string& l) { return l.find(needle) != std::string::npos; }));
+}
+
+}  // namespace
+
+TEST(DatasetColor, TumTakesTheNearestRgbWithin20ms) {
+    TumFixture f = makeTum();
+    // Colour 10 ms after each depth frame, except frame 5's, 30 ms after: too far. Listed unsorted.
+    std::string rgbTxt = "# color images\n";
+    for (size_t i = f.depthTimes.size(); i-- > 0;) {
+        std::ostringstream name;
+        name << std::fixed << std::setprecision(6) << f.depthTimes[i] + (i == 5 ? 0.030 : 0.010);
+        rgbTxt += name.str() + " rgb/" + name.str() + ".png\n";
+        writeColor(f.dir / "rgb" / (name.str() + ".png"), [&](int x, int y) { return colorRamp(int(i), x, y); });
+    }
+    writeText(f.dir / "rgb.txt", rgbTxt);
+    auto ds = Dataset::open(f.dir);
+    ASSERT_EQ(ds->size(), 5u);  // frame 3 has no pose
+    EXPECT_TRUE(ds->hasColor());
+    EXPECT_FALSE(anyContains(ds->warnings(), "no colour images")) << joinLines(ds->warnings());
+    const int listed[5] = {0, 1, 2, 4, 5};
+    for (size_t i = 0; i < 4; ++i) {
+        SCOPED_TRACE(i);
+        EXPECT_NE(ds->frame(i).colorPath.string().find("rgb/"), std::string::npos);
+        std::string warning;
+        expectColorRamp(ds->loadColor(i, &warning), listed[i]);
+        EXPECT_TRUE(warning.empty()) << warning;
+    }
+    EXPECT_TRUE(ds->frame(4).colorPath.empty());
+    EXPECT_TRUE(anyContains(ds->warnings(), "no colour image within 20 ms of depth frame 100.504")) << joinLines(ds->warnings());
+    EXPECT_TRUE(anyContains(ds->warnings(), "30.0 ms")) << joinLines(ds->warnings());
+    std::string warning;
+    EXPECT_TRUE(ds->loadColor(4, &warning).empty());
+    EXPECT_NE(warning.find("100.504000.png"), std::string::npos) << warning;
+    EXPECT_THROW(ds->loadColor(5), Error);
+}
+
+TEST(DatasetColor, NoColourAtAllIsDepthOnlySaidOnce) {
+    TumFixture f = makeTum();
+    auto ds = Dataset::open(f.dir);
+    EXPECT_FALSE(ds->hasColor());
+    EXPECT_EQ(countContaining(ds->warnings(), "no colour images: depth only"), 1u) << joinLines(ds->warnings());
+    std::string warning = "untouched";
+    EXPECT_TRUE(ds->loadColor(0, &warning).empty());
+    EXPECT_EQ(warning, "untouched");  // nothing to say per frame: open() said it once
+    EXPECT_TRUE(ds->frame(0).colorPath.empty());
+}
+
+TEST(DatasetColor, IclRedwoodAndSevenScenesFindTheirColour) {
+    {  // ICL-NUIM: rgb.txt with the same frame indices; frame 2's colour is listed but missing.
+        auto dir = makeIcl("ICL_living_room", {0, 1, 2}, {0, 1, 2});
+        writeText(dir / "rgb.txt", "0 rgb/0.png\n1 rgb/1.png\n2 rgb/2.png\n");
+        for (int i : {0, 1}) writeColor(dir / "rgb" / (std::to_string(i) + ".png"), [&](int x, int y) { return colorRamp(i, x, y); });
+        auto ds = Dataset::open(dir);
+        EXPECT_TRUE(ds->hasColor());
+        expectColorRamp(ds->loadColor(1), 1);
+        EXPECT_TRUE(ds->frame(2).colorPath.empty());
+        EXPECT_TRUE(anyContains(ds->warnings(), "2.png (frame 2) does not exist")) << joinLines(ds->warnings());
+    }
+    {  // Redwood: color/ beside depth/, paired by name order (frame 1 has no pose: colour 2 goes with depth 2).
+        auto dir = makeRedwood({0, 2, 3, 4});
+        for (int i = 0; i < 5; ++i) {
+            char name[32];
+            std::snprintf(name, sizeof name, "%06d.png", i);
+            writeColor(dir / "color" / name, [&](int x, int y) { return colorRamp(i, x, y); });
+        }
+        auto ds = Dataset::open(dir);
+        ASSERT_EQ(ds->size(), 4u);
+        EXPECT_TRUE(ds->hasColor());
+        expectColorRamp(ds->loadColor(1), 2);
+        expectColorRamp(ds->loadColor(3), 4);
+    }
+    {  // 7-Scenes: frame-NNNNNN.color.png beside the depth; frame 1 has none.
+        const std::string identity = "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n";
+        auto dir = makeSevenScenes(test::makeTempDir("seven_color") / "seq-01", 3, [&](int) { return identity; });
+        for (int i : {0, 2}) {
+            char name[40];
+            std::snprintf(name, sizeof name, "frame-%06d.color.png", i);
+            writeColor(dir / name, [&](int x, int y) { return colorRamp(i, x, y); });
+        }
+        auto ds = Dataset::open(dir);
+        EXPECT_TRUE(ds->hasColor());
+        expectColorRamp(ds->loadColor(2), 2);
+        EXPECT_TRUE(anyContains(ds->warnings(), "1 of 3 frames have no frame-NNNNNN.color.png")) << joinLines(ds->warnings());
+        std::string warning;
+        EXPECT_TRUE(ds->loadColor(1, &warning).empty());
+        EXPECT_NE(warning.find("frame-000001.depth.png"), std::string::npos) << warning;
+    }
+}
+
+TEST(DatasetColor, JpegGrayscaleAndBadImagesPerFrame) {
+    TumFixture f = makeTum();
+    std::string rgbTxt;
+    for (size_t i = 0; i < f.depthTimes.size(); ++i) {
+        std::ostringstream t;
+        t << std::fixed << std::setprecision(6) << f.depthTimes[i];
+        rgbTxt += t.str() + " rgb/" + std::to_string(i) + (i == 0 ? ".jpg" : ".png") + "\n";
+    }
+    writeText(f.dir / "rgb.txt", rgbTxt);
+    // 0: a JPEG (lossy: a flat colour survives within a few levels).
+    writeColor(f.dir / "rgb" / "0.jpg", [](int, int) { return std::array<uint8_t, 3>{200, 100, 30}; });
+    // 1: 8-bit grayscale becomes grey RGB.
+    test::writePng(f.dir / "rgb" / "1.png", W, H, CV_8UC1, 77);
+    // 2: the wrong size; 4: a 16-bit image (a depth image by mistake); 5: not an image.
+    writeColor(f.dir / "rgb" / "2.png", [](int, int) { return std::array<uint8_t, 3>{1, 2, 3}; }, W * 2, H * 2);
+    test::writePng(f.dir / "rgb" / "4.png", W, H, CV_16UC1, 1000);
+    test::writeBytes(f.dir / "rgb" / "5.png", "not an image at all");
+    auto ds = Dataset::open(f.dir);
+    ASSERT_EQ(ds->size(), 5u);
+    EXPECT_TRUE(ds->hasColor());
+
+    std::string warning;
+    ColorImage c = ds->loadColor(0, &warning);
+    ASSERT_FALSE(c.empty()) << warning;
+    EXPECT_NEAR(c.at(3, 3)[0], 200, 4);
+    EXPECT_NEAR(c.at(3, 3)[1], 100, 4);
+    EXPECT_NEAR(c.at(3, 3)[2], 30, 4);
+    c = ds->loadColor(1, &warning);
+    ASSERT_FALSE(c.empty()) << warning;
+    EXPECT_EQ(c.at(5, 2)[0], 77);
+    EXPECT_EQ(c.at(5, 2)[2], 77);
+
+    const struct {
+        size_t frame;
+        std::vector<std::string> needles;
+    } bad[] = {{2, {"2.png", "16x12", "8x6"}}, {3, {"4.png", "16-bit", "depth image?"}}, {4, {"5.png", "neither a PNG nor a JPEG"}}};
+    for (const auto& b : bad) {
+        warning.clear();
+        EXPECT_TRUE(ds->loadColor(b.frame, &warning).empty());
+        for (const auto& n : b.needles) EXPECT_NE(warning.find(n), std::string::npos) << warning << " lacks " << n;
+        EXPECT_NE(warning.find("has no colour"), std::string::npos) << warning;
+    }
+}
+
+TEST(DatasetColor, ColourIntrinsicsResampleOntoTheDepthGrid) {
+    TumFixture f = makeTum("rgbd_dataset_freiburg1_color_camera");
+    // Depth camera fx = fy = 4, centre (3.5, 2.5) on 8x6; colour camera twice the resolution: depth pixel
+    // (u, v) lies at (2u + 0.5, 2v + 0.5) in the colour image, halfway between two colour pixels.
+    writeText(f.dir / "camera.json",
+              R"({"fx": 4, "fy": 4, "cx": 3.5, "cy": 2.5, "color_fx": 8, "color_fy": 8, "color_cx": 7.5, "color_cy": 5.5,
+                  "color_width": 16, "color_height": 12})");
+    std::string rgbTxt;
+    for (size_t i = 0; i < f.depthTimes.size(); ++i) {
+        std::ostringstream t;
+        t << std::fixed << std::setprecision(6) << f.depthTimes[i];
+        rgbTxt += t.str() + " rgb/" + std::to_string(i) + ".png\n";
+        writeColor(f.dir / "rgb" / (std::to_string(i) + ".png"),
+                   [](int x, int y) { return std::array<uint8_t, 3>{uint8_t(10 * x), uint8_t(10 * y), 77}; }, 16, 12);
+    }
+    writeText(f.dir / "rgb.txt", rgbTxt);
+    auto ds = Dataset::open(f.dir);
+    std::string warning;
+    const ColorImage c = ds->loadColor(0, &warning);
+    ASSERT_EQ(c.width, W) << warning;
+    ASSERT_EQ(c.height, H);
+    for (int v = 0; v < H; ++v)
+        for (int u = 0; u < W; ++u) {
+            // Bilinear between 10 * 2u and 10 * (2u + 1).
+            EXPECT_NEAR(c.at(u, v)[0], 20 * u + 5, 1) << u << "," << v;
+            EXPECT_NEAR(c.at(u, v)[1], 20 * v + 5, 1) << u << "," << v;
+            EXPECT_EQ(c.at(u, v)[2], 77);
+        }
+    // Without color_width/height the size comes from the first colour image; a colour image of another
+    // size than the calibration's is a per-frame warning.
+    writeText(f.dir / "camera.json", R"({"fx": 4, "fy": 4, "cx": 3.5, "cy": 2.5, "color_fx": 8, "color_fy": 8, "color_cx": 7.5, "color_cy": 5.5})");
+    writeColor(f.dir / "rgb" / "1.png", [](int, int) { return std::array<uint8_t, 3>{1, 2, 3}; }, 8, 6);
+    ds = Dataset::open(f.dir);
+    EXPECT_FALSE(ds->loadColor(0).empty());
+    EXPECT_TRUE(ds->loadColor(1, &warning).empty());
+    EXPECT_NE(warning.find("colour calibration (camera.json) is for 16x12"), std::string::npos) << warning;
+    // Half a colour calibration is an error naming the file.
+    writeText(f.dir / "camera.json", R"({"fx": 4, "fy": 4, "cx": 3.5, "cy": 2.5, "color_fx": 8})");
+    const std::string message = errorMessageOf([&] { Dataset::open(f.dir); });
+    EXPECT_NE(message.find("camera.json"), std::string::npos) << message;
+    EXPECT_NE(message.find("color_fx, color_fy, color_cx, color_cy"), std::string::npos) << message;
+}
+
+TEST(DatasetReal, ColourOfTheSharedSequences) {
+    for (const char* name : {"tum_fr1_rpy", "iclnuim_office_traj0"}) {
+        auto dir = realDataset(name);
+        if (!dir) GTEST_SKIP() << "shared datasets not found at ../shared/datasets (or $VKMESH_DATASETS)";
+        if (!fs::exists(*dir / "rgb.txt")) GTEST_SKIP() << *dir << " has no rgb.txt";
+        SCOPED_TRACE(name);
+        auto ds = Dataset::open(*dir);
+        EXPECT_TRUE(ds->hasColor());
+        EXPECT_FALSE(anyContains(ds->warnings(), "colour")) << joinLines(ds->warnings());
+        for (size_t i : {size_t(0), ds->size() - 1}) {
+            std::string warning;
+            const ColorImage c = ds->loadColor(i, &warning);
+            ASSERT_FALSE(c.empty()) << warning;
+            EXPECT_EQ(c.width, 640);
+            EXPECT_EQ(c.height, 480);
+            // A real picture: not one flat colour.
+            EXPECT_GT(*std::max_element(c.rgb.begin(), c.rgb.end()) - *std::min_element(c.rgb.begin(), c.rgb.end()), 100);
+        }
+    }
 }

@@ -423,3 +423,134 @@ TEST(EvalCli, BadInputNamesTheFile) {
     EXPECT_NE(r.err.find("abc"), std::string::npos) << r.err;
     fs::remove_all(dir);
 }
+
+// ------------------------------------------------------------------------------------------ colour
+
+TEST(ColorError, KnownPairsGiveKnownMaeAndPsnr) {
+    ColorErrorSum sum;
+    EXPECT_EQ(sum.result().pairs, 0u);
+    sum.add({10, 20, 30}, {0, 20, 40});
+    sum.add({0, 0, 0}, {0, 0, 0});
+    const ColorError e = sum.result();
+    EXPECT_EQ(e.pairs, 2u);
+    EXPECT_DOUBLE_EQ(e.mae[0], 5.0);
+    EXPECT_DOUBLE_EQ(e.mae[1], 0.0);
+    EXPECT_DOUBLE_EQ(e.mae[2], 5.0);
+    EXPECT_NEAR(e.maeMean, 10.0 / 3, 1e-12);
+    // MSE over all channels: (100 + 0 + 100 + 0 + 0 + 0) / 6.
+    EXPECT_NEAR(e.psnr, 10 * std::log10(255.0 * 255.0 / (200.0 / 6)), 1e-9);
+    ColorErrorSum same;
+    same.add({1, 2, 3}, {1, 2, 3});
+    EXPECT_TRUE(std::isinf(same.result().psnr));
+    // The worst case: 255 apart everywhere is 0 dB.
+    ColorErrorSum worst;
+    worst.add({255, 255, 255}, {0, 0, 0});
+    EXPECT_NEAR(worst.result().psnr, 0.0, 1e-12);
+    sum.merge(worst);
+    EXPECT_EQ(sum.result().pairs, 3u);
+    EXPECT_NEAR(sum.result().mae[1], 255.0 / 3, 1e-12);
+}
+
+TEST(ColorError, AgainstGtTakesTheNearestVertexOfEachSeenPoint) {
+    // Mesh vertices on a 1 cm lattice, red = 10 * column; GT points 2 mm off each vertex, red = 10 * column + 4.
+    Mesh mesh;
+    std::vector<Eigen::Vector3f> gt;
+    std::vector<std::array<uint8_t, 3>> gtColors;
+    for (int i = 0; i < 10; ++i)
+        for (int j = 0; j < 10; ++j) {
+            mesh.positions.emplace_back(0.01f * i, 0.01f * j, 0.0f);
+            mesh.colors.push_back({uint8_t(10 * i), 100, 50});
+            gt.emplace_back(0.01f * i + 0.002f, 0.01f * j, 0.0f);
+            gtColors.push_back({uint8_t(10 * i + 4), 100, 50});
+        }
+    // A GT point far from the mesh (a completeness matter) with a very different colour: left out.
+    gt.emplace_back(1.0f, 1.0f, 1.0f);
+    gtColors.push_back({255, 255, 255});
+    ColorError e = colorErrorAgainstGt(mesh, gt, gtColors, {}, 0.02);
+    EXPECT_EQ(e.pairs, 100u);
+    EXPECT_DOUBLE_EQ(e.mae[0], 4.0);
+    EXPECT_DOUBLE_EQ(e.mae[1], 0.0);
+    EXPECT_NEAR(e.psnr, 10 * std::log10(255.0 * 255.0 / (16.0 / 3)), 1e-9);
+    // A seen mask restricts the GT points: only the first column (10 points) is seen.
+    std::vector<bool> seen(gt.size(), false);
+    for (int j = 0; j < 10; ++j) seen[j] = true;
+    gtColors[0] = {0, 100, 60};  // one of them 10 off in blue, and 0 in red
+    e = colorErrorAgainstGt(mesh, gt, gtColors, seen, 0.02);
+    EXPECT_EQ(e.pairs, 10u);
+    EXPECT_DOUBLE_EQ(e.mae[0], 4.0 * 9 / 10);
+    EXPECT_DOUBLE_EQ(e.mae[2], 1.0);
+    // Missing or mismatched colours are errors.
+    Mesh grey = mesh;
+    grey.colors.clear();
+    EXPECT_THROW(colorErrorAgainstGt(grey, gt, gtColors, {}, 0.02), Error);
+    gtColors.pop_back();
+    EXPECT_THROW(colorErrorAgainstGt(mesh, gt, gtColors, {}, 0.02), Error);
+}
+
+TEST(ColorError, AgainstFramesComparesTheVerticesEachFrameSees) {
+    // The sphere sequence's GT cloud as the "mesh", coloured 10 too red where the frame sees it and black on
+    // the far side: the far side must not count (it is behind the visible surface).
+    const SphereSequence& s = sphereSequence();
+    const auto dataset = Dataset::open(s.dir);
+    ASSERT_TRUE(dataset->hasColor());
+    Mesh mesh = readPly(s.dir / "gt_points.ply");
+    ASSERT_EQ(mesh.colors.size(), mesh.positions.size());
+    const std::vector<bool> seen = seenMask(mesh.positions, *dataset, 1, 0.03);
+    for (size_t i = 0; i < mesh.positions.size(); ++i)
+        mesh.colors[i] = seen[i] ? std::array<uint8_t, 3>{190, 180, 180} : std::array<uint8_t, 3>{0, 0, 0};
+    std::vector<std::string> warnings;
+    size_t framesUsed = 0;
+    const ColorError e = colorErrorAgainstFrames(mesh, *dataset, 1, 0.03, &warnings, &framesUsed);
+    EXPECT_TRUE(warnings.empty());
+    EXPECT_EQ(framesUsed, 1u);
+    EXPECT_GT(e.pairs, 500u);  // the 80x60 image sees ~1000 of the sphere's points
+    EXPECT_NEAR(e.mae[0], 10.0, 0.5);  // the sphere is uniform grey 180
+    EXPECT_LT(e.mae[1], 0.5);
+    EXPECT_LT(e.mae[2], 0.5);
+    EXPECT_THROW(colorErrorAgainstFrames(mesh, *dataset, 0), Error);
+    mesh.colors.clear();
+    EXPECT_THROW(colorErrorAgainstFrames(mesh, *dataset, 1), Error);
+}
+
+TEST(EvalCli, ColourAgainstGtAndAgainstFrames) {
+    if (!cliHasEval()) GTEST_SKIP() << VKMESH_CLI << " has no `eval` command yet (host/commands.h must list it)";
+    const SphereSequence& s = sphereSequence();
+    const fs::path out = test::makeTempDir("eval_cli_color");
+    const std::string gt = (s.dir / "gt_points.ply").string();
+    Mesh mesh = readPly(gt);
+    for (auto& c : mesh.colors) c[1] = uint8_t(c[1] - 20);  // 20 less green everywhere
+    writePly(out / "mesh.ply", mesh);
+    const std::string meshPath = (out / "mesh.ply").string();
+    CliRun r = runCli("eval " + meshPath + " --gt " + gt + " --dataset " + s.dir.string() + " --color-every 1 --json " +
+                      (out / "out.json").string());
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_NE(r.out.find("colour vs GT"), std::string::npos) << r.out;
+    auto j = nlohmann::json::parse(readText(out / "out.json"));
+    EXPECT_EQ(j["color_vs_gt"]["pairs"], j["gt_points_seen"]);
+    EXPECT_DOUBLE_EQ(j["color_vs_gt"]["mae_green"].get<double>(), 20.0);
+    EXPECT_DOUBLE_EQ(j["color_vs_gt"]["mae_red"].get<double>(), 0.0);
+    EXPECT_NEAR(j["color_vs_gt"]["psnr"].get<double>(), 10 * std::log10(255.0 * 255.0 / (400.0 / 3)), 1e-9);
+    EXPECT_GT(j["color_vs_frames"]["pairs"].get<size_t>(), 500u);
+    EXPECT_NEAR(j["color_vs_frames"]["mae_green"].get<double>(), 20.0, 0.5);
+    EXPECT_EQ(j["color_vs_frames"]["frames_used"], 1);
+    EXPECT_TRUE(j.contains("accuracy_mean"));  // the geometry keys stay
+
+    // Real data without GT: colour only.
+    r = runCli("eval " + meshPath + " --dataset " + s.dir.string() + " --color-every 1 --json " + (out / "c.json").string());
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    j = nlohmann::json::parse(readText(out / "c.json"));
+    EXPECT_NEAR(j["color_vs_frames"]["mae_green"].get<double>(), 20.0, 0.5);
+    EXPECT_TRUE(j["color_vs_gt"].is_null());
+    // Neither --gt nor --color-every: an error that says what to give.
+    r = runCli("eval " + meshPath + " --dataset " + s.dir.string());
+    EXPECT_EQ(r.exitCode, 2);
+    EXPECT_NE(r.err.find("--gt"), std::string::npos) << r.err;
+    // A mesh without colours has no colour keys but still its geometry.
+    mesh.colors.clear();
+    writePly(out / "grey.ply", mesh);
+    r = runCli("eval " + (out / "grey.ply").string() + " --gt " + gt + " --json " + (out / "g.json").string());
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    j = nlohmann::json::parse(readText(out / "g.json"));
+    EXPECT_TRUE(j["color_vs_gt"].is_null());
+    fs::remove_all(out);
+}

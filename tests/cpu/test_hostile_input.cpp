@@ -410,3 +410,108 @@ TEST(HostileParsers, InMemoryParsersNameTheSource) {
     expectMentions(errorMessageOf([&] { io::parseCameraJson(deep, "deep.json"); }), {"deep.json", "not valid JSON"});
     expectMentions(errorMessageOf([] { io::decodeDepthPng("", "mem.png"); }), {"mem.png", "empty"});
 }
+
+// ------------------------------------------------------------------------------------------ colour images
+// Colour is optional: a bad colour image costs that frame its colour (a warning from loadColor), never the
+// reconstruction; a bad colour calibration in camera.json is still an error at open, like any calibration.
+
+namespace {
+
+// A minimal TUM sequence whose frame 1 has `bytes` as its colour image and frames 0 and 2 a valid one.
+fs::path tumWithColor(const std::string& name, const std::string& bytes, const std::string& ext = ".png") {
+    fs::path dir = makeMinimalTum(name);
+    writeBytes(dir / "rgb.txt", "1 rgb/0.png\n2 rgb/1" + ext + "\n3 rgb/2.png\n");
+    writePng(dir / "rgb" / "0.png", 8, 6, CV_8UC3, 90);
+    writePng(dir / "rgb" / "2.png", 8, 6, CV_8UC3, 90);
+    writeBytes(dir / "rgb" / ("1" + ext), bytes);
+    return dir;
+}
+
+std::string colorWarning(const Dataset& ds, size_t frame) {
+    std::string warning;
+    EXPECT_TRUE(ds.loadColor(frame, &warning).empty()) << "frame " << frame << " gave colour";
+    return warning;
+}
+
+}  // namespace
+
+TEST(HostileColor, EmptyGarbageAndTruncatedImagesAreWarnings) {
+    const std::string png = test::readText(fs::path(VKMESH_SOURCE_DIR) / "fuzz/corpus/fuzz_depth_png/gray8_4x3.png");
+    const struct {
+        const char* name;
+        std::string bytes;
+        const char* ext;
+        std::vector<std::string> needles;
+    } cases[] = {
+        {"empty", "", ".png", {"neither a PNG nor a JPEG", "empty"}},
+        {"text", "P3\n2 2\n255\n", ".png", {"neither a PNG nor a JPEG"}},
+        {"png_header_only", png.substr(0, 20), ".png", {"truncated or corrupt"}},
+        {"png_cut", png.substr(0, png.size() - 20), ".png", {"1.png"}},
+        {"jpeg_no_frame", std::string("\xFF\xD8\xFF\xD9", 4), ".jpg", {"JPEG", "no frame header"}},
+        // A JPEG whose frame header claims 65535 x 65535: refused before the decoder allocates.
+        {"jpeg_huge", std::string("\xFF\xD8\xFF\xC0\x00\x11\x08\xFF\xFF\xFF\xFF\x03\x01\x22\x00\x02\x11\x01\x03\x11\x01", 21), ".jpg",
+         {"65535x65535", "more than vkmesh accepts"}},
+        {"jpeg_bad_length", std::string("\xFF\xD8\xFF\xE0\x00\x00", 6), ".jpg", {"corrupt JPEG"}},
+    };
+    for (const auto& c : cases) {
+        SCOPED_TRACE(c.name);
+        const fs::path dir = tumWithColor(std::string("fr1_color_") + c.name, c.bytes, c.ext);
+        auto ds = Dataset::open(dir);  // never an error: the file exists
+        ASSERT_TRUE(ds->hasColor());
+        EXPECT_FALSE(ds->loadColor(0).empty());
+        const std::string w = colorWarning(*ds, 1);
+        expectMentions(w, {(dir / "rgb" / (std::string("1") + c.ext)).string(), "frame 1 has no colour"});
+        for (const auto& n : c.needles) expectMentions(w, {n});
+        EXPECT_FALSE(ds->loadColor(2).empty());
+    }
+    // The in-memory decoder names its source and throws only vkmesh::Error.
+    expectMentions(errorMessageOf([] { io::decodeColorImage("", "mem.jpg"); }), {"mem.jpg", "empty"});
+}
+
+TEST(HostileColor, WrongKindsOfImage) {
+    fs::path dir = tumWithColor("fr1_color_kinds", "");
+    writePng(dir / "rgb" / "1.png", 8, 6, CV_16UC3, 1000);  // 16-bit colour
+    auto ds = Dataset::open(dir);
+    expectMentions(colorWarning(*ds, 1), {"1.png", "16-bit", "expected 8 bits"});
+    writePng(dir / "rgb" / "1.png", 6, 8, CV_8UC3, 10);  // transposed size
+    expectMentions(colorWarning(*ds, 1), {"1.png", "6x8", "depth images are 8x6"});
+    writePng(dir / "rgb" / "1.png", 8, 6, CV_8UC4, 10);  // RGBA: alpha dropped, fine
+    std::string warning;
+    EXPECT_FALSE(ds->loadColor(1, &warning).empty()) << warning;
+    fs::remove(dir / "rgb" / "1.png");  // deleted after open: a warning, not a crash
+    expectMentions(colorWarning(*ds, 1), {"1.png", "cannot open"});
+    // Missing at open: that frame loses its colour with a warning, the rest keep theirs.
+    ds = Dataset::open(dir);
+    EXPECT_TRUE(ds->hasColor());
+    EXPECT_TRUE(anyWarning(*ds, "1.png (frame 1) does not exist"));
+    // A broken rgb.txt costs the colour, not the dataset.
+    writeBytes(dir / "rgb.txt", "1 rgb/0.png extra\n");
+    ds = Dataset::open(dir);
+    EXPECT_FALSE(ds->hasColor());
+    EXPECT_TRUE(anyWarning(*ds, "rgb.txt:1"));
+    EXPECT_TRUE(anyWarning(*ds, "colour ignored"));
+    EXPECT_TRUE(anyWarning(*ds, "no colour images: depth only"));
+}
+
+TEST(HostileColor, ColourCalibrationValues) {
+    fs::path dir = tumWithColor("fr1_color_json", "");
+    const std::string json = (dir / "camera.json").string();
+    const struct {
+        const char* text;
+        std::vector<std::string> needles;
+    } cases[] = {
+        {R"({"color_fx": 500, "color_fy": 500, "color_cx": 3})", {"all four of color_fx"}},
+        {R"({"color_fx": -5, "color_fy": 500, "color_cx": 3, "color_cy": 2})", {"\"color_fx\" = -5", "positive"}},
+        {R"({"color_fx": 5, "color_fy": 0, "color_cx": 3, "color_cy": 2})", {"\"color_fy\" = 0"}},
+        {R"({"color_fx": "five", "color_fy": 5, "color_cx": 3, "color_cy": 2})", {"\"color_fx\" is \"five\""}},
+        {R"({"color_fx": 5, "color_fy": 5, "color_cx": 3, "color_cy": 2, "color_width": 1e30})", {"\"color_width\""}},
+        {R"({"color_width": 640, "color_height": 480})", {"color_width/color_height given without"}},
+    };
+    for (const auto& c : cases) {
+        SCOPED_TRACE(c.text);
+        writeBytes(dir / "camera.json", c.text);
+        const std::string m = errorMessageOf([&] { Dataset::open(dir); });
+        expectMentions(m, {json});
+        for (const auto& n : c.needles) expectMentions(m, {n});
+    }
+}

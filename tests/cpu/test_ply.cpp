@@ -39,7 +39,9 @@ void expectSame(const Mesh& a, const Mesh& b) {
     ASSERT_EQ(a.positions.size(), b.positions.size());
     ASSERT_EQ(a.normals.size(), b.normals.size());
     ASSERT_EQ(a.vertexAge.size(), b.vertexAge.size());
+    ASSERT_EQ(a.colors.size(), b.colors.size());
     ASSERT_EQ(a.triangles.size(), b.triangles.size());
+    for (size_t i = 0; i < a.colors.size(); ++i) EXPECT_EQ(a.colors[i], b.colors[i]) << i;
     for (size_t i = 0; i < a.positions.size(); ++i) EXPECT_EQ(a.positions[i], b.positions[i]) << i;
     for (size_t i = 0; i < a.normals.size(); ++i) EXPECT_EQ(a.normals[i], b.normals[i]) << i;
     for (size_t i = 0; i < a.vertexAge.size(); ++i) EXPECT_EQ(a.vertexAge[i], b.vertexAge[i]) << i;
@@ -152,6 +154,9 @@ TEST_F(PlyTest, AsciiPointCloudWithDoublesNormalsAndUnknownProperties) {
     EXPECT_EQ(m.positions[2], Eigen::Vector3f(0.125f, 0.25f, 0.5f));
     EXPECT_EQ(m.normals[0], Eigen::Vector3f(0, 0, 1));
     EXPECT_EQ(m.normals[2], Eigen::Vector3f(0, 1, 0));
+    ASSERT_EQ(m.colors.size(), 3u);
+    EXPECT_EQ(m.colors[0], (std::array<uint8_t, 3>{255, 0, 12}));
+    EXPECT_EQ(m.colors[1], (std::array<uint8_t, 3>{1, 2, 3}));
 }
 
 TEST_F(PlyTest, AsciiMeshWithPolygonsIsFanTriangulated) {
@@ -270,4 +275,66 @@ TEST_F(PlyTest, ObjHasOneBasedFacesAndNormals) {
     m.normals.clear();
     writeObj(dir / "m.obj", m);
     EXPECT_NE(slurp(dir / "m.obj").find("\nf 1 2 3\n"), std::string::npos);
+}
+
+TEST_F(PlyTest, ColorsRoundTripAsUcharRedGreenBlue) {
+    Mesh m = makeMesh(300, 500, true, true, 11);
+    for (size_t i = 0; i < m.positions.size(); ++i)
+        m.colors.push_back({uint8_t(i), uint8_t(255 - i % 256), uint8_t(i * 7)});
+    const fs::path p = dir / "c.ply";
+    writePly(p, m);
+    const std::string bytes = slurp(p);
+    const size_t header = bytes.find("end_header\n") + std::strlen("end_header\n");
+    // The order Open3D writes too: position, normal, colour (then vkmesh's age).
+    EXPECT_NE(bytes.find("property float nz\nproperty uchar red\nproperty uchar green\nproperty uchar blue\n"
+                         "property uint age\n"),
+              std::string::npos);
+    EXPECT_EQ(bytes.size() - header, 300 * (12 + 12 + 3 + 4) + 500 * 13u);
+    expectSame(m, readPly(p));
+    // Without colours nothing is declared.
+    writePly(p, makeMesh(3, 1, false, false));
+    EXPECT_EQ(slurp(p).find("red"), std::string::npos);
+}
+
+TEST_F(PlyTest, Open3DStyleFloatAndDiffuseColorsAreRead) {
+    // Open3D writes point clouds with double x y z and uchar colours; PCL and some tools write float
+    // colours in 0..1; older scanners write diffuse_red. Out-of-range floats clamp.
+    const fs::path p = dir / "o3d.ply";
+    spit(p,
+         "ply\nformat ascii 1.0\ncomment Created by Open3D\nelement vertex 3\n"
+         "property double x\nproperty double y\nproperty double z\n"
+         "property float red\nproperty float green\nproperty float blue\nend_header\n"
+         "0 0 0 1 0.5 0\n1 0 0 0.2 2.0 -1\n0 1 0 0 0 0.00196\n");
+    Mesh m = readPly(p);
+    ASSERT_EQ(m.colors.size(), 3u);
+    EXPECT_EQ(m.colors[0], (std::array<uint8_t, 3>{255, 128, 0}));
+    EXPECT_EQ(m.colors[1], (std::array<uint8_t, 3>{51, 255, 0}));
+    EXPECT_EQ(m.colors[2], (std::array<uint8_t, 3>{0, 0, 0}));
+    spit(p,
+         "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n"
+         "property uchar diffuse_red\nproperty uchar diffuse_green\nproperty uchar diffuse_blue\nend_header\n"
+         "0 0 0 10 20 30\n");
+    m = readPly(p);
+    ASSERT_EQ(m.colors.size(), 1u);
+    EXPECT_EQ(m.colors[0], (std::array<uint8_t, 3>{10, 20, 30}));
+    // Only red and green: no colours rather than a guessed blue.
+    spit(p,
+         "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n"
+         "property uchar red\nproperty uchar green\nend_header\n0 0 0 10 20\n");
+    EXPECT_TRUE(readPly(p).colors.empty());
+    Mesh bad = makeMesh(3, 1, false, false);
+    bad.colors.resize(2);
+    expectError([&] { writePly(dir / "bad.ply", bad); }, {(dir / "bad.ply").string(), "colours"});
+}
+
+TEST_F(PlyTest, ObjWritesVertexColorsAsFloats) {
+    Mesh m;
+    m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1.5f, 0}};
+    m.colors = {{255, 0, 0}, {0, 51, 0}, {0, 0, 0}};
+    m.triangles = {{0, 1, 2}};
+    writeObj(dir / "c.obj", m);
+    const std::string text = slurp(dir / "c.obj");
+    EXPECT_NE(text.find("\nv 0 0 0 1 0 0\n"), std::string::npos) << text;
+    EXPECT_NE(text.find("\nv 1 0 0 0 0.2 0\n"), std::string::npos) << text;
+    EXPECT_NE(text.find("\nv 0 1.5 0 0 0 0\n"), std::string::npos) << text;
 }

@@ -13,6 +13,7 @@
 #include <cstring>
 #include <fstream>
 #include <numbers>
+#include <set>
 #include <sstream>
 
 using namespace vkmesh;
@@ -50,9 +51,11 @@ void expectProperRotation(const Pose& pose) {
 
 struct PlyPoints {
     std::vector<Eigen::Vector3d> positions, normals;
+    std::vector<Rgb> colors;
 };
 
-// Reads the binary little-endian "float x y z nx ny nz" clouds writeTumSequence produces (and nothing else).
+// Reads the binary little-endian "float x y z nx ny nz uchar red green blue" clouds writeTumSequence
+// produces (and nothing else).
 PlyPoints readGroundTruthPly(const std::filesystem::path& path) {
     std::ifstream in(path, std::ios::binary);
     EXPECT_TRUE(in.good()) << path;
@@ -68,19 +71,24 @@ PlyPoints readGroundTruthPly(const std::filesystem::path& path) {
         if (word == "element") words >> name >> count;
         if (word == "property") {
             words >> type >> name;
-            EXPECT_EQ(type, "float");
+            EXPECT_EQ(type, properties.size() < 6 ? "float" : "uchar") << name;
             properties.push_back(name);
         }
     }
     EXPECT_TRUE(binaryLittleEndian);
-    EXPECT_EQ(properties, (std::vector<std::string>{"x", "y", "z", "nx", "ny", "nz"}));
+    EXPECT_EQ(properties, (std::vector<std::string>{"x", "y", "z", "nx", "ny", "nz", "red", "green", "blue"}));
     PlyPoints points;
-    std::vector<float> values(count * 6);
-    in.read(reinterpret_cast<char*>(values.data()), static_cast<std::streamsize>(values.size() * sizeof(float)));
-    EXPECT_EQ(static_cast<size_t>(in.gcount()), values.size() * sizeof(float)) << "truncated " << path;
+    constexpr size_t kRecord = 6 * sizeof(float) + 3;
+    std::vector<char> bytes(count * kRecord);
+    in.read(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    EXPECT_EQ(static_cast<size_t>(in.gcount()), bytes.size()) << "truncated " << path;
     for (size_t i = 0; i < count; ++i) {
-        points.positions.emplace_back(values[6 * i], values[6 * i + 1], values[6 * i + 2]);
-        points.normals.emplace_back(values[6 * i + 3], values[6 * i + 4], values[6 * i + 5]);
+        float v[6];
+        std::memcpy(v, bytes.data() + i * kRecord, sizeof v);
+        points.positions.emplace_back(v[0], v[1], v[2]);
+        points.normals.emplace_back(v[3], v[4], v[5]);
+        const auto* c = reinterpret_cast<const uint8_t*>(bytes.data() + i * kRecord + sizeof v);
+        points.colors.push_back({c[0], c[1], c[2]});
     }
     return points;
 }
@@ -423,7 +431,118 @@ TEST(SyntheticSequence, WritesTumLayoutWithGroundTruth) {
     // Uniform by area: the sphere gets its area / spacing^2 samples.
     const double sphereArea = 4 * std::numbers::pi * sphere.radius * sphere.radius;
     EXPECT_NEAR(static_cast<double>(onSphere), sphereArea / (0.02 * 0.02), 0.02 * sphereArea / (0.02 * 0.02));
+
+    // Every GT point carries the exact colour of the scene there, and every object's colours show up.
+    std::set<Rgb> seenColors;
+    size_t colorMismatches = 0;
+    for (size_t i = 0; i < points.positions.size(); ++i) {
+        // The file holds float positions: a point within float rounding (~0.1 um) of a band edge may read
+        // the other band, so a handful may differ; the textures' offsets keep that rare.
+        colorMismatches += points.colors[i] != scene.color(points.positions[i]);
+        seenColors.insert(points.colors[i]);
+    }
+    EXPECT_LE(colorMismatches, points.positions.size() / 1000) << colorMismatches << " of " << points.positions.size();
+    for (const Object& object : scene.objects()) {
+        EXPECT_TRUE(seenColors.count(object.texture.a)) << object.name;
+        EXPECT_TRUE(seenColors.count(object.texture.b)) << object.name;
+    }
+
+    // rgb.txt lists one colour image per depth frame, with its timestamp; the image is the clean render's colour.
+    const auto rgbIndex = readDataLines(dir / "rgb.txt");
+    ASSERT_EQ(rgbIndex.size(), 4u);
+    for (size_t frame = 0; frame < 4; ++frame) {
+        EXPECT_EQ(rgbIndex[frame][0], depthIndex[frame][0]);
+        char name[32];
+        std::snprintf(name, sizeof name, "rgb/%06zu.png", frame);
+        EXPECT_EQ(rgbIndex[frame][1], name);
+        const cv::Mat png = cv::imread((dir / name).string(), cv::IMREAD_UNCHANGED);
+        ASSERT_EQ(png.type(), CV_8UC3);
+        ColorImage expected;
+        scene.renderDepth(options.intrinsics, poses[frame], {}, &expected);
+        for (int v = 0; v < 48; ++v)
+            for (int u = 0; u < 64; ++u) {
+                const cv::Vec3b bgr = png.at<cv::Vec3b>(v, u);
+                ASSERT_EQ(bgr[2], expected.at(u, v)[0]) << name << " " << u << "," << v;
+                ASSERT_EQ(bgr[1], expected.at(u, v)[1]);
+                ASSERT_EQ(bgr[0], expected.at(u, v)[2]);
+            }
+    }
     std::filesystem::remove_all(dir);
+}
+
+TEST(SyntheticColor, PixelColourIsTheTextureAtTheHitPoint) {
+    const auto scene = SyntheticScene::defaultRoom();
+    const Intrinsics k = kinectIntrinsics(160, 120);
+    const Pose pose = cameraPath(12)[5];
+    ColorImage color;
+    const DepthImage depth = scene.renderDepth(k, pose, {}, &color);
+    // The depth is the same with or without colour.
+    EXPECT_EQ(depth.meters, scene.renderDepth(k, pose).meters);
+    ASSERT_EQ(color.width, 160);
+    ASSERT_EQ(color.height, 120);
+    size_t checked = 0, agreeing = 0;
+    std::set<std::string> objectsSeen;
+    for (int v = 0; v < k.height; ++v)
+        for (int u = 0; u < k.width; ++u) {
+            const float z = depth.at(u, v);
+            if (z <= 0) {
+                EXPECT_EQ(color.at(u, v)[0] + color.at(u, v)[1] + color.at(u, v)[2], 0);  // nothing hit: black
+                continue;
+            }
+            // The back-projected float depth is within ~0.1 um of the hit: off by a band only at a band edge.
+            const Eigen::Vector3d p = toWorld(pose, backProject(k, u, v, z));
+            const Rgb texture = scene.color(p);
+            ++checked;
+            agreeing += Rgb{color.at(u, v)[0], color.at(u, v)[1], color.at(u, v)[2]} == texture;
+            for (const Object& object : scene.objects())
+                if (std::abs(object.sdf(p)) < 1e-4) objectsSeen.insert(object.name);
+        }
+    EXPECT_GT(checked, size_t(0.9 * 160 * 120));
+    EXPECT_GE(agreeing, checked * 998 / 1000) << agreeing << " of " << checked;
+    EXPECT_GE(objectsSeen.size(), 5u);
+
+    // Texture patterns: stripes across their axis, a 3D checker, each band `period` wide.
+    const Texture stripes{Texture::Pattern::Stripes, 0.01, 2, 0, {1, 1, 1}, {2, 2, 2}};
+    EXPECT_EQ(stripes.at({5, 5, 0.005}), (Rgb{1, 1, 1}));
+    EXPECT_EQ(stripes.at({-5, 3, 0.015}), (Rgb{2, 2, 2}));
+    EXPECT_EQ(stripes.at({0, 0, -0.005}), (Rgb{2, 2, 2}));
+    const Texture checker{Texture::Pattern::Checker, 0.5, 2, 0, {1, 1, 1}, {2, 2, 2}};
+    EXPECT_EQ(checker.at({0.25, 0.25, 0.25}), (Rgb{1, 1, 1}));
+    EXPECT_EQ(checker.at({0.75, 0.25, 0.25}), (Rgb{2, 2, 2}));
+    EXPECT_EQ(checker.at({0.75, 0.75, 0.25}), (Rgb{1, 1, 1}));
+}
+
+TEST(SyntheticColor, ExposureAndNoiseAreDeterministic) {
+    const auto scene = SyntheticScene::defaultRoom();
+    const Intrinsics k = kinectIntrinsics(64, 48);
+    const Pose pose = cameraPath(8)[2];
+    ColorImage clean, bright, noisy, noisyAgain, otherSeed;
+    scene.renderDepth(k, pose, {}, &clean);
+    RenderOptions options;
+    options.exposure = 1.2;
+    scene.renderDepth(k, pose, options, &bright);
+    for (size_t i = 0; i < clean.rgb.size(); ++i)
+        ASSERT_EQ(bright.rgb[i], uint8_t(std::min(255.0, std::round(clean.rgb[i] * 1.2)))) << i;
+    options = {};
+    options.colorNoise = 5;
+    options.seed = 7;
+    const DepthImage depthNoisy = scene.renderDepth(k, pose, options, &noisy);
+    scene.renderDepth(k, pose, options, &noisyAgain);
+    EXPECT_EQ(noisy.rgb, noisyAgain.rgb);
+    EXPECT_EQ(depthNoisy.meters, scene.renderDepth(k, pose).meters);  // colour noise leaves depth alone
+    options.seed = 8;
+    scene.renderDepth(k, pose, options, &otherSeed);
+    EXPECT_NE(noisy.rgb, otherSeed.rgb);
+    double sum = 0, sum2 = 0;
+    size_t n = 0;
+    for (size_t i = 0; i < clean.rgb.size(); ++i) {
+        if (clean.rgb[i] < 30 || clean.rgb[i] > 225) continue;  // away from clamping
+        const double d = double(noisy.rgb[i]) - double(clean.rgb[i]);
+        sum += d, sum2 += d * d, ++n;
+    }
+    ASSERT_GT(n, 1000u);
+    EXPECT_NEAR(sum / n, 0, 0.5);
+    EXPECT_NEAR(std::sqrt(sum2 / n), 5.0, 0.5);  // sigma 5 (plus rounding, 1/12)
 }
 
 TEST(SyntheticSequence, ReportsBadOptions) {
@@ -455,6 +574,13 @@ TEST(SyntheticSequence, ReportsBadOptions) {
     SequenceOptions mismatched = options;
     mismatched.width = 640;
     EXPECT_NE(messageOf(dir / "c", mismatched).find("640"), std::string::npos);
+
+    SequenceOptions badColor = options;
+    badColor.colorNoise = -1;
+    EXPECT_NE(messageOf(dir / "d", badColor).find("colour noise"), std::string::npos);
+    badColor = options;
+    badColor.exposureDrift = 1.5;
+    EXPECT_NE(messageOf(dir / "e", badColor).find("exposure drift"), std::string::npos);
 
     // A folder that cannot be created: its parent is a regular file.
     std::ofstream(dir / "blocker") << "not a folder";
