@@ -358,6 +358,14 @@ MapData parse(std::string_view bytes, const std::string& name) {
     if (map.chunkWords.size() != size_t(chunkCount) * CHUNK_WORDS)
         r.fail("the chunk heap holds " + std::to_string(map.chunkWords.size() / CHUNK_WORDS) + " chunks, its free stack says " +
                std::to_string(chunkCount));
+    // Free means DEAD: the GC frees a vertex by swapping its refcount 0 -> DEAD and pushes it once, so a live
+    // refcount on the free stack would be pushed a second time (past the stack's end).
+    std::vector<char> vertexFree(vertexCount, 0), chunkFree(chunkCount, 0), chunkUsed(chunkCount, 0);
+    for (uint32_t v : map.vertexFree.holes) vertexFree[v] = 1;
+    for (uint32_t c : map.chunkFree.holes) chunkFree[c] = 1;
+    for (uint32_t v = 0; v < vertexCount; ++v)
+        if ((map.vertices[v].refcount == DEAD_REFCOUNT) != bool(vertexFree[v]))
+            r.fail("vertex " + std::to_string(v) + (vertexFree[v] ? " is on the free stack but alive" : " is free but not on the free stack"));
     const uint64_t edgeIds = uint64_t(cap.blocks) * VOXELS_PER_BLOCK * 3;
     for (uint32_t v = 0; v < vertexCount; ++v)
         if (map.vertices[v].refcount != DEAD_REFCOUNT && map.vertexOwners[v] >= edgeIds)
@@ -376,11 +384,16 @@ MapData parse(std::string_view bytes, const std::string& name) {
     }
     for (const CornerArray& a : map.cornerArrays) {
         if (a.tag == tag("cube")) {
-            for (uint32_t st : a.words)
-                if ((st >> CUBE_CHUNK_SHIFT) > chunkCount) r.fail("a cube refers to a triangle chunk outside the heap");
+            for (uint32_t st : a.words) {
+                const uint32_t chunk = st >> CUBE_CHUNK_SHIFT;   // chunk + 1, 0 = none
+                if (chunk > chunkCount) r.fail("a cube refers to a triangle chunk outside the heap");
+                if (chunk && (chunkFree[chunk - 1] || chunkUsed[chunk - 1]++))
+                    r.fail("triangle chunk " + std::to_string(chunk - 1) + " is free or belongs to two cubes");
+            }
         } else if (a.tag == tag("edgx") || a.tag == tag("edgy") || a.tag == tag("edgz")) {
             for (uint32_t slot : a.words)
-                if (slot != EMPTY_SLOT && slot >= vertexCount) r.fail("an edge refers to vertex " + std::to_string(slot) + ", outside the heap");
+                if (slot != EMPTY_SLOT && (slot >= vertexCount || vertexFree[slot]))
+                    r.fail("an edge refers to vertex " + std::to_string(slot) + (slot >= vertexCount ? ", outside the heap" : ", which is free"));
         }
     }
     const Counters& k = map.counters;

@@ -182,6 +182,10 @@ TEST(MapFormat, IndicesOutsideThePoolsAreRefused) {
     refused([](map::MapData& m) { m.vertexFree.firstUntouched = 65; }, "beyond the capacity");
     refused([](map::MapData& m) { m.vertexOwners.pop_back(); }, "owners");
     refused([](map::MapData& m) { m.vertexOwners[0] = 16 * 512 * 3; }, "owner edge outside");
+    refused([](map::MapData& m) { m.vertices[2].refcount = 0; }, "on the free stack but alive");
+    refused([](map::MapData& m) { m.vertices[1].refcount = DEAD_REFCOUNT; }, "free but not on the free stack");
+    refused([](map::MapData& m) { m.cornerArrays[4].words[0] = 2; }, "which is free");
+    refused([](map::MapData& m) { m.cornerArrays[2].words[10] = 1u << CUBE_CHUNK_SHIFT; }, "belongs to two cubes");
     refused([](map::MapData& m) { m.capacities.hashSlots = 1000; }, "not a power of two");
     refused([](map::MapData& m) { m.counters.vertexHighWater = 1000; }, "exceed the capacities");
 }
