@@ -104,18 +104,21 @@ def main():
                 row["eval"] = evaluate(args, row["mesh"], ds, gt, out / f"{name}_eval_{method}.json",
                                        color=method == "vbg_color")
             entry["rows"].append(row)
-        if not args.no_vkmesh:
-            mesh, stats = out / name / "vkmesh.ply", out / f"{name}_vkmesh_stats.json"
+        # vkmesh twice, depth only (--no-color) and with colour, side by side in one run: the cost of colour
+        # is the ratio of the two whole-frame times.
+        for label, extra in ([] if args.no_vkmesh else [("vkmesh --no-color", ["--no-color"]), ("vkmesh", [])]):
+            tag = "vkmesh" + ("_nocolor" if extra else "")
+            mesh, stats = out / name / f"{tag}.ply", out / f"{name}_{tag}_stats.json"
             run([args.vkmesh, "fuse", ds, "-q", "--voxel", args.voxel, "--trunc", args.trunc_voxels, "--device",
-                 args.device, "-o", mesh, "--stats", stats] + common, stdout=subprocess.DEVNULL)
+                 args.device, "-o", mesh, "--stats", stats] + extra + common, stdout=subprocess.DEVNULL)
             st = json.loads(stats.read_text())
-            # Whole frame on the GPU (allocation, fusion, mesh), the closest to Open3D's integrate that
-            # vkmesh reports; the fusion alone is in stats gpu_ms_per_frame.
-            row = {"method": "vkmesh", "vertices": st["mesh"]["vertices"], "mesh": str(mesh), "stats": st,
+            # Whole frame (upload, allocation, fusion, incremental mesh, fence), the closest to Open3D's
+            # integrate that vkmesh reports; the fusion alone is in stats gpu_ms_per_frame.
+            row = {"method": label, "vertices": st["mesh"]["vertices"], "mesh": str(mesh), "stats": st,
                    "integrate_median_ms": st["wall_ms_per_frame"]["median"], "has_color": has_colors(mesh)}
-            # A grey mesh (before the GPU colour lands) is still scored on geometry when there is a GT.
+            # The depth-only mesh is scored on geometry when there is a GT.
             if row["has_color"] or gt:
-                row["eval"] = evaluate(args, mesh, ds, gt, out / f"{name}_eval_vkmesh.json",
+                row["eval"] = evaluate(args, mesh, ds, gt, out / f"{name}_eval_{tag}.json",
                                        color=row["has_color"])
             entry["rows"].append(row)
         results["datasets"].append(entry)

@@ -24,6 +24,7 @@
 #include "api/exported_mesh.h"
 #include "cli_options.h"
 #include "commands.h"
+#include "core/map_format.h"
 #include "core/mesh_analysis.h"
 #include "core/refinement.h"
 #include "gpu/gpu_volume.h"
@@ -54,7 +55,34 @@ struct FuseArgs {
     std::string renderView = "sensor";
     std::string renderColor = "auto";
     std::string deltasPath;
+    // Maps (docs/MAPFILE.md): continue from one, skip the frames it holds, save the state after the last frame.
+    std::string loadPath;
+    std::string savePath;
+    size_t firstFrame = 0;
+    const CLI::App* cmd = nullptr;   // which options were given (a loaded map's settings fill the others)
 };
+
+// Continuing a map: every setting the command line did not give is the map's; one it gave must agree with the
+// map (GpuVolume::load refuses it otherwise, naming the file and the option).
+void takeMapSettings(const CLI::App& cmd, const gpu::GpuVolumeConfig& map, gpu::GpuVolumeConfig& c) {
+    auto given = [&](const char* option) { return cmd.get_option(option)->count() > 0; };
+    if (!given("--voxel")) c.params.voxelSize = map.params.voxelSize;
+    if (!given("--trunc")) c.params.truncVoxels = map.params.truncVoxels;
+    if (!given("--max-weight")) c.params.maxWeight = map.params.maxWeight;
+    if (!given("--min-weight")) c.minMeshWeight = map.minMeshWeight;
+    if (!given("--alloc-stride")) c.params.allocationStride = map.params.allocationStride;
+    if (!given("--mode")) c.meshMode = map.meshMode;
+    if (!given("--refine")) c.refine = map.refine;
+    if (!given("--refine-eps")) c.refineEpsilonVoxels = map.refineEpsilonVoxels;
+    if (!given("--keep-radius")) c.keepRadius = map.keepRadius;
+    if (!given("--recycle")) c.recycle = map.recycle;
+    if (!given("--recycle-after")) c.recycleAfterFrames = map.recycleAfterFrames;
+    if (!given("--starve-weight")) c.starveWeight = map.starveWeight;
+    // A map keeps its colour (frames without colour images then fuse depth only); --no-color or --color-mode
+    // on the command line must agree with it.
+    if (!given("--no-color") && !given("--color-mode")) c.params.colorFusion = map.params.colorFusion;
+    if (!given("--color-recency")) c.params.colorRecency = map.params.colorRecency;
+}
 
 json statsOf(std::vector<double> values) {
     if (values.empty()) return json{{"median", nullptr}, {"mean", nullptr}, {"max", nullptr}};
@@ -66,6 +94,9 @@ json statsOf(std::vector<double> values) {
 }
 
 int runFuse(const FuseArgs& args) {
+    // A map to continue is read and checked before anything else is opened.
+    std::optional<map::MapData> loaded;
+    if (!args.loadPath.empty()) loaded = map::readFile(args.loadPath);
     if (args.growHeaps)
         std::cerr << "note: --grow-heaps is deprecated and has no effect: capacities grow by default (--no-grow keeps them fixed)\n";
     auto dataset = args.data.open();
@@ -73,8 +104,22 @@ int runFuse(const FuseArgs& args) {
     if (dataset->size() == 0) throw Error("no usable frame in " + args.data.dataset);
     const Intrinsics& intrinsics = dataset->intrinsics();
 
+    if (args.firstFrame > 0 && args.firstFrame >= dataset->size())
+        throw Error("--first-frame " + std::to_string(args.firstFrame) + " but " + args.data.dataset + " has " +
+                    std::to_string(dataset->size()) + " usable frames");
+
     vk::Context context(args.device.contextOptions());
     gpu::GpuVolumeConfig config = args.volume.toConfig(args.data.maxDepth, intrinsics.width, intrinsics.height, dataset->hasColor());
+    VolumeOptions vo = args.volume;   // what the run uses: a loaded map's settings where the command line gave none
+    if (loaded) {
+        takeMapSettings(*args.cmd, gpu::GpuVolume::mapConfig(*loaded), config);
+        vo.voxel = config.params.voxelSize, vo.truncVoxels = config.params.truncVoxels, vo.allocStride = config.params.allocationStride;
+        vo.mode = config.meshMode == gpu::MeshMode::Incremental ? "incremental" : "baseline";
+        vo.refine = config.refine, vo.refineEps = config.refineEpsilonVoxels, vo.keepRadius = config.keepRadius;
+        vo.recycle = config.recycle, vo.recycleAfter = config.recycleAfterFrames, vo.starveWeight = config.starveWeight;
+        vo.colorMode = config.params.colorFusion == ColorFusion::Recent ? "recent" : "average";
+        vo.colorRecency = config.params.colorRecency;
+    }
     const bool fuseColor = config.params.colorFusion != ColorFusion::Off;
     const bool rendering = args.renderEvery > 0;
     if ((rendering || !args.deltasPath.empty()) && config.meshMode != gpu::MeshMode::Incremental)
@@ -82,7 +127,17 @@ int runFuse(const FuseArgs& args) {
     if (rendering && args.renderDir.empty()) throw Error("--render-every needs --render-dir");
     config.publishMesh = rendering;
     config.trackDeltas = !args.deltasPath.empty();
-    gpu::GpuVolume volume(context, config);
+    double loadMs = 0;
+    std::unique_ptr<gpu::GpuVolume> volumeOwner;
+    if (loaded) {
+        const auto t0 = std::chrono::steady_clock::now();
+        volumeOwner = gpu::GpuVolume::load(context, *loaded, config, args.loadPath);
+        loadMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+        loaded.reset();   // the host copy is not needed any more
+    } else {
+        volumeOwner = std::make_unique<gpu::GpuVolume>(context, config);
+    }
+    gpu::GpuVolume& volume = *volumeOwner;
     std::optional<render::MeshRenderer> renderer;
     render::RenderOptions renderOptions;
     if (rendering) {
@@ -115,7 +170,7 @@ int runFuse(const FuseArgs& args) {
         std::cerr << "warning: " << w << "\n";
     };
     const auto start = std::chrono::steady_clock::now();
-    for (size_t i = 0; i < dataset->size(); ++i) {
+    for (size_t i = args.firstFrame; i < dataset->size(); ++i) {
         DepthImage depth;
         try {
             depth = dataset->loadDepth(i);
@@ -211,8 +266,19 @@ int runFuse(const FuseArgs& args) {
         }
     }
     if (tty && !args.quiet) std::cerr << "\n";
-    if (integrated == 0) throw Error("none of the " + std::to_string(dataset->size()) + " frames could be fused");
+    if (integrated == 0 && args.loadPath.empty()) throw Error("none of the " + std::to_string(dataset->size()) + " frames could be fused");
     const double fuseSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+    // The map is saved before the mesh is exported: the export may re-mesh cubes left pending, which a run
+    // continuing from the map would otherwise do at another time than an uninterrupted one.
+    double saveMs = 0;
+    uintmax_t mapBytes = 0;
+    if (!args.savePath.empty()) {
+        const auto t0 = std::chrono::steady_clock::now();
+        volume.save(args.savePath);
+        saveMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+        mapBytes = std::filesystem::file_size(args.savePath);
+    }
 
     // The mesh: the persistent shared-vertex mesh compacted on the GPU, or the baseline soup. The baseline's
     // vertex count is measured on the same TSDF either way (the paper's memory comparison).
@@ -257,20 +323,20 @@ int runFuse(const FuseArgs& args) {
                         {"frames_available", dataset->size()}};
     stats["device"] = context.info().name;
     stats["int64_atomics"] = context.int64Atomics();   // the block hash's path (docs/HASH.md)
-    stats["mode"] = args.volume.mode;
-    stats["refine"] = args.volume.refine;
-    stats["refine_epsilon_voxels"] = args.volume.refineEps;
-    stats["lock_free"] = args.volume.lockFree;
+    stats["mode"] = vo.mode;
+    stats["refine"] = vo.refine;
+    stats["refine_epsilon_voxels"] = vo.refineEps;
+    stats["lock_free"] = vo.lockFree;
     stats["frames"] = {{"integrated", integrated}, {"skipped", skipped}};
-    stats["voxel_size"] = args.volume.voxel;
+    stats["voxel_size"] = vo.voxel;
     stats["truncation_m"] = config.params.truncation();
-    stats["allocation_stride"] = args.volume.allocStride;
+    stats["allocation_stride"] = vo.allocStride;
     stats["max_depth"] = args.data.maxDepth;
     stats["blocks"] = {{"in_use", k.blocksInUse}, {"capacity", volume.config().blockCapacity},
                        {"hash_capacity", volume.config().hashCapacity}, {"hash_entries", k.hashEntries},
                        {"hash_tombstones", k.hashTombstones}};
-    stats["recycling"] = {{"keep_radius", args.volume.keepRadius}, {"recycle", args.volume.recycle},
-                          {"recycle_after_frames", args.volume.recycleAfter}, {"starve_weight", args.volume.starveWeight}};
+    stats["recycling"] = {{"keep_radius", vo.keepRadius}, {"recycle", vo.recycle},
+                          {"recycle_after_frames", vo.recycleAfter}, {"starve_weight", vo.starveWeight}};
     stats["mesh"] = {{"vertices", mesh.positions.size()},
                      {"triangles", mesh.triangles.size()},
                      {"path", out.string()},
@@ -328,6 +394,9 @@ int runFuse(const FuseArgs& args) {
     stats["capacities"] = {{"grow", grownTo.growCapacities}, {"blocks", grownTo.blockCapacity}, {"hash_slots", grownTo.hashCapacity},
                            {"touched", grownTo.touchedCapacity}, {"retype", grownTo.retypeCapacity},
                            {"vertices", grownTo.vertexCapacity}, {"triangle_chunks", grownTo.chunkCapacity}};
+    stats["map"] = {{"loaded", args.loadPath}, {"load_ms", loadMs}, {"first_frame", args.firstFrame}, {"saved", args.savePath},
+                    {"save_ms", saveMs}, {"bytes", mapBytes}, {"live_blocks", k.blocksInUse},
+                    {"bytes_per_live_block", k.blocksInUse ? double(mapBytes) / k.blocksInUse : 0.0}};
     stats["warnings"] = warnings;
     if (!args.statsPath.empty()) {
         std::ofstream file(args.statsPath);
@@ -337,7 +406,7 @@ int runFuse(const FuseArgs& args) {
     auto median = [&](const char* name) { return stageMs.count(name) ? statsOf(stageMs[name])["median"].get<double>() : 0.0; };
     std::cout << "vkmesh fuse: " << integrated << " frames (" << skipped << " skipped) from " << args.data.dataset << " on "
               << context.info().name << "\n"
-              << "  voxel " << args.volume.voxel << " m, " << k.blocksInUse << " blocks, mesh (" << args.volume.mode << "): "
+              << "  voxel " << vo.voxel << " m, " << k.blocksInUse << " blocks, mesh (" << vo.mode << "): "
               << mesh.positions.size() << " vertices (baseline " << baselineVertices << "), " << mesh.triangles.size()
               << " triangles -> " << out.string() << "\n"
               << "  GPU per frame (median): allocate " << median("allocate") << " ms, fuse " << median("fuse") << " ms, mesh "
@@ -345,6 +414,10 @@ int runFuse(const FuseArgs& args) {
               << "wall " << statsOf(frameWallMs)["median"].get<double>() << " ms/frame\n";
     if (rendering) std::cout << "  " << picturesWritten << " pictures (" << args.renderView << " view) -> " << args.renderDir << "\n";
     if (deltaStream) std::cout << "  mesh deltas: " << deltaStream->bytesWritten() << " bytes -> " << args.deltasPath << "\n";
+    if (!args.loadPath.empty()) std::cout << "  map loaded from " << args.loadPath << " (" << loadMs << " ms), frames from " << args.firstFrame << "\n";
+    if (!args.savePath.empty())
+        std::cout << "  map: " << mapBytes << " bytes (" << (k.blocksInUse ? mapBytes / k.blocksInUse : 0) << " per live block) -> "
+                  << args.savePath << " (" << saveMs << " ms)\n";
     if (!warnings.empty()) std::cout << "  " << warnings.size() << " warnings (see stderr)\n";
     return 0;
 }
@@ -373,6 +446,11 @@ Run addFuseCommand(CLI::App& app) {
                     "fused, else shade")
         ->check(CLI::IsMember({"shade", "normal", "age", "rgb", "auto"}));
     cmd->add_option("--deltas", args->deltasPath, "write every frame's mesh changes to this stream file (docs/DELTAS.md)");
+    cmd->add_option("--save", args->savePath, "write the whole state after the last frame to this map file (.vkmap, docs/MAPFILE.md)");
+    cmd->add_option("--load", args->loadPath,
+                    "continue the map in this file (its settings unless given; with --first-frame, the frames it does not hold yet)");
+    cmd->add_option("--first-frame", args->firstFrame, "start at this frame of the dataset (0-based; frames before it are skipped)");
+    args->cmd = cmd;
     return [args] { return runFuse(*args); };
 }
 

@@ -44,6 +44,39 @@ gpu::MeshBuffers Reconstructor::meshBuffers() const { return volume_ ? volume_->
 
 gpu::ExportedMesh Reconstructor::downloadMesh() { return volume_ ? volume_->exportMesh() : gpu::ExportedMesh{}; }
 
+void Reconstructor::save(const std::filesystem::path& path) const {
+    if (!volume_) throw Error("cannot save " + path.string() + ": no frame has been integrated yet");
+    volume_->save(path);
+}
+
+void Reconstructor::loadMap(const map::MapData& m, const std::filesystem::path& path) {
+    gpu::GpuVolumeConfig config = gpu::GpuVolume::mapConfig(m);
+    const gpu::GpuVolumeConfig& want = options_.volume;
+    config.blockCapacity = want.blockCapacity;   // GpuVolume::load takes the larger of these and the map's
+    config.hashCapacity = want.hashCapacity;
+    config.vertexCapacity = want.vertexCapacity;
+    config.chunkCapacity = want.chunkCapacity;
+    config.retypeCapacity = want.retypeCapacity;
+    config.publishMesh = true;
+    config.trackDeltas = options_.trackDeltas;
+    volume_ = gpu::GpuVolume::load(*context_, m, config, path.string());
+}
+
+std::unique_ptr<Reconstructor> Reconstructor::load(const std::filesystem::path& path, const ReconstructorOptions& options) {
+    const map::MapData m = map::readFile(path);   // parsed and checked before a device is created
+    auto r = std::make_unique<Reconstructor>(options);
+    r->loadMap(m, path);
+    return r;
+}
+
+std::unique_ptr<Reconstructor> Reconstructor::load(const std::filesystem::path& path, const vk::ExternalDevice& device,
+                                                   const ReconstructorOptions& options) {
+    const map::MapData m = map::readFile(path);
+    auto r = std::make_unique<Reconstructor>(device, options);
+    r->loadMap(m, path);
+    return r;
+}
+
 uint32_t Reconstructor::framesIntegrated() const { return volume_ ? volume_->framesIntegrated() : 0; }
 
 }  // namespace vkmesh

@@ -26,6 +26,7 @@
 // must not submit to that same VkQueue from another thread during a call.
 #pragma once
 
+#include <filesystem>
 #include <memory>
 
 #include "core/mesh_delta.h"
@@ -78,11 +79,22 @@ public:
     const MeshDelta& lastDelta() const { return lastDelta_; }
     uint32_t framesIntegrated() const;
 
+    // Maps that outlive the process (docs/MAPFILE.md). save() writes everything the reconstruction holds after
+    // the last frame; load() continues it: the next integrate() gives exactly what an uninterrupted run would
+    // have. The map's settings are used (voxel size, truncation, ...); options.volume's capacities where larger
+    // than the map's; the image size is the map's. Errors (bad file, a map that does not fit the device) name
+    // the file and the problem, and nothing is created.
+    void save(const std::filesystem::path& path) const;
+    static std::unique_ptr<Reconstructor> load(const std::filesystem::path& path, const ReconstructorOptions& options = {});
+    static std::unique_ptr<Reconstructor> load(const std::filesystem::path& path, const vk::ExternalDevice& device,
+                                               const ReconstructorOptions& options = {});
+
     const vk::Context& context() const { return *context_; }
     // The data structure itself, for what the facade does not cover; nullptr before the first frame.
     gpu::GpuVolume* volume() { return volume_.get(); }
 
 private:
+    void loadMap(const map::MapData& map, const std::filesystem::path& path);
     std::unique_ptr<vk::Context> context_;
     ReconstructorOptions options_;
     std::unique_ptr<gpu::GpuVolume> volume_;

@@ -9,12 +9,14 @@
 #include <Eigen/Core>
 
 #include <array>
+#include <filesystem>
 #include <memory>
 #include <optional>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "core/map_format.h"
 #include "core/mesh_delta.h"
 #include "core/types.h"
 #include "gpu/layout.h"
@@ -204,7 +206,28 @@ public:
     // the frames run again after a deferral.
     uint32_t frameNumber() const { return frameNumber_; }
 
+    // ---- maps that outlive the process (docs/MAPFILE.md; src/gpu/map_file.cpp) ----
+    // Everything between two frames: live blocks (coordinates, TSDF, hash stamps, retype masks), the mesh
+    // (cube states, edge slots, vertex heap with refcounts and owners, triangle chunks), the free stacks,
+    // the counters, the frame numbers and the settings. Read back from the GPU; changes nothing. Call
+    // between frames (before exportMesh(), which may re-mesh cubes left pending, to resume bit-exactly).
+    map::MapData saveMap() const;
+    void save(const std::filesystem::path& path) const;
+    // The configuration a map was saved with (its settings and capacities; the image size it was fused at).
+    static GpuVolumeConfig mapConfig(const map::MapData& map);
+    // A volume holding the map, ready for the next frame. `config` must agree with the map's settings (voxel
+    // size, truncation, weights, allocation stride, mesh mode, refinement, recycling: anything else is an
+    // Error naming `name` and the setting); its capacities are used where larger than the map's. Everything is
+    // checked before a buffer is created (the map was validated when parsed, map::parse); the hash is rebuilt
+    // from the block coordinates by the GPU's own re-insertion pass, so a map saved on a device with 64-bit
+    // atomics loads on one without, and into a table of any size.
+    static std::unique_ptr<GpuVolume> load(const vk::Context& context, const map::MapData& map, const GpuVolumeConfig& config,
+                                           const std::string& name);
+    static std::unique_ptr<GpuVolume> load(const vk::Context& context, const std::filesystem::path& path);
+
 private:
+    // load(): uploads the map into this freshly created volume and rebuilds the hash.
+    void restore(const map::MapData& map, const std::string& name);
     // The frame: every pass in order, with what it reads and writes (docs/ARCHITECTURE.md draws it).
     void recordFrame(VkCommandBuffer cmd, const FramePush& push, bool rebuildHash, bool retryPending);
     // The incremental mesh passes after the dirty blocks are listed (also a rebuild's and a retry's).

@@ -274,5 +274,51 @@ TEST(Cli, HostileDatasetsAreClearErrors) {
     fs::remove_all(seq);
 }
 
+// Maps (docs/MAPFILE.md): fuse the first frames and save, continue from the map with the rest: the mesh of
+// the uninterrupted run, vertex ages included; `vkmesh export` writes a map's mesh; bad maps are clear errors.
+TEST(Cli, SaveLoadAndFirstFrameResumeTheRun) {
+    fs::path out = test::makeTempDir("cli_map");
+    const std::string seq = smallSequence().string(), map = (out / "first.vkmap").string();
+    CliRun whole = runCli("fuse " + seq + " -o " + (out / "whole.ply").string() + " --voxel 0.05 -q --validation");
+    ASSERT_EQ(whole.exitCode, 0) << whole.err;
+    CliRun first = runCli("fuse " + seq + " --frames 3 -o " + (out / "first.ply").string() + " --voxel 0.05 --save " + map +
+                          " --stats " + (out / "first.json").string() + " -q --validation");
+    ASSERT_EQ(first.exitCode, 0) << first.err;
+    EXPECT_NE(first.out.find("per live block"), std::string::npos) << first.out;
+    const nlohmann::json stats = nlohmann::json::parse(readText(out / "first.json"));
+    EXPECT_EQ(stats["map"]["bytes"].get<uint64_t>(), fs::file_size(map));
+    // The voxel size comes from the map.
+    CliRun rest = runCli("fuse " + seq + " --load " + map + " --first-frame 3 -o " + (out / "rest.ply").string() + " -q --validation");
+    ASSERT_EQ(rest.exitCode, 0) << rest.err;
+    Mesh a = readPly(out / "whole.ply"), b = readPly(out / "rest.ply");
+    EXPECT_GT(a.triangles.size(), 1000u);
+    EXPECT_EQ(countTriangleMismatches(canonicalTriangles(a), canonicalTriangles(b), 0), 0u);
+    EXPECT_EQ(a.triangles.size(), b.triangles.size());
+    std::sort(a.vertexAge.begin(), a.vertexAge.end());
+    std::sort(b.vertexAge.begin(), b.vertexAge.end());
+    EXPECT_EQ(a.vertexAge, b.vertexAge);
+
+    CliRun exported = runCli("export " + map + " -o " + (out / "exported.ply").string() + " --validation");
+    ASSERT_EQ(exported.exitCode, 0) << exported.err;
+    EXPECT_EQ(countTriangleMismatches(canonicalTriangles(readPly(out / "first.ply")), canonicalTriangles(readPly(out / "exported.ply")), 0),
+              0u);
+
+    CliRun voxel = runCli("fuse " + seq + " --load " + map + " --first-frame 3 -o " + (out / "x.ply").string() + " --voxel 0.04 -q");
+    EXPECT_EQ(voxel.exitCode, 2);
+    EXPECT_NE(voxel.err.find(map + ": the map was fused with voxel size"), std::string::npos) << voxel.err;
+    test::writeBytes(out / "garbage.vkmap", "not a map at all, just some bytes");
+    CliRun garbage = runCli("export " + (out / "garbage.vkmap").string() + " -o " + (out / "x.ply").string());
+    EXPECT_EQ(garbage.exitCode, 2);
+    EXPECT_NE(garbage.err.find("garbage.vkmap: not a vkmesh map"), std::string::npos) << garbage.err;
+    std::string bytes = readText(map);
+    test::writeBytes(out / "short.vkmap", bytes.substr(0, bytes.size() / 2));
+    CliRun truncated = runCli("fuse " + seq + " --load " + (out / "short.vkmap").string() + " -o " + (out / "x.ply").string() + " -q");
+    EXPECT_EQ(truncated.exitCode, 2);
+    EXPECT_NE(truncated.err.find("short.vkmap: truncated"), std::string::npos) << truncated.err;
+    CliRun past = runCli("fuse " + seq + " --first-frame 6 -o " + (out / "x.ply").string() + " -q");
+    EXPECT_EQ(past.exitCode, 2);
+    EXPECT_NE(past.err.find("--first-frame 6"), std::string::npos) << past.err;
+}
+
 }  // namespace
 }  // namespace vkmesh

@@ -2,6 +2,12 @@
 
 namespace vkmesh::gpu {
 
+const std::vector<BlockStore::CornerArray> BlockStore::kCornerArrays = {
+    {map::tag("sdf_"), &BlockStore::sdf_},
+    {map::tag("wght"), &BlockStore::weight_},
+    {map::tag("colr"), &BlockStore::color_, true},
+};
+
 BlockStore::BlockStore(const vk::Context& context, const vk::BindingTable& table, uint32_t capacity, CounterBuffer& counters,
                        bool withColor)
     : context_(context), table_(table), capacity_(capacity), withColor_(withColor) {
@@ -64,6 +70,30 @@ std::vector<BlockSnapshot> BlockStore::download(const std::vector<uint32_t>& blo
         out.push_back(std::move(snap));
     }
     return out;
+}
+
+void BlockStore::save(map::MapData& map, const std::vector<uint32_t>& blocks, uint32_t freeTop) const {
+    for (const CornerArray& a : kCornerArrays) {
+        if (a.colorOnly && !withColor_) continue;
+        map::CornerArray out{a.tag, std::vector<uint32_t>(blocks.size() * VOXELS_PER_BLOCK)};
+        downloadRecords(context_, this->*a.buffer, 4 * VOXELS_PER_BLOCK, blocks, out.words.data());
+        map.cornerArrays.push_back(std::move(out));
+    }
+    map.blockFree = map::FreeStack::fromEntries(downloadWords(context_, freeList_, freeTop), capacity_);
+}
+
+void BlockStore::load(const map::MapData& map, const std::vector<uint32_t>& blocks, CounterBuffer& counters) {
+    for (const CornerArray& a : kCornerArrays)   // present: checked by GpuVolume::load before anything was created
+        if (!a.colorOnly || withColor_) uploadRecords(context_, this->*a.buffer, 4 * VOXELS_PER_BLOCK, blocks, map.corners(a.tag)->words.data());
+    std::vector<int32_t> coords(map.blocks.size() * 4);
+    for (size_t i = 0; i < map.blocks.size(); ++i) {
+        const map::Block& b = map.blocks[i];
+        coords[4 * i] = b.x, coords[4 * i + 1] = b.y, coords[4 * i + 2] = b.z, coords[4 * i + 3] = int32_t(b.hashStamp);
+    }
+    uploadRecords(context_, coords_, 16, blocks, coords.data());
+    const std::vector<uint32_t> stack = map.blockFree.entries(capacity_);
+    uploadWords(context_, freeList_, stack);
+    counters.update([&](Counters& k) { k.freeTop = uint32_t(stack.size()); });
 }
 
 }  // namespace vkmesh::gpu

@@ -7,6 +7,7 @@
 
 #include <Eigen/Core>
 
+#include "core/map_format.h"
 #include "gpu/structure/component.h"
 #include "gpu/structure/counter_buffer.h"
 #include "gpu/layout.h"
@@ -39,6 +40,21 @@ public:
 
     static constexpr uint64_t kBytesPerBlock = 16 + 2ull * 4 * VOXELS_PER_BLOCK + 4;
     static constexpr uint64_t kColorBytesPerBlock = 4ull * VOXELS_PER_BLOCK;
+
+    // Map files (docs/MAPFILE.md). Each per-corner array is one section, listed once in kCornerArrays
+    // (block_store.cpp): adding an array is one line there. The colour array is written and read only when
+    // the store keeps colour (the map's FEATURE_COLOR).
+    struct CornerArray {
+        uint32_t tag;
+        vk::Buffer BlockStore::*buffer;
+        bool colorOnly = false;
+    };
+    static const std::vector<CornerArray> kCornerArrays;
+    // The live blocks' corner arrays (in `blocks` order) and the free list. Coordinates come from the hash.
+    void save(map::MapData& map, const std::vector<uint32_t>& blocks, uint32_t freeTop) const;
+    // Into a store just created (capacity >= the map's): corner arrays, free list (counters.freeTop), and each
+    // live block's coordinate with w = its hash stamp, which the hash's re-insertion reads (BlockHash::restore).
+    void load(const map::MapData& map, const std::vector<uint32_t>& blocks, CounterBuffer& counters);
 
 private:
     const vk::Context& context_;

@@ -3,6 +3,7 @@
 // the binding numbers of shared_layout.h (and again after it grows one), and lists them for pools().
 #pragma once
 
+#include <cstring>
 #include <string>
 #include <vector>
 
@@ -67,6 +68,51 @@ inline void fillFreeStack(const vk::Context& context, const vk::Buffer& stack, u
     std::vector<uint32_t> entries(capacity);
     for (uint32_t i = 0; i < capacity; ++i) entries[i] = capacity - 1 - i;
     vk::uploadToBuffer(context, stack, entries.data(), VkDeviceSize(capacity) * 4);
+}
+
+// Map files (src/gpu/map_file.cpp): fixed-size records of the given pool entries (the live blocks' parts of a
+// per-block array), gathered into / scattered from one host array in `indices` order, one copy region each,
+// through one staging buffer: only the used parts of a pool cross the bus.
+inline void downloadRecords(const vk::Context& context, const vk::Buffer& src, VkDeviceSize recordBytes,
+                            const std::vector<uint32_t>& indices, void* out) {
+    if (indices.empty()) return;
+    vk::Buffer staging(context, recordBytes * indices.size(), VK_BUFFER_USAGE_TRANSFER_DST_BIT, vk::MemoryUse::Readback,
+                       src.name() + " (map readback)");
+    std::vector<VkBufferCopy> regions(indices.size());
+    for (size_t i = 0; i < indices.size(); ++i) regions[i] = {indices[i] * recordBytes, i * recordBytes, recordBytes};
+    vk::CommandRecorder recorder(context);
+    VkCommandBuffer cmd = recorder.begin();
+    vk::memoryBarrier(cmd);
+    vkCmdCopyBuffer(cmd, src.handle(), staging.handle(), uint32_t(regions.size()), regions.data());
+    vk::memoryBarrier(cmd);
+    recorder.submitAndWait();
+    staging.invalidate();
+    std::memcpy(out, staging.mapped(), staging.size());
+}
+
+inline void uploadRecords(const vk::Context& context, const vk::Buffer& dst, VkDeviceSize recordBytes,
+                          const std::vector<uint32_t>& indices, const void* data) {
+    if (indices.empty()) return;
+    vk::Buffer staging(context, recordBytes * indices.size(), VK_BUFFER_USAGE_TRANSFER_SRC_BIT, vk::MemoryUse::Upload,
+                       dst.name() + " (map upload)");
+    std::memcpy(staging.mapped(), data, staging.size());
+    std::vector<VkBufferCopy> regions(indices.size());
+    for (size_t i = 0; i < indices.size(); ++i) regions[i] = {i * recordBytes, indices[i] * recordBytes, recordBytes};
+    vk::CommandRecorder recorder(context);
+    VkCommandBuffer cmd = recorder.begin();
+    vkCmdCopyBuffer(cmd, staging.handle(), dst.handle(), uint32_t(regions.size()), regions.data());
+    vk::memoryBarrier(cmd);
+    recorder.submitAndWait();
+}
+
+// The first `count` words of a buffer (0: nothing), and their upload.
+inline std::vector<uint32_t> downloadWords(const vk::Context& context, const vk::Buffer& src, size_t count) {
+    std::vector<uint32_t> words(count);
+    if (count) vk::downloadFromBuffer(context, src, words.data(), count * 4);
+    return words;
+}
+inline void uploadWords(const vk::Context& context, const vk::Buffer& dst, const std::vector<uint32_t>& words) {
+    if (!words.empty()) vk::uploadToBuffer(context, dst, words.data(), words.size() * 4);
 }
 
 }  // namespace vkmesh::gpu

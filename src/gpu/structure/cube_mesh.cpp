@@ -10,6 +10,8 @@ constexpr const char* kEdgeNames[3] = {"edge vertex slots x", "edge vertex slots
 constexpr uint32_t kDeadVertexWord = DEAD_REFCOUNT;
 }  // namespace
 
+const std::vector<uint32_t> CubeMesh::kCornerTags = {map::tag("cube"), map::tag("edgx"), map::tag("edgy"), map::tag("edgz")};
+
 CubeMesh::CubeMesh(const vk::Context& context, const vk::BindingTable& table, uint32_t blockCapacity, uint32_t vertexCapacity,
                    uint32_t chunkCapacity, CounterBuffer& counters)
     : context_(context), table_(table), blockCapacity_(blockCapacity), vertexCapacity_(vertexCapacity), chunkCapacity_(chunkCapacity) {
@@ -125,6 +127,40 @@ std::array<uint64_t, 256> CubeMesh::surfaceCubeTypes() const {
     for (uint32_t st : state)
         if ((st >> CUBE_CHUNK_SHIFT) != 0) ++histogram[st & CUBE_TYPE_MASK];
     return histogram;
+}
+
+void CubeMesh::save(map::MapData& map, const std::vector<uint32_t>& blocks, const Counters& k) const {
+    const vk::Buffer* arrays[4] = {&cubeState_, &edgeVertex_[0], &edgeVertex_[1], &edgeVertex_[2]};
+    for (int i = 0; i < 4; ++i) {
+        map::CornerArray out{kCornerTags[i], std::vector<uint32_t>(blocks.size() * VOXELS_PER_BLOCK)};
+        downloadRecords(context_, *arrays[i], 4 * VOXELS_PER_BLOCK, blocks, out.words.data());
+        map.cornerArrays.push_back(std::move(out));
+    }
+    map.vertexFree = map::FreeStack::fromEntries(downloadWords(context_, vertexFree_, k.vertexFreeTop), vertexCapacity_);
+    map.chunkFree = map::FreeStack::fromEntries(downloadWords(context_, chunkFree_, k.chunkFreeTop), chunkCapacity_);
+    // Every index at or above the untouched run is free (never used since the heap was last reset): only the
+    // heap below it is stored.
+    const uint32_t vertices = map.vertexFree.firstUntouched, chunks = map.chunkFree.firstUntouched;
+    map.vertices.resize(vertices);
+    if (vertices) vk::downloadFromBuffer(context_, vertices_, map.vertices.data(), VkDeviceSize(vertices) * sizeof(Vertex));
+    map.vertexOwners = downloadWords(context_, vertexOwner_, vertices);
+    map.chunkWords = downloadWords(context_, chunkTriangles_, size_t(chunks) * CHUNK_WORDS);
+}
+
+void CubeMesh::load(const map::MapData& map, const std::vector<uint32_t>& blocks, CounterBuffer& counters) {
+    const vk::Buffer* arrays[4] = {&cubeState_, &edgeVertex_[0], &edgeVertex_[1], &edgeVertex_[2]};
+    for (int i = 0; i < 4; ++i) uploadRecords(context_, *arrays[i], 4 * VOXELS_PER_BLOCK, blocks, map.corners(kCornerTags[i])->words.data());
+    if (!map.vertices.empty())
+        vk::uploadToBuffer(context_, vertices_, map.vertices.data(), VkDeviceSize(map.vertices.size()) * sizeof(Vertex));
+    uploadWords(context_, vertexOwner_, map.vertexOwners);
+    uploadWords(context_, chunkTriangles_, map.chunkWords);
+    const std::vector<uint32_t> vertexStack = map.vertexFree.entries(vertexCapacity_), chunkStack = map.chunkFree.entries(chunkCapacity_);
+    uploadWords(context_, vertexFree_, vertexStack);
+    uploadWords(context_, chunkFree_, chunkStack);
+    counters.update([&](Counters& k) {
+        k.vertexFreeTop = uint32_t(vertexStack.size());
+        k.chunkFreeTop = uint32_t(chunkStack.size());
+    });
 }
 
 }  // namespace vkmesh::gpu

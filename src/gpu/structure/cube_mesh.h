@@ -7,6 +7,7 @@
 
 #include <array>
 
+#include "core/map_format.h"
 #include "gpu/structure/component.h"
 #include "gpu/structure/counter_buffer.h"
 #include "gpu/layout.h"
@@ -49,6 +50,13 @@ public:
     }
 
     static constexpr uint64_t kBytesPerBlock = 4ull * 4 * VOXELS_PER_BLOCK;   // cube state + 3 edge slots per cube
+
+    // Map files (docs/MAPFILE.md): the per-cube arrays (one section each, like BlockStore's), the vertex heap,
+    // owners and chunks below their free stacks' untouched runs, and the free stacks.
+    static const std::vector<uint32_t> kCornerTags;   // cube state, edge slots x, y, z
+    void save(map::MapData& map, const std::vector<uint32_t>& blocks, const Counters& k) const;
+    // Into a mesh just created (capacities >= the map's); sets the free-stack tops in the counters.
+    void load(const map::MapData& map, const std::vector<uint32_t>& blocks, CounterBuffer& counters);
 
 private:
     const vk::Context& context_;

@@ -52,4 +52,18 @@ void FrameLists::grow(const FrameListCapacities& wanted) {
     capacities_ = c;
 }
 
+void FrameLists::saveRetypeMasks(map::MapData& map, const std::vector<uint32_t>& blocks) const {
+    std::vector<uint32_t> masks(blocks.size() * MASK_WORDS);
+    downloadRecords(context_, retypeMask_, 4 * MASK_WORDS, blocks, masks.data());
+    for (size_t i = 0; i < blocks.size(); ++i) std::copy_n(&masks[i * MASK_WORDS], MASK_WORDS, map.blocks[i].retypeMask.begin());
+}
+
+void FrameLists::loadRetypeMasks(const map::MapData& map, const std::vector<uint32_t>& blocks) {
+    std::vector<uint32_t> masks(blocks.size() * MASK_WORDS);
+    for (size_t i = 0; i < blocks.size(); ++i) std::copy_n(map.blocks[i].retypeMask.begin(), MASK_WORDS, &masks[i * MASK_WORDS]);
+    uploadRecords(context_, retypeMask_, 4 * MASK_WORDS, blocks, masks.data());
+}
+
+void FrameLists::uploadBlockList(const std::vector<uint32_t>& blocks) { uploadWords(context_, blockList_, blocks); }
+
 }  // namespace vkmesh::gpu

@@ -9,6 +9,7 @@
 //   garbage      GC candidate vertices and released chunks (claim, triangulate -> mesh_gc).
 #pragma once
 
+#include "core/map_format.h"
 #include "gpu/structure/component.h"
 #include "gpu/layout.h"
 
@@ -33,6 +34,12 @@ public:
     // Between frames: lists for larger capacities (never smaller). The persistent parts (mesh stamps,
     // retype masks) keep their contents; the rest only ever holds the current frame's entries.
     void grow(const FrameListCapacities& capacities);
+    // Map files: the live blocks' retype masks (the only persistent list besides the mesh stamps, which
+    // only ever compare equal to the current frame number and so need not be kept).
+    void saveRetypeMasks(map::MapData& map, const std::vector<uint32_t>& blocks) const;
+    void loadRetypeMasks(const map::MapData& map, const std::vector<uint32_t>& blocks);
+    // The live block list (blockList), as collect_blocks would write it: what the hash re-insertion reads.
+    void uploadBlockList(const std::vector<uint32_t>& blocks);
     void pools(std::vector<PoolInfo>& out) const {
         listPools(out, {&touched_, &blockList_, &meshStamps_, &dirtyList_, &retypeMask_, &retypeList_, &garbage_});
     }
