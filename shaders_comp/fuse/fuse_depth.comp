@@ -57,7 +57,7 @@ void main() {
                         if ((rgba >> 24) != 0u) {
                             uint oldColor = fresh ? 0u : voxelColor[v];
                             uvec3 rgb = uvec3(rgba, rgba >> 8, rgba >> 16) & 0xFFu;
-                            voxelColor[v] = foldVoxelColor(oldColor, oldWeight, rgb, origin + ivec3(l), frame.frameNumber);
+                            voxelColor[v] = foldVoxelColor(oldColor, oldWeight, newSdf, rgb, origin + ivec3(l));
                         } else if (fresh && params.colorMode != COLOR_MODE_OFF) {
                             voxelColor[v] = 0u;
                         }

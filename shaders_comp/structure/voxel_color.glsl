@@ -13,12 +13,14 @@ uint packVoxelColor(uvec3 q) {
     return q.x | (q.y << VOXEL_COLOR_BITS) | (q.z << (2u * VOXEL_COLOR_BITS)) | VOXEL_COLOR_SET;
 }
 
-// A value in [0, 1) from the corner's grid position and the frame number (a fixed integer hash), so that
-// rounding a running average to the stored precision is unbiased, yet every run (and the CPU reference)
-// rounds alike: the position, unlike the corner's place in the pool, does not depend on thread scheduling.
-float colorDither(ivec3 corner, uint frameNumber) {
+// A value in [0, 1) from the corner's grid position and a salt that changes with every observation (a fixed
+// integer hash), so that rounding a running average to the stored precision is unbiased, yet every run (and
+// the CPU reference) rounds alike. Neither input depends on thread scheduling (the corner's place in the pool
+// would) or on frame numbers (a frame run again after growing a capacity gets a new one): the colour is a
+// function of the frames fused, whatever the capacities.
+float colorDither(ivec3 corner, uint salt) {
     uvec3 c = uvec3(corner);
-    uint h = (c.x * 0x9E3779B1u) ^ (c.y * 0x85EBCA77u) ^ (c.z * 0xC2B2AE3Du) ^ (frameNumber * 0x27D4EB2Fu);
+    uint h = (c.x * 0x9E3779B1u) ^ (c.y * 0x85EBCA77u) ^ (c.z * 0xC2B2AE3Du) ^ (salt * 0x27D4EB2Fu);
     h ^= h >> 16;
     h *= 0x7FEB352Du;
     h ^= h >> 15;
@@ -28,10 +30,11 @@ float colorDither(ivec3 corner, uint frameNumber) {
 }
 
 // The corner's colour word after one more observation `rgb` (8-bit), `oldWeight` being the corner's TSDF
-// weight before this frame's update: the running average with the TSDF's weights, or the exponential one.
+// weight before this frame's update and `newSdf` its distance after it (with the weight, the dither's salt):
+// the running average with the TSDF's weights, or the exponential one.
 // A corner without a colour yet, or without weight (a block handed out again, or emptied by recycling), takes
 // the pixel's.
-uint foldVoxelColor(uint old, float oldWeight, uvec3 rgb, ivec3 corner, uint frameNumber) {
+uint foldVoxelColor(uint old, float oldWeight, float newSdf, uvec3 rgb, ivec3 corner) {
     vec3 target = vec3(rgb * VOXEL_COLOR_SCALE);
     if ((old & VOXEL_COLOR_SET) == 0u || oldWeight == 0.0) return packVoxelColor(rgb * VOXEL_COLOR_SCALE);
     vec3 prev = unpackVoxelColor(old);
@@ -41,7 +44,7 @@ uint foldVoxelColor(uint old, float oldWeight, uvec3 rgb, ivec3 corner, uint fra
     } else {
         mixed = (prev * oldWeight + target) / (oldWeight + 1.0);
     }
-    precise vec3 dithered = mixed + colorDither(corner, frameNumber);
+    precise vec3 dithered = mixed + colorDither(corner, floatBitsToUint(newSdf) + floatBitsToUint(oldWeight) * 0x2545F491u);
     return packVoxelColor(uvec3(min(floor(dithered), vec3(float(255u * VOXEL_COLOR_SCALE)))));
 }
 

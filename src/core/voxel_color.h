@@ -4,6 +4,7 @@
 #pragma once
 
 #include <algorithm>
+#include <bit>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -34,9 +35,9 @@ inline std::array<uint8_t, 3> voxelColor8(uint32_t word) {
     return out;
 }
 
-inline float colorDither(const std::array<int, 3>& corner, uint32_t frameNumber) {
+inline float colorDither(const std::array<int, 3>& corner, uint32_t salt) {
     const uint32_t x = uint32_t(corner[0]), y = uint32_t(corner[1]), z = uint32_t(corner[2]);
-    uint32_t h = (x * 0x9E3779B1u) ^ (y * 0x85EBCA77u) ^ (z * 0xC2B2AE3Du) ^ (frameNumber * 0x27D4EB2Fu);
+    uint32_t h = (x * 0x9E3779B1u) ^ (y * 0x85EBCA77u) ^ (z * 0xC2B2AE3Du) ^ (salt * 0x27D4EB2Fu);
     h ^= h >> 16;
     h *= 0x7FEB352Du;
     h ^= h >> 15;
@@ -46,13 +47,13 @@ inline float colorDither(const std::array<int, 3>& corner, uint32_t frameNumber)
 }
 
 // colorMode / colorRecency: gpu::VolumeParamsGpu's; corner: the corner's global grid position (block * 8 +
-// local), which seeds the dither.
-inline uint32_t foldVoxelColor(uint32_t old, float oldWeight, const uint8_t rgb[3], const std::array<int, 3>& corner, uint32_t frameNumber,
+// local); with the weight before and the distance after the update, it seeds the dither.
+inline uint32_t foldVoxelColor(uint32_t old, float oldWeight, float newSdf, const uint8_t rgb[3], const std::array<int, 3>& corner,
                                uint32_t colorMode, float colorRecency) {
     const uint32_t scale = gpu::VOXEL_COLOR_SCALE;
     if (!hasVoxelColor(old) || oldWeight == 0.0f) return packVoxelColor(rgb[0] * scale, rgb[1] * scale, rgb[2] * scale);
     const ColorChannels prev = unpackVoxelColor(old);
-    const float dither = colorDither(corner, frameNumber);
+    const float dither = colorDither(corner, std::bit_cast<uint32_t>(newSdf) + std::bit_cast<uint32_t>(oldWeight) * 0x2545F491u);
     uint32_t q[3];
     for (int i = 0; i < 3; ++i) {
         const float target = float(rgb[i] * scale);

@@ -22,8 +22,7 @@ bool cornerFlipped(float oldSdf, float oldWeight, float newSdf, float newWeight,
 }
 
 uint32_t fuseBlock(ReferenceBlock& block, const BlockCoord& c, const DepthImage& depth, const gpu::FramePush& push,
-                   const FusionRule& rule, std::vector<std::array<int, 3>>* flipped, const ColorImage* color,
-                   uint32_t frameNumber) {
+                   const FusionRule& rule, std::vector<std::array<int, 3>>* flipped, const ColorImage* color) {
     const bool withColor = rule.colorFusion != ColorFusion::Off && color && !color->empty();
     const float fx = push.intrinsics[0], fy = push.intrinsics[1], cx = push.intrinsics[2], cy = push.intrinsics[3];
     const float truncation = rule.truncation;
@@ -50,9 +49,9 @@ uint32_t fuseBlock(ReferenceBlock& block, const BlockCoord& c, const DepthImage&
         block.weight[v] = newWeight;
         ++updated;
         if (withColor)
-            block.color[v] = foldVoxelColor(block.color[v], oldWeight, color->at(int(pu), int(pv)),
-                                            {c[0] * side + lx, c[1] * side + ly, c[2] * side + lz}, frameNumber,
-                                            uint32_t(rule.colorFusion), rule.colorRecency);
+            block.color[v] = foldVoxelColor(block.color[v], oldWeight, newSdf, color->at(int(pu), int(pv)),
+                                            {c[0] * side + lx, c[1] * side + ly, c[2] * side + lz}, uint32_t(rule.colorFusion),
+                                            rule.colorRecency);
         // Corners not updated keep their values and never flip.
         if (flipped && cornerFlipped(oldSdf, oldWeight, newSdf, newWeight, rule))
             flipped->push_back({c[0] * side + lx, c[1] * side + ly, c[2] * side + lz});

@@ -31,12 +31,11 @@ bool cornerFlipped(float oldSdf, float oldWeight, float newSdf, float newWeight,
 // Fuses the frame (push: its camera and depth range) into one block at `coord`: every corner that projects
 // into the image onto a valid depth d with sdf = d - z >= -truncation gets sdf' = (sdf w + min(sdf, trunc)) /
 // (w + 1), w' = min(w + 1, maxWeight), and, when `color` is given and colour fusion is on, its colour at the
-// same pixel folded into the corner's (foldVoxelColor, core/voxel_color.h; frameNumber seeds the dither).
+// same pixel folded into the corner's (foldVoxelColor, core/voxel_color.h).
 // Appends the corners that flipped (global voxel coordinates) to `flipped` in corner order; returns the
 // number of corners updated.
 uint32_t fuseBlock(ReferenceBlock& block, const BlockCoord& coord, const DepthImage& depth, const gpu::FramePush& push,
-                   const FusionRule& rule, std::vector<std::array<int, 3>>* flipped, const ColorImage* color = nullptr,
-                   uint32_t frameNumber = 1);
+                   const FusionRule& rule, std::vector<std::array<int, 3>>* flipped, const ColorImage* color = nullptr);
 
 // For every flipped corner (global voxel coordinates), the 8 cubes around it (corner - o, o in {0,1}^3) in
 // whatever block they lie, for the blocks in `blocks`: the cubes whose MC (or refined) type may have changed.

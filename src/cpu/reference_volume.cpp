@@ -58,7 +58,7 @@ ReferenceFrameStats ReferenceVolume::integrate(const DepthImage& depth, const In
     for (const BlockCoord& c : touched) {
         auto [it, inserted] = blocks_.try_emplace(c);
         if (inserted) ++stats.blocksInserted;
-        stats.updatedVoxels += fuseBlock(it->second, c, depth, push, rule, &lastFlipped_, color, frame_ + 1);
+        stats.updatedVoxels += fuseBlock(it->second, c, depth, push, rule, &lastFlipped_, color);
     }
     lastTouched_ = std::move(touched);
 

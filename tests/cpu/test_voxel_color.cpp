@@ -20,7 +20,7 @@ ColorChannels foldSequence(int frames, uint32_t mode, float recency, Observe obs
     float weight = 0;
     for (int f = 1; f <= frames; ++f) {
         const std::array<uint8_t, 3> rgb = observe(f);
-        word = foldVoxelColor(word, weight, rgb.data(), corner, uint32_t(f), mode, recency);
+        word = foldVoxelColor(word, weight, 0.01f * float(f % 7), rgb.data(), corner, mode, recency);
         weight = std::min(weight + 1.0f, 255.0f);
     }
     EXPECT_TRUE(hasVoxelColor(word));
@@ -29,12 +29,12 @@ ColorChannels foldSequence(int frames, uint32_t mode, float recency, Observe obs
 
 TEST(VoxelColor, FirstObservationIsStoredExactly) {
     const uint8_t rgb[3] = {0, 128, 255};
-    const uint32_t word = foldVoxelColor(0, 0.0f, rgb, {0, 0, 0}, 1, kAverage, 0.2f);
+    const uint32_t word = foldVoxelColor(0, 0.0f, 0.0f, rgb, {0, 0, 0}, kAverage, 0.2f);
     EXPECT_TRUE(hasVoxelColor(word));
     EXPECT_EQ(voxelColor8(word), (std::array<uint8_t, 3>{0, 128, 255}));
     // A corner that lost its weight (recycled, or a block handed out again) starts afresh.
     const uint8_t other[3] = {10, 20, 30};
-    EXPECT_EQ(voxelColor8(foldVoxelColor(word, 0.0f, other, {0, 0, 0}, 2, kAverage, 0.2f)), (std::array<uint8_t, 3>{10, 20, 30}));
+    EXPECT_EQ(voxelColor8(foldVoxelColor(word, 0.0f, 0.0f, other, {0, 0, 0}, kAverage, 0.2f)), (std::array<uint8_t, 3>{10, 20, 30}));
 }
 
 TEST(VoxelColor, ConstantColourStaysExact) {

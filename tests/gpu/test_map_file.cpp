@@ -3,6 +3,7 @@
 // and into larger capacities; a map that cannot be loaded is an Error naming the file and the problem.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <cstring>
 #include <map>
@@ -25,7 +26,8 @@ using test::GpuTest;
 
 constexpr int kWidth = 160, kHeight = 120;
 
-// Frames [from, to) of the noisy orbit around the synthetic room (the same frame i whoever fuses it).
+// Frames [from, to) of the noisy orbit around the synthetic room, with its textures' colour (the same frame i
+// whoever fuses it).
 void integrateFrames(gpu::GpuVolume& volume, size_t from, size_t to) {
     static const synth::SyntheticScene scene = synth::SyntheticScene::defaultRoom();
     const Intrinsics intr = synth::kinectIntrinsics(kWidth, kHeight);
@@ -35,7 +37,9 @@ void integrateFrames(gpu::GpuVolume& volume, size_t from, size_t to) {
         options.noise = true;
         options.seed = uint32_t(i + 1);
         const Pose& pose = poses[i % poses.size()];
-        const gpu::FrameReport r = volume.integrate(scene.renderDepth(intr, pose, options), intr, pose);
+        ColorImage color;
+        const DepthImage depth = scene.renderDepth(intr, pose, options, &color);
+        const gpu::FrameReport r = volume.integrate(depth, &color, intr, pose);
         EXPECT_TRUE(r.warnings.empty()) << r.warnings.front();
     }
 }
@@ -57,24 +61,28 @@ gpu::GpuVolumeConfig resumeConfig(bool recycling) {
     return c;
 }
 
-// What must be equal: every live block's TSDF bits (by coordinate), the mesh as a set of triangles, and each
-// vertex's position bits with its age and refcount.
+// What must be equal: every live block's TSDF bits and colour words (by coordinate), the mesh as a set of
+// triangles, and each vertex's position bits with its age, refcount and colour.
 struct State {
     std::map<std::tuple<int, int, int>, std::pair<std::vector<float>, std::vector<float>>> tsdf;
+    std::map<std::tuple<int, int, int>, std::vector<uint32_t>> color;
     std::vector<CanonicalTriangle> triangles;
-    std::vector<std::tuple<uint32_t, uint32_t, uint32_t, uint32_t, uint32_t>> vertices;   // position bits, createdFrame, refcount
+    std::vector<std::tuple<uint32_t, uint32_t, uint32_t, uint32_t, uint32_t, uint32_t>> vertices;   // position bits, createdFrame, refcount, colour
     uint32_t frameNumber = 0;
 };
 
 State stateOf(gpu::GpuVolume& volume) {
     State s;
-    for (auto& b : volume.downloadBlocks()) s.tsdf[{b.coord.x(), b.coord.y(), b.coord.z()}] = {std::move(b.sdf), std::move(b.weight)};
+    for (auto& b : volume.downloadBlocks()) {
+        s.color[{b.coord.x(), b.coord.y(), b.coord.z()}] = std::move(b.color);
+        s.tsdf[{b.coord.x(), b.coord.y(), b.coord.z()}] = {std::move(b.sdf), std::move(b.weight)};
+    }
     const gpu::ExportedMesh mesh = volume.exportMesh();
     s.triangles = canonicalTriangles(test::soupOf(mesh));
     for (const gpu::Vertex& v : mesh.vertices) {
         uint32_t p[3];
         std::memcpy(p, &v.px, 12);
-        s.vertices.emplace_back(p[0], p[1], p[2], v.createdFrame, v.refcount);
+        s.vertices.emplace_back(p[0], p[1], p[2], v.createdFrame, v.refcount, v.color);
     }
     std::sort(s.vertices.begin(), s.vertices.end());
     s.frameNumber = volume.frameNumber();
@@ -93,6 +101,10 @@ void expectSameState(const State& a, const State& b, bool sameAges = true) {
         differingBlocks += !same;
     }
     EXPECT_EQ(differingBlocks, 0u) << "blocks whose TSDF bits differ";
+    EXPECT_TRUE(a.color == b.color) << "colour words differ";
+    size_t colored = 0;
+    for (const auto& [coord, words] : a.color) colored += std::count_if(words.begin(), words.end(), [](uint32_t w) { return w != 0; });
+    EXPECT_GT(colored, 1000u) << "the run fused colour";
     EXPECT_GT(a.triangles.size(), 1000u);
     EXPECT_EQ(countTriangleMismatches(a.triangles, b.triangles, 0), 0u);
     EXPECT_EQ(a.triangles.size(), b.triangles.size());

@@ -15,7 +15,7 @@ AllocateBlocksStage::AllocateBlocksStage(const vk::Context& context, const vk::B
 void AllocateBlocksStage::record(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters,
                                  uint32_t pixelStride) const {
     uint32_t width = ((push.imageSize & 0xFFFFu) + pixelStride - 1) / pixelStride;
-    uint32_t height = ((push.imageSize >> 16) + pixelStride - 1) / pixelStride;
+    uint32_t height = (((push.imageSize >> 16) & FRAME_HEIGHT_MASK) + pixelStride - 1) / pixelStride;   // not FRAME_HAS_COLOR
     allocate_.dispatch(cmd, &push, (width + WG_PIXELS_X - 1) / WG_PIXELS_X, (height + WG_PIXELS_Y - 1) / WG_PIXELS_Y);
     vk::memoryBarrier(cmd);
     plan_.dispatch(cmd, &push, 1);
