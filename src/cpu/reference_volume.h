@@ -39,7 +39,7 @@ public:
     // minMeshWeight: a corner is "observed" (meshable) from this weight on; refine / refineEpsilon (metres):
     // whether mesh refinement is on (then a corner crossing |d| < epsilon also flips, see lastFlipped());
     // a negative epsilon stands for the default, defaultRefineEpsilon(voxelSize) = half a voxel.
-    explicit ReferenceVolume(const VolumeParams& params, float minMeshWeight = 1.0f, bool refine = false,
+    explicit ReferenceVolume(const VolumeParams& params, float minMeshWeight = 1.0f, bool refine = true,
                              float refineEpsilon = -1.0f);
 
     // The same settings afterwards (they apply from the next integrate() on). Negative epsilon: the default.
