@@ -158,16 +158,18 @@ uint refinedCubeType(CubeRef r, uint block) {
         bool meshInside = ((uint(raw[13]) >> c) & 1u) != 0u;
         if (abs(dCube[c]) < params.refineEpsilon) {
             // The 8 cubes around the corner (corner 0 at p - o; the corner is their corner o): flip when that
-            // strictly lowers their summed distance to the good types.
+            // strictly lowers their summed distance to the good types. Decided only with all 8 observed: at the
+            // rim of the observed surface a flip would move the rim.
             int keep = 0, flip = 0;
+            bool all8 = true;
             for (uint o = 0u; o < 8u; ++o) {
                 uvec3 q = p + uvec3(1u) - cornerOffset(o);
                 int t = raw[q.x + 3u * q.y + 9u * q.z];
-                if (t < 0) continue;
-                keep += regularDistance(uint(t));
-                flip += regularDistance(uint(t) ^ (1u << o));
+                all8 = all8 && t >= 0;
+                keep += regularDistance(uint(max(t, 0)));
+                flip += regularDistance(uint(max(t, 0)) ^ (1u << o));
             }
-            if (flip < keep) meshInside = !meshInside;
+            if (all8 && flip < keep) meshInside = !meshInside;
         }
         if (meshInside) type |= 1u << c;
     }

@@ -75,14 +75,19 @@ int refinedCubeType(const float d[kWindowSize], const bool observed[kWindowSize]
         bool inside = (raw[13] >> c) & 1;
         if (std::fabs(d[windowIndex(x, y, z)]) < epsilon) {
             // The 8 cubes around the corner: corner 0 at (x, y, z) - o, the corner is their corner o.
+            // Decided only with all 8 observed: at the rim of the observed surface a flip would move the rim.
             int keep = 0, flip = 0;
+            bool all8 = true;
             for (int o = 0; o < 8; ++o) {
                 const int t = raw[(x - (o & 1) + 1) + 3 * (y - ((o >> 1) & 1) + 1) + 9 * (z - ((o >> 2) & 1) + 1)];
-                if (t < 0) continue;
+                if (t < 0) {
+                    all8 = false;
+                    break;
+                }
                 keep += regularDistance(t);
                 flip += regularDistance(t ^ (1 << o));
             }
-            if (flip < keep) inside = !inside;
+            if (all8 && flip < keep) inside = !inside;
         }
         if (inside) type |= 1 << c;
     }

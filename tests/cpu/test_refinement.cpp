@@ -271,7 +271,9 @@ TEST(CornerRefinement, NeighboursAgreeOnSharedCornersAndOnlyNearCornersFlip) {
                     if ((axis == 0 ? x : axis == 1 ? y : z) + 1 >= n - 3) continue;
                     const int u = f.refined(x + (axis == 0), y + (axis == 1), z + (axis == 2), eps);
                     for (int c = 0; c < 8; ++c)
-                        if ((c >> axis) & 1) ASSERT_EQ((r >> c) & 1, (u >> (c ^ (1 << axis))) & 1) << "crack at " << x << " " << y << " " << z;
+                        if ((c >> axis) & 1) {
+                            ASSERT_EQ((r >> c) & 1, (u >> (c ^ (1 << axis))) & 1) << "crack at " << x << " " << y << " " << z;
+                        }
                 }
             }
     std::cout << "[ corner refinement ] " << surface << " surface cubes, irregular " << irregularRaw << " raw, "
