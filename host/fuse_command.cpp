@@ -288,6 +288,7 @@ int runFuse(const FuseArgs& args) {
     size_t baselineVertices = 0;
     uint32_t unreferenced = 0;
     double sliverTriangleShare = 0, irregularCubeShare = 0;
+    size_t boundaryEdges = 0, nonManifoldEdges = 0;   // of the shared-vertex mesh (a soup has no shared edges)
     if (config.meshMode == gpu::MeshMode::Incremental) {
         gpu::ExportedMesh exported = volume.exportMesh(&meshMs);
         unreferenced = exported.unreferencedVertices;
@@ -303,6 +304,10 @@ int runFuse(const FuseArgs& args) {
             if (!isRegularType(t)) irregular += types[t];
         }
         irregularCubeShare = surface ? double(irregular) / double(surface) : 0.0;
+        // Cracks (what refinement must not open): edges with one triangle.
+        const TopologyReport topology = analyzeTopology(mesh);
+        boundaryEdges = topology.boundaryEdges;
+        nonManifoldEdges = topology.nonManifoldEdges;
     } else {
         gpu::TriangleSoup soup = volume.extractBaselineMesh(&meshMs);
         mesh.positions = soup.vertices;
@@ -344,7 +349,9 @@ int runFuse(const FuseArgs& args) {
                      {"vertices_vs_baseline", baselineVertices ? double(mesh.positions.size()) / baselineVertices : 0.0},
                      {"unreferenced_vertices", unreferenced},
                      {"sliver_triangle_share", sliverTriangleShare},   // smallest angle < 10 degrees
-                     {"irregular_cube_share", irregularCubeShare}};
+                     {"irregular_cube_share", irregularCubeShare},
+                     {"boundary_edges", boundaryEdges},
+                     {"non_manifold_edges", nonManifoldEdges}};
     if (config.meshMode == gpu::MeshMode::Incremental) {
         const gpu::GpuVolumeConfig& c = volume.config();
         stats["heaps"] = {{"vertices", {{"capacity", c.vertexCapacity}, {"live", k.verticesInUse}, {"free", k.vertexFreeTop},

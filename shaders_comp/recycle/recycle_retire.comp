@@ -2,8 +2,8 @@
 // Recycling, phase 1 (after fusion and mark_dirty, before the mesh passes): one workgroup per live block
 // (collect_blocks). A block beyond the keep radius has every weight set to 0; a block idle for
 // starveAfterFrames frames loses starveWeight per corner (not below 0). A corner that stops being
-// observed (weight drops below minMeshWeight) marks the 8 cubes around it for retyping, exactly as fusion
-// does, and the block and its -x/-y/-z neighbours (whose cubes read its corners) become dirty: the mesh
+// observed (weight drops below minMeshWeight) marks the cubes around it for retyping, exactly as fusion
+// does, and the block and its -x/-y/-z neighbours (whose cubes read its corners; with refinement all 26) become dirty: the mesh
 // passes of this same frame then release every triangle that read those corners, and GC frees their
 // vertices. recycle_free frees the block once it owns no TSDF weight, triangle or vertex.
 #extension GL_GOOGLE_include_directive : require
@@ -36,10 +36,13 @@ void main() {
             if ((flipped & (1u << k)) != 0u) markCornerRetype(block, gl_LocalInvocationIndex + k * WG_BLOCK);
         // One invocation per subgroup that saw a flip lists the dirty blocks; the stamp lists each once.
         if (subgroupOr(flipped) != 0u && subgroupElect()) {
+            // With refinement the marks reach the blocks at +-1 too (retype_marks.glsl), as in mark_dirty.
             ivec3 coord = blockCoords[block].xyz;
-            for (uint o = 0u; o < 8u; ++o) {
-                ivec3 offset = ivec3(o & 1u, (o >> 1) & 1u, (o >> 2) & 1u);
-                uint b = o == 0u ? block : findBlock(coord - offset);
+            uint n = params.refine != 0u ? 27u : 8u;
+            for (uint o = 0u; o < n; ++o) {
+                ivec3 offset = params.refine != 0u ? ivec3(int(o % 3u), int((o / 3u) % 3u), int(o / 9u)) - 1
+                                                   : ivec3(o & 1u, (o >> 1) & 1u, (o >> 2) & 1u);
+                uint b = offset == ivec3(0) ? block : findBlock(coord - offset);
                 if (b == NO_BLOCK) continue;
                 if (meshStamps[b] != frame.frameNumber && atomicExchange(meshStamps[b], frame.frameNumber) != frame.frameNumber)
                     dirtyList[atomicAdd(counters.dirtyCount, 1u)] = b;

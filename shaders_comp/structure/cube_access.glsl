@@ -83,42 +83,101 @@ uint edgeSlot(CubeRef r, uint e) {
 // Position of the vertex on the edge from corner `lo` along `axis` of the cube: linear interpolation of
 // the zero crossing, in grid units, then metres. Written out so the CPU reference reproduces it bit for
 // bit; the baseline and the shared-vertex mesh use this one function, so their vertices coincide exactly.
-// s is clamped to [-0.5, 1.5]: refinement can make an edge whose corners share a sign carry a vertex,
-// extrapolated as the paper intends; where the corners differ in sign s is in (0, 1] and unchanged.
+// s is clamped to [0, 1]: refinement can make an edge whose corners share a sign carry a vertex (one corner
+// flipped for meshing); the zero crossing extrapolated from its values lies beyond the flipped corner, and the
+// vertex stops at that corner, the nearest point of its edge. Where the corners differ in sign s is in (0, 1]
+// and unchanged. Equal values (only possible on such an edge): the midpoint.
 vec3 edgeVertexPosition(CubeRef r, uint lo, uint axis, float dLo, float dHi) {
-    precise float s = clamp(dLo / (dLo - dHi), -0.5, 1.5);
+    precise float s = dLo == dHi ? 0.5 : clamp(dLo / (dLo - dHi), 0.0, 1.0);
     precise vec3 p = vec3(r.origin + ivec3(r.cube + cornerOffset(lo)));
     p[axis] += s;
     precise vec3 world = p * params.voxelSize;
     return world;
 }
 
-// ---- refinement (paper §V.F, docs/REFINEMENT.md) ---------------------------------------------------
-// The six half-cube types (a plane parallel to a face), in vkmesh's corner numbering; the order breaks ties.
+// ---- refinement, flips decided per corner (docs/REFINEMENT.md; src/core/refinement.cpp is the CPU twin) --------
+// The six half-cube types (a plane parallel to a face), in vkmesh's corner numbering.
 const uint REGULAR_TYPES[6] = uint[6](0x0Fu, 0xF0u, 0x33u, 0xCCu, 0x55u, 0xAAu);
 
-// The type MC uses for a cube whose triangles were built from `prev` and whose corners now give `t`:
-// a nearby regular type when the corners it flips are all within refineEpsilon of the surface.
-uint refineType(uint prev, uint t, float d[8]) {
-    if (params.refine == 0u || t == 0u || t == 255u || bitCount(prev ^ t) > 3) return t;
-    for (uint k = 0u; k < 6u; ++k) if (REGULAR_TYPES[k] == t) return t;
-    uint best = t;
-    float bestCost = 0.0;
-    for (uint k = 0u; k < 6u; ++k) {
-        uint flips = REGULAR_TYPES[k] ^ t;
-        if (bitCount(flips) > 3) continue;
-        float cost = 0.0;
-        bool ok = true;
-        for (uint i = 0u; i < 8u; ++i) {
-            if ((flips & (1u << i)) == 0u) continue;
-            ok = ok && abs(d[i]) < params.refineEpsilon;
-            cost += abs(d[i]);
-        }
-        if (ok && (best == t || cost < bestCost)) {
-            best = REGULAR_TYPES[k];
-            bestCost = cost;
-        }
-    }
+// Hamming distance from type t to the nearest of 0, 255 and the six regular types.
+int regularDistance(uint t) {
+    int best = min(bitCount(t), 8 - bitCount(t));
+    for (uint k = 0u; k < 6u; ++k) best = min(best, bitCount(REGULAR_TYPES[k] ^ t));
     return best;
+}
+
+// The type MC builds for cube r of `block` when refinement is on. A corner's meshing sign is a pure function
+// of the signs of the 3x3x3 corners around it and of its own |d| < refineEpsilon, so every cube sharing the
+// corner computes the same sign (no cracks) without talking to the others. The cube reads the 4x4x4 corners
+// at offsets -1..2 from its corner 0, which lie in its block and the blocks around it (found in the hash).
+uint refinedCubeType(CubeRef r, uint block) {
+    ivec3 coord = blockCoords[block].xyz;
+    // The blocks at offsets -1..1 the window reaches (index (x+1) + 3 (y+1) + 9 (z+1)); NO_BLOCK elsewhere.
+    uint around[27];
+    for (uint i = 0u; i < 27u; ++i) {
+        ivec3 o = ivec3(int(i % 3u), int((i / 3u) % 3u), int(i / 9u)) - 1;
+        bvec3 reach = bvec3(o.x == 0 || (o.x < 0 ? r.cube.x == 0u : r.cube.x >= BLOCK_SIDE - 2u),
+                            o.y == 0 || (o.y < 0 ? r.cube.y == 0u : r.cube.y >= BLOCK_SIDE - 2u),
+                            o.z == 0 || (o.z < 0 ? r.cube.z == 0u : r.cube.z >= BLOCK_SIDE - 2u));
+        around[i] = !all(reach) ? NO_BLOCK : (i == 13u ? block : findBlock(coord + o));
+    }
+    // Window corner w at offset (w % 4, w / 4 % 4, w / 16) - 1: its sign and whether it is observed.
+    bool inside[64], seen[64];
+    float dCube[8] = float[8](0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+    for (uint w = 0u; w < 64u; ++w) {
+        ivec3 g = ivec3(r.cube) + ivec3(int(w % 4u), int((w / 4u) % 4u), int(w / 16u)) - 1;   // in [-1, 9]
+        ivec3 o = ivec3(greaterThanEqual(g, ivec3(BLOCK_SIDE))) - ivec3(lessThan(g, ivec3(0)));
+        uint nb = around[(o.x + 1) + 3 * (o.y + 1) + 9 * (o.z + 1)];
+        inside[w] = false;
+        seen[w] = nb != NO_BLOCK;
+        if (!seen[w]) continue;
+        uint v = voxelIndex(nb, uvec3(g - o * int(BLOCK_SIDE)));
+        seen[w] = voxelWeight[v] >= params.minMeshWeight;
+        inside[w] = voxelSdf[v] < 0.0;
+        uvec3 c = uvec3(g - ivec3(r.cube));   // a corner of the cube itself: keep its value for the epsilon test
+        if (all(lessThan(c, uvec3(2u)))) dCube[c.x | (c.y << 1) | (c.z << 2)] = voxelSdf[v];
+    }
+    // Raw types of the 27 cubes with corner 0 at offsets -1..1 (index i + 3 j + 9 k), -1 if one corner is unobserved.
+    int raw[27];
+    for (uint q = 0u; q < 27u; ++q) {
+        uvec3 base = uvec3(q % 3u, (q / 3u) % 3u, q / 9u);   // window offset + 1 of the cube's corner 0
+        uint t = 0u;
+        bool all8 = true;
+        for (uint c = 0u; c < 8u; ++c) {
+            uvec3 p = base + cornerOffset(c);
+            uint w = p.x + 4u * (p.y + 4u * p.z);
+            all8 = all8 && seen[w];
+            if (inside[w]) t |= 1u << c;
+        }
+        raw[q] = all8 ? int(t) : -1;
+    }
+    if (raw[13] < 0) return 0u;
+    uint type = 0u;
+    for (uint c = 0u; c < 8u; ++c) {
+        uvec3 p = cornerOffset(c);
+        bool meshInside = ((uint(raw[13]) >> c) & 1u) != 0u;
+        if (abs(dCube[c]) < params.refineEpsilon) {
+            // The 8 cubes around the corner (corner 0 at p - o; the corner is their corner o): flip when that
+            // strictly lowers their summed distance to the good types. Decided only with all 8 observed: at the
+            // rim of the observed surface a flip would move the rim.
+            int keep = 0, flip = 0;
+            bool all8 = true;
+            for (uint o = 0u; o < 8u; ++o) {
+                uvec3 q = p + uvec3(1u) - cornerOffset(o);
+                int t = raw[q.x + 3u * q.y + 9u * q.z];
+                all8 = all8 && t >= 0;
+                keep += regularDistance(uint(max(t, 0)));
+                flip += regularDistance(uint(max(t, 0)) ^ (1u << o));
+            }
+            if (all8 && flip < keep) meshInside = !meshInside;
+        }
+        if (meshInside) type |= 1u << c;
+    }
+    return type;
+}
+
+// The type a listed cube is built with: its MC type t (from loadCube), or with refinement the refined type.
+uint meshType(CubeRef r, uint block, uint t) {
+    return params.refine == 0u ? t : refinedCubeType(r, block);
 }
 #endif

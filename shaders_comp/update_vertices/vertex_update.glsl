@@ -1,7 +1,7 @@
 // Moving a vertex to the current zero crossing of its edge (paper §V.B): the position interpolated along
-// the edge (extrapolated, within limits, on an edge that only a refined type uses), the normal from the
-// owner cube's TSDF gradient, the colour interpolated between the edge's corners (voxel_color.glsl) when
-// colour is fused. Includes cube_access.glsl.
+// the edge (clamped to the edge on one that only a refined type uses), the normal from the owner cube's TSDF
+// gradient, the colour interpolated between the edge's corners (voxel_color.glsl) when colour is fused.
+// Includes cube_access.glsl.
 #ifndef VKMESH_VERTEX_UPDATE_GLSL
 #define VKMESH_VERTEX_UPDATE_GLSL
 #include "structure/cube_access.glsl"
@@ -11,8 +11,9 @@
 // r: the owner cube with its corners loaded into d/present; axis: which of its 3 edges.
 void moveVertex(uint v, CubeRef r, uint axis, float d[8], bool present[8]) {
     uint hi = 1u << axis;
-    // Also edges whose corners share a sign: refinement may use them (the position is then extrapolated).
-    if (!present[0] || !present[hi] || d[0] == d[hi]) return;
+    // Also edges whose corners share a sign: refinement may use them (the vertex then sits at the flipped
+    // corner, edgeVertexPosition). Every vertex gets a position, so a new one never keeps a stale one.
+    if (!present[0] || !present[hi]) return;
     vec3 p = edgeVertexPosition(r, 0u, axis, d[0], d[hi]);
     vec3 n = vec3(0.0);
     n[axis] = d[hi] - d[0] >= 0.0 ? 1.0 : -1.0;   // fallback: along the edge, toward free space

@@ -1,7 +1,9 @@
-// Mesh refinement (paper §V.F, docs/REFINEMENT.md): a cube whose MC type is a few corners away from one of the
-// six "regular" types (a plane parallel to a cube face splitting the cube in two halves) takes that regular
-// type instead, when every corner it would flip lies within epsilon of the surface. Shared by the CPU
-// reference (src/cpu/reference_mesh_dirty.cpp); shaders_comp/structure/cube_access.glsl computes the same function.
+// Mesh refinement (paper §V.F, docs/REFINEMENT.md): noisy corners within epsilon of the surface are snapped so
+// that cubes take the six "regular" types (a plane parallel to a cube face splitting the cube in two halves).
+// refinedCubeType() is what the meshers use (src/cpu/reference_mesh_dirty.cpp; shaders_comp/structure/
+// cube_access.glsl computes the same function): flips are decided per corner, so the mesh has no cracks.
+// refineType() is the paper's rule as written, per cube (it cracks the mesh); kept as the specification the
+// per-corner rule is measured against (docs/REFINEMENT.md) and unit-tested, not used by the meshers.
 #pragma once
 
 #include <array>
@@ -28,5 +30,29 @@ bool isRegularType(int t);
 // 3. No candidate: t; otherwise the candidate with the smallest float sum of |d[i]| over its flipped corners
 //    (summed in increasing i), ties to the earlier one in kRegularTypes.
 int refineType(int prev, int t, const float d[8], float epsilon);
+
+}  // namespace vkmesh
+
+namespace vkmesh {
+
+// ---- Crack-free refinement: flips decided per corner (docs/REFINEMENT.md) ------------------------------------
+// The meshing sign of a corner is a pure function of the TSDF in the 3x3x3 corners around it, so every cube
+// sharing the corner sees the same sign and neighbouring cubes always meet on their shared face.
+
+// Hamming distance from type t to the nearest "good" type: 0, 255 or one of kRegularTypes (0 for those).
+int regularDistance(int t);
+
+// A 4x4x4 window of corners around a cube: offsets -1..2 on each axis from the cube's corner 0, index
+// windowIndex(x, y, z) with x, y, z in [-1, 2]. observed: the corner's block exists and its weight is at
+// least minMeshWeight; d: its TSDF value (anything when not observed).
+inline constexpr int kWindowSide = 4, kWindowSize = 64;
+constexpr int windowIndex(int x, int y, int z) { return (x + 1) + kWindowSide * ((y + 1) + kWindowSide * (z + 1)); }
+
+// The type MC builds for the cube at window offset (0, 0, 0), with refinement on (epsilon in metres):
+// 0 unless its 8 corners are observed; bit i set iff corner i is inside *for meshing*. A corner is inside
+// for meshing iff d < 0, except that an observed corner with |d| < epsilon flips when that strictly lowers
+// the sum of regularDistance() over the 8 cubes around it (each typed from the raw signs of its corners,
+// 0 if one is unobserved). Only signs and that one |d| < epsilon test enter: integer arithmetic, exact.
+int refinedCubeType(const float d[kWindowSize], const bool observed[kWindowSize], float epsilon);
 
 }  // namespace vkmesh

@@ -70,7 +70,7 @@ inline uint32_t vertexColorOnEdge(uint32_t lo, uint32_t hi, float dLo, float dHi
     const bool hasLo = hasVoxelColor(lo), hasHi = hasVoxelColor(hi);
     if (!hasLo && !hasHi) return 0;
     const ColorChannels a = unpackVoxelColor(hasLo ? lo : hi), b = unpackVoxelColor(hasHi ? hi : lo);
-    const float t = std::clamp(dLo / (dLo - dHi), 0.0f, 1.0f);
+    const float t = dLo == dHi ? 0.5f : std::clamp(dLo / (dLo - dHi), 0.0f, 1.0f);
     uint32_t out = 255u << 24;
     for (int i = 0; i < 3; ++i) {
         const float c = a[i] + (b[i] - a[i]) * t;

@@ -37,9 +37,10 @@ bool cornerFlipped(float oldSdf, float oldWeight, float newSdf, float newWeight,
 uint32_t fuseBlock(ReferenceBlock& block, const BlockCoord& coord, const DepthImage& depth, const gpu::FramePush& push,
                    const FusionRule& rule, std::vector<std::array<int, 3>>* flipped, const ColorImage* color = nullptr);
 
-// For every flipped corner (global voxel coordinates), the 8 cubes around it (corner - o, o in {0,1}^3) in
+// For every flipped corner (global voxel coordinates), the 8 cubes around it (corner - o, o in {0,1}^3; with
+// refine, the 64 cubes corner - o, o in {-1..2}^3, whose refined type reads its sign: docs/REFINEMENT.md) in
 // whatever block they lie, for the blocks in `blocks`: the cubes whose MC (or refined) type may have changed.
 std::map<BlockCoord, CubeMask> cubesAroundCorners(const std::vector<std::array<int, 3>>& flipped,
-                                                  const std::map<BlockCoord, ReferenceBlock>& blocks);
+                                                  const std::map<BlockCoord, ReferenceBlock>& blocks, bool refine = false);
 
 }  // namespace vkmesh::cpu

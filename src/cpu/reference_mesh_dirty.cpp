@@ -15,11 +15,13 @@ using gpu::VOXELS_PER_BLOCK;
 std::vector<ReferenceMesher::DirtyBlock> ReferenceMesher::markDirty(const ReferenceVolume& volume,
                                                                     const std::vector<BlockCoord>& touched,
                                                                     RetypeScope scope, MeshFrameStats& stats) {
-    // D: every touched block and every existing block T - o, o in {0,1}^3 (its cubes read corners in T).
+    // D: every touched block and every existing block T - o, o in {0,1}^3 (its cubes read corners in T); with
+    // refinement T + o, o in {-1,0,1}^3, since a flipped corner's marks reach a block ahead (mark_dirty.comp).
     std::set<BlockCoord> dirtySet;
+    const int offsets = options_.refine ? 27 : kCubeCorners;
     for (const BlockCoord& t : touched) {
-        for (int o = 0; o < kCubeCorners; ++o) {
-            const auto off = cornerOffset(o);
+        for (int o = 0; o < offsets; ++o) {
+            const std::array<int, 3> off = options_.refine ? std::array<int, 3>{o % 3 - 1, (o / 3) % 3 - 1, o / 9 - 1} : cornerOffset(o);
             const BlockCoord c{t[0] - off[0], t[1] - off[1], t[2] - off[2]};
             if (volume.blocks().count(c)) dirtySet.insert(c);
         }
@@ -47,15 +49,33 @@ std::vector<ReferenceMesher::DirtyBlock> ReferenceMesher::markDirty(const Refere
 }
 
 // New type of every listed cube: t = MC type of its corners if all 8 exist with weight >= minMeshWeight,
-// else 0; with refinement, refineType(stored type, t, d, epsilon). Computed before any cube state changes,
-// so claim and triangulate see the same type.
-void ReferenceMesher::chooseTypes(std::vector<DirtyBlock>& dirty) const {
+// else 0; with refinement, refinedCubeType() of the 4x4x4 corners around it (docs/REFINEMENT.md). Computed
+// before any cube state changes, so claim and triangulate see the same type.
+void ReferenceMesher::chooseTypes(const ReferenceVolume& volume, std::vector<DirtyBlock>& dirty) const {
+    const int side = int(gpu::BLOCK_SIDE);
     for (DirtyBlock& b : dirty) {
         for (uint32_t cube = 0; cube < VOXELS_PER_BLOCK; ++cube) {
             if (!b.retype.test(cube)) continue;
-            const CubeCorners corners = readCorners(b.tsdf, cube, minMeshWeight_);
-            int t = corners.observed ? cubeType(corners.d) : 0;
-            if (options_.refine) t = refineType(int(b.state->cubeState[cube] & gpu::CUBE_TYPE_MASK), t, corners.d, refineEpsilon_);
+            int t = 0;
+            if (options_.refine) {
+                // The window, read from whichever blocks hold it (refinedCubeType.glsl looks them up in the hash).
+                float d[kWindowSize] = {};
+                bool observed[kWindowSize] = {};
+                const auto l = localCoords(cube);
+                for (int w = 0; w < kWindowSize; ++w) {
+                    const int g[3] = {b.coord[0] * side + l[0] + w % 4 - 1, b.coord[1] * side + l[1] + (w / 4) % 4 - 1,
+                                      b.coord[2] * side + l[2] + w / 16 - 1};
+                    auto it = volume.blocks().find(BlockCoord{blockOf(g[0]), blockOf(g[1]), blockOf(g[2])});
+                    if (it == volume.blocks().end()) continue;
+                    const uint32_t v = localIndex(g[0] - it->first[0] * side, g[1] - it->first[1] * side, g[2] - it->first[2] * side);
+                    d[w] = it->second.sdf[v];
+                    observed[w] = it->second.weight[v] >= minMeshWeight_;
+                }
+                t = refinedCubeType(d, observed, refineEpsilon_);
+            } else {
+                const CubeCorners corners = readCorners(b.tsdf, cube, minMeshWeight_);
+                t = corners.observed ? cubeType(corners.d) : 0;
+            }
             b.newType[cube] = uint8_t(t);
         }
     }

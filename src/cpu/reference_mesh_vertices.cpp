@@ -44,12 +44,13 @@ void ReferenceMesher::updateVertex(const TsdfBlocks& tsdf, const BlockMeshState&
     const CubeCorners corners = readCorners(tsdf, cube, minMeshWeight_);
     const int hi = 1 << axis;
     const float dLo = corners.d[0], dHi = corners.d[hi];
-    if (!corners.exists[0] || !corners.exists[hi] || dLo == dHi) return;  // keeps its position
+    if (!corners.exists[0] || !corners.exists[hi]) return;  // keeps its position
 
-    // Exactly the float operations of ReferenceVolume::extractBaselineMesh, s clamped to [-0.5, 1.5]: an edge
-    // of a refined type whose corners have the same sign gets an extrapolated vertex (docs/REFINEMENT.md);
-    // where they differ in sign s is in (0, 1] and the clamp changes nothing.
-    const float s = std::clamp(dLo / (dLo - dHi), -0.5f, 1.5f);
+    // Exactly the float operations of ReferenceVolume::extractBaselineMesh, s clamped to [0, 1]: on an edge of a
+    // refined type whose corners have the same sign (one flipped for meshing) the extrapolated crossing lies
+    // beyond the flipped corner and the vertex stops there (docs/REFINEMENT.md); where they differ in sign s is
+    // in (0, 1] and the clamp changes nothing. Equal values (only on such an edge): the midpoint.
+    const float s = dLo == dHi ? 0.5f : std::clamp(dLo / (dLo - dHi), 0.0f, 1.0f);
     const auto local = localCoords(cube);
     float p[3] = {float(owner.coord[0] * int(gpu::BLOCK_SIDE) + local[0]), float(owner.coord[1] * int(gpu::BLOCK_SIDE) + local[1]),
                   float(owner.coord[2] * int(gpu::BLOCK_SIDE) + local[2])};

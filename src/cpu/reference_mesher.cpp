@@ -73,7 +73,7 @@ MeshFrameStats ReferenceMesher::update(const ReferenceVolume& volume, const std:
 
     // 0. Dirty marking: D, the cubes of D to re-evaluate, and their new types.
     std::vector<DirtyBlock> dirty = markDirty(volume, touched, scope, stats);
-    chooseTypes(dirty);
+    chooseTypes(volume, dirty);
     // 1. Claim.
     claimVertices(dirty, stats, frameNumber);
     // 2. Update vertex positions and normals.

@@ -62,7 +62,7 @@ struct BlockMeshState {
 
 // Options of the mesher beyond its heap sizes (docs/REFINEMENT.md).
 struct MesherOptions {
-    bool refine = false;                 // mesh refinement (paper §V.F): claim and triangulate use refineType()
+    bool refine = false;                 // mesh refinement (paper §V.F, off by default as GpuVolumeConfig's): claim and triangulate use refinedCubeType()
     std::optional<float> refineEpsilon;  // metres; default defaultRefineEpsilon(voxelSize) = half a voxel
     // The lock-free claim order (paper §V.C): 4 passes, one per parity class {000,111}, {001,110}, {010,101},
     // {100,011} of the cube's global position (x&1, y&1, z&1). Serially it only changes the order of claims
@@ -134,7 +134,7 @@ private:
     // Dirty marking (reference_mesh_dirty.cpp): D, the cubes to re-evaluate and their new types.
     std::vector<DirtyBlock> markDirty(const ReferenceVolume& volume, const std::vector<BlockCoord>& touched,
                                       RetypeScope scope, MeshFrameStats& stats);
-    void chooseTypes(std::vector<DirtyBlock>& dirty) const;
+    void chooseTypes(const ReferenceVolume& volume, std::vector<DirtyBlock>& dirty) const;
     // Claim (reference_mesh_claim.cpp).
     void claimVertices(std::vector<DirtyBlock>& dirty, MeshFrameStats& stats, uint32_t frameNumber);
     void claimCube(DirtyBlock& block, uint32_t cube, MeshFrameStats& stats, uint32_t frameNumber);

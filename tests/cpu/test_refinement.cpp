@@ -7,7 +7,9 @@
 #include <bit>
 #include <cmath>
 #include <random>
+#include <iostream>
 #include <set>
+#include <vector>
 
 #include "core/marching_cubes.h"
 
@@ -177,6 +179,119 @@ TEST(Refinement, PropertiesOnRandomCorners) {
         }
     }
     EXPECT_GT(snapped, 1000u);
+}
+
+}  // namespace
+}  // namespace vkmesh
+
+// ---- the per-corner rule the meshers use (refinedCubeType) ------------------------------------------------
+
+namespace vkmesh {
+namespace {
+
+TEST(CornerRefinement, RegularDistanceCountsFlipsToTheNearestGoodType) {
+    for (int t : {0, 255, 0x0F, 0xF0, 0x33, 0xCC, 0x55, 0xAA}) EXPECT_EQ(regularDistance(t), 0) << t;
+    EXPECT_EQ(regularDistance(0x01), 1);  // one corner inside: one flip from empty
+    EXPECT_EQ(regularDistance(0x07), 1);  // three of the z = 0 face: one flip from 0x0F
+    EXPECT_EQ(regularDistance(0x81), 2);  // two opposite corners
+    for (int t = 0; t < 256; ++t) {
+        EXPECT_LE(regularDistance(t), 4) << t;
+        EXPECT_EQ(regularDistance(t), regularDistance(~t & 0xFF)) << t;  // symmetric under inside/outside
+    }
+}
+
+// A field over the grid; window of the cube with corner 0 at (x, y, z).
+struct Field {
+    int n;
+    std::vector<float> v;
+    float at(int x, int y, int z) const { return v[size_t(x + n * (y + n * z))]; }
+    int refined(int x, int y, int z, float eps) const {
+        float d[kWindowSize];
+        bool observed[kWindowSize];
+        for (int w = 0; w < kWindowSize; ++w) {
+            d[w] = at(x + w % 4 - 1, y + (w / 4) % 4 - 1, z + w / 16 - 1);
+            observed[w] = true;
+        }
+        return refinedCubeType(d, observed, eps);
+    }
+    int raw(int x, int y, int z) const {
+        int t = 0;
+        for (int c = 0; c < 8; ++c)
+            if (at(x + (c & 1), y + ((c >> 1) & 1), z + ((c >> 2) & 1)) < 0.0f) t |= 1 << c;
+        return t;
+    }
+};
+
+// A horizontal plane z = 2.5 (voxels) with one corner of the z = 2 layer nudged just outside: raw, the four
+// cubes around it are irregular; refined, the corner flips back and all of them are the half cube 0x0F.
+TEST(CornerRefinement, ANoisyCornerOnAPlaneSnapsBack) {
+    Field f{7, std::vector<float>(343)};
+    for (int z = 0; z < 7; ++z)
+        for (int y = 0; y < 7; ++y)
+            for (int x = 0; x < 7; ++x) f.v[size_t(x + 7 * (y + 7 * z))] = float(z) - 2.5f;
+    f.v[size_t(3 + 7 * (3 + 7 * 2))] = 0.1f;  // corner (3, 3, 2): was -0.5
+    EXPECT_EQ(f.raw(2, 2, 2), 0x07);  // the corner is corner 3 of this cube
+    EXPECT_EQ(f.raw(2, 2, 1), 0x7F);  // and corner 7 of the one below
+    for (int cy = 2; cy <= 3; ++cy)
+        for (int cx = 2; cx <= 3; ++cx) {
+            EXPECT_EQ(f.refined(cx, cy, 2, 0.5f), 0x0F) << cx << " " << cy;
+            EXPECT_EQ(f.refined(cx, cy, 2, 0.05f), f.raw(cx, cy, 2)) << "epsilon below |d|: no flip";
+            // The cubes below (z = 1 .. 2) see the same flip: all inside again.
+            EXPECT_EQ(f.refined(cx, cy, 1, 0.5f), 0xFF);
+        }
+}
+
+// On a random field near zero: neighbouring cubes agree on every shared corner (no cracks), a corner whose
+// refined sign differs from its raw sign lies within epsilon, and the irregular share goes down.
+TEST(CornerRefinement, NeighboursAgreeOnSharedCornersAndOnlyNearCornersFlip) {
+    const int n = 14;
+    Field f{n, std::vector<float>(size_t(n * n * n))};
+    std::mt19937 rng(7);
+    std::normal_distribution<float> noise(0.0f, 0.15f);
+    for (int z = 0; z < n; ++z)
+        for (int y = 0; y < n; ++y)
+            for (int x = 0; x < n; ++x) f.v[size_t(x + n * (y + n * z))] = 0.1f * float(x) + 0.05f * float(y) + float(z) - 6.3f + noise(rng);
+    const float eps = 0.5f;
+    size_t surface = 0, irregularRaw = 0, irregularRefined = 0, flippedCorners = 0;
+    for (int z = 1; z < n - 3; ++z)
+        for (int y = 1; y < n - 3; ++y)
+            for (int x = 1; x < n - 3; ++x) {
+                const int r = f.refined(x, y, z, eps), t = f.raw(x, y, z);
+                for (int c = 0; c < 8; ++c)
+                    if (((r ^ t) >> c) & 1) {
+                        ++flippedCorners;
+                        ASSERT_LT(std::fabs(f.at(x + (c & 1), y + ((c >> 1) & 1), z + ((c >> 2) & 1))), eps);
+                    }
+                if (t != 0 && t != 255) {
+                    ++surface;
+                    irregularRaw += isRegularType(t) ? 0 : 1;
+                }
+                if (r != 0 && r != 255) irregularRefined += isRegularType(r) ? 0 : 1;
+                for (int axis = 0; axis < 3; ++axis) {
+                    if ((axis == 0 ? x : axis == 1 ? y : z) + 1 >= n - 3) continue;
+                    const int u = f.refined(x + (axis == 0), y + (axis == 1), z + (axis == 2), eps);
+                    for (int c = 0; c < 8; ++c)
+                        if ((c >> axis) & 1) {
+                            ASSERT_EQ((r >> c) & 1, (u >> (c ^ (1 << axis))) & 1) << "crack at " << x << " " << y << " " << z;
+                        }
+                }
+            }
+    std::cout << "[ corner refinement ] " << surface << " surface cubes, irregular " << irregularRaw << " raw, "
+              << irregularRefined << " refined; " << flippedCorners << " corner flips seen\n";
+    EXPECT_GT(flippedCorners, 0u);
+    EXPECT_LT(irregularRefined, irregularRaw);
+}
+
+TEST(CornerRefinement, UnobservedCubesHaveNoSurface) {
+    float d[kWindowSize];
+    bool observed[kWindowSize];
+    for (int w = 0; w < kWindowSize; ++w) {
+        d[w] = (w / 16 == 1) ? -0.01f : 0.01f;
+        observed[w] = true;
+    }
+    EXPECT_EQ(refinedCubeType(d, observed, 0.5f), 0x0F);
+    observed[windowIndex(1, 1, 1)] = false;
+    EXPECT_EQ(refinedCubeType(d, observed, 0.5f), 0);
 }
 
 }  // namespace

@@ -67,13 +67,49 @@ TEST(Cli, FuseWritesMeshAndStats) {
     EXPECT_TRUE(stats["gpu_ms_per_frame"]["fuse"].contains("median"));
     EXPECT_GT(stats["gpu_pool_bytes"]["voxel sdf"].get<size_t>(), 0u);
     EXPECT_TRUE(stats["gpu_ms_per_frame"].contains("mesh_triangulate"));
-    EXPECT_EQ(stats["mesh"]["baseline_vertices"], 3 * mesh.triangles.size());
+    // Refinement is off by default; the baseline is plain MC (3 vertices per triangle) on the same TSDF.
+    EXPECT_FALSE(stats["refine"].get<bool>());
+    const size_t baselineVertices = stats["mesh"]["baseline_vertices"].get<size_t>();
+    EXPECT_EQ(baselineVertices, 3 * mesh.triangles.size());
+    EXPECT_TRUE(stats["mesh"].contains("boundary_edges"));
+    EXPECT_TRUE(stats["mesh"].contains("non_manifold_edges"));
     EXPECT_EQ(stats["mesh"]["unreferenced_vertices"], 0);
     EXPECT_EQ(stats["heaps"]["vertices"]["live"], mesh.positions.size());
-    EXPECT_EQ(stats["bytes_per_cube"], 24);
+    // The synthetic sequence has colour: fused by default (4 bytes per cube), on every vertex of the PLY.
+    EXPECT_EQ(stats["bytes_per_cube"], 28);
+    EXPECT_TRUE(stats["color"]["fused"].get<bool>());
+    EXPECT_EQ(stats["color"]["frames_with_color"], 6);
+    EXPECT_EQ(mesh.colors.size(), mesh.positions.size());
     // Every vertex lies in the synthetic room (4 x 3 x 2.5 m around the origin, turned 20 degrees).
     for (const auto& p : mesh.positions) ASSERT_LT(p.norm(), 4.0f);
     fs::remove_all(out);
+}
+
+// --no-color: depth only, the same geometry, 24 bytes per cube, a PLY without colours; render draws the
+// coloured mesh in its colours by default.
+TEST(Cli, NoColorFusesDepthOnlyAndRenderUsesTheColours) {
+    fs::path out = test::makeTempDir("cli_no_color");
+    const std::string common = smallSequence().string() + " --voxel 0.04 --frames 3";
+    CliRun grey = runCli("fuse " + common + " --no-color -o " + (out / "grey.ply").string() + " --stats " + (out / "grey.json").string());
+    ASSERT_EQ(grey.exitCode, 0) << grey.err;
+    CliRun colour = runCli("fuse " + common + " -o " + (out / "colour.ply").string());
+    ASSERT_EQ(colour.exitCode, 0) << colour.err;
+    auto stats = nlohmann::json::parse(readText(out / "grey.json"));
+    EXPECT_EQ(stats["bytes_per_cube"], 24);
+    EXPECT_FALSE(stats["color"]["fused"].get<bool>());
+    EXPECT_TRUE(stats["color"]["dataset_has_color"].get<bool>());
+    const Mesh a = readPly(out / "grey.ply"), b = readPly(out / "colour.ply");
+    EXPECT_TRUE(a.colors.empty());
+    ASSERT_EQ(b.colors.size(), b.positions.size());
+    EXPECT_EQ(canonicalTriangles(a), canonicalTriangles(b));
+    if (test::lavapipeCannotDraw().empty()) {
+        CliRun rendered = runCli("render " + (out / "colour.ply").string() + " -o " + (out / "colour.png").string() + " --width 64 --height 48");
+        ASSERT_EQ(rendered.exitCode, 0) << rendered.err;
+        EXPECT_NE(rendered.out.find("auto"), std::string::npos) << rendered.out;
+    }
+    CliRun bad = runCli("render " + (out / "colour.ply").string() + " -o " + (out / "x.png").string() + " --color purple");
+    EXPECT_NE(bad.exitCode, 0);
+    EXPECT_NE(bad.err.find("rgb"), std::string::npos) << bad.err;
 }
 
 TEST(Cli, BaselineModeWritesATriangleSoup) {
