@@ -155,12 +155,21 @@ TEST(MapFormat, ChecksumMismatchIsRefused) {
 
 TEST(MapFormat, UnknownFeaturesAndRecordSizesAreRefused) {
     map::MapData m = smallMap();
-    m.features |= map::FEATURE_COLOR;
+    m.features |= 1u << 7;   // a feature of a later build
     std::string e = errorOf(map::serialize(m));
-    EXPECT_NE(e.find("colour"), std::string::npos) << e;
-    // A Vertex with a colour word (36 bytes) from a later build: detected, not misread.
-    e = errorOf(withHeaderWord(map::serialize(smallMap()), 28, 36));
-    EXPECT_NE(e.find("vertex records of 36 bytes"), std::string::npos) << e;
+    EXPECT_NE(e.find("features this build of vkmesh does not know"), std::string::npos) << e;
+    // Colour in the flags but not in the settings (or the other way round): inconsistent.
+    m = smallMap();
+    m.features |= map::FEATURE_COLOR;
+    m.settings.colorMode = 0;
+    e = errorOf(map::serialize(m));
+    EXPECT_NE(e.find("colour mode in the settings disagrees"), std::string::npos) << e;
+    m.settings.colorMode = 7;
+    e = errorOf(map::serialize(m));
+    EXPECT_NE(e.find("colour mode 7"), std::string::npos) << e;
+    // A Vertex of another size (an older build's 32 bytes, or a later one's): detected, not misread.
+    e = errorOf(withHeaderWord(map::serialize(smallMap()), 28, 32));
+    EXPECT_NE(e.find("vertex records of 32 bytes"), std::string::npos) << e;
 }
 
 TEST(MapFormat, IndicesOutsideThePoolsAreRefused) {

@@ -257,9 +257,16 @@ TEST_F(GpuTest, MapsThatCannotBeLoadedAreClearErrors) {
     EXPECT_NE(e.find("no section 'wght'"), std::string::npos) << e;
 
     map::MapData extra = good;
-    extra.cornerArrays.push_back({map::tag("colr"), std::vector<uint32_t>(good.blocks.size() * gpu::VOXELS_PER_BLOCK)});
+    extra.cornerArrays.push_back({map::tag("xtra"), std::vector<uint32_t>(good.blocks.size() * gpu::VOXELS_PER_BLOCK)});
     e = loadError(context(), extra, config);
-    EXPECT_NE(e.find("'colr'"), std::string::npos) << e;
+    EXPECT_NE(e.find("'xtra' this build does not know"), std::string::npos) << e;
+
+    // A map that fused colour must carry it.
+    ASSERT_TRUE(good.features & map::FEATURE_COLOR);
+    map::MapData noColor = good;
+    std::erase_if(noColor.cornerArrays, [](const map::CornerArray& a) { return a.tag == map::tag("colr"); });
+    e = loadError(context(), noColor, config);
+    EXPECT_NE(e.find("no section 'colr'"), std::string::npos) << e;
 
     // Bad bytes never reach the GPU: GpuVolume::load(path) parses first.
     const auto dir = test::makeTempDir("map_errors");
