@@ -43,7 +43,7 @@ echo "sanitize: build-asan built after $((SECONDS - start)) s"
 # fusion against the CPU reference, the incremental mesh (and its rebuild and determinism), mesh export
 # through the CLI and the CLI's bad-input handling. The whole suite runs without sanitizers in
 # scripts/test.sh. No validation layer here: that suite runs it too, and it is slow under ASan.
-gpu_tests='GpuTest\.(FusedTsdfMatchesReference|IncrementalMeshEqualsRebuildFromScratch|SameInputSameMesh|EmptyVolumeExportsAnEmptyMesh|LockFreeClaimsBuildTheSameMesh)$'
+gpu_tests='(GpuTest\.(FusedTsdfMatchesReference|SameInputSameMesh|EmptyVolumeExportsAnEmptyMesh|LockFreeClaimsBuildTheSameMesh|VertexColoursMatchReferenceMesherAndRebuild)|Refinement/IncrementalTest\.IncrementalMeshEqualsRebuildFromScratch/false)( .*)?$'
 cli_tests='Cli\.(FuseWritesMeshAndStats|SaveLoadAndFirstFrameResumeTheRun|CorruptAndEmptyFramesAreSkippedWithAWarning|AllFramesBadFails|NonOrthonormalPoseIsAClearError|HostileDatasetsAreClearErrors)$'
 echo "sanitize: running the CPU tests and the selected GPU tests"
 (

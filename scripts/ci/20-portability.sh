@@ -43,11 +43,11 @@ if [[ $parts == all || $parts == gpu-av ]]; then
   gpu_av_tests=(
     GpuTest.FusedTsdfMatchesReference                          # allocation + fusion against the CPU reference
     GpuTest.BaselineMeshMatchesReference                       # baseline marching cubes (mesh_baseline)
-    GpuTest.IncrementalMeshEqualsRebuildFromScratch            # incremental mesh, mark-all-dirty rebuild, export
+    Refinement/IncrementalTest.IncrementalMeshEqualsRebuildFromScratch/true  # incremental mesh, mark-all-dirty rebuild, export
     GpuTest.VertexColoursMatchReferenceMesherAndRebuild        # colour: fused corner colours, vertex colours
     GpuTest.BothVertexUpdatePathsGiveTheSameMesh               # both vertex-update modes
     GpuTest.RecyclingWithLockFreeClaims                        # lock-free claims, recycling, hash rebuild (rehash_*)
-    GpuTest.RefinementHalvesIrregularityOnASlantedPlane        # refinement (retype passes)
+    GpuTest.RefinementOnASlantedPlaneKeepsTheMeshWhole         # refinement per corner (retype passes), against unrefined
     MeshDeltas.FollowHeapExhaustionGrowthAndRecycling          # deltas (diff_*, plan_deltas), heap growth, pending dirty
     OwnDevice.PublishedMeshEqualsTheExportAndSurvivesARebuild  # published mesh: export to draw-ready buffers
     GpuTest.TinyCapacitiesGrowToTheMeshOfAmpleOnes             # every capacity grows (rebound buffers), deferred frames
