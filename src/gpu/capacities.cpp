@@ -49,7 +49,7 @@ void checkCapacities(const GpuVolumeConfig& c, uint64_t maxBufferBytes, uint64_t
         {"voxel sdf", 4ull * VOXELS_PER_BLOCK, c.blockCapacity, "blockCapacity (--blocks)"},
         {"voxel weight", 4ull * VOXELS_PER_BLOCK, c.blockCapacity, "blockCapacity (--blocks)"},
         {"hash keys", hashKeyBytesPerSlot, hashSlots, "hashCapacity (2 x blockCapacity by default, --blocks)"},
-        {"frame images", c.params.colorFusion != ColorFusion::Off ? 8u : 4u, uint64_t(c.imageWidth) * uint64_t(c.imageHeight),
+        {"depth image", c.params.colorFusion != ColorFusion::Off ? 8u : 4u, uint64_t(c.imageWidth) * uint64_t(c.imageHeight),
          "the image size"},
     };
     if (c.params.colorFusion != ColorFusion::Off)

@@ -172,7 +172,7 @@ GpuVolume::GpuVolume(const vk::Context& context, const GpuVolumeConfig& config)
     touchedFollowsPool_ = config.touchedCapacity == 0;
     // The depth image, then (when colour is fused) the colour image's RGBA8 words: one binding for both.
     const VkDeviceSize pixels = VkDeviceSize(c.imageWidth) * c.imageHeight;
-    depth_ = makeStorage(context, table_, BINDING_DEPTH, pixels * 4 * (fusesColor() ? 2 : 1), "frame images");
+    depth_ = makeStorage(context, table_, BINDING_DEPTH, pixels * 4 * (fusesColor() ? 2 : 1), "depth image");   // name kept: a --stats key
     depthStaging_ = vk::Buffer(context, depth_.size(), VK_BUFFER_USAGE_TRANSFER_SRC_BIT, vk::MemoryUse::Upload, "depth staging");
     mcTables_ = vk::Buffer(context, MC_TABLE_WORDS * 4, VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, vk::MemoryUse::Device, "marching cubes tables");
     table_.bind(BINDING_MC_TABLES, mcTables_);
