@@ -55,6 +55,14 @@ struct EvalArgs {
     double colorTolerance = 0.03;  // colour vs frames: a vertex is seen where |its depth - measured| < this
 };
 
+// Writes the --json report; an unwritable file is an error naming it.
+void writeJson(const std::string& path, const json& j) {
+    std::ofstream file(path);
+    if (!file) throw Error("cannot write '" + path + "'");
+    file << j.dump(2) << "\n";
+    if (!file) throw Error("cannot write '" + path + "' (disk full?)");
+}
+
 json colorJson(const eval::ColorError& e) {
     // PSNR is +infinity for identical colours: nlohmann writes null, which the text output says as "inf".
     return {{"pairs", e.pairs},        {"mae_red", e.mae[0]}, {"mae_green", e.mae[1]},
@@ -116,12 +124,7 @@ int runColorOnly(const EvalArgs& args) {
     j["color_vs_gt"] = nullptr;
     j["color_vs_frames"] = colorVsFrames(args, mesh, *dataset, warnings, frames);
     j["warnings"] = warnings;
-    if (!args.jsonPath.empty()) {
-        std::ofstream file(args.jsonPath);
-        if (!file) throw Error("cannot write '" + args.jsonPath + "'");
-        file << j.dump(2) << "\n";
-        if (!file) throw Error("cannot write '" + args.jsonPath + "' (disk full?)");
-    }
+    if (!args.jsonPath.empty()) writeJson(args.jsonPath, j);
     for (const auto& w : warnings) std::cerr << "warning: " << w << "\n";
     std::printf("vkmesh eval: %s vs the colour images of %s\n", args.mesh.c_str(), args.dataset.c_str());
     if (frames) printColor("vs frames", *frames);
@@ -321,12 +324,7 @@ int runEval(const EvalArgs& args) {
     j["color_vs_gt"] = colorGtJson;
     j["color_vs_frames"] = colorFramesJson;
     j["warnings"] = warnings;
-    if (!args.jsonPath.empty()) {
-        std::ofstream file(args.jsonPath);
-        if (!file) throw Error("cannot write '" + args.jsonPath + "'");
-        file << j.dump(2) << "\n";
-        if (!file) throw Error("cannot write '" + args.jsonPath + "' (disk full?)");
-    }
+    if (!args.jsonPath.empty()) writeJson(args.jsonPath, j);
 
     for (const auto& w : warnings) std::cerr << "warning: " << w << "\n";
     std::printf("vkmesh eval: %s (%zu samples) vs %s (%zu GT points, %zu seen%s)\n", args.mesh.c_str(),

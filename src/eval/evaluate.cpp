@@ -505,13 +505,21 @@ std::vector<bool> seenMask(const std::vector<Eigen::Vector3f>& gt, const Dataset
     return std::vector<bool>(seen.begin(), seen.end());
 }
 
-std::vector<float> nearestDistances(const std::vector<Eigen::Vector3f>& points,
-                                    const std::vector<Eigen::Vector3f>& queries, double maxDistance) {
+namespace {
+// The checks nearestDistances and nearestIndices share, and the grid they search.
+PointGrid checkedGrid(const std::vector<Eigen::Vector3f>& points, const std::vector<Eigen::Vector3f>& queries,
+                      double maxDistance) {
     if (!(std::isfinite(maxDistance) && maxDistance > 0))
         throw Error("max distance " + number(maxDistance) + " must be positive and finite");
     checkFinite(points, "indexed");
     checkFinite(queries, "query");
-    const PointGrid grid(points, maxDistance);
+    return PointGrid(points, maxDistance);
+}
+}  // namespace
+
+std::vector<float> nearestDistances(const std::vector<Eigen::Vector3f>& points,
+                                    const std::vector<Eigen::Vector3f>& queries, double maxDistance) {
+    const PointGrid grid = checkedGrid(points, queries, maxDistance);
     std::vector<float> out(queries.size());
     parallelChunks(queries.size(), 4096, [&](size_t b, size_t e) {
         for (size_t i = b; i < e; ++i) out[i] = grid.nearest(queries[i]);
@@ -521,11 +529,7 @@ std::vector<float> nearestDistances(const std::vector<Eigen::Vector3f>& points,
 
 std::vector<uint32_t> nearestIndices(const std::vector<Eigen::Vector3f>& points,
                                      const std::vector<Eigen::Vector3f>& queries, double maxDistance) {
-    if (!(std::isfinite(maxDistance) && maxDistance > 0))
-        throw Error("max distance " + number(maxDistance) + " must be positive and finite");
-    checkFinite(points, "indexed");
-    checkFinite(queries, "query");
-    const PointGrid grid(points, maxDistance);
+    const PointGrid grid = checkedGrid(points, queries, maxDistance);
     std::vector<uint32_t> out(queries.size());
     parallelChunks(queries.size(), 4096, [&](size_t b, size_t e) {
         for (size_t i = b; i < e; ++i) grid.nearest(queries[i], &out[i]);
