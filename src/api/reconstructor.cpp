@@ -18,7 +18,8 @@ Reconstructor::Reconstructor(const ReconstructorOptions& options)
 Reconstructor::Reconstructor(const vk::ExternalDevice& device, const ReconstructorOptions& options)
     : context_(std::make_unique<vk::Context>(device)), options_(checked(options)) {}
 
-// The volume (its buffers) goes before the context (its command pool, and the device when owned).
+// The volume (its buffers) goes before the context (its command pool, and the device when owned); a frame
+// still in flight is waited for by the volume's command recorder.
 Reconstructor::~Reconstructor() { volume_.reset(); }
 
 gpu::FrameReport Reconstructor::integrate(const DepthImage& depth, const Intrinsics& intrinsics, const Pose& cameraToWorld,
@@ -26,25 +27,92 @@ gpu::FrameReport Reconstructor::integrate(const DepthImage& depth, const Intrins
     return integrate(depth, nullptr, intrinsics, cameraToWorld, sync);
 }
 
+void Reconstructor::createVolume(int width, int height) {
+    if (volume_) return;
+    if (width <= 0 || height <= 0) throw Error("the first depth image is empty");
+    gpu::GpuVolumeConfig config = options_.volume;
+    config.imageWidth = width;
+    config.imageHeight = height;
+    volume_ = std::make_unique<gpu::GpuVolume>(*context_, config);
+}
+
 gpu::FrameReport Reconstructor::integrate(const DepthImage& depth, const ColorImage* color, const Intrinsics& intrinsics,
                                           const Pose& cameraToWorld, const vk::SubmitSync& sync) {
-    if (!volume_) {
-        if (depth.width <= 0 || depth.height <= 0) throw Error("the first depth image is empty");
-        gpu::GpuVolumeConfig config = options_.volume;
-        config.imageWidth = depth.width;
-        config.imageHeight = depth.height;
-        volume_ = std::make_unique<gpu::GpuVolume>(*context_, config);
-    }
+    finish();   // an asynchronous frame before this one
+    createVolume(depth.width, depth.height);
     gpu::FrameReport report = volume_->integrate(depth, color, intrinsics, cameraToWorld, sync);
     lastDelta_ = report.delta;
     return report;
 }
 
+gpu::FrameReport Reconstructor::integrate(const gpu::GpuImageInput& depth, const gpu::GpuImageInput& color,
+                                          const Intrinsics& intrinsics, const Pose& cameraToWorld, const vk::SubmitSync& sync) {
+    finish();
+    createVolume(intrinsics.width, intrinsics.height);   // a GPU image's size is the intrinsics'
+    gpu::FrameInput input;
+    input.gpuDepth = depth;
+    input.gpuColor = color;
+    input.intrinsics = intrinsics;
+    input.cameraToWorld = cameraToWorld;
+    input.sync = sync;
+    volume_->submitFrame(input);
+    gpu::FrameReport report = volume_->finishFrame();
+    lastDelta_ = report.delta;
+    return report;
+}
+
+std::optional<gpu::FrameReport> Reconstructor::finish() {
+    if (!volume_ || !volume_->framePending()) return std::nullopt;
+    gpu::FrameReport report = volume_->finishFrame();
+    lastDelta_ = report.delta;
+    return report;
+}
+
+Reconstructor::AsyncFrame Reconstructor::submitAsync(const gpu::FrameInput& input) {
+    AsyncFrame out;
+    out.previous = finish();
+    volume_->submitFrame(input, ++nextReadyValue_);
+    out.frame = volume_->framesIntegrated() + 1;
+    out.ready = volume_->timeline().handle();
+    out.readyValue = nextReadyValue_;
+    out.mesh = volume_->meshBuffers();
+    return out;
+}
+
+Reconstructor::AsyncFrame Reconstructor::integrateAsync(const DepthImage& depth, const ColorImage* color, const Intrinsics& intrinsics,
+                                                        const Pose& cameraToWorld, const vk::SubmitSync& sync) {
+    createVolume(depth.width, depth.height);
+    gpu::FrameInput input;
+    input.depth = &depth;
+    input.color = color;
+    input.intrinsics = intrinsics;
+    input.cameraToWorld = cameraToWorld;
+    input.sync = sync;
+    return submitAsync(input);
+}
+
+Reconstructor::AsyncFrame Reconstructor::integrateAsync(const gpu::GpuImageInput& depth, const gpu::GpuImageInput& color,
+                                                        const Intrinsics& intrinsics, const Pose& cameraToWorld,
+                                                        const vk::SubmitSync& sync) {
+    createVolume(intrinsics.width, intrinsics.height);
+    gpu::FrameInput input;
+    input.gpuDepth = depth;
+    input.gpuColor = color;
+    input.intrinsics = intrinsics;
+    input.cameraToWorld = cameraToWorld;
+    input.sync = sync;
+    return submitAsync(input);
+}
+
 gpu::MeshBuffers Reconstructor::meshBuffers() const { return volume_ ? volume_->meshBuffers() : gpu::MeshBuffers{}; }
 
-gpu::ExportedMesh Reconstructor::downloadMesh() { return volume_ ? volume_->exportMesh() : gpu::ExportedMesh{}; }
+gpu::ExportedMesh Reconstructor::downloadMesh() {
+    finish();
+    return volume_ ? volume_->exportMesh() : gpu::ExportedMesh{};
+}
 
-void Reconstructor::save(const std::filesystem::path& path) const {
+void Reconstructor::save(const std::filesystem::path& path) {
+    finish();
     if (!volume_) throw Error("cannot save " + path.string() + ": no frame has been integrated yet");
     volume_->save(path);
 }
@@ -77,6 +145,8 @@ std::unique_ptr<Reconstructor> Reconstructor::load(const std::filesystem::path& 
     return r;
 }
 
-uint32_t Reconstructor::framesIntegrated() const { return volume_ ? volume_->framesIntegrated() : 0; }
+uint32_t Reconstructor::framesIntegrated() const {
+    return volume_ ? volume_->framesIntegrated() + (volume_->framePending() ? 1 : 0) : 0;
+}
 
 }  // namespace vkmesh

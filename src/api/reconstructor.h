@@ -28,6 +28,7 @@
 
 #include <filesystem>
 #include <memory>
+#include <optional>
 
 #include "core/mesh_delta.h"
 #include "core/types.h"
@@ -68,7 +69,35 @@ public:
     gpu::FrameReport integrate(const DepthImage& depth, const ColorImage* color, const Intrinsics& intrinsics,
                                const Pose& cameraToWorld, const vk::SubmitSync& sync = {});
 
-    // The compacted mesh of the last frame (empty handles before the first).
+    // ---- asynchronous frames: the application's frame never waits for vkmesh's GPU work ----
+    // integrateAsync() checks and copies the input, records the frame and submits it, and returns at once.
+    // The frame's mesh is published into the other of two buffer sets than the last frame's, so the
+    // application draws frame N while frame N+1 is fused: wait (on the GPU) on `ready` for `readyValue`
+    // before reading `mesh` (plus recordMeshReadBarrier as usual). The call first finishes the frame before
+    // (it waits on the host only if that frame is still running: the GPU is one frame behind at most) and
+    // returns its report in `previous`: counters are one frame late. Contract points 2 and 3 hold per set:
+    // the application's reads of frame N's buffers must be ordered before integrateAsync for frame N+2.
+    // Deltas (trackDeltas) come with the report. finish() waits for the last frame and returns its report.
+    struct AsyncFrame {
+        uint32_t frame = 0;                          // frames integrated, this one included
+        VkSemaphore ready = VK_NULL_HANDLE;          // vkmesh's timeline semaphore
+        uint64_t readyValue = 0;                     // ...the value at which `mesh` holds this frame's mesh
+        gpu::MeshBuffers mesh;                       // handles valid until integrateAsync for frame N+2
+        std::optional<gpu::FrameReport> previous;    // the frame before, finished during this call
+    };
+    AsyncFrame integrateAsync(const DepthImage& depth, const ColorImage* color, const Intrinsics& intrinsics,
+                              const Pose& cameraToWorld, const vk::SubmitSync& sync = {});
+    // Depth (and colour, or an empty input) already in the application's GPU memory: copied on the GPU, no
+    // host copy (gpu::GpuImageInput says what is accepted and how its writes must be ordered).
+    AsyncFrame integrateAsync(const gpu::GpuImageInput& depth, const gpu::GpuImageInput& color, const Intrinsics& intrinsics,
+                              const Pose& cameraToWorld, const vk::SubmitSync& sync = {});
+    // The blocking form of the GPU input: returns when the GPU has finished the frame.
+    gpu::FrameReport integrate(const gpu::GpuImageInput& depth, const gpu::GpuImageInput& color, const Intrinsics& intrinsics,
+                               const Pose& cameraToWorld, const vk::SubmitSync& sync = {});
+    std::optional<gpu::FrameReport> finish();
+
+    // The compacted mesh of the last frame (empty handles before the first). While an asynchronous frame is
+    // in flight: its set, with readyValue set and the counts 0.
     gpu::MeshBuffers meshBuffers() const;
     // The barrier an application records before reading meshBuffers() (contract, point 1).
     static void recordMeshReadBarrier(VkCommandBuffer cmd) { gpu::recordMeshReadBarrier(cmd); }
@@ -84,7 +113,7 @@ public:
     // have. The map's settings are used (voxel size, truncation, ...); options.volume's capacities where larger
     // than the map's; the image size is the map's. Errors (bad file, a map that does not fit the device) name
     // the file and the problem, and nothing is created.
-    void save(const std::filesystem::path& path) const;
+    void save(const std::filesystem::path& path);   // finishes an asynchronous frame in flight first
     static std::unique_ptr<Reconstructor> load(const std::filesystem::path& path, const ReconstructorOptions& options = {});
     static std::unique_ptr<Reconstructor> load(const std::filesystem::path& path, const vk::ExternalDevice& device,
                                                const ReconstructorOptions& options = {});
@@ -95,6 +124,9 @@ public:
 
 private:
     void loadMap(const map::MapData& map, const std::filesystem::path& path);
+    void createVolume(int width, int height);
+    AsyncFrame submitAsync(const gpu::FrameInput& input);
+    uint64_t nextReadyValue_ = 0;
     std::unique_ptr<vk::Context> context_;
     ReconstructorOptions options_;
     std::unique_ptr<gpu::GpuVolume> volume_;

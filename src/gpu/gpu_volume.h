@@ -120,9 +120,11 @@ struct MeshBuffers {
     VkBuffer indices = VK_NULL_HANDLE;    // uint32 triangle list, 3 per triangle
     VkBuffer drawIndirect = VK_NULL_HANDLE;   // a VkDrawIndexedIndirectCommand at drawIndirectOffset
     VkDeviceSize drawIndirectOffset = 0;
-    uint32_t vertexCount = 0;
+    uint32_t vertexCount = 0;             // 0 while an asynchronous frame is in flight (draw indirectly)
     uint32_t triangleCount = 0;
     uint32_t frame = 0;                   // frame number the mesh is from (createdFrame <= frame)
+    uint64_t readyValue = 0;              // asynchronous frame in flight: the GpuVolume::timeline() value
+                                          // at which these buffers hold its mesh; 0: ready now
     static constexpr uint32_t kStride = sizeof(Vertex);
     static constexpr uint32_t kPositionOffset = 0;
     static constexpr uint32_t kNormalOffset = 16;
@@ -148,6 +150,33 @@ struct ExportedMesh {
     uint32_t unreferencedVertices = 0;            // allocated vertices with no triangle (0 unless GC fell behind)
 };
 
+// A depth or colour image already in the application's GPU memory (docs/EMBEDDING.md), copied on the GPU
+// into vkmesh's input buffer: no host copy. Same size and pixel grid as the volume's images. Either
+//  - a buffer: width x height values, rows packed, from `offset`: depth as float32 metres (0 = none), colour as
+//    RGBA8 words (red in the low byte; alpha 0 = no colour at that pixel); usage TRANSFER_SRC; or
+//  - an image: one mip level and layer in `layout` (TRANSFER_SRC_OPTIMAL or GENERAL), usage TRANSFER_SRC;
+//    depth R32_SFLOAT or D32_SFLOAT (metres), colour R8G8B8A8_UNORM or _SRGB (the bytes as they are).
+// The application's writes must be ordered before the frame: submitted earlier to the same queue (the frame
+// starts with a barrier after all prior commands), or a semaphore in the frame's sync.wait.
+struct GpuImageInput {
+    VkBuffer buffer = VK_NULL_HANDLE;
+    VkDeviceSize offset = 0;
+    VkImage image = VK_NULL_HANDLE;
+    VkFormat format = VK_FORMAT_UNDEFINED;
+    VkImageLayout layout = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
+    bool empty() const { return !buffer && !image; }
+};
+
+// One frame's input: host images (depth, and colour or nullptr) or GPU ones (gpuDepth, gpuColor).
+struct FrameInput {
+    const DepthImage* depth = nullptr;
+    const ColorImage* color = nullptr;
+    GpuImageInput gpuDepth, gpuColor;
+    Intrinsics intrinsics;
+    Pose cameraToWorld = Pose::Identity();
+    vk::SubmitSync sync;
+};
+
 // Checks, before anything is allocated, that every buffer the configuration implies fits in one storage
 // buffer binding (maxBufferBytes: maxStorageBufferRange) and that all of them fit in the device's largest
 // device-local memory heap. Throws Error naming the buffer, the setting that sizes it (config field and CLI
@@ -159,6 +188,9 @@ void checkCapacities(const GpuVolumeConfig& config, uint64_t maxBufferBytes, uin
 class GpuVolume {
 public:
     GpuVolume(const vk::Context& context, const GpuVolumeConfig& config);
+    ~GpuVolume();   // waits for a frame still in flight (submitFrame without finishFrame)
+    GpuVolume(const GpuVolume&) = delete;
+    GpuVolume& operator=(const GpuVolume&) = delete;
 
     // Fuses one depth image (metres, 0 = none) seen from `cameraToWorld`. One submission (more only when
     // the frame overflowed a capacity and is run again after growing it).
@@ -170,6 +202,18 @@ public:
     // nullptr or an empty image: this frame fuses depth only. Ignored when colour fusion is off.
     FrameReport integrate(const DepthImage& depth, const ColorImage* color, const Intrinsics& intrinsics,
                           const Pose& cameraToWorld, const vk::SubmitSync& sync = {});
+    // The same, in two halves, for callers that do not wait for the GPU (Reconstructor::integrateAsync):
+    // submitFrame() checks the input, records the frame and submits it, and returns without waiting;
+    // finishFrame() waits for it and does what needs its counters (a deferred frame's re-run after growing,
+    // the mesh completion after a heap grew, the deltas, the warnings) and returns its report. Between the
+    // two nothing else may be called but meshBuffers() and framePending(). With `timelineValue` (non-zero)
+    // the frame is published into the other export set than the last one (the application draws the last
+    // one meanwhile) and the frame's submission raises timeline() to that value when its mesh is ready.
+    void submitFrame(const FrameInput& input, uint64_t timelineValue = 0);
+    FrameReport finishFrame();
+    bool framePending() const { return inFlight_.has_value(); }
+    // The semaphore submitFrame() signals (created on first use; the device needs timelineSemaphore enabled).
+    const vk::TimelineSemaphore& timeline();
     // Whether the volume keeps colour (params.colorFusion != Off).
     bool fusesColor() const { return config_.params.colorFusion != ColorFusion::Off; }
 
@@ -230,7 +274,12 @@ private:
     // load(): uploads the map into this freshly created volume and rebuilds the hash.
     void restore(const map::MapData& map, const std::string& name);
     // The frame: every pass in order, with what it reads and writes (docs/ARCHITECTURE.md draws it).
-    void recordFrame(VkCommandBuffer cmd, const FramePush& push, bool rebuildHash, bool retryPending);
+    // `copyInput`: the frame's first attempt copies its input into depth_; a deferred frame's re-run finds it
+    // there (the application's GPU input need not outlive the first submission).
+    void recordFrame(VkCommandBuffer cmd, const FramePush& push, bool rebuildHash, bool retryPending, bool copyInput);
+    void recordInputCopy(VkCommandBuffer cmd, bool withColor);
+    // Submits one attempt of the frame in flight (the first, or a re-run after a deferral).
+    void submitAttempt();
     // The incremental mesh passes after the dirty blocks are listed (also a rebuild's and a retry's).
     void recordMeshPasses(VkCommandBuffer cmd, const FramePush& push, vk::StageTimer* timer);
     void recordExport(VkCommandBuffer cmd) { exportMesh_->record(cmd, lastPush_, counters_); }
@@ -247,8 +296,8 @@ private:
     void growRetypeList(uint32_t entries, FrameReport& report);
     void growHeaps(uint32_t vertices, uint32_t chunks, FrameReport* report);
     // One submission re-meshing the cubes left INCOMPLETE or deferred (mark_pending_dirty + the mesh passes),
-    // with the export and the delta passes when `publishAndReport`; returns its counters.
-    Counters runMeshCompletion(bool publishAndReport);
+    // with the export when `publish` and the delta passes when `report`; returns its counters.
+    Counters runMeshCompletion(bool publish, bool report);
     // Re-meshes what was left (retryPending_) before an export outside integrate().
     void completePendingMesh();
     Counters runBaselinePass(std::vector<std::pair<std::string, double>>* stageMs);
@@ -292,6 +341,18 @@ private:
     uint32_t limitsReported_ = 0;
     bool retryPending_ = false;   // next frame: dirty every block with retype bits left (see growMeshHeaps)
     FramePush lastPush_{};
+    // The frame between submitFrame() and finishFrame().
+    struct InFlight {
+        FrameInput input;          // its images' pointers are not used after submitFrame()
+        bool withColor = false, fromGpu = false;
+        bool rebuildHash = false, retryPending = false;
+        int attempt = 0;
+        bool mayDefer = false, signalled = false;
+        uint64_t timelineValue = 0;
+        FrameReport report;
+    };
+    std::optional<InFlight> inFlight_;
+    std::unique_ptr<vk::TimelineSemaphore> timeline_;
 };
 
 }  // namespace vkmesh::gpu

@@ -28,11 +28,13 @@ CommandRecorder::CommandRecorder(const Context& context) : context_(context) {
 }
 
 CommandRecorder::~CommandRecorder() {
+    if (pending_) vkWaitForFences(context_.device(), 1, &fence_, VK_TRUE, UINT64_MAX);
     if (fence_) vkDestroyFence(context_.device(), fence_, nullptr);
     if (cmd_) vkFreeCommandBuffers(context_.device(), context_.commandPool(), 1, &cmd_);
 }
 
 VkCommandBuffer CommandRecorder::begin() {
+    wait();
     check(vkResetCommandBuffer(cmd_, 0), "vkResetCommandBuffer");
     VkCommandBufferBeginInfo info{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
     info.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
@@ -40,12 +42,23 @@ VkCommandBuffer CommandRecorder::begin() {
     return cmd_;
 }
 
-void CommandRecorder::submitAndWait(const SubmitSync& sync) {
+void CommandRecorder::submit(const SubmitSync& sync) {
     check(vkEndCommandBuffer(cmd_), "vkEndCommandBuffer");
     if (sync.wait.size() != sync.waitStages.size())
         throw Error("SubmitSync: " + std::to_string(sync.wait.size()) + " wait semaphores but " +
                     std::to_string(sync.waitStages.size()) + " wait stages");
+    if ((!sync.waitValues.empty() && sync.waitValues.size() != sync.wait.size()) ||
+        (!sync.signalValues.empty() && sync.signalValues.size() != sync.signal.size()))
+        throw Error("SubmitSync: timeline values must be given for every wait (signal) semaphore or for none");
     VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};
+    VkTimelineSemaphoreSubmitInfo timeline{VK_STRUCTURE_TYPE_TIMELINE_SEMAPHORE_SUBMIT_INFO};
+    if (!sync.waitValues.empty() || !sync.signalValues.empty()) {
+        timeline.waitSemaphoreValueCount = uint32_t(sync.waitValues.size());
+        timeline.pWaitSemaphoreValues = sync.waitValues.data();
+        timeline.signalSemaphoreValueCount = uint32_t(sync.signalValues.size());
+        timeline.pSignalSemaphoreValues = sync.signalValues.data();
+        submit.pNext = &timeline;
+    }
     submit.waitSemaphoreCount = uint32_t(sync.wait.size());
     submit.pWaitSemaphores = sync.wait.data();
     submit.pWaitDstStageMask = sync.waitStages.data();
@@ -55,7 +68,41 @@ void CommandRecorder::submitAndWait(const SubmitSync& sync) {
     submit.pCommandBuffers = &cmd_;
     check(vkResetFences(context_.device(), 1, &fence_), "vkResetFences");
     check(vkQueueSubmit(context_.queue(), 1, &submit, fence_), "vkQueueSubmit");
+    pending_ = true;
+}
+
+void CommandRecorder::wait() {
+    if (!pending_) return;
     check(vkWaitForFences(context_.device(), 1, &fence_, VK_TRUE, UINT64_MAX), "vkWaitForFences");
+    pending_ = false;
+}
+
+TimelineSemaphore::TimelineSemaphore(const Context& context, uint64_t initialValue) : context_(context) {
+    VkSemaphoreTypeCreateInfo type{VK_STRUCTURE_TYPE_SEMAPHORE_TYPE_CREATE_INFO};
+    type.semaphoreType = VK_SEMAPHORE_TYPE_TIMELINE;
+    type.initialValue = initialValue;
+    VkSemaphoreCreateInfo info{VK_STRUCTURE_TYPE_SEMAPHORE_CREATE_INFO};
+    info.pNext = &type;
+    check(vkCreateSemaphore(context.device(), &info, nullptr, &semaphore_),
+          "vkCreateSemaphore (timeline; the device needs the timelineSemaphore feature enabled)");
+}
+
+TimelineSemaphore::~TimelineSemaphore() {
+    if (semaphore_) vkDestroySemaphore(context_.device(), semaphore_, nullptr);
+}
+
+uint64_t TimelineSemaphore::value() const {
+    uint64_t v = 0;
+    check(vkGetSemaphoreCounterValue(context_.device(), semaphore_, &v), "vkGetSemaphoreCounterValue");
+    return v;
+}
+
+void TimelineSemaphore::wait(uint64_t value) const {
+    VkSemaphoreWaitInfo info{VK_STRUCTURE_TYPE_SEMAPHORE_WAIT_INFO};
+    info.semaphoreCount = 1;
+    info.pSemaphores = &semaphore_;
+    info.pValues = &value;
+    check(vkWaitSemaphores(context_.device(), &info, UINT64_MAX), "vkWaitSemaphores");
 }
 
 StageTimer::StageTimer(const Context& context, uint32_t maxMarks) : context_(context), capacity_(maxMarks) {

@@ -24,9 +24,33 @@ struct SubmitSync {
     std::vector<VkSemaphore> wait;
     std::vector<VkPipelineStageFlags> waitStages;   // one per wait semaphore
     std::vector<VkSemaphore> signal;
+    // Values for timeline semaphores, one per entry of `wait` / `signal` (ignored for a binary semaphore
+    // among them); empty when all are binary.
+    std::vector<uint64_t> waitValues;
+    std::vector<uint64_t> signalValues;
 };
 
-// A command buffer that is recorded, submitted, and waited for, again and again.
+// A timeline semaphore (Vulkan 1.2 core; the device must have enabled the timelineSemaphore feature, which
+// Context::enableRequiredFeatures does): a counter the GPU raises as submissions finish, that the host or
+// another submission waits on for a given value.
+class TimelineSemaphore {
+public:
+    explicit TimelineSemaphore(const Context& context, uint64_t initialValue = 0);
+    ~TimelineSemaphore();
+    TimelineSemaphore(const TimelineSemaphore&) = delete;
+    TimelineSemaphore& operator=(const TimelineSemaphore&) = delete;
+
+    VkSemaphore handle() const { return semaphore_; }
+    uint64_t value() const;           // what the GPU has reached
+    void wait(uint64_t value) const;  // on the host, until the GPU reaches `value`
+
+private:
+    const Context& context_;
+    VkSemaphore semaphore_ = VK_NULL_HANDLE;
+};
+
+// A command buffer that is recorded, submitted, and waited for, again and again. begin() waits for the
+// last submission first (the command buffer cannot be re-recorded while the GPU runs it).
 class CommandRecorder {
 public:
     explicit CommandRecorder(const Context& context);
@@ -35,12 +59,19 @@ public:
     CommandRecorder& operator=(const CommandRecorder&) = delete;
 
     VkCommandBuffer begin();
-    void submitAndWait(const SubmitSync& sync = {});
+    void submit(const SubmitSync& sync = {});   // returns at once; wait() before reading what it wrote
+    void wait();                               // for the last submission; no-op when none is pending
+    bool pending() const { return pending_; }
+    void submitAndWait(const SubmitSync& sync = {}) {
+        submit(sync);
+        wait();
+    }
 
 private:
     const Context& context_;
     VkCommandBuffer cmd_ = VK_NULL_HANDLE;
     VkFence fence_ = VK_NULL_HANDLE;
+    bool pending_ = false;
 };
 
 // Timestamps written between the stages of one command buffer; read after the fence.

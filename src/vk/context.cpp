@@ -331,6 +331,7 @@ void Context::initDeviceState(uint32_t queueIndex) {
 void Context::enableRequiredFeatures(VkPhysicalDeviceFeatures2& features, VkPhysicalDeviceVulkan12Features& f12) {
     features.features.shaderInt64 = VK_TRUE;
     f12.shaderBufferInt64Atomics = VK_TRUE;
+    f12.timelineSemaphore = VK_TRUE;
 }
 
 void Context::enableRequiredFeatures(VkPhysicalDevice device, VkPhysicalDeviceFeatures2& features,
@@ -338,6 +339,8 @@ void Context::enableRequiredFeatures(VkPhysicalDevice device, VkPhysicalDeviceFe
     // Only for the 64-bit hash path; a device on the 32-bit path (or pretending to be) gets neither, so the
     // validation layer reports any shader that would still use a 64-bit type.
     if (describe(device, 0).int64Atomics) enableRequiredFeatures(features, f12);
+    // Reconstructor::integrateAsync signals a timeline semaphore; every Vulkan 1.2 device supports them.
+    f12.timelineSemaphore = VK_TRUE;
 }
 
 DeviceInfo Context::describeDevice(VkPhysicalDevice device) { return describe(device, 0); }

@@ -62,7 +62,8 @@ public:
     // Lists the physical devices and whether vkmesh can run on each.
     static std::vector<DeviceInfo> listDevices();
     // Sets the features vkmesh uses in an application's VkDeviceCreateInfo chain (features.pNext must
-    // reach f12): shaderInt64 and shaderBufferInt64Atomics, which are optional (without them the block hash
+    // reach f12): timelineSemaphore (for Reconstructor::integrateAsync; core in Vulkan 1.2), and
+    // shaderInt64 and shaderBufferInt64Atomics, which are optional (without them the block hash
     // takes its 32-bit path): this overload sets them unconditionally (device creation fails where they are
     // missing); the one taking the physical device sets only what the device has. Vulkan 1.2 required.
     static void enableRequiredFeatures(VkPhysicalDeviceFeatures2& features, VkPhysicalDeviceVulkan12Features& f12);
