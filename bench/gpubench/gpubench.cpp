@@ -82,7 +82,8 @@ struct Frame {
 };
 
 // What the dataset reader hands `vkmesh fuse` for a depth image the TUM writer stored: rounded to the 16-bit
-// sensor unit (0 beyond what 16 bits hold), depth beyond kMaxDepth dropped. Bit for bit what fuse would fuse.
+// sensor unit (0 beyond what 16 bits hold), depth beyond kMaxDepth dropped: bit for bit the depth fuse reads
+// (its poses differ from these only by groundtruth.txt's 9 decimals).
 void quantiseAsStored(DepthImage& depth) {
     for (float& d : depth.meters) {
         const double units = std::round(double(d) * kDepthUnitsPerMetre);
@@ -124,6 +125,12 @@ std::vector<Frame> renderFrames(size_t count, size_t loopFrames) {
     for (std::thread& t : threads) t.join();
     if (failure) std::rethrow_exception(failure);
     return frames;
+}
+
+std::string cm(double voxel) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%g cm", voxel * 100.0);
+    return text;
 }
 
 struct Summary {
@@ -186,7 +193,8 @@ void fuseSequence(const vkmesh::vk::Context& context, const std::vector<Frame>& 
         const auto t0 = Clock::now();
         vkmesh::gpu::FrameReport report = volume.integrate(frame.depth, &frame.color, intrinsics, frame.pose);
         const double wallMs = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-        for (const std::string& w : report.warnings) std::cerr << "warning: " << voxel * 100 << " cm, frame " << i << ": " << w << "\n";
+        for (const std::string& w : report.warnings) std::cerr << "warning: " << cm(voxel) << ", frame " << i << ": " << w << "\n";
+        for (const std::string& g : report.growth) std::cerr << "note: " << cm(voxel) << ", frame " << i << ": grew " << g << "\n";
         if (!run) continue;
         double total = 0, mesh = 0;
         for (const auto& [name, ms] : report.stageMs) {
@@ -257,12 +265,6 @@ DriverDescription describeDriver(const vkmesh::vk::Context& context) {
     if (void* symbol = dlsym(RTLD_DEFAULT, "vkGetInstanceProcAddr"); symbol && dladdr(symbol, &where) && where.dli_fname)
         d.loaderPath = where.dli_fname;
     return d;
-}
-
-std::string cm(double voxel) {
-    char text[32];
-    std::snprintf(text, sizeof text, "%g cm", voxel * 100.0);
-    return text;
 }
 
 void printRun(const VoxelRun& r, size_t repeat) {
