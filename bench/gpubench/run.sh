@@ -148,7 +148,11 @@ main() {
   local start=$SECONDS status=0
   "${run[@]}" "${args[@]}" || status=$?
   if ((status == 124 || status == 137)); then say "error: the benchmark ran past --timeout $timeout_s s and was stopped"; fi
-  say "exit code $status after $((SECONDS - start)) s; results in $out (gpubench.json, gpubench.txt)"
+  if ((status == 0)); then
+    say "done in $((SECONDS - start)) s; results in $out (gpubench.json, gpubench.txt)"
+  else
+    say "FAILED with exit code $status after $((SECONDS - start)) s; what it printed is in $out/gpubench.txt"
+  fi
   return "$status"
 }
 
