@@ -71,8 +71,8 @@ grep -q '"glibc": "' "$tmp/bundled/gpubench.json" || fail "no glibc version in t
 lvp=/usr/lib/x86_64-linux-gnu/libvulkan_lvp.so
 if [[ ! -e $lvp ]]; then
   echo "25-gpubench-pack: (d) skipped: no $lvp"
-elif ! unshare -m true 2>/dev/null; then
-  echo "25-gpubench-pack: (d) skipped: unshare -m is not allowed here"
+elif ! unshare -m mount -t tmpfs vkmesh-ci-probe /usr/local 2>/dev/null; then
+  echo "25-gpubench-pack: (d) skipped: no private mount namespace with a tmpfs over /usr/local here (unshare -m)"
 else
   unshare -m bash -euo pipefail -c '
     pack=$1 tmp=$2 lvp=$3
