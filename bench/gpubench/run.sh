@@ -137,7 +137,7 @@ main() {
     args+=(--quick)
   else
     has() { local a; for a in "${bench_args[@]}"; do [[ $a == "$1" || $a == "$1="* ]] && return 0; done; return 1; }
-    has --voxel || args+=(--voxel 0.03,0.01)
+    has --voxel || args+=(--voxel "0.03,0.01")
     has --frames || args+=(--frames 60)       # vkmesh synth's default sequence, one lap of the room
     has --repeat || args+=(--repeat 5)        # 300 timed frames per voxel size, each run into a fresh volume
     has --warmup || args+=(--warmup 30)
