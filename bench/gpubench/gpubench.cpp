@@ -7,11 +7,12 @@
 // and libvulkan.so.1: scripts/pack_gpubench.sh packs it with the loader for a bare machine (bench/README.md).
 //
 //   vkmesh_gpubench [--voxel 0.03,0.01] [--frames 60] [--repeat 1] [--warmup 10] [--device I] [--json FILE]
-//                   [--publish] [--quick]
+//                   [--publish] [--quick] [--devices]
 //
 // Prints a table per voxel size (median and p90 GPU ms per stage, the frame's GPU and wall time, the meshing
 // total) and writes the same as JSON. Exit codes: 0 done; 1 validation messages (VKMESH_VALIDATION=1);
-// 2 an error named in the message (no Vulkan driver or device, bad option); 3 an internal error.
+// 2 an error named in the message (no Vulkan driver or device, a voxel size out of range); 3 an internal error;
+// a malformed command line: CLI11's own non-zero code.
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 

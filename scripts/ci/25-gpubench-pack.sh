@@ -12,7 +12,7 @@
 #       manifest (run.sh must write one), then with a manifest in /usr/local/nvidia/share/vulkan/icd.d that
 #       names the library without a folder (run.sh must put the folder on LD_LIBRARY_PATH). Skipped with a
 #       note where unshare is not allowed.
-# About a minute on 2 cores when build/ is up to date.
+# About 30 s on 2 cores when build/ is up to date.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 start=$SECONDS
