@@ -7,8 +7,16 @@
 //
 //   vkmesh_embed_example --frames 24 --out out/embed      (VKMESH_VALIDATION=1: validation layer on, and
 //                                                          any validation message makes it exit 1)
+//   vkmesh_embed_example --async ...                      the asynchronous form: integrateAsync() returns at
+//                                                          once; the draw waits on vkmesh's timeline semaphore
+//                                                          on the GPU
+//   vkmesh_embed_example --compare --pictures-every 0     the application's loop time per frame (make the next
+//                                                          depth image + integrate), blocking against
+//                                                          asynchronous, alternating runs on the same frames
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -16,6 +24,7 @@
 #include <fstream>
 #include <iostream>
 #include <stdexcept>
+#include <vector>
 
 #include "api/reconstructor.h"
 #include "app_device.h"
@@ -34,6 +43,12 @@ void writePpm(const std::filesystem::path& path, const vkmesh::render::Image& im
     if (!out) throw std::runtime_error("cannot write " + path.string());
 }
 
+double median(std::vector<double> v) {
+    if (v.empty()) return 0.0;
+    std::sort(v.begin(), v.end());
+    return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -44,6 +59,12 @@ int main(int argc, char** argv) {
     cli.add_option("--width", width, "depth and picture width")->check(CLI::Range(16, 4096));
     cli.add_option("--height", height, "depth and picture height")->check(CLI::Range(16, 4096));
     cli.add_option("--out", outDir, "folder for frame_NNN.ppm");
+    bool async = false, compare = false;
+    int picturesEvery = 1, repeats = 2;
+    cli.add_flag("--async", async, "integrateAsync: fuse frame N+1 while frame N is drawn");
+    cli.add_flag("--compare", compare, "time the application's loop, blocking against asynchronous (alternating runs)");
+    cli.add_option("--pictures-every", picturesEvery, "draw and write every Kth frame (0: none)")->check(CLI::Range(0, 10000));
+    cli.add_option("--repeats", repeats, "--compare: runs of each form")->check(CLI::Range(1, 100));
     CLI11_PARSE(cli, argc, argv);
     const char* env = std::getenv("VKMESH_VALIDATION");
     const bool validation = env && *env && std::strcmp(env, "0") != 0;
@@ -52,7 +73,7 @@ int main(int argc, char** argv) {
         std::filesystem::create_directories(outDir);
         // 1. The application's own Vulkan objects.
         vkmesh::example::AppDevice app(validation);
-        size_t messages = 0;
+        size_t messages = 0, pictures = 0;
         {
             // 2. vkmesh on them, and the application's renderer on the same device and queue family.
             vkmesh::ReconstructorOptions options;
@@ -60,43 +81,98 @@ int main(int argc, char** argv) {
             options.volume.params.maxDepth = 6.0f;
             options.volume.blockCapacity = 8192;
             options.trackDeltas = true;   // what a remote viewer would be sent, counted below
-            vkmesh::Reconstructor reconstructor(app.external(), options);
             vkmesh::vk::Context renderContext(app.external());
             vkmesh::render::MeshRenderer renderer(renderContext);
-
             const auto scene = vkmesh::synth::SyntheticScene::defaultRoom();
             const vkmesh::Intrinsics intrinsics = vkmesh::synth::kinectIntrinsics(width, height);
             const auto poses = vkmesh::synth::cameraPath(size_t(frames));
-            for (int i = 0; i < frames; ++i) {
-                vkmesh::synth::RenderOptions noisy;
-                noisy.noise = true;
-                noisy.seed = uint32_t(i + 1);
-                const vkmesh::Pose& pose = poses[size_t(i)];
-                // 3. Fuse. When integrate() returns, the mesh buffers hold this frame's mesh.
-                vkmesh::gpu::FrameReport report = reconstructor.integrate(scene.renderDepth(intrinsics, pose, noisy), intrinsics, pose);
-                for (const auto& w : report.warnings) std::cerr << "warning: " << w << "\n";
-                // 4. Draw from vkmesh's buffers (the renderer records Reconstructor::recordMeshReadBarrier
-                //    before its indirect draw; see the contract in api/reconstructor.h).
-                vkmesh::gpu::MeshBuffers mesh = reconstructor.meshBuffers();
-                vkmesh::render::RenderOptions view;
-                view.width = width;
-                view.height = height;
-                view.camera = vkmesh::render::sensorCamera(pose, intrinsics);
-                Eigen::Vector3f eye = pose.block<3, 1>(0, 3).cast<float>();
-                Eigen::Vector3f reach = Eigen::Vector3f::Constant(options.volume.params.maxDepth);
-                char name[32];
-                std::snprintf(name, sizeof(name), "frame_%03d.ppm", i);
-                if (mesh.triangleCount > 0)
-                    writePpm(std::filesystem::path(outDir) / name, renderer.render(mesh, eye - reach, eye + reach, view));
-                const vkmesh::MeshDelta& delta = reconstructor.lastDelta();
-                std::printf("frame %3d: %7u triangles, %7u vertices; delta +%zu ~%zu -%zu records\n", i + 1, mesh.triangleCount,
-                            mesh.vertexCount, delta.count(vkmesh::DeltaKind::Added), delta.count(vkmesh::DeltaKind::Changed),
-                            delta.count(vkmesh::DeltaKind::Removed));
+
+            // One run: returns the application's loop time per frame (ms): making the depth image (standing
+            // in for the application's own work: a simulator, a sensor driver) plus the integrate call.
+            auto run = [&](bool asyncForm, bool print) {
+                vkmesh::Reconstructor reconstructor(app.external(), options);
+                std::vector<double> loopMs;
+                for (int i = 0; i < frames; ++i) {
+                    const auto start = std::chrono::steady_clock::now();
+                    vkmesh::synth::RenderOptions noisy;
+                    noisy.noise = true;
+                    noisy.seed = uint32_t(i + 1);
+                    const vkmesh::Pose& pose = poses[size_t(i)];
+                    const vkmesh::DepthImage depth = scene.renderDepth(intrinsics, pose, noisy);
+                    // 3. Fuse. Blocking: when integrate() returns, the mesh buffers hold this frame's mesh.
+                    //    Asynchronous: integrateAsync() returns at once with the buffers this frame writes and
+                    //    the timeline value at which they hold its mesh; the last frame's report comes with it.
+                    vkmesh::gpu::MeshBuffers mesh;
+                    vkmesh::vk::SubmitSync drawAfterFusion;
+                    std::vector<std::string> warnings;
+                    if (asyncForm) {
+                        vkmesh::Reconstructor::AsyncFrame a = reconstructor.integrateAsync(depth, nullptr, intrinsics, pose);
+                        mesh = a.mesh;
+                        drawAfterFusion.wait = {a.ready};
+                        drawAfterFusion.waitStages = {VK_PIPELINE_STAGE_DRAW_INDIRECT_BIT | VK_PIPELINE_STAGE_VERTEX_INPUT_BIT};
+                        drawAfterFusion.waitValues = {a.readyValue};
+                        if (a.previous) warnings = a.previous->warnings;
+                    } else {
+                        warnings = reconstructor.integrate(depth, intrinsics, pose).warnings;
+                        mesh = reconstructor.meshBuffers();
+                    }
+                    loopMs.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+                    for (const auto& w : warnings) std::cerr << "warning: " << w << "\n";
+                    // 4. Draw from vkmesh's buffers (the renderer records Reconstructor::recordMeshReadBarrier
+                    //    before its indirect draw, and waits on the GPU for the asynchronous frame's value; see
+                    //    the contract in api/reconstructor.h).
+                    if (picturesEvery > 0 && i % picturesEvery == 0) {
+                        vkmesh::render::RenderOptions view;
+                        view.width = width;
+                        view.height = height;
+                        view.camera = vkmesh::render::sensorCamera(pose, intrinsics);
+                        Eigen::Vector3f eye = pose.block<3, 1>(0, 3).cast<float>();
+                        Eigen::Vector3f reach = Eigen::Vector3f::Constant(options.volume.params.maxDepth);
+                        char name[32];
+                        std::snprintf(name, sizeof(name), "frame_%03d.ppm", i);
+                        writePpm(std::filesystem::path(outDir) / name, renderer.render(mesh, eye - reach, eye + reach, view, drawAfterFusion));
+                        ++pictures;
+                    }
+                    if (print) {
+                        const vkmesh::MeshDelta& delta = reconstructor.lastDelta();
+                        if (asyncForm)
+                            std::printf("frame %3d submitted; frame %3d's delta +%zu ~%zu -%zu records\n", i + 1, i,
+                                        delta.count(vkmesh::DeltaKind::Added), delta.count(vkmesh::DeltaKind::Changed),
+                                        delta.count(vkmesh::DeltaKind::Removed));
+                        else
+                            std::printf("frame %3d: %7u triangles, %7u vertices; delta +%zu ~%zu -%zu records\n", i + 1, mesh.triangleCount,
+                                        mesh.vertexCount, delta.count(vkmesh::DeltaKind::Added), delta.count(vkmesh::DeltaKind::Changed),
+                                        delta.count(vkmesh::DeltaKind::Removed));
+                    }
+                }
+                if (auto last = reconstructor.finish()) {
+                    for (const auto& w : last->warnings) std::cerr << "warning: " << w << "\n";
+                    if (print) std::printf("frame %3d finished: %u live triangles\n", frames, last->counters.liveTriangles);
+                }
+                return loopMs;
+            };
+
+            if (!compare) {
+                run(async, true);
+            } else {
+                // Alternating runs on the same frames; the first frame of each (pipeline warm-up, first
+                // allocation) is left out of the median.
+                std::vector<double> blockingMs, asyncMs;
+                for (int r = 0; r < repeats; ++r) {
+                    for (bool asyncForm : {false, true}) {
+                        std::vector<double> ms = run(asyncForm, false);
+                        if (ms.size() > 1) ms.erase(ms.begin());
+                        (asyncForm ? asyncMs : blockingMs).insert((asyncForm ? asyncMs : blockingMs).end(), ms.begin(), ms.end());
+                    }
+                }
+                std::printf("application loop per frame (make depth + integrate), median over %zu frames: blocking %.2f ms, "
+                            "asynchronous %.2f ms (x%.2f)\n",
+                            blockingMs.size(), median(blockingMs), median(asyncMs), median(asyncMs) / std::max(1e-9, median(blockingMs)));
             }
         }
         // 5. vkmesh is gone; the application's device lives on.
         messages = app.takeMessages().size();
-        std::printf("wrote %d pictures to %s; validation %s, %zu messages\n", frames, outDir.c_str(), validation ? "on" : "off", messages);
+        std::printf("wrote %zu pictures to %s; validation %s, %zu messages\n", pictures, outDir.c_str(), validation ? "on" : "off", messages);
         return messages == 0 ? 0 : 1;
     } catch (const std::exception& e) {
         std::cerr << "error: " << e.what() << "\n";
