@@ -63,8 +63,16 @@ int runSoak(const SoakArgs& a) {
 
     std::ofstream csv(a.output);
     if (!csv) throw Error("cannot write " + a.output);
+    // Per-stage GPU ms after the original columns (added, so scripts reading the old ones keep working): how
+    // each pass's cost follows the map's size (docs/RESULTS.md, issue 14's flat-cost target). A stage a frame
+    // does not run is 0; a name not listed here (a future pass) goes to ms_other.
+    static const std::vector<std::string> kStages = {"rehash",     "allocate",   "fuse",           "mesh_mark",
+                                                     "recycle_retire", "mesh_claim", "mesh_update", "mesh_triangulate",
+                                                     "mesh_gc",    "recycle_free", "export",       "deltas"};
     csv << "frame,lap,hash_entries,hash_tombstones,hash_rebuilt,blocks_in_use,vertices_in_use,chunks_in_use,live_triangles,"
-           "touched_blocks,blocks_freed,blocks_retired,blocks_starved,warnings,gpu_ms,wall_ms\n";
+           "touched_blocks,blocks_freed,blocks_retired,blocks_starved,warnings,gpu_ms,wall_ms";
+    for (const std::string& stage : kStages) csv << ",ms_" << stage;
+    csv << ",ms_other\n";
     std::vector<Occupancy> highWater(a.laps, Occupancy{0, 0, 0, 0, 0, 0});
     size_t warnings = 0, rebuilds = 0;
     uint64_t freed = 0;
@@ -98,7 +106,12 @@ int runSoak(const SoakArgs& a) {
         csv << i + 1 << "," << lapIndex + 1 << "," << k.hashEntries << "," << k.hashTombstones << "," << k.hashRebuilt << ","
             << k.blocksInUse << "," << k.verticesInUse << "," << k.chunksInUse << "," << k.liveTriangles << "," << k.touchedCount
             << "," << k.blocksFreed << "," << k.blocksRetired << "," << k.blocksStarved << "," << r.warnings.size() << ","
-            << gpuMs << "," << wallMs << "\n";
+            << gpuMs << "," << wallMs;
+        std::vector<double> stageMs(kStages.size() + 1, 0.0);
+        for (const auto& [name, ms] : r.stageMs)
+            stageMs[size_t(std::find(kStages.begin(), kStages.end(), name) - kStages.begin())] += ms;
+        for (double ms : stageMs) csv << "," << ms;
+        csv << "\n";
         if ((i + 1) % 250 == 0)
             std::cerr << "frame " << i + 1 << "/" << framesPerLap * a.laps << "  blocks " << k.blocksInUse << "  vertices "
                       << k.verticesInUse << "\n";
