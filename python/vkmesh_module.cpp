@@ -187,6 +187,9 @@ Intrinsics toIntrinsics(const py::handle& object, int width, int height) {
     if (a.ndim() == 1) {
         out.fx = float(v[0]), out.fy = float(v[1]), out.cx = float(v[2]), out.cy = float(v[3]);
     } else {
+        // A pinhole camera matrix: no skew, last row 0 0 1 (anything else would be silently dropped).
+        if (v[1] != 0 || v[3] != 0 || v[6] != 0 || v[7] != 0 || v[8] != 1)
+            throw py::value_error("intrinsics: a camera matrix must be [[fx, 0, cx], [0, fy, cy], [0, 0, 1]]");
         out.fx = float(v[0]), out.fy = float(v[4]), out.cx = float(v[2]), out.cy = float(v[5]);
     }
     out.width = width;
@@ -368,7 +371,9 @@ public:
                                       std::to_string(v->config().imageHeight) + ": every frame must have the first one's size");
             convertDepth(depth, depthScale, maxDepth(rec), depth_);
             if (color) convertColor(*color, color_);
+            const auto t0 = std::chrono::steady_clock::now();
             lastReport_ = rec.integrate(depth_, color ? &color_ : nullptr, intrinsics, pose);
+            lastCppSeconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
             lastReport_.delta = MeshDelta{};   // the Reconstructor keeps it (lastDelta); one copy is enough
             frame = rec.framesIntegrated();
             return lastReport_.warnings;
@@ -433,7 +438,10 @@ public:
             s.device = rec.context().info().name;
             s.int64Atomics = rec.context().int64Atomics();
             s.validation = rec.context().validationEnabled();
+            // Before the first frame: the settings with their defaults filled in (hash slots, ...), as the volume will have them.
             s.config = options_.volume;
+            s.config.imageWidth = s.config.imageHeight = 1;
+            s.config = gpu::resolveConfig(s.config);
             if (const gpu::GpuVolume* v = rec.volume()) {
                 s.hasVolume = true;
                 s.config = v->config();
@@ -516,7 +524,14 @@ public:
                " frames, on " + rec_->context().info().name + ">";
     }
 
-    // benchmark (bench/python_overhead.py): the C++ API's integrate on a frame converted beforehand, timed in C++.
+    // For the overhead benchmark (bench/python_overhead.py): how long the last integrate() spent in the C++ API's
+    // Reconstructor::integrate; the rest of its wall time is the module's.
+    double lastCppSeconds() {
+        std::lock_guard<std::mutex> lock(mutex_);
+        return lastCppSeconds_;
+    }
+
+    // For the overhead benchmark: the C++ API's integrate on a frame converted beforehand, timed in C++.
     double timedCppIntegrate(const DepthImage& depth, const ColorImage* color, const Intrinsics& intrinsics, const Pose& pose) {
         return locked([&](Reconstructor& rec) {
             const auto t0 = std::chrono::steady_clock::now();
@@ -547,6 +562,7 @@ private:
     DepthImage depth_;
     ColorImage color_;
     gpu::FrameReport lastReport_;
+    double lastCppSeconds_ = 0;
 };
 
 std::unique_ptr<PyReconstructor> makeReconstructor(float voxelSize, float truncationVoxels, float maxDepth, const py::object& device,
@@ -840,7 +856,9 @@ file and the problem for a missing, corrupt or truncated map.
         .def("__exit__", [](PyReconstructor& self, const py::args&) { self.close(); })
         .def_property_readonly("closed", &PyReconstructor::closed, "Whether close() was called.")
         .def_property_readonly("frames_integrated", &PyReconstructor::framesIntegrated, "How many frames have been fused.")
-        .def("__repr__", &PyReconstructor::repr);
+        .def("__repr__", &PyReconstructor::repr)
+        .def_property_readonly("_last_cpp_seconds", &PyReconstructor::lastCppSeconds,
+                               "Benchmarks: seconds the last integrate() spent in the C++ Reconstructor::integrate.");
 
     py::class_<PyDataset>(m, "_Dataset")
         .def(py::init([](const fs::path& path, size_t frames, float maxDepth, const py::object& intrinsics, const py::object& depthScale) {

@@ -59,8 +59,9 @@ def colors_by_position(mesh: vkmesh.Mesh) -> dict:
 
 
 def small_reconstructor(**kwargs) -> vkmesh.Reconstructor:
-    """A Reconstructor with small capacities (they grow when needed): quick to create on lavapipe."""
-    options = dict(block_capacity=256, vertex_capacity=1 << 14, chunk_capacity=1 << 13, retype_capacity=1 << 12)
+    """A Reconstructor with small capacities (they grow when needed): quick to create on lavapipe. The retype list
+    keeps its default: a smaller one defers cubes to later frames, and which ones wait depends on the GPU's order."""
+    options = dict(block_capacity=256, vertex_capacity=1 << 14, chunk_capacity=1 << 13)
     options.update(kwargs)
     return vkmesh.Reconstructor(**options)
 

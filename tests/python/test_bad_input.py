@@ -107,6 +107,8 @@ def test_intrinsics(rec):
         integrate(rec, intrinsics=(50, 50, float("nan"), 24))
     with pytest.raises(ValueError, match=r"\(fx, fy, cx, cy\) or a 3x3 camera matrix, got shape \(3,\)"):
         integrate(rec, intrinsics=(50, 50, 32))
+    with pytest.raises(ValueError, match=r"camera matrix must be \[\[fx, 0, cx\], \[0, fy, cy\], \[0, 0, 1\]\]"):
+        integrate(rec, intrinsics=np.array([[51.2, 0.5, 31.5], [0, 51.2, 23.5], [0, 0, 1]]))
     integrate(rec, intrinsics=np.array([[51.2, 0, 31.5], [0, 51.2, 23.5], [0, 0, 1]]))
 
 
