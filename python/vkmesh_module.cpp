@@ -14,6 +14,7 @@
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
+#include <algorithm>
 #include <charconv>
 #include <chrono>
 #include <cmath>
@@ -60,8 +61,8 @@ std::string shapeOf(const py::array& a) {
 
 std::string dtypeOf(const py::array& a) { return py::str(a.dtype()).cast<std::string>(); }
 
-// A float setting as Python shows it: the shortest decimal that reads back as the same float (0.03, not
-// 0.029999999329447746), as `vkmesh fuse --stats` writes it. Converting it back to float gives `v` exactly.
+// A float setting as Python shows it: the shortest decimal that reads back as the same float (0.03, where the
+// CLI's --stats JSON prints the float's exact value, 0.029999999329447746). Converting it back gives `v` exactly.
 double shortest(float v) {
     char text[32];
     const auto end = std::to_chars(text, text + sizeof(text), v).ptr;
@@ -301,8 +302,8 @@ vk::ContextOptions deviceOptions(const py::object& device, bool validation) {
             throw py::value_error("device must be None (the first suitable one) or an index from vkmesh.devices(), got " +
                                   py::repr(device).cast<std::string>());
         const long long index = device.cast<long long>();
-        if (index < 0 || index > 1 << 20) throw py::value_error("device " + std::to_string(index) + " must be >= 0");
-        o.deviceIndex = int(index);
+        if (index < 0) throw py::value_error("device " + std::to_string(index) + " must be >= 0");
+        o.deviceIndex = int(std::min<long long>(index, std::numeric_limits<int>::max()));   // too large: vk::Context says so
     }
     o.validation = validation;   // VKMESH_VALIDATION=1 turns it on as well (vk::Context, as for the CLI)
     return o;

@@ -25,6 +25,8 @@ import numpy as np
 from . import _vkmesh
 from ._vkmesh import CapacityWarning, Error, Reconstructor
 
+Reconstructor.__module__ = "vkmesh"   # as help() and tracebacks name it (the class lives in vkmesh._vkmesh)
+
 __version__ = "0.1.0"
 __all__ = [
     "Reconstructor", "Mesh", "MeshDelta", "Dataset", "Frame", "Device", "open_dataset", "read_mesh", "devices",

@@ -12,12 +12,16 @@ import pytest
 import vkmesh
 
 
+def assert_no_validation_messages(when: str):
+    messages = vkmesh.validation_messages()
+    assert not messages, f"{len(messages)} validation messages {when}, first: {messages[0]}"
+
+
 @pytest.fixture(autouse=True)
 def no_validation_messages():
-    vkmesh.validation_messages()   # whatever an earlier test left behind is that test's
+    assert_no_validation_messages("before the test (from the fixtures it uses)")
     yield
-    messages = vkmesh.validation_messages()
-    assert not messages, f"{len(messages)} validation messages, first: {messages[0]}"
+    assert_no_validation_messages("during the test")
 
 
 def cli_path() -> Path:
