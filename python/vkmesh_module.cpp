@@ -355,8 +355,9 @@ public:
         }
     }
 
-    void integrate(const py::handle& depthObject, const py::handle& intrinsicsObject, const py::handle& poseObject,
-                   double depthScale, const py::handle& colorObject) {
+    // py::object rather than py::array: any array-like is accepted, and a wrong one is a ValueError naming it.
+    void integrate(const py::object& depthObject, const py::object& intrinsicsObject, const py::object& poseObject,
+                   double depthScale, const py::object& colorObject) {
         // Arguments first, with the GIL: nothing reaches the GPU unless all of them are right.
         const DepthInput depth = checkDepth(depthObject);
         const Intrinsics intrinsics = toIntrinsics(intrinsicsObject, depth.width, depth.height);
@@ -939,13 +940,17 @@ file and the problem for a missing, corrupt or truncated map.
             writePly(path, mesh);
     });
 
+    m.attr("_DELTA_ADDED") = uint32_t(DeltaKind::Added);
+    m.attr("_DELTA_CHANGED") = uint32_t(DeltaKind::Changed);
+    m.attr("_DELTA_REMOVED") = uint32_t(DeltaKind::Removed);
+
     m.def("_take_validation_messages", [] { return std::exchange(validationMessages(), {}); });
 
     // The overhead benchmark's C++ side (bench/python_overhead.py): a frame converted once, then the C++ API's
     // integrate on it, timed in C++.
     py::class_<CppFrame>(m, "_CppFrame")
-        .def(py::init([](const py::handle& depth, const py::handle& intrinsics, const py::handle& pose, double depthScale,
-                         const py::handle& color, float maxDepth) {
+        .def(py::init([](const py::object& depth, const py::object& intrinsics, const py::object& pose, double depthScale,
+                         const py::object& color, float maxDepth) {
                  auto f = std::make_unique<CppFrame>();
                  const DepthInput d = checkDepth(depth);
                  convertDepth(d, depthScale, maxDepth, f->depth);

@@ -33,8 +33,8 @@ __all__ = [
     "synth", "validation_messages", "Error", "CapacityWarning", "ADDED", "CHANGED", "REMOVED",
 ]
 
-# MeshDelta kinds (docs/DELTAS.md).
-ADDED, CHANGED, REMOVED = 0, 1, 2
+# MeshDelta kinds (docs/DELTAS.md), the GPU's own values.
+ADDED, CHANGED, REMOVED = _vkmesh._DELTA_ADDED, _vkmesh._DELTA_CHANGED, _vkmesh._DELTA_REMOVED
 
 
 def _shape(a) -> str:
