@@ -1,18 +1,21 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages vkmesh needs to build, test and run on lavapipe (software Vulkan).
 # Installs only what is missing; uses sudo when not root. Pass --bench to add Open3D for the peer
-# benchmark, --sanitize to add clang with its sanitizer and libFuzzer runtimes (libclang-rt-14-dev holds
-# libclang_rt.fuzzer/asan/ubsan) and llvm-symbolizer for readable reports (scripts/ci/10-sanitize-fuzz.sh).
+# benchmark (and the Python module's Open3D example), --sanitize to add clang with its sanitizer and
+# libFuzzer runtimes (libclang-rt-14-dev holds libclang_rt.fuzzer/asan/ubsan) and llvm-symbolizer for
+# readable reports (scripts/ci/10-sanitize-fuzz.sh).
 set -euo pipefail
 
 packages=(
   cmake g++ make pkg-config
   libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers vulkan-tools glslang-tools spirv-tools
   libeigen3-dev libopencv-core-dev libopencv-imgcodecs-dev libcli11-dev nlohmann-json3-dev libgtest-dev
+  # the Python module (python/, docs/PYTHON.md) and its tests
+  python3-dev pybind11-dev python3-pybind11 python3-numpy python3-pytest
 )
 for arg in "$@"; do
   case "$arg" in
-    --bench) packages+=(python3-open3d python3-numpy) ;;
+    --bench) packages+=(python3-open3d) ;;
     --sanitize) packages+=(clang libclang-rt-14-dev llvm-14) ;;
     *) echo "install_deps.sh: unknown option $arg" >&2; exit 2 ;;
   esac

@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # CI job: vkmesh as an installed package. `cmake --install`s the main suite's Release build (build/, tests
 # built too, so the check that no test is installed has something to catch) into a temporary prefix, checks
-# what was installed (no tests, no paths into this checkout, the data files), then
-# builds examples/consumer against it with find_package(vkmesh) and runs it on lavapipe with validation on,
-# and checks that the installed CLI finds its data relative to itself.
+# what was installed (no tests, no paths into this checkout, the data files, the Python package importable
+# from the prefix), then builds examples/consumer against it with find_package(vkmesh) and runs it on
+# lavapipe with validation on, and checks that the installed CLI finds its data relative to itself.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 scripts/install_deps.sh
@@ -37,6 +37,15 @@ for f in include/vkmesh/vkmesh.h include/vkmesh/shared_layout.h bin/vkmesh share
 done
 config="$(find "$prefix" -name vkmeshConfig.cmake)"
 [[ -n "$config" ]] || { echo "error: vkmeshConfig.cmake was not installed" >&2; exit 1; }
+# The Python package (built by default; install_deps.sh installs what it needs), in lib/python3.X/dist-packages
+# as Debian's python3 looks for it under /usr and /usr/local: imported from the prefix, not from the build tree.
+package="$(find "$prefix" -path '*/dist-packages/vkmesh/__init__.py')"
+[[ -n "$package" ]] || { echo "error: the vkmesh Python package was not installed" >&2; exit 1; }
+(cd / && PYTHONPATH="$(dirname "$(dirname "$package")")" /usr/bin/python3 -c "
+import vkmesh
+assert vkmesh.__file__ == '$package', vkmesh.__file__
+assert any(d.suitable for d in vkmesh.devices())
+")
 
 # The consumer sees the package only through CMAKE_PREFIX_PATH, never this source tree.
 rm -rf build-consumer

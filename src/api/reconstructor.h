@@ -119,6 +119,7 @@ public:
                                                const ReconstructorOptions& options = {});
 
     const vk::Context& context() const { return *context_; }
+    vk::Context& context() { return *context_; }   // e.g. to take its validation messages
     // The data structure itself, for what the facade does not cover; nullptr before the first frame.
     gpu::GpuVolume* volume() { return volume_.get(); }
 

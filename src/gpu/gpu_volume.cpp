@@ -144,6 +144,8 @@ Counters mergedCounters(const Counters& frame, const std::vector<Counters>& pass
 
 }  // namespace
 
+GpuVolumeConfig resolveConfig(const GpuVolumeConfig& config) { return resolved(config); }
+
 GpuVolume::GpuVolume(const vk::Context& context, const GpuVolumeConfig& config)
     : context_(context),
       config_(checkedFor(context, config)),

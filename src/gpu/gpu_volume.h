@@ -177,6 +177,12 @@ struct FrameInput {
     vk::SubmitSync sync;
 };
 
+// The configuration with its defaults filled in (hashCapacity 0 -> twice the block capacity, a power of two;
+// touchedCapacity 0 -> the block capacity, ...), checked without a device: throws Error naming the first
+// setting out of range. The GpuVolume constructor starts with it; exposed so that a caller can report a bad
+// setting before it has a device or an image (the Python module's constructor).
+GpuVolumeConfig resolveConfig(const GpuVolumeConfig& config);
+
 // Checks, before anything is allocated, that every buffer the configuration implies fits in one storage
 // buffer binding (maxBufferBytes: maxStorageBufferRange) and that all of them fit in the device's largest
 // device-local memory heap. Throws Error naming the buffer, the setting that sizes it (config field and CLI

@@ -440,22 +440,27 @@ cv::Mat decodeDepthPng(std::string_view bytes, const std::string& source) {
     return img;
 }
 
-DepthImage rawDepthToMeters(const cv::Mat& raw, double depthScale, std::optional<uint16_t> invalidRaw, float maxDepth) {
-    DepthImage out;
-    out.width = raw.cols;
-    out.height = raw.rows;
-    out.meters.resize(static_cast<size_t>(raw.cols) * raw.rows);
+void rawDepthToMeters(const uint16_t* raw, int width, int height, size_t rowStride, double depthScale,
+                      std::optional<uint16_t> invalidRaw, float maxDepth, DepthImage& out) {
+    out.width = width;
+    out.height = height;
+    out.meters.resize(static_cast<size_t>(width) * height);
     const uint16_t invalid = invalidRaw.value_or(0);
-    for (int y = 0; y < raw.rows; ++y) {
-        const uint16_t* row = raw.ptr<uint16_t>(y);
-        float* dst = out.meters.data() + static_cast<size_t>(y) * raw.cols;
-        for (int x = 0; x < raw.cols; ++x) {
+    for (int y = 0; y < height; ++y) {
+        const uint16_t* row = raw + static_cast<size_t>(y) * rowStride;
+        float* dst = out.meters.data() + static_cast<size_t>(y) * width;
+        for (int x = 0; x < width; ++x) {
             uint16_t v = row[x];
             float m = (v == 0 || v == invalid) ? 0.0f : static_cast<float>(v / depthScale);
             if (maxDepth > 0 && m > maxDepth) m = 0.0f;
             dst[x] = m;
         }
     }
+}
+
+DepthImage rawDepthToMeters(const cv::Mat& raw, double depthScale, std::optional<uint16_t> invalidRaw, float maxDepth) {
+    DepthImage out;
+    rawDepthToMeters(raw.ptr<uint16_t>(0), raw.cols, raw.rows, raw.step1(), depthScale, invalidRaw, maxDepth, out);
     return out;
 }
 
@@ -980,6 +985,8 @@ io::CameraJson readCameraJson(const fs::path& file) {
     return io::parseCameraJson(in, file.string());
 }
 
+}  // namespace
+
 void checkIntrinsics(const Intrinsics& k, const std::string& source) {
     auto check = [&](const char* name, float v, bool nonZero) {
         if (!std::isfinite(v)) throw Error(source + ": " + name + " = " + fmt(v) + " is not finite");
@@ -993,8 +1000,6 @@ void checkIntrinsics(const Intrinsics& k, const std::string& source) {
     check("cx", k.cx, false);
     check("cy", k.cy, false);
 }
-
-}  // namespace
 
 // =====================================================================================================
 

@@ -129,6 +129,10 @@ CameraPreset loadCameraPreset(const std::string& name);
 // value: not four numbers, a non-number, non-finite values, or fx/fy equal to 0.
 Intrinsics parseIntrinsics(const std::string& text);
 
+// Checks a camera's fx, fy, cx, cy: finite, fx > 0, fy non-zero (negative only with ICL-NUIM's poses, which
+// Dataset::open checks against the layout). Throws Error starting with `source` and naming the bad value.
+void checkIntrinsics(const Intrinsics& intrinsics, const std::string& source);
+
 // Checks that `pose` is a rigid camera-to-world transform: finite, rotation orthonormal within 1e-3
 // (max |R^T R - I|), determinant +1 (not a reflection), bottom row 0 0 0 1. Throws Error starting with
 // `where` (a file and line, or a frame) otherwise.

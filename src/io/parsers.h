@@ -85,6 +85,10 @@ cv::Mat decodeDepthPng(std::string_view bytes, const std::string& source);
 
 // Raw samples to metres: 0 and `invalidRaw` mean "no measurement"; samples beyond maxDepth (> 0) become 0.
 DepthImage rawDepthToMeters(const cv::Mat& raw, double depthScale, std::optional<uint16_t> invalidRaw, float maxDepth);
+// The same on samples in memory, rows `rowStride` samples apart, into `out` (whose buffer is reused): the one
+// conversion for a dataset's PNGs and an application's arrays (the Python module), so both give the same floats.
+void rawDepthToMeters(const uint16_t* raw, int width, int height, size_t rowStride, double depthScale,
+                      std::optional<uint16_t> invalidRaw, float maxDepth, DepthImage& out);
 
 }  // namespace vkmesh::io
 

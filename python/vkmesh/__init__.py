@@ -1,0 +1,299 @@
+"""vkmesh: real-time 3D reconstruction on any Vulkan device, from Python.
+
+Depth frames with known camera poses are fused into a TSDF on a hashed block grid on the GPU, and one
+incremental triangle mesh is kept up to date every frame (Dong et al., ICRA 2018). numpy arrays in, numpy
+arrays out; the work is done by the C++ library (vkmesh::Reconstructor), with the GIL released.
+
+    import vkmesh
+    vkmesh.synth("room", frames=60)                      # a synthetic sequence with ground truth
+    r = vkmesh.Reconstructor(voxel_size=0.03)            # the defaults of `vkmesh fuse`
+    for f in vkmesh.open_dataset("room"):
+        r.integrate(f.depth, f.intrinsics, f.pose, color=f.color)
+    m = r.mesh()                                         # m.vertices (N, 3) float32, m.triangles (M, 3) uint32
+    m.save("room.ply")
+
+Contents: Reconstructor, Mesh, MeshDelta, open_dataset (Dataset, Frame), read_mesh, devices (Device), synth,
+validation_messages, Error, CapacityWarning. docs/PYTHON.md in the source tree has more.
+"""
+
+import os
+import warnings
+from typing import Iterator, List, NamedTuple, Optional, Tuple
+
+import numpy as np
+
+from . import _vkmesh
+from ._vkmesh import CapacityWarning, Error, Reconstructor
+
+Reconstructor.__module__ = "vkmesh"   # as help() and tracebacks name it (the class lives in vkmesh._vkmesh)
+
+__version__ = "0.1.0"
+__all__ = [
+    "Reconstructor", "Mesh", "MeshDelta", "Dataset", "Frame", "Device", "open_dataset", "read_mesh", "devices",
+    "synth", "validation_messages", "Error", "CapacityWarning", "ADDED", "CHANGED", "REMOVED",
+]
+
+# MeshDelta kinds (docs/DELTAS.md), the GPU's own values.
+ADDED, CHANGED, REMOVED = _vkmesh._DELTA_ADDED, _vkmesh._DELTA_CHANGED, _vkmesh._DELTA_REMOVED
+
+
+def _shape(a) -> str:
+    return str(tuple(a.shape))
+
+
+class Mesh:
+    """An indexed triangle mesh: what Reconstructor.mesh() and read_mesh() return, and what save() writes.
+
+    vertices   (N, 3) float32 positions in metres (world frame)
+    triangles  (M, 3) uint32 vertex indices, counter-clockwise seen from outside
+    normals    (N, 3) float32 unit normals, or None
+    colors     (N, 3) uint8 red, green, blue, or None (no colour fused)
+    ages       (N,) uint32 frames since each vertex was created, or None
+
+    Mesh(vertices, triangles, normals=None, colors=None, ages=None) builds one from array-likes: positions and
+    normals are converted to float32, indices to uint32 (they must be in range); colours must already be uint8
+    (Open3D's float colours in [0, 1]: (numpy.asarray(c) * 255).round().astype(numpy.uint8)).
+    """
+
+    __slots__ = ("vertices", "triangles", "normals", "colors", "ages")
+
+    def __init__(self, vertices, triangles, normals=None, colors=None, ages=None):
+        self.vertices = np.ascontiguousarray(vertices, dtype=np.float32)
+        if self.vertices.ndim != 2 or self.vertices.shape[1] != 3:
+            raise ValueError(f"vertices must be an N x 3 array, got shape {_shape(self.vertices)}")
+        n = len(self.vertices)
+        t = np.asarray(triangles)
+        if t.size == 0:
+            t = t.reshape(0, 3)
+        if t.ndim != 2 or t.shape[1] != 3:
+            raise ValueError(f"triangles must be an M x 3 array of vertex indices, got shape {_shape(t)}")
+        if t.size and not np.issubdtype(t.dtype, np.integer):
+            raise ValueError(f"triangles must hold integer vertex indices, got dtype {t.dtype}")
+        if t.size and (t.min() < 0 or t.max() >= n):
+            raise ValueError(f"triangles index vertices {t.min()}..{t.max()} but there are {n} vertices")
+        self.triangles = np.ascontiguousarray(t, dtype=np.uint32)
+        self.normals = None if normals is None else np.ascontiguousarray(normals, dtype=np.float32)
+        if self.normals is not None and self.normals.shape != (n, 3):
+            raise ValueError(f"normals must be {n} x 3 (one per vertex), got shape {_shape(self.normals)}")
+        self.colors = None if colors is None else np.ascontiguousarray(colors)
+        if self.colors is not None:
+            if self.colors.dtype != np.uint8:
+                raise ValueError(f"colors must be uint8 (red, green, blue in 0..255), got dtype {self.colors.dtype}")
+            if self.colors.shape != (n, 3):
+                raise ValueError(f"colors must be {n} x 3 (one per vertex), got shape {_shape(self.colors)}")
+        self.ages = None if ages is None else np.ascontiguousarray(ages)
+        if self.ages is not None:
+            if not np.issubdtype(self.ages.dtype, np.integer) or self.ages.shape != (n,) or (n and self.ages.min() < 0):
+                raise ValueError(f"ages must be {n} non-negative integers (one per vertex), got dtype {self.ages.dtype} "
+                                 f"and shape {_shape(self.ages)}")
+            self.ages = self.ages.astype(np.uint32, copy=False)
+
+    def save(self, path) -> None:
+        """Writes the mesh as binary PLY (with normals, colours and ages when present), or as OBJ when the path
+        ends in .obj, exactly as `vkmesh fuse -o` writes its meshes (Open3D and MeshLab read both)."""
+        _vkmesh._write_mesh(os.fspath(path), self.vertices, self.triangles, self.normals, self.colors, self.ages)
+
+    def __repr__(self) -> str:
+        extras = [name for name in ("normals", "colors", "ages") if getattr(self, name) is not None]
+        return (f"<vkmesh.Mesh {len(self.vertices)} vertices, {len(self.triangles)} triangles"
+                + (", with " + ", ".join(extras) if extras else "") + ">")
+
+
+def read_mesh(path) -> Mesh:
+    """Reads a PLY file (ascii or binary; what `vkmesh fuse -o mesh.ply` writes, and most tools' PLY) into a
+    Mesh: positions, triangles (polygons split into fans), and normals, colours and ages when the file has
+    them. Raises vkmesh.Error naming the file for a missing, corrupt or unsupported one."""
+    return _vkmesh._read_ply(os.fspath(path))
+
+
+class MeshDelta:
+    """One frame's mesh changes (Reconstructor.deltas(), docs/DELTAS.md).
+
+    frame                  the frame number (1 = the first integrated frame)
+    vertex_ids             (K,) uint32: vertex ids (stable while the vertex lives, reused afterwards)
+    vertex_kinds           (K,) uint8: vkmesh.ADDED, vkmesh.CHANGED (moved, new normal or colour) or vkmesh.REMOVED
+    vertex_positions       (K, 3) float32, vertex_normals (K, 3) float32, vertex_created_frames (K,) uint32,
+    vertex_colors          (K, 4) uint8 red, green, blue, alpha (alpha 0: no colour): meaningful for ADDED
+                           and CHANGED
+    triangle_ids           (T,) uint32, triangle_kinds (T,) uint8 (ADDED or REMOVED)
+    triangle_vertices      (T, 3) uint32 vertex ids of ADDED triangles
+
+    Applying a frame to a copy of the mesh: removals first, then additions and changes.
+    """
+
+    __slots__ = ("frame", "vertex_ids", "vertex_kinds", "vertex_positions", "vertex_normals", "vertex_created_frames",
+                 "vertex_colors", "triangle_ids", "triangle_kinds", "triangle_vertices")
+
+    def __init__(self, **fields):
+        for name in self.__slots__:
+            setattr(self, name, fields[name])
+
+    def __repr__(self) -> str:
+        def counts(kinds):
+            return "/".join(str(int(np.count_nonzero(kinds == k))) for k in (ADDED, CHANGED, REMOVED))
+        return (f"<vkmesh.MeshDelta frame {self.frame}: vertices added/changed/removed {counts(self.vertex_kinds)}, "
+                f"triangles {counts(self.triangle_kinds)}>")
+
+
+class Frame:
+    """One frame of a Dataset.
+
+    index        position in the dataset
+    timestamp    seconds (TUM), frame index (ICL-NUIM) or frame number (Redwood, 7-Scenes)
+    depth        (H, W) float32 metres, 0 = no measurement (the files' raw values / depth_scale, exactly as
+                 `vkmesh fuse` computes them)
+    color        (H, W, 3) uint8 red, green, blue registered to depth, or None
+    pose         (4, 4) float64 camera-to-world
+    intrinsics   (fx, fy, cx, cy)
+    depth_scale  raw depth units per metre in the files
+    depth_path, color_path   the files ("" when there is no colour image)
+    """
+
+    __slots__ = ("index", "timestamp", "depth", "color", "pose", "intrinsics", "depth_scale", "depth_path", "color_path")
+
+    def __init__(self, **fields):
+        for name in self.__slots__:
+            setattr(self, name, fields[name])
+
+    def __repr__(self) -> str:
+        h, w = self.depth.shape
+        return (f"<vkmesh.Frame {self.index} ({w}x{h}{', colour' if self.color is not None else ''}) "
+                f"from {self.depth_path}>")
+
+
+class Dataset:
+    """A depth sequence on disk (TUM RGB-D, ICL-NUIM, Redwood or 7-Scenes layout), opened by open_dataset().
+
+    len(ds) frames; ds[i] loads frame i (raises vkmesh.Error if its depth image is unreadable); iterating
+    yields the frames `vkmesh fuse` would fuse, in order: a frame whose depth image cannot be read, or which has
+    no valid depth, is skipped with a warning (warnings.warn), as the CLI skips it.
+    Properties: path, kind, intrinsics (fx, fy, cx, cy), width, height, depth_scale, has_color, warnings (notes
+    from opening it: frames without a pose, default intrinsics used, ...).
+    """
+
+    def __init__(self, impl):
+        self._impl = impl
+
+    def __len__(self) -> int:
+        return len(self._impl)
+
+    def __getitem__(self, index: int) -> Frame:
+        n = len(self._impl)
+        if not isinstance(index, (int, np.integer)):
+            raise TypeError(f"dataset indices are integers, not {type(index).__name__}")
+        i = int(index) + n if index < 0 else int(index)
+        if not 0 <= i < n:
+            raise IndexError(f"frame {index} out of range: the dataset has {n} frames")
+        return self._frame(i)[0]
+
+    def _frame(self, i: int) -> Tuple[Frame, str]:
+        d = self._impl.load(i)
+        frame = Frame(index=d["index"], timestamp=d["timestamp"], depth=d["depth"], color=d["color"], pose=d["pose"],
+                      intrinsics=self._impl.intrinsics, depth_scale=self._impl.depth_scale, depth_path=d["depth_path"],
+                      color_path=d["color_path"])
+        return frame, d["color_warning"]
+
+    def __iter__(self) -> Iterator[Frame]:
+        for i in range(len(self._impl)):
+            try:
+                frame, color_warning = self._frame(i)
+            except Error as e:
+                warnings.warn(f"frame {i} skipped: {e}", stacklevel=2)
+                continue
+            if not np.any(frame.depth > 0):
+                warnings.warn(f"frame {i} skipped: no valid depth in {frame.depth_path}", stacklevel=2)
+                continue
+            if color_warning:
+                warnings.warn(f"frame {i} fused without colour: {color_warning}", stacklevel=2)
+            yield frame
+
+    path = property(lambda self: self._impl.folder, doc="The dataset's folder (absolute).")
+    kind = property(lambda self: self._impl.kind, doc="'TUM RGB-D', 'ICL-NUIM', 'Redwood' or '7-Scenes'.")
+    intrinsics = property(lambda self: self._impl.intrinsics, doc="(fx, fy, cx, cy) of the depth camera.")
+    width = property(lambda self: self._impl.width, doc="Depth image width in pixels.")
+    height = property(lambda self: self._impl.height, doc="Depth image height in pixels.")
+    depth_scale = property(lambda self: self._impl.depth_scale, doc="Raw depth units per metre in the files.")
+    has_color = property(lambda self: self._impl.has_color, doc="Whether any frame has a colour image.")
+    warnings = property(lambda self: list(self._impl.warnings), doc="Notes from opening the dataset.")
+
+    def __repr__(self) -> str:
+        return f"<vkmesh.Dataset {self.kind}, {len(self)} frames of {self.width}x{self.height} in {self.path}>"
+
+
+def open_dataset(path, frames: int = 0, intrinsics=None, depth_scale: Optional[float] = None,
+                 max_depth: float = 0.0) -> Dataset:
+    """Opens a depth sequence: a folder in TUM RGB-D, ICL-NUIM, Redwood or 7-Scenes layout, detected as
+    `vkmesh fuse` detects it (README.md lists what each layout needs).
+
+    frames       use at most this many frames (0: all), like --frames
+    intrinsics   (fx, fy, cx, cy) overriding the dataset's, like --intrinsics
+    depth_scale  raw units per metre overriding the dataset's, like --depth-scale
+    max_depth    metres beyond which a frame's depth is set to 0 (0: no limit). The Reconstructor ignores
+                 depth beyond its own max_depth anyway, so this is rarely needed.
+
+    Raises vkmesh.Error naming the file or value at fault for a folder it cannot use.
+    """
+    if frames < 0:
+        raise ValueError(f"frames {frames} must be >= 0 (0 = all)")
+    if depth_scale is not None and not (np.isfinite(depth_scale) and depth_scale > 0):
+        raise ValueError(f"depth_scale {depth_scale} must be a positive finite number")
+    if not (np.isfinite(max_depth) and max_depth >= 0):
+        raise ValueError(f"max_depth {max_depth} must be a finite number >= 0 (0 = no limit)")
+    return Dataset(_vkmesh._Dataset(os.fspath(path), int(frames), float(max_depth), intrinsics, depth_scale))
+
+
+class Device(NamedTuple):
+    """A Vulkan device (vkmesh.devices()). Pass its index as Reconstructor(device=...)."""
+    index: int
+    name: str
+    type: str            # "discrete GPU", "integrated GPU", "CPU", ...
+    api_version: str
+    driver: str
+    suitable: bool       # whether vkmesh can run on it
+    why_not: str         # what it lacks when not suitable
+    int64_atomics: bool  # the block hash's path (docs/HASH.md)
+    hash_path: str
+
+
+def devices() -> List[Device]:
+    """The Vulkan devices and whether vkmesh can use each (as `vkmesh devices` lists them)."""
+    return [Device(**d) for d in _vkmesh._devices()]
+
+
+def synth(out_dir, frames: int = 60, *, width: int = 640, height: int = 480, noise: bool = False, seed: int = 1,
+          path: str = "orbit", color_noise: float = 0.0, exposure_drift: float = 0.0) -> str:
+    """Renders the built-in synthetic room along a camera path into a TUM-layout folder with exact ground
+    truth (depth/, rgb/, depth.txt, rgb.txt, groundtruth.txt, camera.json, gt_points.ply), as `vkmesh synth`
+    does, with its defaults. Returns the folder, ready for open_dataset().
+
+    noise           Kinect-like depth noise and dropout
+    seed            noise seed
+    path            'orbit' (one loop) or 'revisit' (the loop three times)
+    color_noise     Gaussian colour noise per pixel and channel, sigma in 0-255 units
+    exposure_drift  colour gain 1 + A sin(2 pi frame / frames) over the sequence, A in [0, 1)
+    """
+    # The ranges `vkmesh synth` accepts.
+    if frames < 1:
+        raise ValueError(f"frames {frames} must be >= 1")
+    for name, value in (("width", width), ("height", height)):
+        if not 16 <= value <= 4096:
+            raise ValueError(f"{name} {value} must be in [16, 4096]")
+    if path not in ("orbit", "revisit"):
+        raise ValueError(f"path '{path}' is not one of 'orbit', 'revisit'")
+    if not 0 <= color_noise <= 255:
+        raise ValueError(f"color_noise {color_noise} must be in [0, 255]")
+    if not 0 <= exposure_drift <= 0.999:
+        raise ValueError(f"exposure_drift {exposure_drift} must be in [0, 0.999]")
+    if not 0 <= seed < 2**32:
+        raise ValueError(f"seed {seed} must be in [0, 2^32)")
+    out = os.fspath(out_dir)
+    _vkmesh._synth(out, int(frames), int(width), int(height), bool(noise), int(seed), path, float(color_noise),
+                   float(exposure_drift))
+    return out
+
+
+def validation_messages() -> List[str]:
+    """The Khronos validation layer's messages (with VKMESH_VALIDATION=1 or Reconstructor(validation=True))
+    from every Reconstructor since the last call, which clears them. They are printed to stderr as well; the
+    test suite fails on any."""
+    return _vkmesh._take_validation_messages()

@@ -1,0 +1,966 @@
+// vkmesh._vkmesh: the compiled half of the Python package `vkmesh` (docs/PYTHON.md; the pure-Python half,
+// vkmesh/__init__.py, holds the data classes and the dataset iteration). Bindings over the C++ API with no
+// reconstruction code of their own: vkmesh::Reconstructor (api/reconstructor.h) fuses and meshes, the dataset
+// reader (io/dataset.h) reads sequences, io/ply.h reads and writes meshes, synth/ writes synthetic sequences.
+// What is here: numpy arrays checked and converted, with the dataset reader's own conversion (uint16 depth to
+// metres) and checks (intrinsics, rigid poses), so that the same frames give the CLI's floats and messages.
+//
+// Errors: a bad argument (dtype, shape, value, a non-rigid pose) raises ValueError with vkmesh's message;
+// whatever vkmesh::Error reports (Vulkan, capacities that do not fit the device, files) raises vkmesh.Error,
+// a RuntimeError. The GIL is released while images are converted and while the GPU works; each Reconstructor
+// has a mutex so that its C++ object is used by one thread at a time, as api/reconstructor.h requires.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
+
+#include <algorithm>
+#include <charconv>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <limits>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "api/exported_mesh.h"
+#include "api/reconstructor.h"
+#include "core/mesh_delta.h"
+#include "core/types.h"
+#include "gpu/gpu_volume.h"
+#include "io/dataset.h"
+#include "io/parsers.h"
+#include "io/ply.h"
+#include "synth/synthetic_scene.h"
+#include "synth/tum_sequence.h"
+#include "vk/context.h"
+
+namespace py = pybind11;
+using namespace pybind11::literals;
+
+namespace vkmesh::python {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// ---------------------------------------------------------------------------------------------------
+// numpy helpers
+
+// The shape as Python prints it, "(480, 640)", for messages.
+std::string shapeOf(const py::array& a) {
+    std::string s = "(";
+    for (py::ssize_t i = 0; i < a.ndim(); ++i) s += (i ? ", " : "") + std::to_string(a.shape(i));
+    return s + (a.ndim() == 1 ? ",)" : ")");
+}
+
+std::string dtypeOf(const py::array& a) { return py::str(a.dtype()).cast<std::string>(); }
+
+// A float setting as Python shows it: the shortest decimal that reads back as the same float (0.03, where the
+// CLI's --stats JSON prints the float's exact value, 0.029999999329447746). Converting it back gives `v` exactly.
+double shortest(float v) {
+    char text[32];
+    const auto end = std::to_chars(text, text + sizeof(text), v).ptr;
+    double out = v;
+    std::from_chars(text, end, out);
+    return out;
+}
+
+// Any array-like as a numpy array (lists become arrays, whose dtype the caller then checks).
+py::array asArray(const py::handle& x) {
+    if (py::isinstance<py::array>(x)) return py::reinterpret_borrow<py::array>(x);
+    return py::module_::import("numpy").attr("asarray")(x);
+}
+
+// A C-contiguous array: arrays that are not (a slice, a transposed view) are copied once.
+py::array contiguous(py::array a) {
+    if (a.flags() & py::array::c_style) return a;
+    return py::module_::import("numpy").attr("ascontiguousarray")(a);
+}
+
+template <class T>
+bool hasDtype(const py::array& a) {
+    return a.dtype().equal(py::dtype::of<T>());
+}
+
+// A std::vector handed to numpy without a copy: the array owns the vector through a capsule. V is a plain
+// aggregate of `components` T's (float for Eigen::Vector3f, uint32_t for std::array<uint32_t, 3>, ...).
+template <class T, class V>
+py::array_t<T> moveToArray(std::vector<V>&& values, size_t components) {
+    static_assert(sizeof(V) % sizeof(T) == 0, "V must be made of T's");
+    std::vector<py::ssize_t> shape{py::ssize_t(values.size())};
+    if (components > 1) shape.push_back(py::ssize_t(components));
+    if (values.empty()) return py::array_t<T>(shape);
+    auto* owner = new std::vector<V>(std::move(values));
+    py::capsule free(owner, [](void* p) { delete static_cast<std::vector<V>*>(p); });
+    return py::array_t<T>(shape, reinterpret_cast<const T*>(owner->data()), free);
+}
+static_assert(sizeof(Eigen::Vector3f) == 3 * sizeof(float), "positions are handed to numpy as float32 (N, 3)");
+
+// ---------------------------------------------------------------------------------------------------
+// Frame inputs: depth, colour, intrinsics, pose
+
+// A depth image as given: uint16 raw units (with a depth scale) or float32 metres, H x W, C-contiguous.
+struct DepthInput {
+    py::array array;
+    bool raw = false;   // uint16
+    int width = 0, height = 0;
+};
+
+DepthInput checkDepth(const py::handle& object) {
+    DepthInput d;
+    d.array = asArray(object);
+    d.raw = hasDtype<uint16_t>(d.array);
+    if (!d.raw && !hasDtype<float>(d.array))
+        throw py::value_error("depth must be a uint16 array (raw sensor units, with depth_scale) or a float32 array (metres), "
+                              "got dtype " + dtypeOf(d.array) + "; convert with depth.astype(numpy.float32) for metres");
+    if (d.array.ndim() != 2)
+        throw py::value_error("depth must be an H x W array, got shape " + shapeOf(d.array));
+    if (d.array.shape(0) < 1 || d.array.shape(1) < 1 || d.array.shape(0) > 65535 || d.array.shape(1) > 65535)
+        throw py::value_error("depth has shape " + shapeOf(d.array) + "; height and width must be in [1, 65535]");
+    d.height = int(d.array.shape(0));
+    d.width = int(d.array.shape(1));
+    d.array = contiguous(d.array);
+    return d;
+}
+
+// Metres for the GPU, into `out` (its buffer reused from frame to frame). uint16: the dataset reader's own
+// conversion (io::rawDepthToMeters), so the same PNG gives the same floats as `vkmesh fuse`. float32: NaN and 0
+// mean no measurement; beyond maxDepth becomes 0, as the reader does. Runs without the GIL.
+void convertDepth(const DepthInput& d, double depthScale, float maxDepth, DepthImage& out) {
+    if (d.raw) {
+        io::rawDepthToMeters(static_cast<const uint16_t*>(d.array.data()), d.width, d.height, size_t(d.width), depthScale,
+                             std::nullopt, maxDepth, out);
+        return;
+    }
+    out.width = d.width;
+    out.height = d.height;
+    out.meters.resize(size_t(d.width) * d.height);
+    const float* src = static_cast<const float*>(d.array.data());
+    for (size_t i = 0; i < out.meters.size(); ++i) {
+        float m = src[i];
+        if (std::isnan(m)) m = 0.0f;
+        if (!(m >= 0.0f && m <= std::numeric_limits<float>::max()))
+            throw py::value_error("depth[" + std::to_string(i / d.width) + ", " + std::to_string(i % d.width) + "] = " +
+                                  std::to_string(m) + ": depth in metres must be finite and >= 0 (0 or NaN: no measurement)");
+        if (maxDepth > 0 && m > maxDepth) m = 0.0f;
+        out.meters[i] = m;
+    }
+}
+
+// A colour image registered to the depth image: uint8 H x W x 3 (red, green, blue), C-contiguous.
+std::optional<py::array> checkColor(const py::handle& object, const DepthInput& depth) {
+    if (object.is_none()) return std::nullopt;
+    py::array c = asArray(object);
+    if (!hasDtype<uint8_t>(c))
+        throw py::value_error("color must be a uint8 array (H x W x 3, red green blue), got dtype " + dtypeOf(c));
+    if (c.ndim() != 3 || c.shape(2) != 3)
+        throw py::value_error("color must be an H x W x 3 array (red green blue), got shape " + shapeOf(c) +
+                              (c.ndim() == 3 && c.shape(2) == 4 ? "; drop the alpha channel with color[..., :3]" : ""));
+    if (c.shape(0) != depth.height || c.shape(1) != depth.width)
+        throw py::value_error("color image is " + std::to_string(c.shape(1)) + "x" + std::to_string(c.shape(0)) +
+                              " but the depth image is " + std::to_string(depth.width) + "x" + std::to_string(depth.height) +
+                              " (colour must be registered to depth)");
+    return contiguous(c);
+}
+
+void convertColor(const py::array& c, ColorImage& out) {
+    out.height = int(c.shape(0));
+    out.width = int(c.shape(1));
+    out.rgb.resize(size_t(out.width) * out.height * 3);
+    std::memcpy(out.rgb.data(), c.data(), out.rgb.size());
+}
+
+// (fx, fy, cx, cy) or a 3 x 3 camera matrix, checked as the dataset reader checks --intrinsics.
+Intrinsics toIntrinsics(const py::handle& object, int width, int height) {
+    py::array a = asArray(object);
+    if (!(a.ndim() == 1 && a.shape(0) == 4) && !(a.ndim() == 2 && a.shape(0) == 3 && a.shape(1) == 3))
+        throw py::value_error("intrinsics must be (fx, fy, cx, cy) or a 3x3 camera matrix, got shape " + shapeOf(a));
+    auto k = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(a);
+    if (!k) throw py::value_error("intrinsics must be numbers, got dtype " + dtypeOf(a));
+    const double* v = k.data();
+    Intrinsics out;
+    if (a.ndim() == 1) {
+        out.fx = float(v[0]), out.fy = float(v[1]), out.cx = float(v[2]), out.cy = float(v[3]);
+    } else {
+        // A pinhole camera matrix: no skew, last row 0 0 1 (anything else would be silently dropped).
+        if (v[1] != 0 || v[3] != 0 || v[6] != 0 || v[7] != 0 || v[8] != 1)
+            throw py::value_error("intrinsics: a camera matrix must be [[fx, 0, cx], [0, fy, cy], [0, 0, 1]]");
+        out.fx = float(v[0]), out.fy = float(v[4]), out.cx = float(v[2]), out.cy = float(v[5]);
+    }
+    out.width = width;
+    out.height = height;
+    try {
+        checkIntrinsics(out, "intrinsics");
+    } catch (const Error& e) {
+        throw py::value_error(e.what());
+    }
+    return out;
+}
+
+// A 4 x 4 camera-to-world matrix, checked as the dataset reader checks every pose it reads (validatePose).
+Pose toPose(const py::handle& object, const std::string& where) {
+    py::array a = asArray(object);
+    if (a.ndim() != 2 || a.shape(0) != 4 || a.shape(1) != 4)
+        throw py::value_error(where + ": pose must be a 4x4 camera-to-world matrix, got shape " + shapeOf(a));
+    auto m = py::array_t<double, py::array::forcecast>::ensure(a);
+    if (!m) throw py::value_error(where + ": pose must be numbers, got dtype " + dtypeOf(a));
+    auto r = m.unchecked<2>();
+    Pose pose;
+    for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j) pose(i, j) = r(i, j);
+    try {
+        validatePose(pose, where);
+    } catch (const Error& e) {
+        throw py::value_error(e.what());
+    }
+    return pose;
+}
+
+py::array_t<double> poseToArray(const Pose& pose) {
+    py::array_t<double> out({4, 4});
+    auto w = out.mutable_unchecked<2>();
+    for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j) w(i, j) = pose(i, j);
+    return out;
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Validation messages and capacity warnings
+
+// Validation-layer messages of every Reconstructor, collected after each call (with the GIL held) until
+// vkmesh.validation_messages() takes them: the test suite fails on any, as the C++ tests do.
+std::vector<std::string>& validationMessages() {
+    static std::vector<std::string> messages;
+    return messages;
+}
+
+void publishMessages(std::vector<std::string>&& messages) {
+    auto& all = validationMessages();
+    for (auto& m : messages) all.push_back(std::move(m));
+}
+
+// A frame's capacity problems (FrameReport::warnings: something did not fit and was skipped; what was fused
+// before is kept) as vkmesh.CapacityWarning, which a program can turn into an exception with warnings.simplefilter.
+void warnCapacity(const std::vector<std::string>& warnings, uint32_t frame) {
+    if (warnings.empty()) return;
+    py::object category = py::module_::import("vkmesh._vkmesh").attr("CapacityWarning");
+    for (const auto& w : warnings) {
+        const std::string text = "frame " + std::to_string(frame) + ": " + w;
+        if (PyErr_WarnEx(category.ptr(), text.c_str(), 1) < 0) throw py::error_already_set();
+    }
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Reconstructor
+
+const char* colorModeName(ColorFusion mode) {
+    switch (mode) {
+        case ColorFusion::Off: return "off";
+        case ColorFusion::Average: return "average";
+        case ColorFusion::Recent: return "recent";
+    }
+    return "?";
+}
+
+ColorFusion parseColorMode(const std::string& mode) {
+    if (mode == "average") return ColorFusion::Average;
+    if (mode == "recent") return ColorFusion::Recent;
+    if (mode == "off") return ColorFusion::Off;
+    throw py::value_error("color_mode '" + mode + "' is not one of 'average', 'recent', 'off'");
+}
+
+uint32_t capacity(const char* name, long long value) {
+    if (value < 0 || value > 0xFFFFFFFFll)
+        throw py::value_error(std::string(name) + " = " + std::to_string(value) + " must be in [0, 2^32)");
+    return uint32_t(value);
+}
+
+// The capacities of gpu::GpuVolumeConfig, shared by the constructor and load() (initial sizes: they grow).
+struct Capacities {
+    long long blocks, hashSlots, touched, vertices, chunks, retype, deltaRecords;
+    void applyTo(gpu::GpuVolumeConfig& c) const {
+        c.blockCapacity = capacity("block_capacity", blocks);
+        c.hashCapacity = capacity("hash_capacity", hashSlots);
+        c.touchedCapacity = capacity("touched_capacity", touched);
+        c.vertexCapacity = capacity("vertex_capacity", vertices);
+        c.chunkCapacity = capacity("chunk_capacity", chunks);
+        c.retypeCapacity = capacity("retype_capacity", retype);
+        c.deltaRecordCapacity = capacity("delta_record_capacity", deltaRecords);
+    }
+};
+
+vk::ContextOptions deviceOptions(const py::object& device, bool validation) {
+    vk::ContextOptions o;
+    if (!device.is_none()) {
+        if (!py::isinstance<py::int_>(device) || py::isinstance<py::bool_>(device))
+            throw py::value_error("device must be None (the first suitable one) or an index from vkmesh.devices(), got " +
+                                  py::repr(device).cast<std::string>());
+        const long long index = device.cast<long long>();
+        if (index < 0) throw py::value_error("device " + std::to_string(index) + " must be >= 0");
+        o.deviceIndex = int(std::min<long long>(index, std::numeric_limits<int>::max()));   // too large: vk::Context says so
+    }
+    o.validation = validation;   // VKMESH_VALIDATION=1 turns it on as well (vk::Context, as for the CLI)
+    return o;
+}
+
+// Checks a configuration's settings before any device exists: a bad value is a ValueError naming it. The
+// image size is not known before the first frame; a placeholder stands in for it.
+void checkConfig(gpu::GpuVolumeConfig config) {
+    config.imageWidth = config.imageHeight = 1;
+    try {
+        gpu::resolveConfig(config);
+    } catch (const Error& e) {
+        throw py::value_error(e.what());
+    }
+}
+
+class PyReconstructor {
+public:
+    PyReconstructor(const ReconstructorOptions& options, std::unique_ptr<Reconstructor> rec)
+        : options_(options), rec_(std::move(rec)) {}
+
+    // Runs f on the Reconstructor with the GIL released and the object's mutex held; then publishes the
+    // validation messages the call produced. f must not touch Python objects.
+    template <class F>
+    auto locked(F&& f) {
+        std::vector<std::string> messages;
+        auto takeMessages = [&] {
+            if (rec_) messages = rec_->context().takeValidationMessages();
+        };
+        struct Publish {   // also when f throws
+            std::vector<std::string>& messages;
+            ~Publish() { publishMessages(std::move(messages)); }
+        } publish{messages};
+        py::gil_scoped_release release;
+        std::lock_guard<std::mutex> lock(mutex_);
+        if (!rec_) throw Error("this Reconstructor is closed");
+        try {
+            if constexpr (std::is_void_v<decltype(f(*rec_))>) {
+                f(*rec_);
+                takeMessages();
+            } else {
+                auto result = f(*rec_);
+                takeMessages();
+                return result;
+            }
+        } catch (...) {
+            takeMessages();
+            throw;
+        }
+    }
+
+    // py::object rather than py::array: any array-like is accepted, and a wrong one is a ValueError naming it.
+    void integrate(const py::object& depthObject, const py::object& intrinsicsObject, const py::object& poseObject,
+                   double depthScale, const py::object& colorObject) {
+        // Arguments first, with the GIL: nothing reaches the GPU unless all of them are right.
+        const DepthInput depth = checkDepth(depthObject);
+        const Intrinsics intrinsics = toIntrinsics(intrinsicsObject, depth.width, depth.height);
+        const Pose pose = toPose(poseObject, "integrate()");
+        const std::optional<py::array> color = checkColor(colorObject, depth);
+        if (depth.raw && !(std::isfinite(depthScale) && depthScale > 0))
+            throw py::value_error("depth_scale " + std::to_string(depthScale) + " must be a positive finite number");
+        uint32_t frame = 0;
+        std::vector<std::string> warnings = locked([&](Reconstructor& rec) {
+            if (const gpu::GpuVolume* v = rec.volume(); v && (v->config().imageWidth != depth.width || v->config().imageHeight != depth.height))
+                throw py::value_error("depth image is " + std::to_string(depth.width) + "x" + std::to_string(depth.height) +
+                                      " but the first frame was " + std::to_string(v->config().imageWidth) + "x" +
+                                      std::to_string(v->config().imageHeight) + ": every frame must have the first one's size");
+            convertDepth(depth, depthScale, maxDepth(rec), depth_);
+            if (color) convertColor(*color, color_);
+            const auto t0 = std::chrono::steady_clock::now();
+            lastReport_ = rec.integrate(depth_, color ? &color_ : nullptr, intrinsics, pose);
+            lastCppSeconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+            lastReport_.delta = MeshDelta{};   // the Reconstructor keeps it (lastDelta); one copy is enough
+            frame = rec.framesIntegrated();
+            return lastReport_.warnings;
+        });
+        warnCapacity(warnings, frame);
+    }
+
+    py::object mesh() {
+        Mesh m = locked([](Reconstructor& rec) {
+            const gpu::ExportedMesh exported = rec.downloadMesh();
+            // Ages in the GPU's frame numbers, as `vkmesh fuse` writes them.
+            return toMesh(exported, rec.volume() ? rec.volume()->frameNumber() : 0u);
+        });
+        return meshToPython(std::move(m));
+    }
+
+    py::object deltas() {
+        MeshDelta delta = locked([&](Reconstructor& rec) {
+            if (!options_.trackDeltas)
+                throw Error("mesh deltas are not tracked: create the Reconstructor with track_deltas=True");
+            return rec.lastDelta();
+        });
+        const size_t nv = delta.vertices.size(), nt = delta.triangles.size();
+        py::array_t<uint32_t> vertexIds(nv), triangleIds(nt), created(nv);
+        py::array_t<uint8_t> vertexKinds(nv), triangleKinds(nt), colors({nv, size_t(4)});
+        py::array_t<float> positions({nv, size_t(3)}), normals({nv, size_t(3)});
+        py::array_t<uint32_t> triangleVertices({nt, size_t(3)});
+        for (size_t i = 0; i < nv; ++i) {
+            const gpu::DeltaVertexRecord& r = delta.vertices[i];
+            vertexIds.mutable_at(i) = deltaId(r.idKind);
+            vertexKinds.mutable_at(i) = uint8_t(deltaKind(r.idKind));
+            positions.mutable_at(i, 0) = r.px, positions.mutable_at(i, 1) = r.py, positions.mutable_at(i, 2) = r.pz;
+            normals.mutable_at(i, 0) = r.nx, normals.mutable_at(i, 1) = r.ny, normals.mutable_at(i, 2) = r.nz;
+            created.mutable_at(i) = r.createdFrame;
+            for (int c = 0; c < 4; ++c) colors.mutable_at(i, c) = uint8_t(r.color >> (8 * c));
+        }
+        for (size_t i = 0; i < nt; ++i) {
+            const gpu::DeltaTriangleRecord& r = delta.triangles[i];
+            triangleIds.mutable_at(i) = deltaId(r.idKind);
+            triangleKinds.mutable_at(i) = uint8_t(deltaKind(r.idKind));
+            triangleVertices.mutable_at(i, 0) = r.v0, triangleVertices.mutable_at(i, 1) = r.v1, triangleVertices.mutable_at(i, 2) = r.v2;
+        }
+        return py::module_::import("vkmesh").attr("MeshDelta")(
+            "frame"_a = delta.frame, "vertex_ids"_a = vertexIds, "vertex_kinds"_a = vertexKinds, "vertex_positions"_a = positions,
+            "vertex_normals"_a = normals, "vertex_created_frames"_a = created, "vertex_colors"_a = colors,
+            "triangle_ids"_a = triangleIds, "triangle_kinds"_a = triangleKinds, "triangle_vertices"_a = triangleVertices);
+    }
+
+    // The keys and their meaning follow `vkmesh fuse --stats` where the two report the same thing.
+    py::dict stats() {
+        struct Snapshot {
+            std::string device;
+            bool int64Atomics = false, validation = false, hasVolume = false;
+            gpu::GpuVolumeConfig config;
+            gpu::Counters counters{};
+            std::vector<gpu::PoolInfo> pools;
+            uint32_t frames = 0;
+            gpu::FrameReport last;
+        };
+        Snapshot s = locked([&](Reconstructor& rec) {
+            Snapshot s;
+            s.device = rec.context().info().name;
+            s.int64Atomics = rec.context().int64Atomics();
+            s.validation = rec.context().validationEnabled();
+            // Before the first frame: the settings with their defaults filled in (hash slots, ...), as the volume will have them.
+            s.config = options_.volume;
+            s.config.imageWidth = s.config.imageHeight = 1;
+            s.config = gpu::resolveConfig(s.config);
+            if (const gpu::GpuVolume* v = rec.volume()) {
+                s.hasVolume = true;
+                s.config = v->config();
+                s.counters = v->readCounters();
+                s.pools = v->pools();
+            }
+            s.frames = rec.framesIntegrated();
+            s.last = lastReport_;
+            return s;
+        });
+        const gpu::GpuVolumeConfig& c = s.config;
+        const gpu::Counters& k = s.counters;
+        py::dict d;
+        d["device"] = s.device;
+        d["int64_atomics"] = s.int64Atomics;
+        d["validation"] = s.validation;
+        d["frames"] = py::dict("integrated"_a = s.frames);
+        d["voxel_size"] = shortest(c.params.voxelSize);
+        d["truncation_m"] = shortest(c.params.truncation());
+        d["allocation_stride"] = c.params.allocationStride;
+        d["max_depth"] = shortest(c.params.maxDepth);
+        d["refine"] = c.refine;
+        d["lock_free"] = c.lockFree;
+        d["track_deltas"] = options_.trackDeltas;
+        d["color"] = py::dict("fused"_a = c.params.colorFusion != ColorFusion::Off, "mode"_a = colorModeName(c.params.colorFusion),
+                              "recency"_a = shortest(c.params.colorRecency));
+        d["recycling"] = py::dict("keep_radius"_a = shortest(c.keepRadius), "recycle"_a = c.recycle,
+                                  "recycle_after_frames"_a = c.recycleAfterFrames, "starve_weight"_a = shortest(c.starveWeight));
+        d["capacities"] = py::dict("grow"_a = c.growCapacities, "blocks"_a = c.blockCapacity, "hash_slots"_a = c.hashCapacity,
+                                   "touched"_a = c.touchedCapacity, "retype"_a = c.retypeCapacity, "vertices"_a = c.vertexCapacity,
+                                   "triangle_chunks"_a = c.chunkCapacity);
+        if (!s.hasVolume) return d;   // nothing on the GPU before the first frame
+        d["blocks"] = py::dict("in_use"_a = k.blocksInUse, "capacity"_a = c.blockCapacity, "hash_capacity"_a = c.hashCapacity,
+                               "hash_entries"_a = k.hashEntries, "hash_tombstones"_a = k.hashTombstones);
+        d["heaps"] = py::dict(
+            "vertices"_a = py::dict("capacity"_a = c.vertexCapacity, "live"_a = k.verticesInUse, "free"_a = k.vertexFreeTop,
+                                    "high_water"_a = k.vertexHighWater),
+            "triangle_chunks"_a = py::dict("capacity"_a = c.chunkCapacity, "live"_a = k.chunksInUse, "free"_a = k.chunkFreeTop,
+                                           "high_water"_a = k.chunkHighWater),
+            "live_triangles"_a = k.liveTriangles);
+        py::dict pools;
+        size_t total = 0;
+        for (const auto& p : s.pools) pools[py::str(p.name)] = p.bytes, total += p.bytes;
+        d["gpu_pool_bytes"] = pools;
+        d["gpu_bytes_total"] = total;
+        py::dict gpuMs;
+        for (const auto& [name, ms] : s.last.stageMs) gpuMs[py::str(name)] = ms;
+        const gpu::Counters& f = s.last.counters;
+        d["last_frame"] = py::dict("gpu_ms"_a = gpuMs, "touched_blocks"_a = f.touchedCount, "dirty_blocks"_a = f.dirtyCount,
+                                   "cubes_retyped"_a = f.cubesRetyped, "triangles_created"_a = f.trianglesCreated,
+                                   "warnings"_a = s.last.warnings, "growth"_a = s.last.growth,
+                                   "deferred_attempts"_a = s.last.deferredAttempts);
+        return d;
+    }
+
+    void save(const fs::path& path) {
+        locked([&](Reconstructor& rec) { rec.save(path); });
+    }
+
+    void close() {
+        py::gil_scoped_release release;
+        std::lock_guard<std::mutex> lock(mutex_);
+        rec_.reset();
+    }
+    bool closed() {
+        std::lock_guard<std::mutex> lock(mutex_);
+        return !rec_;
+    }
+    uint32_t framesIntegrated() {
+        return locked([](Reconstructor& rec) { return rec.framesIntegrated(); });
+    }
+    std::string repr() {
+        std::lock_guard<std::mutex> lock(mutex_);
+        if (!rec_) return "<vkmesh.Reconstructor (closed)>";
+        const gpu::GpuVolume* v = rec_->volume();
+        const VolumeParams& p = v ? v->config().params : options_.volume.params;
+        char voxel[32];
+        std::snprintf(voxel, sizeof(voxel), "%g", p.voxelSize);
+        return "<vkmesh.Reconstructor voxel " + std::string(voxel) + " m, " + std::to_string(rec_->framesIntegrated()) +
+               " frames, on " + rec_->context().info().name + ">";
+    }
+
+    // For the overhead benchmark (bench/python_overhead.py): how long the last integrate() spent in the C++ API's
+    // Reconstructor::integrate; the rest of its wall time is the module's.
+    double lastCppSeconds() {
+        std::lock_guard<std::mutex> lock(mutex_);
+        return lastCppSeconds_;
+    }
+
+    // For the overhead benchmark: the C++ API's integrate on a frame converted beforehand, timed in C++.
+    double timedCppIntegrate(const DepthImage& depth, const ColorImage* color, const Intrinsics& intrinsics, const Pose& pose) {
+        return locked([&](Reconstructor& rec) {
+            const auto t0 = std::chrono::steady_clock::now();
+            rec.integrate(depth, color, intrinsics, pose);
+            return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        });
+    }
+
+    static py::object meshToPython(Mesh&& m) {
+        py::object normals = m.normals.empty() ? py::object(py::none()) : py::object(moveToArray<float>(std::move(m.normals), 3));
+        py::object colors = m.colors.empty() ? py::object(py::none()) : py::object(moveToArray<uint8_t>(std::move(m.colors), 3));
+        py::object ages = m.vertexAge.empty() ? py::object(py::none()) : py::object(moveToArray<uint32_t>(std::move(m.vertexAge), 1));
+        return py::module_::import("vkmesh").attr("Mesh")(moveToArray<float>(std::move(m.positions), 3),
+                                                          moveToArray<uint32_t>(std::move(m.triangles), 3), "normals"_a = normals,
+                                                          "colors"_a = colors, "ages"_a = ages);
+    }
+
+private:
+    // Depth beyond this is no measurement (the volume's max depth: the constructor's, or a loaded map's).
+    float maxDepth(Reconstructor& rec) const {
+        return rec.volume() ? rec.volume()->config().params.maxDepth : options_.volume.params.maxDepth;
+    }
+
+    ReconstructorOptions options_;
+    std::unique_ptr<Reconstructor> rec_;
+    std::mutex mutex_;
+    // Reused from frame to frame (guarded by mutex_): no allocation per call once the first frame has run.
+    DepthImage depth_;
+    ColorImage color_;
+    gpu::FrameReport lastReport_;
+    double lastCppSeconds_ = 0;
+};
+
+std::unique_ptr<PyReconstructor> makeReconstructor(float voxelSize, float truncationVoxels, float maxDepth, const py::object& device,
+                                                   const std::string& colorMode, float colorRecency, bool trackDeltas, float maxWeight,
+                                                   float minWeight, int allocationStride, bool refine, float refineEpsilonVoxels,
+                                                   bool lockFree, const Capacities& capacities, bool growCapacities, float keepRadius,
+                                                   bool recycle, long long recycleAfterFrames, float starveWeight, bool validation) {
+    ReconstructorOptions o;
+    gpu::GpuVolumeConfig& c = o.volume;
+    c.params.voxelSize = voxelSize;
+    c.params.truncVoxels = truncationVoxels;
+    c.params.maxDepth = maxDepth;
+    c.params.maxWeight = maxWeight;
+    c.params.allocationStride = allocationStride;
+    c.params.colorFusion = parseColorMode(colorMode);
+    c.params.colorRecency = colorRecency;
+    c.minMeshWeight = minWeight;
+    c.refine = refine;
+    c.refineEpsilonVoxels = refineEpsilonVoxels;
+    c.lockFree = lockFree;
+    capacities.applyTo(c);
+    c.growCapacities = growCapacities;
+    c.keepRadius = keepRadius;
+    c.recycle = recycle;
+    c.recycleAfterFrames = capacity("recycle_after_frames", recycleAfterFrames);
+    c.starveWeight = starveWeight;
+    // The checks `vkmesh fuse` makes on its options (CLI11 ranges) that the volume itself does not.
+    if (!(minWeight >= 1.0f && minWeight <= 255.0f)) throw py::value_error("min_weight " + std::to_string(minWeight) + " must be in [1, 255]");
+    if (c.blockCapacity == 0) throw py::value_error("block_capacity must be at least 1");
+    checkConfig(c);
+    o.trackDeltas = trackDeltas;
+    o.device = deviceOptions(device, validation);
+    std::unique_ptr<Reconstructor> rec;
+    std::vector<std::string> messages;
+    {
+        py::gil_scoped_release release;   // creating the instance and the device takes a while
+        rec = std::make_unique<Reconstructor>(o);
+        messages = rec->context().takeValidationMessages();
+    }
+    publishMessages(std::move(messages));
+    return std::make_unique<PyReconstructor>(o, std::move(rec));
+}
+
+std::unique_ptr<PyReconstructor> loadReconstructor(const fs::path& path, const py::object& device, bool trackDeltas,
+                                                   const Capacities& capacities, bool validation) {
+    ReconstructorOptions o;
+    capacities.applyTo(o.volume);
+    o.trackDeltas = trackDeltas;
+    o.device = deviceOptions(device, validation);
+    std::unique_ptr<Reconstructor> rec;
+    std::vector<std::string> messages;
+    {
+        py::gil_scoped_release release;
+        rec = Reconstructor::load(path, o);
+        messages = rec->context().takeValidationMessages();
+    }
+    publishMessages(std::move(messages));
+    o.volume = rec->volume()->config();   // the map's settings (voxel size, max depth, colour, ...)
+    return std::make_unique<PyReconstructor>(o, std::move(rec));
+}
+
+// A frame converted to the C++ API's types ahead of time, for the overhead benchmark (bench/python_overhead.py).
+struct CppFrame {
+    DepthImage depth;
+    std::optional<ColorImage> color;
+    Intrinsics intrinsics;
+    Pose pose;
+};
+
+// ---------------------------------------------------------------------------------------------------
+// Dataset
+
+class PyDataset {
+public:
+    explicit PyDataset(std::unique_ptr<Dataset> ds) : ds_(std::move(ds)) {}
+    const Dataset& get() const { return *ds_; }
+
+    // Frame i: depth in metres (the reader's conversion, with its max depth), colour or None, pose, paths. A
+    // colour image that cannot be used is reported in "color_warning" (the frame has no colour then).
+    py::dict load(size_t i) const {
+        DepthImage depth;
+        ColorImage color;
+        std::string colorWarning;
+        {
+            py::gil_scoped_release release;   // PNG/JPEG decoding; the reader is const and stateless
+            depth = ds_->loadDepth(i);
+            color = ds_->loadColor(i, &colorWarning);
+        }
+        const FrameInfo& f = ds_->frame(i);
+        py::array d = moveToArray<float>(std::move(depth.meters), 1).reshape({depth.height, depth.width});
+        py::object c = py::none();
+        if (!color.empty()) c = moveToArray<uint8_t>(std::move(color.rgb), 1).reshape({color.height, color.width, 3});
+        return py::dict("index"_a = f.index, "timestamp"_a = f.timestamp, "depth"_a = d, "color"_a = c,
+                        "color_warning"_a = colorWarning, "pose"_a = poseToArray(f.cameraToWorld),
+                        "depth_path"_a = f.depthPath.string(), "color_path"_a = f.colorPath.string());
+    }
+
+private:
+    std::unique_ptr<Dataset> ds_;
+};
+
+// ---------------------------------------------------------------------------------------------------
+// Meshes on disk
+
+Mesh meshFromArrays(const py::array& vertices, const py::array& triangles, const py::object& normals, const py::object& colors,
+                    const py::object& ages) {
+    // vkmesh.Mesh has checked the dtypes and shapes; checked again here, where the memory is read.
+    auto expect = [](const py::array& a, bool dtypeOk, py::ssize_t n, int columns, const char* what) {
+        if (!dtypeOk || a.ndim() != (columns > 1 ? 2 : 1) || (n >= 0 && a.shape(0) != n) || (columns > 1 && a.shape(1) != columns))
+            throw py::value_error(std::string(what) + " has dtype " + dtypeOf(a) + " and shape " + shapeOf(a));
+    };
+    const py::array v = contiguous(vertices), t = contiguous(triangles);
+    expect(v, hasDtype<float>(v), -1, 3, "vertices");
+    expect(t, hasDtype<uint32_t>(t), -1, 3, "triangles");
+    const size_t n = size_t(v.shape(0));
+    auto vectors = [](const py::array& a, std::vector<Eigen::Vector3f>& out) {
+        const float* p = static_cast<const float*>(a.data());
+        out.resize(size_t(a.shape(0)));
+        for (size_t i = 0; i < out.size(); ++i) out[i] = Eigen::Vector3f(p[3 * i], p[3 * i + 1], p[3 * i + 2]);
+    };
+    Mesh m;
+    vectors(v, m.positions);
+    m.triangles.resize(size_t(t.shape(0)));
+    std::memcpy(m.triangles.data(), t.data(), m.triangles.size() * 3 * sizeof(uint32_t));
+    if (!normals.is_none()) {
+        const py::array a = contiguous(asArray(normals));
+        expect(a, hasDtype<float>(a), py::ssize_t(n), 3, "normals");
+        vectors(a, m.normals);
+    }
+    if (!colors.is_none()) {
+        const py::array a = contiguous(asArray(colors));
+        expect(a, hasDtype<uint8_t>(a), py::ssize_t(n), 3, "colors");
+        m.colors.resize(n);
+        std::memcpy(m.colors.data(), a.data(), n * 3);
+    }
+    if (!ages.is_none()) {
+        const py::array a = contiguous(asArray(ages));
+        expect(a, hasDtype<uint32_t>(a), py::ssize_t(n), 1, "ages");
+        m.vertexAge.resize(n);
+        std::memcpy(m.vertexAge.data(), a.data(), n * sizeof(uint32_t));
+    }
+    return m;
+}
+
+}  // namespace
+
+}  // namespace vkmesh::python
+
+// =====================================================================================================
+
+PYBIND11_MODULE(_vkmesh, m) {
+    using namespace vkmesh;
+    using namespace vkmesh::python;
+    m.doc() = "The compiled part of vkmesh (import vkmesh instead; see help(vkmesh)).";
+
+    py::register_exception<Error>(m, "Error", PyExc_RuntimeError);
+    m.attr("Error").attr("__doc__") =
+        "What vkmesh reports when it cannot do what was asked: no usable Vulkan device, a capacity that does not fit "
+        "the device, an unreadable file or dataset, a closed Reconstructor. A RuntimeError; the message names the "
+        "device, file or value at fault. (Bad arguments raise ValueError instead.)";
+    m.attr("Error").attr("__module__") = "vkmesh";
+    m.attr("CapacityWarning") = py::reinterpret_steal<py::object>(
+        PyErr_NewExceptionWithDoc("vkmesh.CapacityWarning",
+                                  "A frame hit a capacity it could not grow past (a device limit, or grow_capacities=False): "
+                                  "what did not fit was skipped, everything fused before is kept. Turn it into an "
+                                  "exception with warnings.simplefilter('error', vkmesh.CapacityWarning).",
+                                  PyExc_RuntimeWarning, nullptr));
+
+    const gpu::GpuVolumeConfig dc;   // the library's defaults, which are `vkmesh fuse`'s
+    const VolumeParams dp;
+    py::class_<PyReconstructor>(m, "Reconstructor", R"doc(
+Fuses depth frames into a TSDF on the GPU and keeps one incremental triangle mesh up to date.
+
+    r = vkmesh.Reconstructor(voxel_size=0.02)
+    for f in vkmesh.open_dataset("room"):
+        r.integrate(f.depth, f.intrinsics, f.pose, color=f.color)
+    m = r.mesh()                  # m.vertices (N, 3) float32, m.triangles (M, 3) uint32, ...
+    m.save("room.ply")
+
+The defaults are those of `vkmesh fuse`, so the same frames give the CLI's mesh. Every capacity is an initial
+size that grows between frames when nearly full (grow_capacities=True). Runs on the first suitable Vulkan
+device unless `device` gives an index from vkmesh.devices(); VKMESH_VALIDATION=1 in the environment (or
+validation=True) turns the Khronos validation layer on. One thread at a time uses a Reconstructor (calls from
+several threads wait for each other); the GIL is released while the GPU works.
+
+Keyword arguments (all optional):
+  voxel_size            metres between TSDF samples (--voxel; 0.03)
+  truncation_voxels     truncation distance in voxels (--trunc; 4)
+  max_depth             depth beyond this many metres is ignored (--max-depth; 4)
+  device                None (a discrete GPU if any, else the first suitable device) or an index (--device)
+  color_mode            'average' (running average with the TSDF weights), 'recent' (exponential, follows
+                        lighting changes, see color_recency) or 'off' (depth only, 4 bytes per cube less)
+  color_recency         'recent': share of the newest colour, in (0, 1] (--color-recency; 0.2)
+  track_deltas          keep each frame's mesh changes for deltas() (--deltas)
+  max_weight            cap of the TSDF weight (--max-weight; 255)
+  min_weight            a cube is meshed when its 8 corners have this weight (--min-weight; 1)
+  allocation_stride     allocate blocks from every Nth pixel (--alloc-stride; 2)
+  refine, refine_epsilon_voxels   Hamming-distance refinement of cube types (--refine, --refine-eps)
+  lock_free             the paper's lock-free vertex claims (--lock-free; same mesh)
+  block_capacity, hash_capacity, touched_capacity, vertex_capacity, chunk_capacity, retype_capacity,
+  delta_record_capacity initial capacities (gpu::GpuVolumeConfig; --blocks, --hash-slots, --vertices, --chunks)
+  grow_capacities       grow them when nearly full (True); False: fixed, what does not fit is skipped and
+                        reported as a vkmesh.CapacityWarning (--no-grow)
+  keep_radius, recycle, recycle_after_frames, starve_weight   bounded maps (--keep-radius, --recycle, ...)
+  validation            the Khronos validation layer (also on with VKMESH_VALIDATION=1)
+
+Bad settings raise ValueError; no usable device or a capacity that does not fit it raises vkmesh.Error.
+)doc")
+        // Float settings are taken as Python floats (doubles) whose defaults read back as the library's floats.
+        .def(py::init([](double voxelSize, double truncationVoxels, double maxDepth, const py::object& device, const std::string& colorMode,
+                         double colorRecency, bool trackDeltas, double maxWeight, double minWeight, int allocationStride, bool refine,
+                         double refineEpsilonVoxels, bool lockFree, long long blockCapacity, long long hashCapacity,
+                         long long touchedCapacity, long long vertexCapacity, long long chunkCapacity, long long retypeCapacity,
+                         long long deltaRecordCapacity, bool growCapacities, double keepRadius, bool recycle,
+                         long long recycleAfterFrames, double starveWeight, bool validation) {
+                 return makeReconstructor(voxelSize, truncationVoxels, maxDepth, device, colorMode, colorRecency, trackDeltas,
+                                          maxWeight, minWeight, allocationStride, refine, refineEpsilonVoxels, lockFree,
+                                          {blockCapacity, hashCapacity, touchedCapacity, vertexCapacity, chunkCapacity,
+                                           retypeCapacity, deltaRecordCapacity},
+                                          growCapacities, keepRadius, recycle, recycleAfterFrames, starveWeight, validation);
+             }),
+             py::kw_only(), "voxel_size"_a = shortest(dp.voxelSize), "truncation_voxels"_a = shortest(dp.truncVoxels),
+             // `vkmesh fuse --max-depth` defaults to 4 m (host/cli_options.h, DatasetArgs), not VolumeParams' 5 m.
+             "max_depth"_a = 4.0, "device"_a = py::none(), "color_mode"_a = "average", "color_recency"_a = shortest(dp.colorRecency),
+             "track_deltas"_a = false, "max_weight"_a = shortest(dp.maxWeight), "min_weight"_a = shortest(dc.minMeshWeight),
+             "allocation_stride"_a = dp.allocationStride, "refine"_a = dc.refine,
+             "refine_epsilon_voxels"_a = shortest(dc.refineEpsilonVoxels),
+             "lock_free"_a = dc.lockFree, "block_capacity"_a = dc.blockCapacity, "hash_capacity"_a = dc.hashCapacity,
+             "touched_capacity"_a = dc.touchedCapacity, "vertex_capacity"_a = dc.vertexCapacity, "chunk_capacity"_a = dc.chunkCapacity,
+             "retype_capacity"_a = dc.retypeCapacity, "delta_record_capacity"_a = dc.deltaRecordCapacity,
+             "grow_capacities"_a = dc.growCapacities, "keep_radius"_a = shortest(dc.keepRadius), "recycle"_a = dc.recycle,
+             "recycle_after_frames"_a = dc.recycleAfterFrames, "starve_weight"_a = shortest(dc.starveWeight), "validation"_a = false)
+        .def("integrate", &PyReconstructor::integrate, "depth"_a, "intrinsics"_a, "pose"_a, "depth_scale"_a = 5000.0,
+             "color"_a = py::none(), R"doc(
+Fuses one frame and updates the mesh; returns when the GPU has finished it.
+
+depth        H x W numpy array: uint16 raw sensor units (divided by depth_scale, as vkmesh reads a dataset's
+             PNGs) or float32 metres (0 or NaN: no measurement). Depth beyond max_depth is ignored. Every
+             frame must have the first frame's size. Arrays that are not C-contiguous are copied once.
+intrinsics   (fx, fy, cx, cy) in pixels, or a 3x3 camera matrix.
+pose         4x4 camera-to-world matrix (the camera's pose in the world), rigid: a rotation and a translation.
+depth_scale  raw units per metre for uint16 depth (5000: TUM; 1000: millimetres); ignored for float32.
+color        None or an H x W x 3 uint8 array (red, green, blue) registered to the depth image.
+
+Raises ValueError (wrong dtype, shape or value; a pose that is not rigid) before anything reaches the GPU,
+vkmesh.Error for Vulkan problems. Capacity problems are vkmesh.CapacityWarning warnings.
+)doc")
+        .def("mesh", &PyReconstructor::mesh, R"doc(
+The mesh after the last frame, copied from the GPU: a vkmesh.Mesh with vertices (N, 3) float32, triangles
+(M, 3) uint32 (counter-clockwise seen from outside), normals (N, 3) float32, colors (N, 3) uint8 (None when no
+colour was fused; grey for vertices no colour reached) and ages (N,) uint32 (frames since each vertex was
+created). Empty before the first frame. To save a map that resumes exactly, call save() before mesh().
+)doc")
+        .def("deltas", &PyReconstructor::deltas, R"doc(
+The last frame's mesh changes (docs/DELTAS.md) as a vkmesh.MeshDelta: vertices and triangles added, changed
+(vertices only) or removed, by id. Needs track_deltas=True (else vkmesh.Error). Applying every frame's deltas
+in order to an empty mesh gives mesh().
+)doc")
+        .def("stats", &PyReconstructor::stats, R"doc(
+Counts, capacities and memory as a dict, with the keys `vkmesh fuse --stats` uses for the same things:
+device, int64_atomics, frames, voxel_size, truncation_m, allocation_stride, max_depth, color, capacities,
+recycling, and after the first frame blocks, heaps, gpu_pool_bytes, gpu_bytes_total and last_frame (its
+GPU milliseconds per stage, counts, capacity warnings and growth).
+)doc")
+        .def("save", &PyReconstructor::save, "path"_a, R"doc(
+Writes everything the reconstruction holds after the last frame to a map file (.vkmap, docs/MAPFILE.md).
+Reconstructor.load(path), `vkmesh fuse --load path` and `vkmesh export path` continue from it exactly.
+Raises vkmesh.Error before the first frame or when the file cannot be written.
+)doc")
+        .def_static("load", [](const fs::path& path, const py::object& device, bool trackDeltas, long long blockCapacity,
+                               long long hashCapacity, long long touchedCapacity, long long vertexCapacity, long long chunkCapacity,
+                               long long retypeCapacity, long long deltaRecordCapacity, bool validation) {
+                        return loadReconstructor(path, device, trackDeltas,
+                                                 {blockCapacity, hashCapacity, touchedCapacity, vertexCapacity, chunkCapacity,
+                                                  retypeCapacity, deltaRecordCapacity},
+                                                 validation);
+                    },
+                    "path"_a, py::kw_only(), "device"_a = py::none(), "track_deltas"_a = false, "block_capacity"_a = dc.blockCapacity,
+                    "hash_capacity"_a = dc.hashCapacity, "touched_capacity"_a = dc.touchedCapacity,
+                    "vertex_capacity"_a = dc.vertexCapacity, "chunk_capacity"_a = dc.chunkCapacity, "retype_capacity"_a = dc.retypeCapacity,
+                    "delta_record_capacity"_a = dc.deltaRecordCapacity, "validation"_a = false, R"doc(
+A Reconstructor continuing the map in `path` (written by save() or `vkmesh fuse --save`): the next integrate()
+gives exactly what an uninterrupted run would have. The map's settings are used (voxel size, truncation, max
+depth, colour, ...); the capacities given here where larger than the map's. Raises vkmesh.Error naming the
+file and the problem for a missing, corrupt or truncated map.
+)doc")
+        .def("close", &PyReconstructor::close,
+             "Releases the GPU memory and the Vulkan device now (rather than when the object is collected). Any later "
+             "call raises vkmesh.Error.")
+        .def("__enter__", [](py::object self) { return self; })
+        .def("__exit__", [](PyReconstructor& self, const py::args&) { self.close(); })
+        .def_property_readonly("closed", &PyReconstructor::closed, "Whether close() was called.")
+        .def_property_readonly("frames_integrated", &PyReconstructor::framesIntegrated, "How many frames have been fused.")
+        .def("__repr__", &PyReconstructor::repr)
+        .def_property_readonly("_last_cpp_seconds", &PyReconstructor::lastCppSeconds,
+                               "Benchmarks: seconds the last integrate() spent in the C++ Reconstructor::integrate.");
+
+    py::class_<PyDataset>(m, "_Dataset")
+        .def(py::init([](const fs::path& path, size_t frames, float maxDepth, const py::object& intrinsics, const py::object& depthScale) {
+                 DatasetOptions o;
+                 o.maxFrames = frames;
+                 o.maxDepth = maxDepth;
+                 if (!intrinsics.is_none()) o.intrinsics = toIntrinsics(intrinsics, 0, 0);
+                 if (!depthScale.is_none()) o.depthScale = depthScale.cast<double>();
+                 std::unique_ptr<Dataset> ds;
+                 {
+                     py::gil_scoped_release release;
+                     ds = Dataset::open(path, o);
+                 }
+                 return std::make_unique<PyDataset>(std::move(ds));
+             }),
+             "path"_a, "frames"_a, "max_depth"_a, "intrinsics"_a, "depth_scale"_a)
+        .def("__len__", [](const PyDataset& d) { return d.get().size(); })
+        .def("load", &PyDataset::load, "index"_a)
+        .def_property_readonly("folder", [](const PyDataset& d) { return d.get().folder().string(); })
+        .def_property_readonly("kind", [](const PyDataset& d) { return toString(d.get().kind()); })
+        .def_property_readonly("intrinsics", [](const PyDataset& d) {
+            const Intrinsics& k = d.get().intrinsics();
+            return py::make_tuple(k.fx, k.fy, k.cx, k.cy);
+        })
+        .def_property_readonly("width", [](const PyDataset& d) { return d.get().intrinsics().width; })
+        .def_property_readonly("height", [](const PyDataset& d) { return d.get().intrinsics().height; })
+        .def_property_readonly("depth_scale", [](const PyDataset& d) { return d.get().depthScale(); })
+        .def_property_readonly("has_color", [](const PyDataset& d) { return d.get().hasColor(); })
+        .def_property_readonly("warnings", [](const PyDataset& d) { return d.get().warnings(); });
+
+    m.def("_devices", [] {
+        std::vector<vk::DeviceInfo> devices;
+        {
+            py::gil_scoped_release release;
+            devices = vk::Context::listDevices();
+        }
+        py::list out;
+        for (const auto& d : devices)
+            out.append(py::dict("index"_a = d.index, "name"_a = d.name, "type"_a = d.type, "api_version"_a = d.apiVersion,
+                                "driver"_a = d.driver, "suitable"_a = d.suitable, "why_not"_a = d.whyNot,
+                                "int64_atomics"_a = d.int64Atomics, "hash_path"_a = d.hashPath));
+        return out;
+    });
+
+    m.def("_synth", [](const fs::path& out, size_t frames, int width, int height, bool noise, uint32_t seed, const std::string& path,
+                       double colorNoise, double exposureDrift) {
+        synth::SequenceOptions o;
+        o.frames = frames;
+        o.width = width;
+        o.height = height;
+        o.intrinsics = synth::kinectIntrinsics(width, height);
+        o.noise = noise;
+        o.seed = seed;
+        o.path = path == "revisit" ? synth::PathKind::Revisit : synth::PathKind::Orbit;
+        o.colorNoise = colorNoise;
+        o.exposureDrift = exposureDrift;
+        py::gil_scoped_release release;
+        synth::writeTumSequence(out, synth::SyntheticScene::defaultRoom(), o);
+    });
+
+    m.def("_read_ply", [](const fs::path& path) {
+        Mesh mesh;
+        {
+            py::gil_scoped_release release;
+            mesh = readPly(path);
+        }
+        return PyReconstructor::meshToPython(std::move(mesh));
+    });
+
+    m.def("_write_mesh", [](const fs::path& path, const py::array& vertices, const py::array& triangles, const py::object& normals,
+                            const py::object& colors, const py::object& ages) {
+        const Mesh mesh = meshFromArrays(vertices, triangles, normals, colors, ages);
+        py::gil_scoped_release release;
+        if (path.extension() == ".obj")
+            writeObj(path, mesh);
+        else
+            writePly(path, mesh);
+    });
+
+    m.attr("_DELTA_ADDED") = uint32_t(DeltaKind::Added);
+    m.attr("_DELTA_CHANGED") = uint32_t(DeltaKind::Changed);
+    m.attr("_DELTA_REMOVED") = uint32_t(DeltaKind::Removed);
+
+    m.def("_take_validation_messages", [] { return std::exchange(validationMessages(), {}); });
+
+    // The overhead benchmark's C++ side (bench/python_overhead.py): a frame converted once, then the C++ API's
+    // integrate on it, timed in C++.
+    py::class_<CppFrame>(m, "_CppFrame")
+        .def(py::init([](const py::object& depth, const py::object& intrinsics, const py::object& pose, double depthScale,
+                         const py::object& color, float maxDepth) {
+                 auto f = std::make_unique<CppFrame>();
+                 const DepthInput d = checkDepth(depth);
+                 convertDepth(d, depthScale, maxDepth, f->depth);
+                 f->intrinsics = toIntrinsics(intrinsics, d.width, d.height);
+                 f->pose = toPose(pose, "_CppFrame");
+                 if (auto c = checkColor(color, d)) convertColor(*c, f->color.emplace());
+                 return f;
+             }),
+             "depth"_a, "intrinsics"_a, "pose"_a, "depth_scale"_a = 5000.0, "color"_a = py::none(), "max_depth"_a = 4.0f);
+    m.def("_timed_cpp_integrate", [](PyReconstructor& r, const CppFrame& f) {
+        return r.timedCppIntegrate(f.depth, f.color ? &*f.color : nullptr, f.intrinsics, f.pose);
+    });
+}
