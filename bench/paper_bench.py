@@ -590,7 +590,7 @@ def markdown(r, figure_link=None):
     # Table I
     states = {str(vk(e, "incremental", "refine")) for e in r["datasets"] if vk(e, "incremental", "refine") is not None}
     ours = "vkmesh default run" + (f" (refinement {'on' if states == {'True'} else 'off'})" if len(states) == 1 else "")
-    L += ["### Table I (paper) shape, voxel 3 cm", "", f"Ours = {ours}; lock-free = the same with `--lock-free`.", "",
+    L += [f"### Table I (paper) shape, voxel {m['voxel'] * 100:g} cm", "", f"Ours = {ours}; lock-free = the same with `--lock-free`.", "",
           "| dataset | frames | meshing ms/frame (ours) | all ms/frame (ours) | vertices ours | baseline | ours / baseline "
           "| lock-free / lock-based meshing | Open3D VBG integrate ms | Open3D VBG integrate + extraction ms/frame "
           "| Open3D VBG vertices |",
@@ -620,7 +620,7 @@ def markdown(r, figure_link=None):
     cols = ["dataset", "run", "refine", "meshing ms (median)", "meshing ms, last 10% frames (mean)", "alloc + fuse ms",
             "whole frame ms", "final extraction ms", "vertices", "triangles"] + [share_names[f] for f in share_fields] + \
            ["other CPU load"]
-    L += ["", "### Every run, voxel 3 cm", "", "| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
+    L += ["", f"### Every run, voxel {m['voxel'] * 100:g} cm", "", "| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
     blank = " |" * (len(cols) - 3)
     labels = (("incremental", "vkmesh default (incremental)"), ("refine", "vkmesh --refine"),
               ("no_refine", "vkmesh --no-refine"), ("lock_free", "vkmesh --lock-free"),
