@@ -10,6 +10,17 @@ ReconstructorOptions checked(ReconstructorOptions options) {
     options.volume.trackDeltas = options.trackDeltas;
     return options;
 }
+
+gpu::FrameInput gpuFrameInput(const gpu::GpuImageInput& depth, const gpu::GpuImageInput& color, const Intrinsics& intrinsics,
+                              const Pose& cameraToWorld, const vk::SubmitSync& sync) {
+    gpu::FrameInput input;
+    input.gpuDepth = depth;
+    input.gpuColor = color;
+    input.intrinsics = intrinsics;
+    input.cameraToWorld = cameraToWorld;
+    input.sync = sync;
+    return input;
+}
 }  // namespace
 
 Reconstructor::Reconstructor(const ReconstructorOptions& options)
@@ -49,13 +60,7 @@ gpu::FrameReport Reconstructor::integrate(const gpu::GpuImageInput& depth, const
                                           const Intrinsics& intrinsics, const Pose& cameraToWorld, const vk::SubmitSync& sync) {
     finish();
     createVolume(intrinsics.width, intrinsics.height);   // a GPU image's size is the intrinsics'
-    gpu::FrameInput input;
-    input.gpuDepth = depth;
-    input.gpuColor = color;
-    input.intrinsics = intrinsics;
-    input.cameraToWorld = cameraToWorld;
-    input.sync = sync;
-    volume_->submitFrame(input);
+    volume_->submitFrame(gpuFrameInput(depth, color, intrinsics, cameraToWorld, sync));
     gpu::FrameReport report = volume_->finishFrame();
     lastDelta_ = report.delta;
     return report;
@@ -95,13 +100,7 @@ Reconstructor::AsyncFrame Reconstructor::integrateAsync(const gpu::GpuImageInput
                                                         const Intrinsics& intrinsics, const Pose& cameraToWorld,
                                                         const vk::SubmitSync& sync) {
     createVolume(intrinsics.width, intrinsics.height);
-    gpu::FrameInput input;
-    input.gpuDepth = depth;
-    input.gpuColor = color;
-    input.intrinsics = intrinsics;
-    input.cameraToWorld = cameraToWorld;
-    input.sync = sync;
-    return submitAsync(input);
+    return submitAsync(gpuFrameInput(depth, color, intrinsics, cameraToWorld, sync));
 }
 
 gpu::MeshBuffers Reconstructor::meshBuffers() const { return volume_ ? volume_->meshBuffers() : gpu::MeshBuffers{}; }
