@@ -152,6 +152,13 @@ struct VolumeParamsGpu {
     uint colorMode;         // COLOR_MODE_*: how fusion folds a pixel's colour into a corner's
     float colorRecency;     // COLOR_MODE_RECENT: the new colour's share, in (0, 1]
 };
+// Which optional code a volume's pipelines are compiled with (specialisation constant VOLUME_FEATURES,
+// constant_id 1, frame.glsl; vk::BindingTable::specialization()). A volume's colour mode and refinement are
+// fixed when it is created, and llvmpipe runs both sides of a branch under a mask, so code switched off only
+// by the uniform still costs its loads and arithmetic (the colour code made depth-only fusion 1.5x slower).
+VKM_CONST VOLUME_FEATURE_COLOR = 1u;    // params.colorMode may be other than COLOR_MODE_OFF
+VKM_CONST VOLUME_FEATURE_REFINE = 2u;   // params.refine may be 1
+VKM_CONST VOLUME_FEATURES_ALL = 3u;
 // Colour fusion (docs/COLOR.md). Off: no colour is fused (and the colour buffer is a placeholder).
 VKM_CONST COLOR_MODE_OFF = 0u;
 VKM_CONST COLOR_MODE_AVERAGE = 1u;     // running average with the TSDF's weight (the paper's and Open3D's rule)

@@ -26,7 +26,7 @@ void main() {
         ivec3 origin = blockCoords[block].xyz * int(BLOCK_SIDE);
         uvec2 size = frameImageSize();
         float trunc = params.truncation;
-        bool withColor = params.colorMode != COLOR_MODE_OFF && frameHasColor();
+        bool withColor = volumeKeepsColor() && frameHasColor();
         uint flipped = 0u;   // which of this invocation's corners flipped (marked after the loop, which stays lean)
         for (uint k = 0u; k < VOXELS_PER_INVOCATION; ++k) {
             uint local = gl_LocalInvocationIndex + k * WG_BLOCK;
@@ -58,21 +58,21 @@ void main() {
                             uint oldColor = fresh ? 0u : voxelColor[v];
                             uvec3 rgb = uvec3(rgba, rgba >> 8, rgba >> 16) & 0xFFu;
                             voxelColor[v] = foldVoxelColor(oldColor, oldWeight, newSdf, rgb, origin + ivec3(l));
-                        } else if (fresh && params.colorMode != COLOR_MODE_OFF) {
+                        } else if (fresh && volumeKeepsColor()) {
                             voxelColor[v] = 0u;
                         }
                     }
                 }
             }
             bool wasObserved = oldWeight >= params.minMeshWeight, isObserved = newWeight >= params.minMeshWeight;
-            bool nearFlip = params.refine != 0u && (abs(oldSdf) < params.refineEpsilon) != (abs(newSdf) < params.refineEpsilon);
+            bool nearFlip = volumeRefines() && (abs(oldSdf) < params.refineEpsilon) != (abs(newSdf) < params.refineEpsilon);
             if (wasObserved != isObserved || (isObserved && ((oldSdf < 0.0) != (newSdf < 0.0) || nearFlip))) flipped |= 1u << k;
             if (fresh || newWeight != oldWeight || newSdf != oldSdf) {
                 voxelSdf[v] = newSdf;
                 voxelWeight[v] = newWeight;
             }
             // A fresh block's corners that this frame did not update still hold a previous owner's colour.
-            if (fresh && newWeight == 0.0 && params.colorMode != COLOR_MODE_OFF) voxelColor[v] = 0u;
+            if (fresh && newWeight == 0.0 && volumeKeepsColor()) voxelColor[v] = 0u;
         }
         if (params.incrementalMesh != 0u) {
             for (uint k = 0u; k < VOXELS_PER_INVOCATION && flipped != 0u; ++k) {

@@ -19,9 +19,9 @@ void main() {
     ivec3 coord = blockCoords[block].xyz;
     // With refinement a flipped corner marks cubes up to one block ahead too (retype_marks.glsl): then the
     // dirty blocks are T + o, o in {-1, 0, 1}^3, so that collect_retype sees every mark.
-    uint n = params.refine != 0u ? 27u : 8u;
+    uint n = volumeRefines() ? 27u : 8u;
     for (uint o = 0u; o < n; ++o) {
-        ivec3 offset = params.refine != 0u ? ivec3(int(o % 3u), int((o / 3u) % 3u), int(o / 9u)) - 1
+        ivec3 offset = volumeRefines() ? ivec3(int(o % 3u), int((o / 3u) % 3u), int(o / 9u)) - 1
                                            : ivec3(o & 1u, (o >> 1) & 1u, (o >> 2) & 1u);
         uint b = offset == ivec3(0) ? block : findBlock(coord - offset);
         if (b == NO_BLOCK) continue;

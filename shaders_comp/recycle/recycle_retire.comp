@@ -38,9 +38,9 @@ void main() {
         if (subgroupOr(flipped) != 0u && subgroupElect()) {
             // With refinement the marks reach the blocks at +-1 too (retype_marks.glsl), as in mark_dirty.
             ivec3 coord = blockCoords[block].xyz;
-            uint n = params.refine != 0u ? 27u : 8u;
+            uint n = volumeRefines() ? 27u : 8u;
             for (uint o = 0u; o < n; ++o) {
-                ivec3 offset = params.refine != 0u ? ivec3(int(o % 3u), int((o / 3u) % 3u), int(o / 9u)) - 1
+                ivec3 offset = volumeRefines() ? ivec3(int(o % 3u), int((o / 3u) % 3u), int(o / 9u)) - 1
                                                    : ivec3(o & 1u, (o >> 1) & 1u, (o >> 2) & 1u);
                 uint b = offset == ivec3(0) ? block : findBlock(coord - offset);
                 if (b == NO_BLOCK) continue;

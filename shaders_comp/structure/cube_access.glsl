@@ -178,6 +178,6 @@ uint refinedCubeType(CubeRef r, uint block) {
 
 // The type a listed cube is built with: its MC type t (from loadCube), or with refinement the refined type.
 uint meshType(CubeRef r, uint block, uint t) {
-    return params.refine == 0u ? t : refinedCubeType(r, block);
+    return !volumeRefines() ? t : refinedCubeType(r, block);
 }
 #endif

@@ -26,6 +26,12 @@ layout(std430, set = 0, binding = BINDING_COUNTERS) coherent buffer CountersBuff
 
 layout(push_constant) uniform Push { FramePush frame; };
 
+// The optional code this pipeline is built with (VOLUME_FEATURE_*, shared_layout.h): a specialisation
+// constant, so what a volume does not use is compiled out. The uniform still decides within it.
+layout(constant_id = 1) const uint VOLUME_FEATURES = VOLUME_FEATURES_ALL;
+bool volumeKeepsColor() { return (VOLUME_FEATURES & VOLUME_FEATURE_COLOR) != 0u && params.colorMode != COLOR_MODE_OFF; }
+bool volumeRefines() { return (VOLUME_FEATURES & VOLUME_FEATURE_REFINE) != 0u && params.refine != 0u; }
+
 // x' = R x + t with R, t given as 3 rows of [R | t]; written out so that the order of the operations
 // (and so the rounding) is the one the CPU reference (src/cpu) uses.
 vec3 transformPoint(vec4 rows[3], vec3 p) {

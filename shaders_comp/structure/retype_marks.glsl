@@ -32,7 +32,7 @@ void markCornerRetypeRefined(uint block, uint local) {
 }
 
 void markCornerRetype(uint block, uint local) {
-    if (params.refine != 0u) {
+    if (volumeRefines()) {
         markCornerRetypeRefined(block, local);
         return;
     }

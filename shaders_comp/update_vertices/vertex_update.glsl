@@ -30,7 +30,7 @@ void moveVertex(uint v, CubeRef r, uint axis, float d[8], bool present[8]) {
     vertices[v].nx = n.x;
     vertices[v].ny = n.y;
     vertices[v].nz = n.z;
-    if (params.colorMode != COLOR_MODE_OFF) {
+    if (volumeKeepsColor()) {
         uvec3 local;
         uint hiBlock = blockHolding(r, r.cube + cornerOffset(hi), local);
         uint lo = voxelColor[voxelIndex(r.nb[0], r.cube)], high = voxelColor[voxelIndex(hiBlock, local)];

@@ -81,6 +81,11 @@ GpuVolumeConfig checkedFor(const vk::Context& context, const GpuVolumeConfig& co
     return c;
 }
 
+// The optional shader code the volume's pipelines keep: colour and refinement are fixed at creation.
+uint32_t compiledFeatures(const GpuVolumeConfig& c) {
+    return (c.params.colorFusion != ColorFusion::Off ? VOLUME_FEATURE_COLOR : 0u) | (c.refine ? VOLUME_FEATURE_REFINE : 0u);
+}
+
 VolumeParamsGpu initialParams(const GpuVolumeConfig& c) {
     VolumeParamsGpu gp{};
     gp.voxelSize = c.params.voxelSize;
@@ -149,7 +154,7 @@ GpuVolumeConfig resolveConfig(const GpuVolumeConfig& config) { return resolved(c
 GpuVolume::GpuVolume(const vk::Context& context, const GpuVolumeConfig& config)
     : context_(context),
       config_(checkedFor(context, config)),
-      table_(context, sizeof(FramePush)),
+      table_(context, sizeof(FramePush), compiledFeatures(config_)),
       counters_(context, table_),
       params_(context, table_, initialParams(config_)),
       hash_(context, table_, config_.hashCapacity),

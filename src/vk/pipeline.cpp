@@ -101,8 +101,8 @@ uint32_t reflectWorkgroupSize(std::span<const uint32_t> spirv, const std::string
 }
 }  // namespace
 
-BindingTable::BindingTable(const Context& context, uint32_t pushConstantSize)
-    : context_(context), pushConstantSize_(pushConstantSize) {}
+BindingTable::BindingTable(const Context& context, uint32_t pushConstantSize, uint32_t features)
+    : context_(context), pushConstantSize_(pushConstantSize), features_(features) {}
 
 BindingTable::~BindingTable() = default;
 
@@ -176,10 +176,13 @@ ComputePipeline::ComputePipeline(const Context& context, const BindingTable& tab
     info.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
     info.stage.module = module;
     info.stage.pName = "main";
-    VkSpecializationMapEntry entry{0, 0, sizeof(uint32_t)};
-    VkSpecializationInfo spec{1, &entry, sizeof(uint32_t), specialization ? &*specialization : nullptr};
+    // Constant 1 (the family's features) always; constant 0 when given. An entry for a constant the shader
+    // does not declare is ignored (Vulkan spec, VkSpecializationMapEntry).
+    const uint32_t values[2] = {table.features(), specialization.value_or(0u)};
+    const VkSpecializationMapEntry entries[2] = {{1, 0, sizeof(uint32_t)}, {0, sizeof(uint32_t), sizeof(uint32_t)}};
+    VkSpecializationInfo spec{specialization ? 2u : 1u, entries, sizeof(values), values};
+    info.stage.pSpecializationInfo = &spec;
     if (specialization) {
-        info.stage.pSpecializationInfo = &spec;
         // Appended piece by piece: GCC 12 warns falsely (-Wrestrict) on "[" + std::string + "]".
         name_.append("[").append(std::to_string(*specialization)).append("]");
     }

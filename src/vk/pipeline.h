@@ -47,7 +47,10 @@ class ComputePipeline;
 // descriptor set is written from the table, at creation and whenever a binding it uses changes.
 class BindingTable {
 public:
-    BindingTable(const Context& context, uint32_t pushConstantSize);
+    // `features`: the value of specialisation constant 1 (`VOLUME_FEATURES` in frame.glsl) that every pipeline
+    // of the family is built with, a bit mask of the optional code its shaders keep (VOLUME_FEATURE_* in
+    // shared_layout.h); all bits set keeps all of it.
+    BindingTable(const Context& context, uint32_t pushConstantSize, uint32_t features = ~0u);
     ~BindingTable();
     BindingTable(const BindingTable&) = delete;
     BindingTable& operator=(const BindingTable&) = delete;
@@ -56,6 +59,7 @@ public:
     // not yet finished (descriptor sets are updated at once).
     void bind(uint32_t binding, const Buffer& buffer) const;
     uint32_t pushConstantSize() const { return pushConstantSize_; }
+    uint32_t features() const { return features_; }
 
 private:
     friend class ComputePipeline;
@@ -66,6 +70,7 @@ private:
     };
     const Context& context_;
     uint32_t pushConstantSize_;
+    uint32_t features_;
     // Mutable: binding buffers and (un)registering pipelines does not change which numbering the table is.
     mutable std::map<uint32_t, Bound> bound_;
     mutable std::vector<ComputePipeline*> pipelines_;
