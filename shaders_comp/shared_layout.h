@@ -90,7 +90,7 @@ VKM_CONST BINDING_VERTEX_OWNER = 19u;  // uint per vertex: global edge id (block
 VKM_CONST BINDING_VERTEX_FREE = 20u;   // uint stack of free vertex indices
 // The frame's garbage, two uint lists in one buffer (one binding fewer for the passes that write both):
 // [0, vertexCapacity) vertices that may have lost their last triangle (GC candidates; also the new vertices
-// update_new_vertices moves), [vertexCapacity, vertexCapacity + chunkCapacity) chunks released this frame.
+// list_new_vertices lists), [vertexCapacity, vertexCapacity + chunkCapacity) chunks released this frame.
 VKM_CONST BINDING_GARBAGE = 21u;
 VKM_CONST BINDING_CHUNK_TRIANGLES = 22u; // uint: 5 triangles x 3 vertex indices per chunk
 VKM_CONST BINDING_CHUNK_FREE = 23u;    // uint stack of free chunk indices
@@ -102,7 +102,8 @@ VKM_CONST BINDING_RETYPE_MASK = 28u;   // 16 uint per block: cubes that may chan
 VKM_CONST BINDING_RETYPE_LIST = 29u;   // uint list of this frame's retype candidates: block * 512 + cube
 VKM_CONST BINDING_EDGE_VERTEX_Y = 30u; // ... +y edge (one array per axis keeps each under 128 MiB for 65,536 blocks)
 VKM_CONST BINDING_EDGE_VERTEX_Z = 31u; // ... +z edge
-VKM_CONST BINDING_COUNT = 32u;
+VKM_CONST BINDING_MOVED_VERTICES = 32u; // uint list of the vertices move_vertices moves this mesh pass
+VKM_CONST BINDING_COUNT = 33u;
 VKM_CONST MASK_WORDS = 16u;            // VOXELS_PER_BLOCK / 32
 VKM_CONST MASK_ALL_CUBES = 0xFFFFFFFFu; // a retype-mask word with each of its 32 cubes listed
 
@@ -175,8 +176,8 @@ VKM_CONST VOXEL_COLOR_SET = 0x40000000u;
 VKM_CONST FRAME_HAS_COLOR = 0x80000000u;
 VKM_CONST FRAME_HEIGHT_MASK = 0x7FFFu;
 VKM_CONST VERTEX_UPDATE_AUTO = 0u;     // whichever of the two visits fewer entries this frame
-VKM_CONST VERTEX_UPDATE_HEAP = 1u;     // scan the heap (update_heap_vertices)
-VKM_CONST VERTEX_UPDATE_DIRTY = 2u;    // the dirty blocks' cubes + new vertices (update_vertices, update_new_vertices)
+VKM_CONST VERTEX_UPDATE_HEAP = 1u;     // scan the heap (list_heap_vertices)
+VKM_CONST VERTEX_UPDATE_DIRTY = 2u;    // the dirty blocks' cubes + new vertices (list_dirty_vertices, list_new_vertices)
 
 // One mesh vertex, as stored in the heap and in the compacted export (stride 36: a renderer reads the
 // position at offset 0, the normal at offset 16 and the colour at offset 32 as R8G8B8A8_UNORM).
@@ -196,9 +197,10 @@ struct Counters {
     uint listDispatch[4];       // over the live block list, one workgroup per block
     uint collectDispatch[4];    // over the dirty blocks' retype-mask words, WG_LIST per group
     uint retypeDispatch[4];     // over the retype list, WG_LIST per group
-    uint vertexDispatch[4];     // update_vertices: VOXELS_PER_BLOCK / WG_BLOCK workgroups per dirty block, or 0
-    uint heapDispatch[4];       // update_heap_vertices: over the heap up to its high water, or 0 (the cheaper runs)
-    uint candidateDispatch[4];  // over the GC candidates, WG_LIST per group (first for update_new_vertices)
+    uint vertexDispatch[4];     // list_dirty_vertices: VOXELS_PER_BLOCK / WG_BLOCK workgroups per dirty block, or 0;
+                                // then (plan_move_vertices, after the listing) move_vertices: over the list
+    uint heapDispatch[4];       // list_heap_vertices: over the heap up to its high water, or 0 (the cheaper runs)
+    uint candidateDispatch[4];  // over the GC candidates, WG_LIST per group (first for list_new_vertices)
     uint releaseDispatch[4];    // over the released chunks, WG_LIST per group
     // --- per frame: reset at the start of every frame ---
     uint validPixels;           // pixels with a depth inside [minDepth, maxDepth]
@@ -261,7 +263,10 @@ struct Counters {
     uint drawIndexed[5];
     uint exportDispatch[4];     // export_vertices: over the vertex heap up to its high water (plan_export)
     uint exportTriangleDispatch[4]; // export_triangles: over the triangle slots of the chunks up to their high water
-    uint persistentPad0, persistentPad1;   // the struct stays a multiple of 16 bytes
+    // The vertices listed for move_vertices this mesh pass: reset by commit_vertices, which runs before the
+    // listing passes (so it needs no per-frame clear). In the former padding: map files hold this struct.
+    uint movedCount;
+    uint persistentPad1;   // the struct stays a multiple of 16 bytes
 };
 VKM_CONST COUNTERS_PER_FRAME_OFFSET = 144u;  // byte offset of validPixels
 VKM_CONST COUNTERS_PER_FRAME_SIZE = 144u;    // 36 per-frame uints

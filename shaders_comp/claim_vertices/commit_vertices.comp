@@ -1,9 +1,9 @@
 #version 460
 // One invocation after mesh_claim: pops the vertices handed out from the heap's free stack, and chooses
-// how this frame's vertices are moved: a scan of the heap up to its high water (update_heap_vertices,
-// cost ~ size of the map) or a pass over the dirty blocks' cubes plus the new vertices (update_vertices +
-// update_new_vertices, cost ~ size of the frame), whichever visits fewer entries; the other dispatches
-// are sized 0. Measured on lavapipe a heap entry costs about twice a cube, hence the factor 2.
+// how this frame's vertices to move are listed: a scan of the heap up to its high water (list_heap_vertices,
+// cost ~ size of the map) or a pass over the dirty blocks' cubes plus the new vertices (list_dirty_vertices +
+// list_new_vertices, cost ~ size of the frame), whichever visits fewer entries; the other dispatches
+// are sized 0. move_vertices then moves what was listed. Measured on lavapipe a heap entry costs about twice a cube, hence the factor 2.
 #extension GL_GOOGLE_include_directive : require
 #include "structure/frame.glsl"
 
@@ -19,6 +19,7 @@ void main() {
     uint dirtyCubes = counters.dirtyCount * VOXELS_PER_BLOCK;
     bool scanHeap = params.vertexUpdate == VERTEX_UPDATE_AUTO ? 2u * counters.vertexHighWater < dirtyCubes
                                                               : params.vertexUpdate == VERTEX_UPDATE_HEAP;
+    counters.movedCount = 0u;
     counters.heapDispatch[0] = scanHeap ? (counters.vertexHighWater + WG_LIST - 1u) / WG_LIST : 0u;
     counters.vertexDispatch[0] = scanHeap ? 0u : counters.dirtyCount * (VOXELS_PER_BLOCK / WG_BLOCK);
     counters.candidateDispatch[0] = scanHeap ? 0u : (created + WG_LIST - 1u) / WG_LIST;

@@ -1,7 +1,7 @@
 // Component: the per-frame lists (src/gpu/frame_lists.h), what one pass hands the next: the blocks a frame
 // touched, the live-block list of whole-volume passes, the dirty blocks (deduplicated with per-block mesh
 // stamps), the retype masks and list of cubes to re-mesh, the vertices that may have lost their last
-// triangle (GC candidates) and the chunks released this frame. Their lengths are in Counters.
+// triangle (GC candidates) and the chunks released this frame, the vertices to move this mesh pass. Their lengths are in Counters.
 #ifndef VKMESH_FRAME_LISTS_GLSL
 #define VKMESH_FRAME_LISTS_GLSL
 #include "structure/frame.glsl"
@@ -13,10 +13,23 @@ layout(std430, set = 0, binding = BINDING_DIRTY_LIST) buffer DirtyList { uint di
 layout(std430, set = 0, binding = BINDING_RETYPE_MASK) coherent buffer RetypeMask { uint retypeMask[]; };
 layout(std430, set = 0, binding = BINDING_RETYPE_LIST) buffer RetypeList { uint retypeList[]; };
 layout(std430, set = 0, binding = BINDING_GARBAGE) buffer Garbage { uint garbage[]; };
+layout(std430, set = 0, binding = BINDING_MOVED_VERTICES) buffer MovedVertices { uint movedVertices[]; };
 
 // The two garbage lists (shared_layout.h, BINDING_GARBAGE).
 uint gcCandidate(uint i) { return garbage[i]; }
 void setGcCandidate(uint i, uint v) { garbage[i] = v; }
 uint releasedChunk(uint i) { return garbage[params.vertexCapacity + i]; }
 void setReleasedChunk(uint i, uint chunk) { garbage[params.vertexCapacity + i] = chunk; }
+
+// Appends vertex v to the moved-vertex list when `listed`, one atomic per subgroup. Called by every
+// invocation of the subgroup (uniform control flow), listed or not.
+void listMovedVertex(uint v, bool listed) {
+    uint offset = subgroupExclusiveAdd(listed ? 1u : 0u);
+    uint total = subgroupAdd(listed ? 1u : 0u);
+    if (total == 0u) return;
+    uint base = 0u;
+    if (subgroupElect()) base = atomicAdd(counters.movedCount, total);
+    base = subgroupBroadcastFirst(base);
+    if (listed && base + offset < params.vertexCapacity) movedVertices[base + offset] = v;
+}
 #endif

@@ -5,14 +5,22 @@
 namespace vkmesh::gpu {
 
 UpdateVerticesStage::UpdateVerticesStage(const vk::Context& context, const vk::BindingTable& table)
-    : dirty_(context, table, "update_vertices"), fresh_(context, table, "update_new_vertices"), heap_(context, table, "update_heap_vertices") {}
+    : listDirty_(context, table, "list_dirty_vertices"),
+      listNew_(context, table, "list_new_vertices"),
+      listHeap_(context, table, "list_heap_vertices"),
+      plan_(context, table, "plan_move_vertices"),
+      move_(context, table, "move_vertices") {}
 
 void UpdateVerticesStage::record(VkCommandBuffer cmd, const FramePush& push, const CounterBuffer& counters) const {
-    dirty_.dispatchIndirect(cmd, &push, counters.buffer(), offsetof(Counters, vertexDispatch));
+    listDirty_.dispatchIndirect(cmd, &push, counters.buffer(), offsetof(Counters, vertexDispatch));
     vk::memoryBarrier(cmd);
-    fresh_.dispatchIndirect(cmd, &push, counters.buffer(), offsetof(Counters, candidateDispatch));
+    listNew_.dispatchIndirect(cmd, &push, counters.buffer(), offsetof(Counters, candidateDispatch));
     vk::memoryBarrier(cmd);
-    heap_.dispatchIndirect(cmd, &push, counters.buffer(), offsetof(Counters, heapDispatch));
+    listHeap_.dispatchIndirect(cmd, &push, counters.buffer(), offsetof(Counters, heapDispatch));
+    vk::memoryBarrier(cmd);
+    plan_.dispatch(cmd, &push, 1);
+    vk::memoryBarrier(cmd);
+    move_.dispatchIndirect(cmd, &push, counters.buffer(), offsetof(Counters, vertexDispatch));
     vk::memoryBarrier(cmd);
 }
 

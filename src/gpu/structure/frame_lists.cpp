@@ -16,6 +16,7 @@ FrameLists::FrameLists(const vk::Context& context, const vk::BindingTable& table
     retypeMask_ = makeStorage(context, table, BINDING_RETYPE_MASK, VkDeviceSize(c.blocks) * MASK_WORDS * 4, "retype masks");
     retypeList_ = makeStorage(context, table, BINDING_RETYPE_LIST, VkDeviceSize(c.retype) * 4, "retype list");
     garbage_ = makeStorage(context, table, BINDING_GARBAGE, garbageBytes(c), "garbage lists");
+    moved_ = makeStorage(context, table, BINDING_MOVED_VERTICES, VkDeviceSize(c.vertices) * 4, "moved vertices");
     vk::CommandRecorder recorder(context);
     VkCommandBuffer cmd = recorder.begin();
     recordReset(cmd);
@@ -49,6 +50,8 @@ void FrameLists::grow(const FrameListCapacities& wanted) {
     if (c.touched > capacities_.touched) touched_ = makeStorage(context_, table_, BINDING_TOUCHED, VkDeviceSize(c.touched) * 4, "touched list");
     if (c.retype > capacities_.retype) retypeList_ = makeStorage(context_, table_, BINDING_RETYPE_LIST, VkDeviceSize(c.retype) * 4, "retype list");
     if (garbageBytes(c) > garbageBytes(capacities_)) garbage_ = makeStorage(context_, table_, BINDING_GARBAGE, garbageBytes(c), "garbage lists");
+    if (c.vertices > capacities_.vertices)
+        moved_ = makeStorage(context_, table_, BINDING_MOVED_VERTICES, VkDeviceSize(c.vertices) * 4, "moved vertices");
     capacities_ = c;
 }
 

@@ -6,7 +6,8 @@
 //   retype masks one bit per cube that may change type; persistent: bits left over (deferred or
 //                INCOMPLETE cubes) wait for the next pass (fuse, recycling -> collect_retype);
 //   retype list  the cubes of this pass (collect_retype -> claim, triangulate);
-//   garbage      GC candidate vertices and released chunks (claim, triangulate -> mesh_gc).
+//   garbage      GC candidate vertices and released chunks (claim, triangulate -> mesh_gc);
+//   moved        the vertices whose edges' corners may have changed (list_*_vertices -> move_vertices).
 #pragma once
 
 #include "core/map_format.h"
@@ -19,7 +20,7 @@ struct FrameListCapacities {
     uint32_t blocks = 0;     // the block pool: block list, dirty list, stamps, masks
     uint32_t touched = 0;    // blocks one frame may touch
     uint32_t retype = 0;     // cubes one mesh pass may retype
-    uint32_t vertices = 0;   // the vertex heap (GC candidates)
+    uint32_t vertices = 0;   // the vertex heap (GC candidates, moved vertices)
     uint32_t chunks = 0;     // the chunk heap (released chunks)
 };
 
@@ -41,14 +42,14 @@ public:
     // The live block list (blockList), as collect_blocks would write it: what the hash re-insertion reads.
     void uploadBlockList(const std::vector<uint32_t>& blocks);
     void pools(std::vector<PoolInfo>& out) const {
-        listPools(out, {&touched_, &blockList_, &meshStamps_, &dirtyList_, &retypeMask_, &retypeList_, &garbage_});
+        listPools(out, {&touched_, &blockList_, &meshStamps_, &dirtyList_, &retypeMask_, &retypeList_, &garbage_, &moved_});
     }
 
 private:
     const vk::Context& context_;
     const vk::BindingTable& table_;
     FrameListCapacities capacities_;
-    vk::Buffer touched_, blockList_, meshStamps_, dirtyList_, retypeMask_, retypeList_, garbage_;
+    vk::Buffer touched_, blockList_, meshStamps_, dirtyList_, retypeMask_, retypeList_, garbage_, moved_;
 };
 
 }  // namespace vkmesh::gpu

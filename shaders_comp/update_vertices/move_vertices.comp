@@ -1,0 +1,25 @@
+#version 460
+// Incremental mesh, pass 2c: one invocation per listed vertex (list_*_vertices) moves it to the zero
+// crossing of its edge (vertex_update.glsl). Listing first and moving second keeps every SIMD lane of this,
+// the expensive part, busy: a cube or heap entry that owns no vertex to move costs only the listing's loads.
+#extension GL_GOOGLE_include_directive : require
+#include "structure/frame.glsl"
+#include "structure/cube_mesh.glsl"
+#include "structure/frame_lists.glsl"
+#include "structure/cube_access.glsl"
+#include "update_vertices/vertex_update.glsl"
+
+layout(local_size_x = WG_LIST) in;
+
+void main() {
+    uint i = gl_GlobalInvocationID.x;
+    if (i >= min(counters.movedCount, params.vertexCapacity)) return;
+    uint v = movedVertices[i];
+    uint owner = vertexOwner[v];
+    CubeRef r = cubeRef(owner / (VOXELS_PER_BLOCK * 3u), (owner / 3u) % VOXELS_PER_BLOCK);
+    float d[8];
+    bool present[8];
+    bool observed;
+    loadCube(r, d, present, observed);
+    moveVertex(v, r, owner % 3u, d, present);
+}
