@@ -21,15 +21,18 @@ void setGcCandidate(uint i, uint v) { garbage[i] = v; }
 uint releasedChunk(uint i) { return garbage[params.vertexCapacity + i]; }
 void setReleasedChunk(uint i, uint chunk) { garbage[params.vertexCapacity + i] = chunk; }
 
-// Appends vertex v to the moved-vertex list when `listed`, one atomic per subgroup. Called by every
-// invocation of the subgroup (uniform control flow), listed or not.
-void listMovedVertex(uint v, bool listed) {
-    uint offset = subgroupExclusiveAdd(listed ? 1u : 0u);
-    uint total = subgroupAdd(listed ? 1u : 0u);
-    if (total == 0u) return;
+// Reserves `count` entries of the moved-vertex list for this invocation, one atomic per subgroup; returns
+// the first. Called by every invocation of the subgroup (uniform control flow), with a count or 0. Entries
+// at or past params.vertexCapacity do not exist (never more: each vertex is listed once).
+uint reserveMovedVertices(uint count) {
+    uint offset = subgroupExclusiveAdd(count);
+    uint total = subgroupAdd(count);
     uint base = 0u;
-    if (subgroupElect()) base = atomicAdd(counters.movedCount, total);
-    base = subgroupBroadcastFirst(base);
-    if (listed && base + offset < params.vertexCapacity) movedVertices[base + offset] = v;
+    if (subgroupElect() && total != 0u) base = atomicAdd(counters.movedCount, total);
+    return subgroupBroadcastFirst(base) + offset;
+}
+
+void listMovedVertex(uint at, uint v) {
+    if (at < params.vertexCapacity) movedVertices[at] = v;
 }
 #endif

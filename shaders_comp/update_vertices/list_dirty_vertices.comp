@@ -16,7 +16,9 @@ void main() {
     uint local = (gl_WorkGroupID.x % groupsPerBlock) * WG_BLOCK + gl_LocalInvocationIndex;
     uint cube = block * VOXELS_PER_BLOCK + local;
     uint vx = edgeVertexX[cube], vy = edgeVertexY[cube], vz = edgeVertexZ[cube];
-    listMovedVertex(vx, vx < CLAIMED_SLOT);
-    listMovedVertex(vy, vy < CLAIMED_SLOT);
-    listMovedVertex(vz, vz < CLAIMED_SLOT);
+    bool hasX = vx < CLAIMED_SLOT, hasY = vy < CLAIMED_SLOT, hasZ = vz < CLAIMED_SLOT;
+    uint at = reserveMovedVertices(uint(hasX) + uint(hasY) + uint(hasZ));   // one reservation for the cube's 3 edges
+    if (hasX) listMovedVertex(at++, vx);
+    if (hasY) listMovedVertex(at++, vy);
+    if (hasZ) listMovedVertex(at, vz);
 }

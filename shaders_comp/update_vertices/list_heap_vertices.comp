@@ -17,5 +17,6 @@ void main() {
         uint block = vertexOwner[v] / (VOXELS_PER_BLOCK * 3u);
         listed = meshStamps[block] == frame.frameNumber || vertices[v].createdFrame == frame.frameNumber;
     }
-    listMovedVertex(v, listed);
+    uint at = reserveMovedVertices(listed ? 1u : 0u);
+    if (listed) listMovedVertex(at, v);
 }

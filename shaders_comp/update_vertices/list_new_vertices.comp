@@ -17,5 +17,6 @@ void main() {
         v = gcCandidate(i);
         listed = meshStamps[vertexOwner[v] / (VOXELS_PER_BLOCK * 3u)] != frame.frameNumber;   // else list_dirty_vertices has it
     }
-    listMovedVertex(v, listed);
+    uint at = reserveMovedVertices(listed ? 1u : 0u);
+    if (listed) listMovedVertex(at, v);
 }
