@@ -6,6 +6,7 @@
 #include "structure/block_hash.glsl"
 #include "structure/block_store.glsl"
 #include "structure/mc_tables.glsl"
+#include "structure/frame_lists.glsl"
 
 struct CubeRef {
     uint nb[8];       // block at offset cornerOffset(i) from the cube's block (nb[0]), NO_BLOCK if absent
@@ -21,9 +22,26 @@ uvec3 cubeOfLocal(uint local) {
 
 uint localOfCube(uvec3 c) { return (c.z * BLOCK_SIDE + c.y) * BLOCK_SIDE + c.x; }
 
-// A cube on its own: the neighbours it can reach (only on the axes where it sits at the block's far
-// side) are looked up in the hash. For the few cubes a frame retypes.
+// A cube of a dirty block on its own: the neighbours it can reach (only on the axes where it sits at the
+// block's far side), from the block's neighbour cache (frame_lists.glsl). The cubes of the retype list are
+// in dirty blocks.
 CubeRef cubeRef(uint block, uint local) {
+    CubeRef r;
+    r.cube = cubeOfLocal(local);
+    r.origin = blockCoords[block].xyz * int(BLOCK_SIDE);
+    uvec3 far = uvec3(equal(r.cube, uvec3(BLOCK_SIDE - 1u)));
+    r.nb[0] = block;
+    for (uint i = 1u; i < 8u; ++i) {
+        uvec3 o = cornerOffset(i);
+        r.nb[i] = all(lessThanEqual(o, far)) ? cachedNeighbor(block, ivec3(o)) : NO_BLOCK;
+    }
+    return r;
+}
+
+// The same for a cube of any block: a block that is not dirty this frame (a vertex created this frame on an
+// edge owned by a clean block) has no valid cache, and its neighbours are looked up in the hash.
+CubeRef cubeRefAnyBlock(uint block, uint local) {
+    if (meshStamps[block] == frame.frameNumber) return cubeRef(block, local);
     CubeRef r;
     r.cube = cubeOfLocal(local);
     ivec3 coord = blockCoords[block].xyz;
@@ -32,8 +50,7 @@ CubeRef cubeRef(uint block, uint local) {
     r.nb[0] = block;
     for (uint i = 1u; i < 8u; ++i) {
         uvec3 o = cornerOffset(i);
-        bool reachable = all(lessThanEqual(o, far));
-        r.nb[i] = reachable ? findBlock(coord + ivec3(o)) : NO_BLOCK;
+        r.nb[i] = all(lessThanEqual(o, far)) ? findBlock(coord + ivec3(o)) : NO_BLOCK;
     }
     return r;
 }
@@ -106,12 +123,12 @@ int regularDistance(uint t) {
     return best;
 }
 
-// The type MC builds for cube r of `block` when refinement is on. A corner's meshing sign is a pure function
-// of the signs of the 3x3x3 corners around it and of its own |d| < refineEpsilon, so every cube sharing the
-// corner computes the same sign (no cracks) without talking to the others. The cube reads the 4x4x4 corners
-// at offsets -1..2 from its corner 0, which lie in its block and the blocks around it (found in the hash).
+// The type MC builds for cube r of `block` (a dirty block) when refinement is on. A corner's meshing sign is a
+// pure function of the signs of the 3x3x3 corners around it and of its own |d| < refineEpsilon, so every cube
+// sharing the corner computes the same sign (no cracks) without talking to the others. The cube reads the
+// 4x4x4 corners at offsets -1..2 from its corner 0, which lie in its block and the blocks around it (from the
+// block's neighbour cache).
 uint refinedCubeType(CubeRef r, uint block) {
-    ivec3 coord = blockCoords[block].xyz;
     // The blocks at offsets -1..1 the window reaches (index (x+1) + 3 (y+1) + 9 (z+1)); NO_BLOCK elsewhere.
     uint around[27];
     for (uint i = 0u; i < 27u; ++i) {
@@ -119,7 +136,7 @@ uint refinedCubeType(CubeRef r, uint block) {
         bvec3 reach = bvec3(o.x == 0 || (o.x < 0 ? r.cube.x == 0u : r.cube.x >= BLOCK_SIDE - 2u),
                             o.y == 0 || (o.y < 0 ? r.cube.y == 0u : r.cube.y >= BLOCK_SIDE - 2u),
                             o.z == 0 || (o.z < 0 ? r.cube.z == 0u : r.cube.z >= BLOCK_SIDE - 2u));
-        around[i] = !all(reach) ? NO_BLOCK : (i == 13u ? block : findBlock(coord + o));
+        around[i] = !all(reach) ? NO_BLOCK : cachedNeighbor(block, o);
     }
     // Window corner w at offset (w % 4, w / 4 % 4, w / 16) - 1: its sign and whether it is observed.
     bool inside[64], seen[64];

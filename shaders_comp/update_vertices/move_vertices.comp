@@ -16,7 +16,7 @@ void main() {
     if (i >= min(counters.movedCount, params.vertexCapacity)) return;
     uint v = movedVertices[i];
     uint owner = vertexOwner[v];
-    CubeRef r = cubeRef(owner / (VOXELS_PER_BLOCK * 3u), (owner / 3u) % VOXELS_PER_BLOCK);
+    CubeRef r = cubeRefAnyBlock(owner / (VOXELS_PER_BLOCK * 3u), (owner / 3u) % VOXELS_PER_BLOCK);
     float d[8];
     bool present[8];
     bool observed;

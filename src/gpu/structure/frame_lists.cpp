@@ -17,6 +17,7 @@ FrameLists::FrameLists(const vk::Context& context, const vk::BindingTable& table
     retypeList_ = makeStorage(context, table, BINDING_RETYPE_LIST, VkDeviceSize(c.retype) * 4, "retype list");
     garbage_ = makeStorage(context, table, BINDING_GARBAGE, garbageBytes(c), "garbage lists");
     moved_ = makeStorage(context, table, BINDING_MOVED_VERTICES, VkDeviceSize(c.vertices) * 4, "moved vertices");
+    neighbors_ = makeStorage(context, table, BINDING_BLOCK_NEIGHBORS, VkDeviceSize(c.blocks) * NEIGHBORS_PER_BLOCK * 4, "block neighbours");
     vk::CommandRecorder recorder(context);
     VkCommandBuffer cmd = recorder.begin();
     recordReset(cmd);
@@ -46,6 +47,7 @@ void FrameLists::grow(const FrameListCapacities& wanted) {
         recorder.submitAndWait();
         blockList_ = makeStorage(context_, table_, BINDING_BLOCK_LIST, VkDeviceSize(c.blocks) * 4, "block list");
         dirtyList_ = makeStorage(context_, table_, BINDING_DIRTY_LIST, VkDeviceSize(c.blocks) * 4, "dirty list");
+        neighbors_ = makeStorage(context_, table_, BINDING_BLOCK_NEIGHBORS, VkDeviceSize(c.blocks) * NEIGHBORS_PER_BLOCK * 4, "block neighbours");
     }
     if (c.touched > capacities_.touched) touched_ = makeStorage(context_, table_, BINDING_TOUCHED, VkDeviceSize(c.touched) * 4, "touched list");
     if (c.retype > capacities_.retype) retypeList_ = makeStorage(context_, table_, BINDING_RETYPE_LIST, VkDeviceSize(c.retype) * 4, "retype list");

@@ -7,7 +7,8 @@
 //                INCOMPLETE cubes) wait for the next pass (fuse, recycling -> collect_retype);
 //   retype list  the cubes of this pass (collect_retype -> claim, triangulate);
 //   garbage      GC candidate vertices and released chunks (claim, triangulate -> mesh_gc);
-//   moved        the vertices whose edges' corners may have changed (list_*_vertices -> move_vertices).
+//   moved        the vertices whose edges' corners may have changed (list_*_vertices -> move_vertices);
+//   neighbours   each dirty block's 26 neighbour blocks (collect_retype -> the mesh passes' cubeRef).
 #pragma once
 
 #include "core/map_format.h"
@@ -42,14 +43,14 @@ public:
     // The live block list (blockList), as collect_blocks would write it: what the hash re-insertion reads.
     void uploadBlockList(const std::vector<uint32_t>& blocks);
     void pools(std::vector<PoolInfo>& out) const {
-        listPools(out, {&touched_, &blockList_, &meshStamps_, &dirtyList_, &retypeMask_, &retypeList_, &garbage_, &moved_});
+        listPools(out, {&touched_, &blockList_, &meshStamps_, &dirtyList_, &retypeMask_, &retypeList_, &garbage_, &moved_, &neighbors_});
     }
 
 private:
     const vk::Context& context_;
     const vk::BindingTable& table_;
     FrameListCapacities capacities_;
-    vk::Buffer touched_, blockList_, meshStamps_, dirtyList_, retypeMask_, retypeList_, garbage_, moved_;
+    vk::Buffer touched_, blockList_, meshStamps_, dirtyList_, retypeMask_, retypeList_, garbage_, moved_, neighbors_;
 };
 
 }  // namespace vkmesh::gpu
