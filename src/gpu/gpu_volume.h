@@ -277,9 +277,11 @@ public:
     static std::unique_ptr<GpuVolume> load(const vk::Context& context, const std::filesystem::path& path);
 
 private:
+    // Follow-up mesh passes after a frame whose mesh passes ran out of a heap or the retype list.
+    static constexpr int kMaxMeshCompletions = 4;
     // load(): uploads the map into this freshly created volume and rebuilds the hash.
     void restore(const map::MapData& map, const std::string& name);
-    // The frame: every pass in order, with what it reads and writes (docs/ARCHITECTURE.md draws it).
+    // The frame (frame.cpp): every pass in order, with what it reads and writes (docs/ARCHITECTURE.md draws it).
     // `copyInput`: the frame's first attempt copies its input into depth_; a deferred frame's re-run finds it
     // there (the application's GPU input need not outlive the first submission).
     void recordFrame(VkCommandBuffer cmd, const FramePush& push, bool rebuildHash, bool retryPending, bool copyInput);

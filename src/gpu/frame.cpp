@@ -1,0 +1,372 @@
+// GpuVolume's frame (docs/ARCHITECTURE.md): recording one frame's passes into one command buffer, the input
+// copies for images already in GPU memory, and the submit / finish pair that the blocking integrate() and the
+// asynchronous form (Reconstructor::integrateAsync) share, with the re-run of a deferred frame.
+#include "gpu/gpu_volume.h"
+
+#include <cstddef>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "core/camera.h"
+#include "gpu/capacities.h"
+#include "vk/check.h"
+
+namespace vkmesh::gpu {
+namespace {
+
+// A frame deferred this many times (growing each time) runs the last time without deferral: what still
+// does not fit (a device limit reached) is reported and skipped.
+constexpr int kMaxDeferrals = 4;
+
+// The counters of a frame whose mesh was completed by follow-up passes: the frame's own counts, the state
+// (everything persistent) as the last pass left it, what ran out as the last pass saw it, and the mesh work
+// of all passes added up.
+Counters mergedCounters(const Counters& frame, const std::vector<Counters>& passes) {
+    if (passes.empty()) return frame;
+    Counters k = frame;
+    const Counters& last = passes.back();
+    std::memcpy(reinterpret_cast<char*>(&k) + offsetof(Counters, freeTop), reinterpret_cast<const char*>(&last) + offsetof(Counters, freeTop),
+                sizeof(Counters) - offsetof(Counters, freeTop));
+    k.vertexExhausted = last.vertexExhausted;
+    k.chunkExhausted = last.chunkExhausted;
+    k.trianglesInvalid = last.trianglesInvalid;
+    k.retypeDeferred = last.retypeDeferred;
+    k.meshPending = last.meshPending;
+    for (const Counters& p : passes) {
+        k.cubesRetyped += p.cubesRetyped;
+        k.vertexAllocRequests += p.vertexAllocRequests;
+        k.chunkAllocRequests += p.chunkAllocRequests;
+        k.trianglesCreated += p.trianglesCreated;
+        k.trianglesReleased += p.trianglesReleased;
+        k.vertexPushes += p.vertexPushes;
+        k.chunkPushes += p.chunkPushes;
+        k.retypeCount += p.retypeCount;
+    }
+    return k;
+}
+
+}  // namespace
+
+void GpuVolume::recordFrame(VkCommandBuffer cmd, const FramePush& push, bool rebuildHash, bool retryPending, bool copyInput) {
+    const bool incremental = config_.meshMode == MeshMode::Incremental;
+    const bool recycling = this->recycling();
+    // Pass                          reads                                     writes
+    // (host)   depth upload         staging                                   depth image; per-frame counters cleared
+    // rehash   (tombstones > 1/8)   block list, hash                          hash (no tombstones), block coords.w
+    // allocate allocate_blocks      depth, hash                               hash keys, stamps, touched list
+    //          plan_frame           touchedCount                              assign/block dispatch
+    //          assign_blocks        touched list, free list, hash             hash values, block coords, touched list
+    //          commit_allocation    allocRequests                             free list top, pool counts
+    //          defer_frame          overflow counts                           frameDeferred, emptied dispatches
+    // fuse     fuse_depth           touched list, depth, block coords         TSDF, retype masks
+    // mesh     mark_dirty           touched list, hash                        dirty list, mesh stamps
+    //          (block list)         hash                                      live-block list  [recycling, pending]
+    //          mark_pending_dirty   block list, retype masks                  dirty list       [after heap growth]
+    // recycle  recycle_retire       block list, hash stamps                   weights, retype masks
+    //          retype stage         dirty list, retype masks                  retype list
+    //          claim stage          retype list, TSDF, hash, cube state       edge slots, vertex heap
+    //          update stage         TSDF, edge slots, dirty list              vertex positions, normals
+    //          triangulate stage    retype list, TSDF, edge slots             cube state, chunks, garbage lists
+    //          mesh GC stage        garbage lists                             free stacks, edge slots
+    // recycle  recycle_free         block list, TSDF, cube state, edge slots  hash (tombstones), free list
+    // export   export stage         vertex heap, chunks                       export buffers, draw command
+    // deltas   delta stage          vertex heap, chunks, shadows              records, shadows
+    // Every pass reads what the one before wrote (at least the counters its dispatch size comes from), so
+    // each is followed by a full compute/transfer barrier (vk::memoryBarrier, inside the stages).
+    // An execution dependency on everything submitted before (an application's draws reading the last
+    // frame's mesh buffers on this queue): this frame overwrites them.
+    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_ALL_COMMANDS_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT | VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+                         0, 0, nullptr, 0, nullptr, 0, nullptr);
+    params_.recordUpload(cmd);   // what grew since the last submission
+    if (copyInput) recordInputCopy(cmd, (push.imageSize & FRAME_HAS_COLOR) != 0);
+    counters_.recordClearFrame(cmd);
+    timer_.mark(cmd, "start");
+    if (rebuildHash) {
+        recordRebuildHash(cmd, push);
+        timer_.mark(cmd, "rehash");
+    }
+    allocate_.record(cmd, push, counters_.buffer(), uint32_t(config_.params.allocationStride));
+    deferFrame_.dispatch(cmd, &push, 1);
+    vk::memoryBarrier(cmd);
+    timer_.mark(cmd, "allocate");
+    fuse_.record(cmd, push, counters_);
+    timer_.mark(cmd, "fuse");
+    if (incremental) {
+        markDirty_.recordTouched(cmd, push, counters_);
+        timer_.mark(cmd, "mesh_mark");
+    }
+    if (recycling || retryPending) blockList_.record(cmd, push, counters_, config_.hashCapacity);
+    if (retryPending) markDirty_.recordPending(cmd, push, config_.blockCapacity);
+    if (recycling) {
+        recycle_.recordRetire(cmd, push, counters_);
+        timer_.mark(cmd, "recycle_retire");
+    }
+    if (incremental) recordMeshPasses(cmd, push, &timer_);
+    if (recycling) {
+        // The live block list is still the one collected above: the mesh passes do not touch the hash.
+        recycle_.recordFree(cmd, push, counters_);
+        timer_.mark(cmd, "recycle_free");
+    }
+    if (config_.publishMesh) {
+        recordExport(cmd);
+        timer_.mark(cmd, "export");
+    }
+    if (deltas_) {
+        deltas_->record(cmd);
+        timer_.mark(cmd, "deltas");
+    }
+}
+
+void GpuVolume::recordInputCopy(VkCommandBuffer cmd, bool withColor) {
+    const VkDeviceSize pixelBytes = VkDeviceSize(config_.imageWidth) * config_.imageHeight * 4;
+    const FrameInput& in = inFlight_->input;
+    if (!inFlight_->fromGpu) {
+        VkBufferCopy region{0, 0, withColor ? 2 * pixelBytes : pixelBytes};
+        vkCmdCopyBuffer(cmd, depthStaging_.handle(), depth_.handle(), 1, &region);
+        return;
+    }
+    // The application's GPU images, straight into the input buffer (depth, then the colour words).
+    auto copy = [&](const GpuImageInput& image, VkDeviceSize dstOffset, bool depthAspect) {
+        if (image.buffer) {
+            VkBufferCopy region{image.offset, dstOffset, pixelBytes};
+            vkCmdCopyBuffer(cmd, image.buffer, depth_.handle(), 1, &region);
+            return;
+        }
+        VkBufferImageCopy region{};
+        region.bufferOffset = dstOffset;
+        region.imageSubresource.aspectMask = depthAspect ? VK_IMAGE_ASPECT_DEPTH_BIT : VK_IMAGE_ASPECT_COLOR_BIT;
+        region.imageSubresource.layerCount = 1;
+        region.imageExtent = {uint32_t(config_.imageWidth), uint32_t(config_.imageHeight), 1};
+        vkCmdCopyImageToBuffer(cmd, image.image, image.layout, depth_.handle(), 1, &region);
+    };
+    copy(in.gpuDepth, 0, in.gpuDepth.format == VK_FORMAT_D32_SFLOAT);
+    if (withColor) copy(in.gpuColor, pixelBytes, false);
+}
+
+void GpuVolume::recordMeshPasses(VkCommandBuffer cmd, const FramePush& push, vk::StageTimer* timer) {
+    auto mark = [&](const char* name) { if (timer) timer->mark(cmd, name); };
+    retype_.record(cmd, push, counters_);
+    claim_.record(cmd, push, counters_, config_.lockFree);
+    mark("mesh_claim");
+    updateVertices_.record(cmd, push, counters_);
+    mark("mesh_update");
+    triangulate_.record(cmd, push, counters_);
+    mark("mesh_triangulate");
+    meshGc_.record(cmd, push, counters_);
+    mark("mesh_gc");
+}
+
+FrameReport GpuVolume::integrate(const DepthImage& depth, const Intrinsics& intrinsics, const Pose& cameraToWorld,
+                                 const vk::SubmitSync& sync) {
+    return integrate(depth, nullptr, intrinsics, cameraToWorld, sync);
+}
+
+FrameReport GpuVolume::integrate(const DepthImage& depth, const ColorImage* color, const Intrinsics& intrinsics,
+                                 const Pose& cameraToWorld, const vk::SubmitSync& sync) {
+    FrameInput input;
+    input.depth = &depth;
+    input.color = color;
+    input.intrinsics = intrinsics;
+    input.cameraToWorld = cameraToWorld;
+    input.sync = sync;
+    submitFrame(input);
+    return finishFrame();
+}
+
+namespace {
+
+std::string sizeText(int width, int height) { return std::to_string(width) + "x" + std::to_string(height); }
+
+// What a GPU image input must be, checked before anything is recorded.
+void checkGpuInput(const GpuImageInput& in, bool color) {
+    const char* what = color ? "GPU colour input" : "GPU depth input";
+    if (in.buffer && in.image) throw Error(std::string(what) + ": give a buffer or an image, not both");
+    if (!in.image) return;
+    const bool ok = color ? (in.format == VK_FORMAT_R8G8B8A8_UNORM || in.format == VK_FORMAT_R8G8B8A8_SRGB)
+                          : (in.format == VK_FORMAT_R32_SFLOAT || in.format == VK_FORMAT_D32_SFLOAT);
+    if (!ok)
+        throw Error(std::string(what) + ": image format " + std::to_string(int(in.format)) + " is not supported (" +
+                    (color ? "R8G8B8A8_UNORM or R8G8B8A8_SRGB" : "R32_SFLOAT or D32_SFLOAT") + ")");
+    if (in.layout != VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL && in.layout != VK_IMAGE_LAYOUT_GENERAL)
+        throw Error(std::string(what) + ": the image must be in TRANSFER_SRC_OPTIMAL or GENERAL layout");
+}
+
+}  // namespace
+
+void GpuVolume::submitFrame(const FrameInput& input, uint64_t timelineValue) {
+    if (inFlight_) throw Error("submitFrame: the previous frame has not been finished (finishFrame)");
+    const int w = config_.imageWidth, h = config_.imageHeight;
+    InFlight frame;
+    frame.fromGpu = !input.gpuDepth.empty();
+    if (frame.fromGpu == (input.depth != nullptr))
+        throw Error("a frame needs exactly one depth image: a host DepthImage or a GPU input");
+    if (frame.fromGpu) {
+        checkGpuInput(input.gpuDepth, false);
+        checkGpuInput(input.gpuColor, true);
+        if (input.color) throw Error("a frame with GPU depth takes its colour as a GPU input too");
+        if (input.intrinsics.width != w || input.intrinsics.height != h)
+            throw Error("intrinsics are for " + sizeText(input.intrinsics.width, input.intrinsics.height) +
+                        " images but the volume was created for " + sizeText(w, h) + " (the GPU input's size)");
+        frame.withColor = fusesColor() && !input.gpuColor.empty();
+    } else {
+        const DepthImage& depth = *input.depth;
+        if (depth.width != w || depth.height != h || depth.meters.size() != size_t(depth.width) * depth.height)
+            throw Error("depth image is " + sizeText(depth.width, depth.height) + " but the volume was created for " + sizeText(w, h));
+        if (!input.gpuColor.empty()) throw Error("a frame with a host depth image takes its colour as a host image too");
+        if (input.intrinsics.width != w || input.intrinsics.height != h)
+            throw Error("intrinsics are for " + sizeText(input.intrinsics.width, input.intrinsics.height) +
+                        " images but the depth image is " + sizeText(w, h));
+        const ColorImage* color = input.color;
+        frame.withColor = fusesColor() && color && !color->empty();
+        if (frame.withColor && (color->width != w || color->height != h || color->rgb.size() != size_t(color->width) * color->height * 3))
+            throw Error("colour image is " + sizeText(color->width, color->height) + " but the depth image is " + sizeText(w, h) +
+                        " (colour must be registered to depth)");
+        std::memcpy(depthStaging_.mapped(), depth.meters.data(), depth.meters.size() * sizeof(float));
+        if (frame.withColor) {
+            // RGBA8 words after the depth samples; alpha 255: every pixel of the image has a colour.
+            auto* words = static_cast<uint32_t*>(depthStaging_.mapped()) + depth.meters.size();
+            const uint8_t* rgb = color->rgb.data();
+            for (size_t i = 0; i < depth.meters.size(); ++i, rgb += 3)
+                words[i] = uint32_t(rgb[0]) | uint32_t(rgb[1]) << 8 | uint32_t(rgb[2]) << 16 | 0xFF000000u;
+        }
+    }
+    frame.input = input;
+    frame.input.depth = nullptr;   // the host images are in the staging buffer now
+    frame.input.color = nullptr;
+    frame.timelineValue = timelineValue;
+
+    if (config_.growCapacities && framesIntegrated_ > 0) growBeforeFrame(frame.report);
+    if (config_.publishMesh) {
+        if (timelineValue) {
+            // An asynchronous frame writes the other set (the application may be drawing the last one), sized
+            // for the whole heaps: it cannot overflow, so the set holds the whole mesh at the ready value and
+            // is never re-exported (which would write buffers the application was told it may draw).
+            exportMesh_->select(exportMesh_->selected() ^ 1u, params_);
+            exportMesh_->ensureCapacity(config_.vertexCapacity, config_.chunkCapacity * TRIANGLES_PER_CHUNK, params_, false);
+            meshPublished_ = true;   // meshBuffers() hands out the set with its ready value
+        } else {
+            if (exportMesh_->selected() != 0) exportMesh_->select(0, params_);
+            // Room for last frame's mesh plus what one frame can plausibly add; a frame that adds more is
+            // re-exported in finishFrame() after growing the buffers.
+            const Counters last = counters_.read();
+            exportMesh_->ensureCapacity(last.verticesInUse + last.verticesInUse / 8 + 4096,
+                                        last.liveTriangles + last.liveTriangles / 8 + 8192, params_);
+        }
+    }
+    // Tombstones of freed keys make probes longer and are never reused by insertions: past the threshold
+    // (read from the previous frame's counters) the table is rebuilt before this frame allocates.
+    frame.rebuildHash = recycling() && double(counters_.read().hashTombstones) >
+                                           double(config_.hashRebuildTombstoneFraction) * config_.hashCapacity;
+    frame.retryPending = config_.meshMode == MeshMode::Incremental && retryPending_;
+    inFlight_ = std::move(frame);
+    submitAttempt();
+}
+
+void GpuVolume::submitAttempt() {
+    InFlight& f = *inFlight_;
+    // A frame whose allocation overflows is deferred (nothing fused), the capacities grow, and it runs again
+    // under the next frame number. The application's semaphores: waited on by the first submission,
+    // signalled by the one that ends the frame (an empty one when deferral was possible). vkmesh's timeline
+    // is raised by the first: its mesh buffers then hold a whole mesh (without this frame's depth when it was
+    // deferred; a re-run writes the same set again, ordered after the application's reads by contract).
+    f.mayDefer = config_.growCapacities && f.attempt < kMaxDeferrals;
+    if (params_.values().deferOnOverflow != uint32_t(f.mayDefer)) params_.edit().deferOnOverflow = f.mayDefer ? 1u : 0u;
+    FramePush push = makeFramePush(f.input.intrinsics, f.input.cameraToWorld, config_.params, ++frameNumber_);
+    if (f.withColor) push.imageSize |= FRAME_HAS_COLOR;
+    lastPush_ = push;
+    VkCommandBuffer cmd = recorder_.begin();
+    timer_.reset(cmd);
+    recordFrame(cmd, push, f.rebuildHash && f.attempt == 0, f.retryPending, f.attempt == 0);
+    counters_.recordReadback(cmd);
+    vk::SubmitSync attemptSync;
+    if (f.attempt == 0) {
+        attemptSync.wait = f.input.sync.wait;
+        attemptSync.waitStages = f.input.sync.waitStages;
+        attemptSync.waitValues = f.input.sync.waitValues;
+        if (f.timelineValue) {
+            // Every signal gets a value once one is a timeline semaphore (binary ones ignore theirs).
+            attemptSync.signal.push_back(timeline().handle());
+            attemptSync.signalValues.push_back(f.timelineValue);
+        }
+    }
+    if (!f.mayDefer) {
+        if (!attemptSync.signalValues.empty() || !f.input.sync.signalValues.empty()) {
+            attemptSync.signalValues.resize(attemptSync.signal.size(), 0);
+            for (size_t i = 0; i < f.input.sync.signal.size(); ++i)
+                attemptSync.signalValues.push_back(i < f.input.sync.signalValues.size() ? f.input.sync.signalValues[i] : 0);
+        }
+        attemptSync.signal.insert(attemptSync.signal.end(), f.input.sync.signal.begin(), f.input.sync.signal.end());
+        f.signalled = true;
+    }
+    recorder_.submit(attemptSync);
+}
+
+FrameReport GpuVolume::finishFrame() {
+    if (!inFlight_) throw Error("finishFrame: no frame was submitted");
+    Counters k{};
+    for (;;) {
+        recorder_.wait();
+        exportMesh_->releaseRetired();   // the application's draws of the replaced buffers came before this frame
+        k = counters_.read();
+        if (!k.frameDeferred) break;
+        ++inFlight_->report.deferredAttempts;
+        growAfterDeferral(k, inFlight_->report);
+        ++inFlight_->attempt;
+        submitAttempt();
+    }
+    InFlight f = std::move(*inFlight_);
+    inFlight_.reset();
+    FrameReport& report = f.report;
+    if (!f.signalled && !f.input.sync.signal.empty()) {
+        vk::SubmitSync signalOnly;
+        signalOnly.signal = f.input.sync.signal;
+        signalOnly.signalValues = f.input.sync.signalValues;
+        recorder_.begin();
+        recorder_.submitAndWait(signalOnly);
+    }
+    ++framesIntegrated_;
+    report.stageMs = timer_.read();
+    // Cubes deferred by a full retype list are left for the next frame's retry; INCOMPLETE cubes are retried
+    // once after a growth (while the heap stays full they wait for their block to be dirty again).
+    if (f.retryPending) retryPending_ = k.retypeDeferred > 0;
+
+    // The mesh passes ran out of a heap or the retype list (meshPending): grow it and re-mesh the cubes left
+    // over before the frame is published and its deltas are taken, so the frame's mesh is complete.
+    const bool incremental = config_.meshMode == MeshMode::Incremental;
+    std::vector<Counters> completion;
+    if (incremental && config_.growCapacities) {
+        Counters last = k;
+        // An asynchronous frame's set is not written again (the application may be drawing it): the cubes
+        // completed here reach the next frame's set.
+        for (int pass = 0; pass < kMaxMeshCompletions && last.meshPending; ++pass) {
+            growMeshAfterFrame(last, report);
+            completion.push_back(runMeshCompletion(f.timelineValue == 0, true));
+            last = completion.back();
+        }
+        if (f.timelineValue && !completion.empty())
+            report.warnings.push_back("frame " + std::to_string(frameNumber_) + ": a mesh heap ran out; the frame's published mesh " +
+                                      "lacks the cubes meshed after the heap grew, the next frame's has them");
+        if (!last.meshPending) growMeshAfterFrame(last, report);   // a retype list that overflowed without pending work
+    }
+    report.counters = mergedCounters(k, completion);
+    if (config_.publishMesh) {
+        meshPublished_ = true;
+        // (An asynchronous frame's set fits by construction.)
+        if (!f.timelineValue && !exportMesh_->fits(report.counters))
+            report.counters = mergedCounters(k, {runExport(nullptr)});   // grows to the exact counts
+    }
+    if (deltas_) {
+        report.delta = deltas_->collect(recorder_);
+        report.delta.frame = frameNumber_;
+    }
+    warnAboutCapacities(report.counters, report);
+    return report;
+}
+
+const vk::TimelineSemaphore& GpuVolume::timeline() {
+    if (!timeline_) timeline_ = std::make_unique<vk::TimelineSemaphore>(context_);
+    return *timeline_;
+}
+
+}  // namespace vkmesh::gpu
