@@ -67,44 +67,20 @@ std::vector<Frame> roomFrames(size_t count) {
     return frames;
 }
 
-// Copies `size` bytes of any buffer to the host, as an application reading vkmesh's buffers would.
-std::vector<uint8_t> readBuffer(const vk::Context& context, VkBuffer buffer, VkDeviceSize offset, VkDeviceSize size) {
-    std::vector<uint8_t> out(size_t(size), 0);
-    if (size == 0) return out;
-    vk::Buffer host(context, size, VK_BUFFER_USAGE_TRANSFER_DST_BIT, vk::MemoryUse::Readback, "test readback");
-    vk::CommandRecorder recorder(context);
-    VkCommandBuffer cmd = recorder.begin();
-    gpu::recordMeshReadBarrier(cmd);
-    VkMemoryBarrier toTransfer{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
-    toTransfer.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_TRANSFER_WRITE_BIT;
-    toTransfer.dstAccessMask = VK_ACCESS_TRANSFER_READ_BIT;
-    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_ALL_COMMANDS_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT, 0, 1, &toTransfer, 0, nullptr, 0, nullptr);
-    VkBufferCopy region{offset, 0, size};
-    vkCmdCopyBuffer(cmd, buffer, host.handle(), 1, &region);
-    VkMemoryBarrier toHost{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
-    toHost.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
-    toHost.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
-    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &toHost, 0, nullptr, 0, nullptr);
-    recorder.submitAndWait();
-    host.invalidate();
-    std::memcpy(out.data(), host.mapped(), out.size());
-    return out;
-}
-
 // The mesh in published buffers, read through its indirect draw command (the counts a renderer never reads).
 Mesh readPublished(const vk::Context& context, const gpu::MeshBuffers& b) {
     VkDrawIndexedIndirectCommand draw{};
-    const auto drawBytes = readBuffer(context, b.drawIndirect, b.drawIndirectOffset, sizeof(draw));
+    const auto drawBytes = test::readDeviceBuffer(context, b.drawIndirect, b.drawIndirectOffset, sizeof(draw));
     std::memcpy(&draw, drawBytes.data(), sizeof(draw));
     gpu::ExportedMesh e;
     e.triangles.resize(draw.indexCount / 3);
-    const auto indexBytes = readBuffer(context, b.indices, 0, VkDeviceSize(draw.indexCount) * 4);
+    const auto indexBytes = test::readDeviceBuffer(context, b.indices, 0, VkDeviceSize(draw.indexCount) * 4);
     std::memcpy(e.triangles.data(), indexBytes.data(), indexBytes.size());
     uint32_t vertices = 0;
     for (const auto& t : e.triangles)
         for (uint32_t v : t) vertices = std::max(vertices, v + 1);
     e.vertices.resize(vertices);
-    const auto vertexBytes = readBuffer(context, b.vertices, 0, VkDeviceSize(vertices) * sizeof(gpu::Vertex));
+    const auto vertexBytes = test::readDeviceBuffer(context, b.vertices, 0, VkDeviceSize(vertices) * sizeof(gpu::Vertex));
     std::memcpy(e.vertices.data(), vertexBytes.data(), vertexBytes.size());
     return toMesh(e);
 }

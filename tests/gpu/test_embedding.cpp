@@ -53,24 +53,9 @@ std::vector<Frame> roomFrames(size_t count) {
 
 // Reads the VkDrawIndexedIndirectCommand the way an application could: a copy on the device.
 VkDrawIndexedIndirectCommand readDrawCommand(const vk::Context& context, const gpu::MeshBuffers& mesh) {
-    vk::Buffer host(context, sizeof(VkDrawIndexedIndirectCommand), VK_BUFFER_USAGE_TRANSFER_DST_BIT, vk::MemoryUse::Readback, "draw command");
-    vk::CommandRecorder recorder(context);
-    VkCommandBuffer cmd = recorder.begin();
-    VkMemoryBarrier toTransfer{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
-    toTransfer.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_TRANSFER_WRITE_BIT;
-    toTransfer.dstAccessMask = VK_ACCESS_TRANSFER_READ_BIT;
-    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT, 0, 1,
-                         &toTransfer, 0, nullptr, 0, nullptr);
-    VkBufferCopy region{mesh.drawIndirectOffset, 0, sizeof(VkDrawIndexedIndirectCommand)};
-    vkCmdCopyBuffer(cmd, mesh.drawIndirect, host.handle(), 1, &region);
-    VkMemoryBarrier toHost{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
-    toHost.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
-    toHost.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
-    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &toHost, 0, nullptr, 0, nullptr);
-    recorder.submitAndWait();
-    host.invalidate();
+    const std::vector<uint8_t> bytes = test::readDeviceBuffer(context, mesh.drawIndirect, mesh.drawIndirectOffset, sizeof(VkDrawIndexedIndirectCommand));
     VkDrawIndexedIndirectCommand out{};
-    std::memcpy(&out, host.mapped(), sizeof(out));
+    std::memcpy(&out, bytes.data(), sizeof(out));
     return out;
 }
 
