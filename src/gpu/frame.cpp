@@ -64,10 +64,10 @@ void GpuVolume::recordFrame(VkCommandBuffer cmd, const FramePush& push, bool reb
     //          (block list)         hash                                      live-block list  [recycling, pending]
     //          mark_pending_dirty   block list, retype masks                  dirty list       [after heap growth]
     // recycle  recycle_retire       block list, hash stamps                   weights, retype masks
-    //          retype stage         dirty list, retype masks                  retype list
-    //          claim stage          retype list, TSDF, hash, cube state       edge slots, vertex heap
-    //          update stage         TSDF, edge slots, dirty list              vertex positions, normals
-    //          triangulate stage    retype list, TSDF, edge slots             cube state, chunks, garbage lists
+    //          retype stage         dirty list, retype masks, hash            retype list, block neighbours
+    //          claim stage          retype list, TSDF, neighbours, cube state edge slots, vertex heap
+    //          update stage         TSDF, edge slots, dirty list, neighbours  moved list, vertex positions, normals
+    //          triangulate stage    retype list, TSDF, edge slots, neighbours cube state, chunks, garbage lists
     //          mesh GC stage        garbage lists                             free stacks, edge slots
     // recycle  recycle_free         block list, TSDF, cube state, edge slots  hash (tombstones), free list
     // export   export stage         vertex heap, chunks                       export buffers, draw command
