@@ -105,7 +105,8 @@ VKM_CONST BINDING_EDGE_VERTEX_Z = 31u; // ... +z edge
 VKM_CONST BINDING_MOVED_VERTICES = 32u; // uint list of the vertices move_vertices moves this mesh pass
 VKM_CONST BINDING_BLOCK_NEIGHBORS = 33u; // uint per block x 27: the blocks around it (frame_lists.glsl), valid while it is dirty
 VKM_CONST NEIGHBORS_PER_BLOCK = 27u;      // offsets -1..1 per axis, index (x + 1) + 3 (y + 1) + 9 (z + 1)
-VKM_CONST BINDING_COUNT = 34u;
+VKM_CONST BINDING_MESH_SIGNS = 34u;     // 16 uint per block: each corner's sign for meshing with refinement (frame_lists.glsl)
+VKM_CONST BINDING_COUNT = 35u;
 VKM_CONST MASK_WORDS = 16u;            // VOXELS_PER_BLOCK / 32
 VKM_CONST MASK_ALL_CUBES = 0xFFFFFFFFu; // a retype-mask word with each of its 32 cubes listed
 
@@ -268,7 +269,9 @@ struct Counters {
     // The vertices listed for move_vertices this mesh pass: reset by commit_vertices, which runs before the
     // listing passes (so it needs no per-frame clear). In the former padding: map files hold this struct.
     uint movedCount;
-    uint persistentPad1;   // the struct stays a multiple of 16 bytes
+    // With refinement, the corners listed for decide_mesh_signs this mesh pass (list_sign_corners): reset by
+    // plan_mesh. Also in the former padding; the struct stays a multiple of 16 bytes.
+    uint signCornerCount;
 };
 VKM_CONST COUNTERS_PER_FRAME_OFFSET = 144u;  // byte offset of validPixels
 VKM_CONST COUNTERS_PER_FRAME_SIZE = 144u;    // 36 per-frame uints

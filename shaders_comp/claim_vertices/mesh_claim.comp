@@ -46,7 +46,7 @@ void main() {
     bool present[8];
     bool observed;
     uint t = loadCube(r, d, present, observed);
-    uint mask = edgeMaskOf(meshType(r, id / VOXELS_PER_BLOCK, t));
+    uint mask = edgeMaskOf(meshType(r, t, observed));
     for (uint n = 0u; n < 12u && mask != 0u; ++n) {   // over the set bits only
         uint e = findLSB(mask);
         mask &= mask - 1u;

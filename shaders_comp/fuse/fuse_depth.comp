@@ -65,6 +65,8 @@ void main() {
                 }
             }
             bool wasObserved = oldWeight >= params.minMeshWeight, isObserved = newWeight >= params.minMeshWeight;
+            // With refinement a corner entering or leaving |d| < epsilon may change its meshing sign: marking its
+            // cubes has decide_mesh_signs re-decide it (and the corners around it).
             bool nearFlip = volumeRefines() && (abs(oldSdf) < params.refineEpsilon) != (abs(newSdf) < params.refineEpsilon);
             if (wasObserved != isObserved || (isObserved && ((oldSdf < 0.0) != (newSdf < 0.0) || nearFlip))) flipped |= 1u << k;
             if (fresh || newWeight != oldWeight || newSdf != oldSdf) {

@@ -17,8 +17,9 @@ void main() {
     if (entry == NO_BLOCK) return;
     uint block = entry & INDEX_MASK;
     ivec3 coord = blockCoords[block].xyz;
-    // With refinement a flipped corner marks cubes up to one block ahead too (retype_marks.glsl): then the
-    // dirty blocks are T + o, o in {-1, 0, 1}^3, so that collect_retype sees every mark.
+    // With refinement a corner's meshing sign reads the corners around it, so the corners whose sign may change
+    // lie up to one block ahead too: then the dirty blocks are T + o, o in {-1, 0, 1}^3, and decide_mesh_signs
+    // re-decides all their corners.
     uint n = volumeRefines() ? 27u : 8u;
     for (uint o = 0u; o < n; ++o) {
         ivec3 offset = volumeRefines() ? ivec3(int(o % 3u), int((o / 3u) % 3u), int(o / 9u)) - 1

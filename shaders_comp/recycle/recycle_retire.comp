@@ -36,7 +36,7 @@ void main() {
             if ((flipped & (1u << k)) != 0u) markCornerRetype(block, gl_LocalInvocationIndex + k * WG_BLOCK);
         // One invocation per subgroup that saw a flip lists the dirty blocks; the stamp lists each once.
         if (subgroupOr(flipped) != 0u && subgroupElect()) {
-            // With refinement the marks reach the blocks at +-1 too (retype_marks.glsl), as in mark_dirty.
+            // With refinement the meshing signs of corners in the blocks at +-1 read these corners, as in mark_dirty.
             ivec3 coord = blockCoords[block].xyz;
             uint n = volumeRefines() ? 27u : 8u;
             for (uint o = 0u; o < n; ++o) {

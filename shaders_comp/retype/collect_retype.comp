@@ -1,13 +1,10 @@
 #version 460
-// Incremental mesh: turns the dirty blocks' retype masks (set by fuse_depth, and by mesh_triangulate for
-// INCOMPLETE cubes) into one list of cubes, and clears the bits it listed. One invocation per mask word;
-// bits that do not fit in the list stay set for the next pass (counted). The invocations of each dirty block
-// also cache the block's 26 neighbours (blockNeighbors) for the passes that follow.
+// Incremental mesh: turns the dirty blocks' retype masks (set by fuse_depth, decide_mesh_signs, and by
+// mesh_triangulate for INCOMPLETE cubes) into one list of cubes, and clears the bits it listed. One invocation per mask word;
+// bits that do not fit in the list stay set for the next pass (counted).
 #extension GL_GOOGLE_include_directive : require
 #include "structure/frame.glsl"
 #include "structure/frame_lists.glsl"
-#include "structure/block_hash.glsl"
-#include "structure/block_store.glsl"
 
 layout(local_size_x = WG_LIST) in;
 
@@ -16,12 +13,6 @@ void main() {
     if (i >= counters.dirtyCount * MASK_WORDS) return;
     uint block = dirtyList[i / MASK_WORDS];
     uint word = block * MASK_WORDS + i % MASK_WORDS;
-    // The block's neighbour cache, spread over its MASK_WORDS invocations (entries word, word + 16).
-    ivec3 coord = blockCoords[block].xyz;
-    for (uint n = i % MASK_WORDS; n < NEIGHBORS_PER_BLOCK; n += MASK_WORDS) {
-        ivec3 offset = ivec3(int(n % 3u), int((n / 3u) % 3u), int(n / 9u)) - 1;
-        blockNeighbors[block * NEIGHBORS_PER_BLOCK + n] = offset == ivec3(0) ? block : findBlock(coord + offset);
-    }
     uint bits = retypeMask[word];
     if (bits == 0u) return;
     uint n = bitCount(bits);

@@ -1,5 +1,6 @@
 #version 460
-// One invocation after mark_dirty: one invocation per retype-mask word of the dirty blocks.
+// One invocation after mark_dirty: one invocation per retype-mask word of the dirty blocks (cache_neighbors,
+// list_sign_corners, collect_retype); the corner list of list_sign_corners starts empty.
 #extension GL_GOOGLE_include_directive : require
 #include "structure/frame.glsl"
 
@@ -9,5 +10,5 @@ void main() {
     counters.collectDispatch[0] = (counters.dirtyCount * MASK_WORDS + WG_LIST - 1u) / WG_LIST;
     counters.collectDispatch[1] = 1u;
     counters.collectDispatch[2] = 1u;
-
+    counters.signCornerCount = 0u;
 }

@@ -123,78 +123,58 @@ int regularDistance(uint t) {
     return best;
 }
 
-// The type MC builds for cube r of `block` (a dirty block) when refinement is on. A corner's meshing sign is a
-// pure function of the signs of the 3x3x3 corners around it and of its own |d| < refineEpsilon, so every cube
-// sharing the corner computes the same sign (no cracks) without talking to the others. The cube reads the
-// 4x4x4 corners at offsets -1..2 from its corner 0, which lie in its block and the blocks around it (from the
-// block's neighbour cache).
-uint refinedCubeType(CubeRef r, uint block) {
-    // The blocks at offsets -1..1 the window reaches (index (x+1) + 3 (y+1) + 9 (z+1)); NO_BLOCK elsewhere.
-    uint around[27];
-    for (uint i = 0u; i < 27u; ++i) {
-        ivec3 o = ivec3(int(i % 3u), int((i / 3u) % 3u), int(i / 9u)) - 1;
-        bvec3 reach = bvec3(o.x == 0 || (o.x < 0 ? r.cube.x == 0u : r.cube.x >= BLOCK_SIDE - 2u),
-                            o.y == 0 || (o.y < 0 ? r.cube.y == 0u : r.cube.y >= BLOCK_SIDE - 2u),
-                            o.z == 0 || (o.z < 0 ? r.cube.z == 0u : r.cube.z >= BLOCK_SIDE - 2u));
-        around[i] = !all(reach) ? NO_BLOCK : cachedNeighbor(block, o);
-    }
-    // Window corner w at offset (w % 4, w / 4 % 4, w / 16) - 1: its sign and whether it is observed.
-    bool inside[64], seen[64];
-    float dCube[8] = float[8](0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
-    for (uint w = 0u; w < 64u; ++w) {
-        ivec3 g = ivec3(r.cube) + ivec3(int(w % 4u), int((w / 4u) % 4u), int(w / 16u)) - 1;   // in [-1, 9]
+// Whether the corner `local` of `block` (a dirty block) is inside for meshing, with refinement on. A pure function
+// of the signs and observed states of the 3x3x3 corners around it and of its own |d| < refineEpsilon, the same as
+// refinedCornerInside() in src/core/refinement.cpp: computed once per corner by decide_mesh_signs and stored,
+// so every cube sharing the corner builds with the same sign (no cracks). The window's blocks come from the
+// block's neighbour cache.
+bool cornerMeshInside(uint block, uint local) {
+    uvec3 l = cubeOfLocal(local);
+    uint v = voxelIndex(block, l);
+    float d = voxelSdf[v];
+    bool inside = d < 0.0;
+    // Far from the surface, or not observed (then a cube around it is not, and it cannot flip): the raw sign.
+    if (!(abs(d) < params.refineEpsilon) || voxelWeight[v] < params.minMeshWeight) return inside;
+    // Window corner w at offset (w % 3, w / 3 % 3, w / 9) - 1: its sign. The 8 cubes around the corner are
+    // decided only when all 27 corners (exactly their corners) are observed: at the rim of the observed
+    // surface a flip would move the rim.
+    bool windowInside[27];
+    for (uint w = 0u; w < 27u; ++w) {
+        ivec3 g = ivec3(l) + ivec3(int(w % 3u), int((w / 3u) % 3u), int(w / 9u)) - 1;   // in [-1, 8]
         ivec3 o = ivec3(greaterThanEqual(g, ivec3(BLOCK_SIDE))) - ivec3(lessThan(g, ivec3(0)));
-        uint nb = around[(o.x + 1) + 3 * (o.y + 1) + 9 * (o.z + 1)];
-        inside[w] = false;
-        seen[w] = nb != NO_BLOCK;
-        if (!seen[w]) continue;
-        uint v = voxelIndex(nb, uvec3(g - o * int(BLOCK_SIDE)));
-        seen[w] = voxelWeight[v] >= params.minMeshWeight;
-        inside[w] = voxelSdf[v] < 0.0;
-        uvec3 c = uvec3(g - ivec3(r.cube));   // a corner of the cube itself: keep its value for the epsilon test
-        if (all(lessThan(c, uvec3(2u)))) dCube[c.x | (c.y << 1) | (c.z << 2)] = voxelSdf[v];
+        uint nb = o == ivec3(0) ? block : cachedNeighbor(block, o);
+        if (nb == NO_BLOCK) return inside;
+        uint u = voxelIndex(nb, uvec3(g - o * int(BLOCK_SIDE)));
+        if (voxelWeight[u] < params.minMeshWeight) return inside;
+        windowInside[w] = voxelSdf[u] < 0.0;
     }
-    // Raw types of the 27 cubes with corner 0 at offsets -1..1 (index i + 3 j + 9 k), -1 if one corner is unobserved.
-    int raw[27];
-    for (uint q = 0u; q < 27u; ++q) {
-        uvec3 base = uvec3(q % 3u, (q / 3u) % 3u, q / 9u);   // window offset + 1 of the cube's corner 0
+    // Cube o (corner 0 at the corner minus o, so the corner is its corner o), typed from raw signs: flip when
+    // that strictly lowers their summed distance to the good types (a tie keeps the raw sign).
+    int keep = 0, flip = 0;
+    for (uint o = 0u; o < 8u; ++o) {
+        uvec3 base = uvec3(1u) - cornerOffset(o);
         uint t = 0u;
-        bool all8 = true;
         for (uint c = 0u; c < 8u; ++c) {
             uvec3 p = base + cornerOffset(c);
-            uint w = p.x + 4u * (p.y + 4u * p.z);
-            all8 = all8 && seen[w];
-            if (inside[w]) t |= 1u << c;
+            if (windowInside[p.x + 3u * p.y + 9u * p.z]) t |= 1u << c;
         }
-        raw[q] = all8 ? int(t) : -1;
+        keep += regularDistance(t);
+        flip += regularDistance(t ^ (1u << o));
     }
-    if (raw[13] < 0) return 0u;
-    uint type = 0u;
-    for (uint c = 0u; c < 8u; ++c) {
-        uvec3 p = cornerOffset(c);
-        bool meshInside = ((uint(raw[13]) >> c) & 1u) != 0u;
-        if (abs(dCube[c]) < params.refineEpsilon) {
-            // The 8 cubes around the corner (corner 0 at p - o; the corner is their corner o): flip when that
-            // strictly lowers their summed distance to the good types. Decided only with all 8 observed: at the
-            // rim of the observed surface a flip would move the rim.
-            int keep = 0, flip = 0;
-            bool all8 = true;
-            for (uint o = 0u; o < 8u; ++o) {
-                uvec3 q = p + uvec3(1u) - cornerOffset(o);
-                int t = raw[q.x + 3u * q.y + 9u * q.z];
-                all8 = all8 && t >= 0;
-                keep += regularDistance(uint(max(t, 0)));
-                flip += regularDistance(uint(max(t, 0)) ^ (1u << o));
-            }
-            if (all8 && flip < keep) meshInside = !meshInside;
-        }
-        if (meshInside) type |= 1u << c;
-    }
-    return type;
+    return flip < keep ? !inside : inside;
 }
 
-// The type a listed cube is built with: its MC type t (from loadCube), or with refinement the refined type.
-uint meshType(CubeRef r, uint block, uint t) {
-    return !volumeRefines() ? t : refinedCubeType(r, block);
+// The type a listed cube is built with: its MC type t (from loadCube, 0 unless observed), or with refinement
+// the MC type of its corners' stored meshing signs (decide_mesh_signs), 0 unless observed.
+uint meshType(CubeRef r, uint t, bool observed) {
+    if (!volumeRefines()) return t;
+    if (!observed) return 0u;
+    uint type = 0u;
+    for (uint c = 0u; c < 8u; ++c) {
+        uvec3 local;
+        uint nb = blockHolding(r, r.cube + cornerOffset(c), local);
+        if (meshSignInside(nb, localOfCube(local))) type |= 1u << c;
+    }
+    return type;
 }
 #endif

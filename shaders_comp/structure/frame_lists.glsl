@@ -2,7 +2,8 @@
 // touched, the live-block list of whole-volume passes, the dirty blocks (deduplicated with per-block mesh
 // stamps), the retype masks and list of cubes to re-mesh, the vertices that may have lost their last
 // triangle (GC candidates) and the chunks released this frame, the vertices to move this mesh pass, and
-// the dirty blocks' neighbour blocks. Their lengths are in Counters.
+// the dirty blocks' neighbour blocks, and with refinement each corner's sign for meshing. Their lengths are in
+// Counters.
 #ifndef VKMESH_FRAME_LISTS_GLSL
 #define VKMESH_FRAME_LISTS_GLSL
 #include "structure/frame.glsl"
@@ -16,11 +17,21 @@ layout(std430, set = 0, binding = BINDING_RETYPE_LIST) buffer RetypeList { uint 
 layout(std430, set = 0, binding = BINDING_GARBAGE) buffer Garbage { uint garbage[]; };
 layout(std430, set = 0, binding = BINDING_MOVED_VERTICES) buffer MovedVertices { uint movedVertices[]; };
 // Per block, NEIGHBORS_PER_BLOCK entries: the block index at each offset in {-1, 0, 1}^3 from it (NO_BLOCK when
-// not allocated), written by collect_retype for every dirty block, and so valid for a block whose mesh stamp
+// not allocated), written by cache_neighbors for every dirty block, and so valid for a block whose mesh stamp
 // is this frame's number (the hash does not change during the mesh passes). The mesh passes read a cube's
 // neighbour blocks here instead of probing the hash up to 7 times per cube (26 with refinement; cubeRef,
 // cube_access.glsl), and their pipelines need no hash buffers.
 layout(std430, set = 0, binding = BINDING_BLOCK_NEIGHBORS) buffer BlockNeighbors { uint blockNeighbors[]; };
+
+// With refinement (docs/REFINEMENT.md), per block MASK_WORDS words: bit `local` set when the corner is inside for
+// meshing. decide_mesh_signs keeps them (for every corner of the dirty blocks, before the retype list is
+// collected); claim and triangulate type a cube from its 8 corners' bits. Persistent: a corner's bit only
+// changes when the TSDF within one corner of it does, and such corners lie in dirty blocks.
+layout(std430, set = 0, binding = BINDING_MESH_SIGNS) coherent buffer MeshSigns { uint meshSigns[]; };
+
+bool meshSignInside(uint block, uint local) {
+    return ((meshSigns[block * MASK_WORDS + local / 32u] >> (local % 32u)) & 1u) != 0u;
+}
 
 uint neighborIndex(ivec3 offset) { return uint((offset.x + 1) + 3 * (offset.y + 1) + 9 * (offset.z + 1)); }
 uint cachedNeighbor(uint block, ivec3 offset) { return blockNeighbors[block * NEIGHBORS_PER_BLOCK + neighborIndex(offset)]; }

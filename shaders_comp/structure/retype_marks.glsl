@@ -2,40 +2,15 @@
 // change MC type: their bits are set in their block's retype mask, and the mesh passes retype only those
 // cubes (docs/MESH.md). Cubes at -x/-y/-z of the block's low faces belong to the blocks behind, looked up
 // here, per corner: few corners flip, and a workgroup-wide table would cost a barrier (expensive on
-// lavapipe). Used by fusion and by block recycling (which zeroes or decays weights).
+// lavapipe). Used by fusion and by block recycling (which zeroes or decays weights). With refinement, the
+// cubes whose type changes with a corner's meshing sign are marked by decide_mesh_signs.
 #ifndef VKMESH_RETYPE_MARKS_GLSL
 #define VKMESH_RETYPE_MARKS_GLSL
 #include "structure/block_hash.glsl"
 #include "structure/block_store.glsl"
 #include "structure/frame_lists.glsl"
 
-// With refinement on (docs/REFINEMENT.md) a corner's meshing sign depends on the signs of the 3x3x3 corners
-// around it, so a corner that flips can change the type of the 64 cubes with corner 0 at offsets -2..1 from it:
-// all of those are marked (they lie in the block and its 26 neighbours).
-void markCornerRetypeRefined(uint block, uint local) {
-    uvec3 l = uvec3(local % BLOCK_SIDE, (local / BLOCK_SIDE) % BLOCK_SIDE, local / (BLOCK_SIDE * BLOCK_SIDE));
-    ivec3 coord = blockCoords[block].xyz;
-    uint cached = block;        // the last block looked up, and its offset: runs of cubes share a block
-    ivec3 cachedOffset = ivec3(0);
-    for (uint o = 0u; o < 64u; ++o) {
-        ivec3 g = ivec3(l) + ivec3(int(o % 4u), int((o / 4u) % 4u), int(o / 16u)) - 2;   // in [-2, 8]
-        ivec3 off = ivec3(greaterThanEqual(g, ivec3(BLOCK_SIDE))) - ivec3(lessThan(g, ivec3(0)));
-        if (off != cachedOffset) {
-            cachedOffset = off;
-            cached = off == ivec3(0) ? block : findBlock(coord + off);
-        }
-        if (cached == NO_BLOCK) continue;
-        uvec3 c = uvec3(g - off * int(BLOCK_SIDE));
-        uint cube = (c.z * BLOCK_SIDE + c.y) * BLOCK_SIDE + c.x;
-        atomicOr(retypeMask[cached * MASK_WORDS + cube / 32u], 1u << (cube % 32u));
-    }
-}
-
 void markCornerRetype(uint block, uint local) {
-    if (volumeRefines()) {
-        markCornerRetypeRefined(block, local);
-        return;
-    }
     uvec3 l = uvec3(local % BLOCK_SIDE, (local / BLOCK_SIDE) % BLOCK_SIDE, local / (BLOCK_SIDE * BLOCK_SIDE));
     for (uint o = 0u; o < 8u; ++o) {
         uvec3 off = uvec3(o & 1u, (o >> 1) & 1u, (o >> 2) & 1u);

@@ -30,7 +30,7 @@ void retype(uint id) {
     bool observed;
     uint state = cubeState[id];
     uint oldType = state & CUBE_TYPE_MASK;
-    uint type = meshType(r, id / VOXELS_PER_BLOCK, loadCube(r, d, present, observed));
+    uint type = meshType(r, loadCube(r, d, present, observed), observed);
     if (type == oldType && (state & CUBE_INCOMPLETE) == 0u) return;
     ++retyped;
     uint chunk = state >> CUBE_CHUNK_SHIFT;   // chunk index + 1, 0 = none

@@ -52,44 +52,41 @@ int regularDistance(int t) {
     return best;
 }
 
+bool refinedCornerInside(const float d[kCornerWindowSize], const bool observed[kCornerWindowSize], float epsilon) {
+    const int self = cornerWindowIndex(0, 0, 0);
+    const bool inside = d[self] < 0.0f;
+    if (!(std::fabs(d[self]) < epsilon)) return inside;
+    // Decided only with the 8 cubes around the corner observed (their corners are exactly the window): at the
+    // rim of the observed surface a flip would move the rim.
+    for (int w = 0; w < kCornerWindowSize; ++w)
+        if (!observed[w]) return inside;
+    // Cube o has its corner 0 at the corner minus o, so the corner is its corner o.
+    int keep = 0, flip = 0;
+    for (int o = 0; o < 8; ++o) {
+        int t = 0;
+        for (int c = 0; c < 8; ++c) {
+            const int w = cornerWindowIndex((c & 1) - (o & 1), ((c >> 1) & 1) - ((o >> 1) & 1), ((c >> 2) & 1) - ((o >> 2) & 1));
+            if (d[w] < 0.0f) t |= 1 << c;
+        }
+        keep += regularDistance(t);
+        flip += regularDistance(t ^ (1 << o));
+    }
+    return flip < keep ? !inside : inside;  // strictly: a tie keeps the raw sign
+}
+
 int refinedCubeType(const float d[kWindowSize], const bool observed[kWindowSize], float epsilon) {
-    // Raw types of the 27 cubes whose corner 0 lies at window offsets -1..1 (index i + 3 j + 9 k), -1 when a
-    // corner is unobserved (such a cube has no surface whatever its signs).
-    int raw[27];
-    for (int k = 0; k < 3; ++k)
-        for (int j = 0; j < 3; ++j)
-            for (int i = 0; i < 3; ++i) {
-                int t = 0;
-                bool seen = true;
-                for (int c = 0; c < 8; ++c) {
-                    const int w = windowIndex(i - 1 + (c & 1), j - 1 + ((c >> 1) & 1), k - 1 + ((c >> 2) & 1));
-                    seen = seen && observed[w];
-                    if (d[w] < 0.0f) t |= 1 << c;
-                }
-                raw[i + 3 * j + 9 * k] = seen ? t : -1;
-            }
-    if (raw[13] < 0) return 0;  // the cube itself is not observed
+    for (int c = 0; c < 8; ++c)
+        if (!observed[windowIndex(c & 1, (c >> 1) & 1, (c >> 2) & 1)]) return 0;
     int type = 0;
     for (int c = 0; c < 8; ++c) {
-        const int x = c & 1, y = (c >> 1) & 1, z = (c >> 2) & 1;
-        bool inside = (raw[13] >> c) & 1;
-        if (std::fabs(d[windowIndex(x, y, z)]) < epsilon) {
-            // The 8 cubes around the corner: corner 0 at (x, y, z) - o, the corner is their corner o.
-            // Decided only with all 8 observed: at the rim of the observed surface a flip would move the rim.
-            int keep = 0, flip = 0;
-            bool all8 = true;
-            for (int o = 0; o < 8; ++o) {
-                const int t = raw[(x - (o & 1) + 1) + 3 * (y - ((o >> 1) & 1) + 1) + 9 * (z - ((o >> 2) & 1) + 1)];
-                if (t < 0) {
-                    all8 = false;
-                    break;
-                }
-                keep += regularDistance(t);
-                flip += regularDistance(t ^ (1 << o));
-            }
-            if (all8 && flip < keep) inside = !inside;
+        float window[kCornerWindowSize];
+        bool seen[kCornerWindowSize];
+        for (int w = 0; w < kCornerWindowSize; ++w) {
+            const int x = (c & 1) + w % 3 - 1, y = ((c >> 1) & 1) + (w / 3) % 3 - 1, z = ((c >> 2) & 1) + w / 9 - 1;
+            window[w] = d[windowIndex(x, y, z)];
+            seen[w] = observed[windowIndex(x, y, z)];
         }
-        if (inside) type |= 1 << c;
+        if (refinedCornerInside(window, seen, epsilon)) type |= 1 << c;
     }
     return type;
 }

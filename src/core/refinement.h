@@ -42,17 +42,25 @@ namespace vkmesh {
 // Hamming distance from type t to the nearest "good" type: 0, 255 or one of kRegularTypes (0 for those).
 int regularDistance(int t);
 
+// The sign of a corner for meshing, with refinement on (epsilon in metres), from the 3x3x3 corners around it:
+// index cornerWindowIndex(x, y, z) with x, y, z in [-1, 1], the corner itself at (0, 0, 0). observed: the
+// corner's block exists and its weight is at least minMeshWeight; d: its TSDF value (anything when not
+// observed). The corner is inside iff d < 0, except that an observed corner with |d| < epsilon whose 27-corner
+// window is all observed (the 8 cubes around it are) flips when that strictly lowers the sum of
+// regularDistance() over those 8 cubes, each typed from the raw signs of its corners. Only signs and the one
+// |d| < epsilon test enter: integer arithmetic, exact. The GPU computes it once per corner
+// (cornerMeshInside, shaders_comp/structure/cube_access.glsl) and stores it.
+inline constexpr int kCornerWindowSize = 27;
+constexpr int cornerWindowIndex(int x, int y, int z) { return (x + 1) + 3 * ((y + 1) + 3 * (z + 1)); }
+bool refinedCornerInside(const float d[kCornerWindowSize], const bool observed[kCornerWindowSize], float epsilon);
+
 // A 4x4x4 window of corners around a cube: offsets -1..2 on each axis from the cube's corner 0, index
-// windowIndex(x, y, z) with x, y, z in [-1, 2]. observed: the corner's block exists and its weight is at
-// least minMeshWeight; d: its TSDF value (anything when not observed).
+// windowIndex(x, y, z) with x, y, z in [-1, 2].
 inline constexpr int kWindowSide = 4, kWindowSize = 64;
 constexpr int windowIndex(int x, int y, int z) { return (x + 1) + kWindowSide * ((y + 1) + kWindowSide * (z + 1)); }
 
-// The type MC builds for the cube at window offset (0, 0, 0), with refinement on (epsilon in metres):
-// 0 unless its 8 corners are observed; bit i set iff corner i is inside *for meshing*. A corner is inside
-// for meshing iff d < 0, except that an observed corner with |d| < epsilon flips when that strictly lowers
-// the sum of regularDistance() over the 8 cubes around it (each typed from the raw signs of its corners,
-// 0 if one is unobserved). Only signs and that one |d| < epsilon test enter: integer arithmetic, exact.
+// The type MC builds for the cube at window offset (0, 0, 0), with refinement on: 0 unless its 8 corners are
+// observed; bit i set iff refinedCornerInside() of corner i (whose 3x3x3 window lies in the cube's 4x4x4).
 int refinedCubeType(const float d[kWindowSize], const bool observed[kWindowSize], float epsilon);
 
 }  // namespace vkmesh

@@ -60,16 +60,12 @@ uint32_t fuseBlock(ReferenceBlock& block, const BlockCoord& c, const DepthImage&
 }
 
 std::map<BlockCoord, CubeMask> cubesAroundCorners(const std::vector<std::array<int, 3>>& flipped,
-                                                  const std::map<BlockCoord, ReferenceBlock>& blocks, bool refine) {
+                                                  const std::map<BlockCoord, ReferenceBlock>& blocks) {
     std::map<BlockCoord, CubeMask> cubes;
     const int side = int(BLOCK_SIDE);
-    // Without refinement the 8 cubes around the corner (corner - o, o in {0,1}^3); with it the 64 cubes whose
-    // refined type reads the corner's sign (corner - o, o in {-1..2}^3, markCornerRetypeRefined).
-    const int lo = refine ? -1 : 0, hi = refine ? 2 : 1;
     for (const auto& g : flipped) {
-        for (int o = 0; o < 64; ++o) {
-            const std::array<int, 3> off{lo + o % 4, lo + (o / 4) % 4, lo + o / 16};
-            if (off[0] > hi || off[1] > hi || off[2] > hi) continue;
+        for (int o = 0; o < 8; ++o) {
+            const std::array<int, 3> off{o & 1, (o >> 1) & 1, (o >> 2) & 1};
             const int x = g[0] - off[0], y = g[1] - off[1], z = g[2] - off[2];
             const BlockCoord b{blockOf(x), blockOf(y), blockOf(z)};
             if (!blocks.count(b)) continue;

@@ -18,6 +18,7 @@ struct FusionRule {
     float voxelSize = 0.0f, truncation = 0.0f, maxWeight = 0.0f;
     float minMeshWeight = 1.0f;   // a corner is observed (meshable) from this weight on
     bool refine = false;          // with mesh refinement, a corner crossing |sdf| < refineEpsilon also flips
+                                  // (its meshing sign may change: the mesher re-decides it)
     float refineEpsilon = 0.0f;
     ColorFusion colorFusion = ColorFusion::Average;
     float colorRecency = 0.2f;
@@ -37,10 +38,11 @@ bool cornerFlipped(float oldSdf, float oldWeight, float newSdf, float newWeight,
 uint32_t fuseBlock(ReferenceBlock& block, const BlockCoord& coord, const DepthImage& depth, const gpu::FramePush& push,
                    const FusionRule& rule, std::vector<std::array<int, 3>>* flipped, const ColorImage* color = nullptr);
 
-// For every flipped corner (global voxel coordinates), the 8 cubes around it (corner - o, o in {0,1}^3; with
-// refine, the 64 cubes corner - o, o in {-1..2}^3, whose refined type reads its sign: docs/REFINEMENT.md) in
-// whatever block they lie, for the blocks in `blocks`: the cubes whose MC (or refined) type may have changed.
+// For every flipped corner (global voxel coordinates), the 8 cubes around it (corner - o, o in {0,1}^3) in
+// whatever block they lie, for the blocks in `blocks`: the cubes whose MC type may have changed. (With
+// refinement, the corners of these cubes are the ones whose meshing sign may have changed, which the mesher
+// re-decides: docs/REFINEMENT.md.)
 std::map<BlockCoord, CubeMask> cubesAroundCorners(const std::vector<std::array<int, 3>>& flipped,
-                                                  const std::map<BlockCoord, ReferenceBlock>& blocks, bool refine = false);
+                                                  const std::map<BlockCoord, ReferenceBlock>& blocks);
 
 }  // namespace vkmesh::cpu

@@ -32,8 +32,9 @@ std::vector<ReferenceMesher::DirtyBlock> ReferenceMesher::markDirty(const Refere
     stats.dirtyBlocks = uint32_t(dirty.size());
 
     // The cubes to re-evaluate (the GPU's retype list): all of D, or the cubes around the corners the last
-    // integrate() flipped and the INCOMPLETE cubes (the GPU sets their retype bit again). The other cubes of D
-    // keep their type: without a flipped corner neither their MC type nor their refined type can change.
+    // integrate() flipped, with refinement those around the corners whose meshing sign changed, and the
+    // INCOMPLETE cubes (the GPU sets their retype bit again). The other cubes of D keep their type: with none of
+    // their corners changed neither their MC type nor their refined type can change.
     for (DirtyBlock& b : dirty) {
         if (scope == RetypeScope::AllCubes) {
             b.retype.set();
@@ -43,9 +44,51 @@ std::vector<ReferenceMesher::DirtyBlock> ReferenceMesher::markDirty(const Refere
             for (uint32_t cube = 0; cube < VOXELS_PER_BLOCK; ++cube)
                 if (b.state->cubeState[cube] & gpu::CUBE_INCOMPLETE) b.retype.set(cube);
         }
-        stats.cubesListed += uint32_t(b.retype.count());
     }
+    if (options_.refine) decideMeshSigns(volume, dirty);
+    for (const DirtyBlock& b : dirty) stats.cubesListed += uint32_t(b.retype.count());
     return dirty;
+}
+
+// decide_mesh_signs.comp: every corner of D gets refinedCornerInside() of its 3x3x3 window; where that differs
+// from the stored sign, the sign is stored and the 8 cubes around the corner (corner - o, o in {0,1}^3) are
+// listed. Those lie in D: a sign only changes with the TSDF within one corner of it, D holds every block
+// within one block of a touched one, and every block is in D the frame it is created. (A mark outside D, which
+// would need a sign decided before its window's last change, the GPU keeps for a later frame; here it has
+// none to keep.)
+void ReferenceMesher::decideMeshSigns(const ReferenceVolume& volume, std::vector<DirtyBlock>& dirty) const {
+    const int side = int(gpu::BLOCK_SIDE);
+    std::map<BlockCoord, DirtyBlock*> byCoord;
+    for (DirtyBlock& b : dirty) byCoord[b.coord] = &b;
+    auto corner = [&](int x, int y, int z, float& d, bool& observed) {
+        const BlockCoord c{blockOf(x), blockOf(y), blockOf(z)};
+        auto it = volume.blocks().find(c);
+        d = 0.0f;
+        observed = false;
+        if (it == volume.blocks().end()) return;
+        const uint32_t v = localIndex(x - c[0] * side, y - c[1] * side, z - c[2] * side);
+        d = it->second.sdf[v];
+        observed = it->second.weight[v] >= minMeshWeight_;
+    };
+    for (DirtyBlock& b : dirty) {
+        for (uint32_t local = 0; local < VOXELS_PER_BLOCK; ++local) {
+            const auto l = localCoords(local);
+            const int g[3] = {b.coord[0] * side + int(l[0]), b.coord[1] * side + int(l[1]), b.coord[2] * side + int(l[2])};
+            float d[kCornerWindowSize];
+            bool observed[kCornerWindowSize];
+            for (int w = 0; w < kCornerWindowSize; ++w) corner(g[0] + w % 3 - 1, g[1] + (w / 3) % 3 - 1, g[2] + w / 9 - 1, d[w], observed[w]);
+            const bool inside = refinedCornerInside(d, observed, refineEpsilon_);
+            if (inside == b.state->meshInside.test(local)) continue;
+            b.state->meshInside.flip(local);
+            for (int o = 0; o < 8; ++o) {
+                const int x = g[0] - (o & 1), y = g[1] - ((o >> 1) & 1), z = g[2] - ((o >> 2) & 1);
+                auto it = byCoord.find(BlockCoord{blockOf(x), blockOf(y), blockOf(z)});
+                if (it == byCoord.end()) continue;
+                const BlockCoord& c = it->first;
+                it->second->retype.set(localIndex(x - c[0] * side, y - c[1] * side, z - c[2] * side));
+            }
+        }
+    }
 }
 
 // New type of every listed cube: t = MC type of its corners if all 8 exist with weight >= minMeshWeight,

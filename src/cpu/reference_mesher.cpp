@@ -36,6 +36,9 @@ ReferenceMesher::ReferenceMesher(const VolumeParams& params, float minMeshWeight
 }
 
 void ReferenceMesher::createBlockStates(const ReferenceVolume& volume) {
+    // A block the volume freed (recycling) has no meshing signs left: all outside, as recycle_free leaves them.
+    for (auto& [coord, state] : blocks_)
+        if (!volume.blocks().count(coord)) state.meshInside.reset();
     for (const auto& [coord, block] : volume.blocks()) {
         auto [it, inserted] = blocks_.try_emplace(coord);
         if (!inserted) continue;

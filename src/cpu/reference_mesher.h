@@ -56,6 +56,8 @@ struct BlockMeshState {
     // Per cube and axis (index cube * 3 + axis): the vertex on the edge leaving the cube's corner 0 along that
     // axis, or EMPTY_SLOT.
     std::array<uint32_t, gpu::VOXELS_PER_BLOCK * 3> edgeVertex{};
+    // With refinement, per corner: inside for meshing (refinedCornerInside), as last decided; the GPU's mesh signs.
+    CubeMask meshInside;
     BlockCoord coord{};
     uint32_t index = 0;  // creation order: the block number in global edge ids (block * 512 + cube) * 3 + axis
 };
@@ -73,7 +75,8 @@ struct MesherOptions {
 // Which cubes of D one update() re-evaluates (claim + triangulate).
 enum class RetypeScope {
     // The GPU's rule: the cubes of volume.retypeCubes() (the 8 cubes around every corner the last integrate()
-    // flipped) and the INCOMPLETE cubes of D. Requires update() after every integrate().
+    // flipped), with refinement the 8 cubes around every corner whose meshing sign changed, and the INCOMPLETE
+    // cubes of D. Requires update() after every integrate().
     FlippedCorners,
     // Every cube of D (a from-scratch rebuild: updateAll()).
     AllCubes,
@@ -134,6 +137,8 @@ private:
     // Dirty marking (reference_mesh_dirty.cpp): D, the cubes to re-evaluate and their new types.
     std::vector<DirtyBlock> markDirty(const ReferenceVolume& volume, const std::vector<BlockCoord>& touched,
                                       RetypeScope scope, MeshFrameStats& stats);
+    // With refinement: re-decides every corner of D's meshing sign and marks the 8 cubes around each that changed.
+    void decideMeshSigns(const ReferenceVolume& volume, std::vector<DirtyBlock>& dirty) const;
     void chooseTypes(const ReferenceVolume& volume, std::vector<DirtyBlock>& dirty) const;
     // Claim (reference_mesh_claim.cpp).
     void claimVertices(std::vector<DirtyBlock>& dirty, MeshFrameStats& stats, uint32_t frameNumber);

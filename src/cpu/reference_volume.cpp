@@ -73,7 +73,7 @@ ReferenceFrameStats ReferenceVolume::integrate(const DepthImage& depth, const In
     }
 
     // 4. The cubes around every flipped corner, in the blocks that exist now.
-    retypeCubes_ = cubesAroundCorners(lastFlipped_, blocks_, refine_);
+    retypeCubes_ = cubesAroundCorners(lastFlipped_, blocks_);
     return stats;
 }
 

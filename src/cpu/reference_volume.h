@@ -84,7 +84,7 @@ public:
     // (A block allocated this frame starts at sdf 0, weight 0.)
     const std::vector<std::array<int, 3>>& lastFlipped() const { return lastFlipped_; }
 
-    // The cubes whose MC (or refined) type may have changed in the last integrate() call: for every flipped
+    // The cubes whose MC type may have changed in the last integrate() call: for every flipped
     // corner, the 8 cubes around it (corner - o, o in {0,1}^3), in whatever block they lie, for the blocks that
     // exist after that call. Every such block is a dirty block of the frame (touched, or touched - o).
     const std::map<BlockCoord, CubeMask>& retypeCubes() const { return retypeCubes_; }

@@ -5,11 +5,31 @@
 namespace vkmesh::gpu {
 
 RetypeStage::RetypeStage(const vk::Context& context, const vk::BindingTable& table)
-    : plan_(context, table, "plan_mesh"), collect_(context, table, "collect_retype"), planRetype_(context, table, "plan_retype") {}
+    : refines_((table.features() & VOLUME_FEATURE_REFINE) != 0),
+      plan_(context, table, "plan_mesh"),
+      cacheNeighbors_(context, table, "cache_neighbors"),
+      listSignCorners_(context, table, "list_sign_corners"),
+      planSignCorners_(context, table, "plan_sign_corners"),
+      decideSigns_(context, table, "decide_mesh_signs"),
+      collect_(context, table, "collect_retype"),
+      planRetype_(context, table, "plan_retype") {}
 
-void RetypeStage::record(VkCommandBuffer cmd, const FramePush& push, const CounterBuffer& counters) const {
+void RetypeStage::recordMeshSigns(VkCommandBuffer cmd, const FramePush& push, const CounterBuffer& counters) const {
     plan_.dispatch(cmd, &push, 1);
     vk::memoryBarrier(cmd);
+    cacheNeighbors_.dispatchIndirect(cmd, &push, counters.buffer(), offsetof(Counters, collectDispatch));
+    vk::memoryBarrier(cmd);
+    if (!refines_) return;
+    listSignCorners_.dispatchIndirect(cmd, &push, counters.buffer(), offsetof(Counters, collectDispatch));
+    vk::memoryBarrier(cmd);
+    planSignCorners_.dispatch(cmd, &push, 1);
+    vk::memoryBarrier(cmd);
+    decideSigns_.dispatchIndirect(cmd, &push, counters.buffer(), offsetof(Counters, vertexDispatch));
+    vk::memoryBarrier(cmd);
+}
+
+void RetypeStage::record(VkCommandBuffer cmd, const FramePush& push, const CounterBuffer& counters) const {
+    recordMeshSigns(cmd, push, counters);
     collect_.dispatchIndirect(cmd, &push, counters.buffer(), offsetof(Counters, collectDispatch));
     vk::memoryBarrier(cmd);
     planRetype_.dispatch(cmd, &push, 1);

@@ -8,7 +8,9 @@
 //   retype list  the cubes of this pass (collect_retype -> claim, triangulate);
 //   garbage      GC candidate vertices and released chunks (claim, triangulate -> mesh_gc);
 //   moved        the vertices whose edges' corners may have changed (list_*_vertices -> move_vertices);
-//   neighbours   each dirty block's 26 neighbour blocks (collect_retype -> the mesh passes' cubeRef).
+//   neighbours   each dirty block's 26 neighbour blocks (cache_neighbors -> the mesh passes' cubeRef);
+//   mesh signs   with refinement, one bit per corner: inside for meshing (decide_mesh_signs -> claim,
+//                triangulate); persistent, and derived from the TSDF alone (docs/REFINEMENT.md).
 #pragma once
 
 #include "core/map_format.h"
@@ -31,10 +33,11 @@ public:
 
     const FrameListCapacities& capacities() const { return capacities_; }
     const vk::Buffer& retypeMasks() const { return retypeMask_; }
-    // Clears the stamps and masks (a new or reset mesh).
+    const vk::Buffer& meshSigns() const { return meshSigns_; }
+    // Clears the stamps, masks and mesh signs (a new or reset mesh).
     void recordReset(VkCommandBuffer cmd) const;
     // Between frames: lists for larger capacities (never smaller). The persistent parts (mesh stamps,
-    // retype masks) keep their contents; the rest only ever holds the current frame's entries.
+    // retype masks, mesh signs) keep their contents; the rest only ever holds the current frame's entries.
     void grow(const FrameListCapacities& capacities);
     // Map files: the live blocks' retype masks (the only persistent list besides the mesh stamps, which
     // only ever compare equal to the current frame number and so need not be kept).
@@ -43,14 +46,14 @@ public:
     // The live block list (blockList), as collect_blocks would write it: what the hash re-insertion reads.
     void uploadBlockList(const std::vector<uint32_t>& blocks);
     void pools(std::vector<PoolInfo>& out) const {
-        listPools(out, {&touched_, &blockList_, &meshStamps_, &dirtyList_, &retypeMask_, &retypeList_, &garbage_, &moved_, &neighbors_});
+        listPools(out, {&touched_, &blockList_, &meshStamps_, &dirtyList_, &retypeMask_, &retypeList_, &garbage_, &moved_, &neighbors_, &meshSigns_});
     }
 
 private:
     const vk::Context& context_;
     const vk::BindingTable& table_;
     FrameListCapacities capacities_;
-    vk::Buffer touched_, blockList_, meshStamps_, dirtyList_, retypeMask_, retypeList_, garbage_, moved_, neighbors_;
+    vk::Buffer touched_, blockList_, meshStamps_, dirtyList_, retypeMask_, retypeList_, garbage_, moved_, neighbors_, meshSigns_;
 };
 
 }  // namespace vkmesh::gpu

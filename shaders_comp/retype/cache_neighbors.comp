@@ -1,0 +1,22 @@
+#version 460
+// Incremental mesh: caches each dirty block's 26 neighbour blocks (blockNeighbors, frame_lists.glsl) for the
+// passes that follow, so that they read a neighbour instead of probing the hash. MASK_WORDS invocations per
+// dirty block (the dispatch of collect_retype), each writing entries n, n + MASK_WORDS.
+#extension GL_GOOGLE_include_directive : require
+#include "structure/frame.glsl"
+#include "structure/frame_lists.glsl"
+#include "structure/block_hash.glsl"
+#include "structure/block_store.glsl"
+
+layout(local_size_x = WG_LIST) in;
+
+void main() {
+    uint i = gl_GlobalInvocationID.x;
+    if (i >= counters.dirtyCount * MASK_WORDS) return;
+    uint block = dirtyList[i / MASK_WORDS];
+    ivec3 coord = blockCoords[block].xyz;
+    for (uint n = i % MASK_WORDS; n < NEIGHBORS_PER_BLOCK; n += MASK_WORDS) {
+        ivec3 offset = ivec3(int(n % 3u), int((n / 3u) % 3u), int(n / 9u)) - 1;
+        blockNeighbors[block * NEIGHBORS_PER_BLOCK + n] = offset == ivec3(0) ? block : findBlock(coord + offset);
+    }
+}
