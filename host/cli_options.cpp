@@ -46,7 +46,7 @@ void VolumeOptions::addTuning(CLI::App* cmd) {
         ->check(CLI::IsMember({"incremental", "baseline"}));
     cmd->add_flag("--refine,!--no-refine", refine,
                   "Hamming-distance refinement of cube types, decided per corner so the mesh has no cracks (paper "
-                  "§V.F, docs/REFINEMENT.md; off by default: it costs meshing time and removes few irregular types)");
+                  "§V.F, docs/REFINEMENT.md; on by default, --no-refine turns it off)");
     cmd->add_option("--refine-eps", refineEps, "refinement: corners within this many voxels of the surface may flip")
         ->check(CLI::Range(0.0f, 1.0f));
     cmd->add_flag("--lock-free", lockFree, "claim edge vertices in 4 parity-class passes without atomics (paper's lock-free)");

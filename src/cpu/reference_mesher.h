@@ -64,7 +64,7 @@ struct BlockMeshState {
 
 // Options of the mesher beyond its heap sizes (docs/REFINEMENT.md).
 struct MesherOptions {
-    bool refine = false;                 // mesh refinement (paper §V.F, off by default as GpuVolumeConfig's): claim and triangulate use refinedCubeType()
+    bool refine = false;                 // mesh refinement (paper §V.F; GpuVolumeConfig has it on by default): claim and triangulate use refinedCubeType()
     std::optional<float> refineEpsilon;  // metres; default defaultRefineEpsilon(voxelSize) = half a voxel
     // The lock-free claim order (paper §V.C): 4 passes, one per parity class {000,111}, {001,110}, {010,101},
     // {100,011} of the cube's global position (x&1, y&1, z&1). Serially it only changes the order of claims

@@ -66,9 +66,9 @@ struct GpuVolumeConfig {
     uint32_t retypeCapacity = 1u << 20;  // cubes one mesh pass can retype (more wait for the next pass)
     // Hamming-distance refinement of cube types (paper §V.F, docs/REFINEMENT.md). Decided per corner: a corner
     // within refineEpsilonVoxels of the surface may flip its sign for meshing, and every cube sharing it sees
-    // the same sign, so the mesh has no cracks. Off by default: it removes too few irregular types (-12 to
-    // -22 %) for its meshing cost (several times unrefined) and adds slivers (docs/RESULTS.md).
-    bool refine = false;
+    // the same sign, so the mesh has no cracks. On by default (--no-refine turns it off); what it changes and
+    // costs is measured in docs/REFINEMENT.md.
+    bool refine = true;
     float refineEpsilonVoxels = 0.5f;    // corners within this distance of the surface may be flipped
     bool lockFree = false;               // the paper's lock-free claim: 4 parity-class passes, no slot atomics
     uint32_t vertexUpdate = VERTEX_UPDATE_AUTO;   // how vertices are moved (both ways give the same mesh)
