@@ -105,10 +105,11 @@ VKM_CONST BINDING_EDGE_VERTEX_Z = 31u; // ... +z edge
 VKM_CONST BINDING_MOVED_VERTICES = 32u; // uint list of the vertices move_vertices moves this mesh pass
 VKM_CONST BINDING_BLOCK_NEIGHBORS = 33u; // uint per block x 27: the blocks around it (frame_lists.glsl), valid while it is dirty
 VKM_CONST NEIGHBORS_PER_BLOCK = 27u;      // offsets -1..1 per axis, index (x + 1) + 3 (y + 1) + 9 (z + 1)
-VKM_CONST BINDING_MESH_SIGNS = 34u;     // 16 uint per block: each corner's sign for meshing with refinement (frame_lists.glsl)
+VKM_CONST BINDING_MESH_SIGNS = 34u;     // MESH_SIGN_WORDS uint per block: with refinement, corner signs for meshing (frame_lists.glsl)
 VKM_CONST BINDING_COUNT = 35u;
 VKM_CONST MASK_WORDS = 16u;            // VOXELS_PER_BLOCK / 32
 VKM_CONST MASK_ALL_CUBES = 0xFFFFFFFFu; // a retype-mask word with each of its 32 cubes listed
+VKM_CONST MESH_SIGN_WORDS = 32u;       // per block: MASK_WORDS of meshing signs, then MASK_WORDS of corners to re-decide
 
 VKM_CONST EMPTY_SLOT = 0xFFFFFFFFu;    // an edge with no vertex
 VKM_CONST CLAIMED_SLOT = 0xFFFFFFFEu;  // claimed, the winner is allocating (within one dispatch only)

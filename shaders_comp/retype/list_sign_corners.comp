@@ -1,10 +1,11 @@
 #version 460
 // Incremental mesh with refinement (docs/REFINEMENT.md): lists the corners whose meshing sign may have changed,
-// for decide_mesh_signs. A corner's sign reads the 3x3x3 corners around it and its own |d| < epsilon; fusion
-// and recycling mark the 8 cubes around every corner whose sign, observed state or |d| < epsilon changed, and
-// the corners within one of such a corner are exactly the corners of those 8 cubes. So the corners to
-// re-decide are the corners of the marked cubes: a corner is listed when one of the 8 cubes it is a corner of
-// (corner - o, o in {0,1}^3, in its block or the blocks behind) is marked. One invocation per retype-mask
+// for decide_mesh_signs. A corner's sign reads the signs and observed states of the 3x3x3 corners around it
+// and its own |d| < epsilon. Fusion and recycling mark the 8 cubes around every corner whose sign or observed
+// state changed, and the corners within one of such a corner are exactly the corners of those 8 cubes; fusion
+// also flags the corners whose |d| < epsilon changed (nearChangeWord). So a corner is listed when it is
+// flagged, or when one of the 8 cubes it is a corner of (corner - o, o in {0,1}^3, in its block or the
+// blocks behind) is marked; the flags are cleared. One invocation per retype-mask
 // word of the dirty blocks (its 32 corners: 4 rows along x of one z layer); the list is the retype list, free
 // until collect_retype. Corners past its capacity are decided here.
 #extension GL_GOOGLE_include_directive : require
@@ -54,7 +55,7 @@ void main() {
     if (valid) {
         for (uint o = 0u; o < 8u; ++o)
             behind[o] = o == 0u ? block : cachedNeighbor(block, -ivec3(cornerOffset(o)));
-        bits = cornersOfMarkedCubes(word);
+        bits = cornersOfMarkedCubes(word) | atomicExchange(meshSigns[nearChangeWord(block, word * 32u)], 0u);
     }
     // One atomic per subgroup (every invocation gets here: no early return above).
     uint n = bitCount(bits);

@@ -11,7 +11,7 @@ void decideMeshSign(uint block, uint local) {
     bool inside = cornerMeshInside(block, local);
     if (inside == meshSignInside(block, local)) return;
     // Only this invocation decides this corner this pass (each corner is listed once), so a toggle is exact.
-    atomicXor(meshSigns[block * MASK_WORDS + local / 32u], 1u << (local % 32u));
+    atomicXor(meshSigns[meshSignWord(block, local)], 1u << (local % 32u));
     // The cubes corner - o, o in {0,1}^3: in this block, or on the axes where the corner is at 0, in the
     // blocks behind (from the neighbour cache).
     uvec3 l = cubeOfLocal(local);

@@ -23,15 +23,18 @@ layout(std430, set = 0, binding = BINDING_MOVED_VERTICES) buffer MovedVertices {
 // cube_access.glsl), and their pipelines need no hash buffers.
 layout(std430, set = 0, binding = BINDING_BLOCK_NEIGHBORS) buffer BlockNeighbors { uint blockNeighbors[]; };
 
-// With refinement (docs/REFINEMENT.md), per block MASK_WORDS words: bit `local` set when the corner is inside for
-// meshing. decide_mesh_signs keeps them (for every corner of the dirty blocks, before the retype list is
-// collected); claim and triangulate type a cube from its 8 corners' bits. Persistent: a corner's bit only
-// changes when the TSDF within one corner of it does, and such corners lie in dirty blocks.
+// With refinement (docs/REFINEMENT.md), per block MESH_SIGN_WORDS words. The first MASK_WORDS: bit `local` set
+// when the corner is inside for meshing; decide_mesh_signs keeps them (for the corners whose sign may have
+// changed, before the retype list is collected), claim and triangulate type a cube from its 8 corners' bits.
+// Persistent: a corner's bit only changes when the TSDF within one corner of it does. The next MASK_WORDS: the
+// corners whose |d| < epsilon changed in fusion (so their sign may have changed), which list_sign_corners
+// lists and clears.
 layout(std430, set = 0, binding = BINDING_MESH_SIGNS) coherent buffer MeshSigns { uint meshSigns[]; };
 
-bool meshSignInside(uint block, uint local) {
-    return ((meshSigns[block * MASK_WORDS + local / 32u] >> (local % 32u)) & 1u) != 0u;
-}
+uint meshSignWord(uint block, uint local) { return block * MESH_SIGN_WORDS + local / 32u; }
+uint nearChangeWord(uint block, uint local) { return block * MESH_SIGN_WORDS + MASK_WORDS + local / 32u; }
+
+bool meshSignInside(uint block, uint local) { return ((meshSigns[meshSignWord(block, local)] >> (local % 32u)) & 1u) != 0u; }
 
 uint neighborIndex(ivec3 offset) { return uint((offset.x + 1) + 3 * (offset.y + 1) + 9 * (offset.z + 1)); }
 uint cachedNeighbor(uint block, ivec3 offset) { return blockNeighbors[block * NEIGHBORS_PER_BLOCK + neighborIndex(offset)]; }

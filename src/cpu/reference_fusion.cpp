@@ -15,10 +15,7 @@ using gpu::VOXELS_PER_BLOCK;
 
 bool cornerFlipped(float oldSdf, float oldWeight, float newSdf, float newWeight, const FusionRule& rule) {
     const bool wasObserved = oldWeight >= rule.minMeshWeight, isObserved = newWeight >= rule.minMeshWeight;
-    bool flipped = wasObserved != isObserved || (isObserved && (oldSdf < 0.0f) != (newSdf < 0.0f));
-    const float eps = rule.refineEpsilon;
-    if (rule.refine && isObserved && (std::fabs(oldSdf) < eps) != (std::fabs(newSdf) < eps)) flipped = true;
-    return flipped;
+    return wasObserved != isObserved || (isObserved && (oldSdf < 0.0f) != (newSdf < 0.0f));
 }
 
 uint32_t fuseBlock(ReferenceBlock& block, const BlockCoord& c, const DepthImage& depth, const gpu::FramePush& push,

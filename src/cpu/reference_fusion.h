@@ -17,16 +17,13 @@ namespace vkmesh::cpu {
 struct FusionRule {
     float voxelSize = 0.0f, truncation = 0.0f, maxWeight = 0.0f;
     float minMeshWeight = 1.0f;   // a corner is observed (meshable) from this weight on
-    bool refine = false;          // with mesh refinement, a corner crossing |sdf| < refineEpsilon also flips
-                                  // (its meshing sign may change: the mesher re-decides it)
-    float refineEpsilon = 0.0f;
     ColorFusion colorFusion = ColorFusion::Average;
     float colorRecency = 0.2f;
 };
 
 // With o/n the old/new weight and sdf, observed = weight >= minMeshWeight, a corner flips when
-// observed(o) != observed(n), or observed(n) and (sdf_o < 0) != (sdf_n < 0), or, with refinement on,
-// observed(n) and (|sdf_o| < epsilon) != (|sdf_n| < epsilon).
+// observed(o) != observed(n), or observed(n) and (sdf_o < 0) != (sdf_n < 0). (With refinement the mesher
+// finds the corners whose meshing sign changed itself: docs/REFINEMENT.md.)
 bool cornerFlipped(float oldSdf, float oldWeight, float newSdf, float newWeight, const FusionRule& rule);
 
 // Fuses the frame (push: its camera and depth range) into one block at `coord`: every corner that projects
@@ -39,9 +36,7 @@ uint32_t fuseBlock(ReferenceBlock& block, const BlockCoord& coord, const DepthIm
                    const FusionRule& rule, std::vector<std::array<int, 3>>* flipped, const ColorImage* color = nullptr);
 
 // For every flipped corner (global voxel coordinates), the 8 cubes around it (corner - o, o in {0,1}^3) in
-// whatever block they lie, for the blocks in `blocks`: the cubes whose MC type may have changed. (With
-// refinement, the corners of these cubes are the ones whose meshing sign may have changed, which the mesher
-// re-decides: docs/REFINEMENT.md.)
+// whatever block they lie, for the blocks in `blocks`: the cubes whose MC type may have changed.
 std::map<BlockCoord, CubeMask> cubesAroundCorners(const std::vector<std::array<int, 3>>& flipped,
                                                   const std::map<BlockCoord, ReferenceBlock>& blocks);
 

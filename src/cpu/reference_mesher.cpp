@@ -64,9 +64,6 @@ MeshFrameStats ReferenceMesher::update(const ReferenceVolume& volume, const std:
         if (volume.minMeshWeight() != minMeshWeight_)
             throw Error("ReferenceMesher: the volume flags corners at minMeshWeight " +
                         std::to_string(volume.minMeshWeight()) + ", the mesher meshes at " + std::to_string(minMeshWeight_));
-        if (options_.refine && (!volume.refinement() || volume.refineEpsilon() != refineEpsilon_))
-            throw Error("ReferenceMesher: refinement is on (epsilon " + std::to_string(refineEpsilon_) +
-                        " m) but the volume does not flag corners crossing that epsilon (ReferenceVolume::setRefinement)");
     }
     MeshFrameStats stats;
     createBlockStates(volume);

@@ -96,8 +96,8 @@ public:
     // One frame of docs/MESH.md on the TSDF as it is now; `touched` = the blocks the frame fused
     // (volume.lastTouched()), `frameNumber` goes into new vertices' createdFrame. With the default scope, the
     // cubes re-evaluated are the volume's retypeCubes() and the INCOMPLETE cubes of D; then the volume must
-    // have this mesher's minMeshWeight, and refinement on with the same epsilon when this mesher refines
-    // (throws Error otherwise: its flipped corners would not be the ones this mesher needs).
+    // have this mesher's minMeshWeight (throws Error otherwise: its flipped corners would not be the ones this
+    // mesher needs).
     MeshFrameStats update(const ReferenceVolume& volume, const std::vector<BlockCoord>& touched, uint32_t frameNumber,
                           RetypeScope scope = RetypeScope::FlippedCorners);
     // Every block of the volume dirty and every cube re-evaluated: on a fresh mesher, the from-scratch extraction.

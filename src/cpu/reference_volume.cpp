@@ -1,22 +1,13 @@
 #include "cpu/reference_volume.h"
 
 #include "core/camera.h"
-#include "core/refinement.h"
 #include "cpu/reference_allocation.h"
 #include "cpu/reference_baseline.h"
 #include "cpu/reference_fusion.h"
 
 namespace vkmesh::cpu {
 
-ReferenceVolume::ReferenceVolume(const VolumeParams& params, float minMeshWeight, bool refine, float refineEpsilon)
-    : params_(params), minMeshWeight_(minMeshWeight) {
-    setRefinement(refine, refineEpsilon);
-}
-
-void ReferenceVolume::setRefinement(bool refine, float refineEpsilon) {
-    refine_ = refine;
-    refineEpsilon_ = refineEpsilon < 0.0f ? defaultRefineEpsilon(params_.voxelSize) : refineEpsilon;
-}
+ReferenceVolume::ReferenceVolume(const VolumeParams& params, float minMeshWeight) : params_(params), minMeshWeight_(minMeshWeight) {}
 
 void ReferenceVolume::setRecycling(float keepRadius, uint32_t starveAfterFrames, float starveWeight) {
     recycling_ = RecyclingRule{keepRadius, starveAfterFrames, starveWeight};
@@ -52,7 +43,7 @@ ReferenceFrameStats ReferenceVolume::integrate(const DepthImage& depth, const In
 
     // 2. Fusion of every touched block; a new block starts at sdf 0, weight 0.
     const gpu::FramePush push = makeFramePush(intrinsics, cameraToWorld, params_, 1);
-    const FusionRule rule{params_.voxelSize, params_.truncation(), params_.maxWeight, minMeshWeight_, refine_, refineEpsilon_,
+    const FusionRule rule{params_.voxelSize, params_.truncation(), params_.maxWeight, minMeshWeight_,
                           params_.colorFusion, params_.colorRecency};
     lastFlipped_.clear();
     for (const BlockCoord& c : touched) {

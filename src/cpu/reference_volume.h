@@ -36,16 +36,10 @@ struct ReferenceFrameStats {
 
 class ReferenceVolume {
 public:
-    // minMeshWeight: a corner is "observed" (meshable) from this weight on; refine / refineEpsilon (metres):
-    // whether mesh refinement is on (then a corner crossing |d| < epsilon also flips, see lastFlipped());
-    // a negative epsilon stands for the default, defaultRefineEpsilon(voxelSize) = half a voxel.
-    explicit ReferenceVolume(const VolumeParams& params, float minMeshWeight = 1.0f, bool refine = false,
-                             float refineEpsilon = -1.0f);
+    // minMeshWeight: a corner is "observed" (meshable) from this weight on. (Mesh refinement is the mesher's
+    // alone: ReferenceMesher re-decides every corner of its dirty blocks.)
+    explicit ReferenceVolume(const VolumeParams& params, float minMeshWeight = 1.0f);
 
-    // The same settings afterwards (they apply from the next integrate() on). Negative epsilon: the default.
-    void setRefinement(bool refine, float refineEpsilon = -1.0f);
-    bool refinement() const { return refine_; }
-    float refineEpsilon() const { return refineEpsilon_; }
     float minMeshWeight() const { return minMeshWeight_; }
     const VolumeParams& params() const { return params_; }
 
@@ -79,8 +73,7 @@ public:
     // The corners (voxels, global coordinates block * 8 + local) that "flipped" in the last integrate() call,
     // in fusion order: the rule of shaders_comp/fuse/fuse_depth.comp. With o/n the old/new weight and sdf,
     // observed = weight >= minMeshWeight, a corner flips when
-    //   observed(o) != observed(n), or observed(n) and (sdf_o < 0) != (sdf_n < 0), or, with refinement on,
-    //   observed(n) and (|sdf_o| < epsilon) != (|sdf_n| < epsilon).
+    //   observed(o) != observed(n), or observed(n) and (sdf_o < 0) != (sdf_n < 0).
     // (A block allocated this frame starts at sdf 0, weight 0.)
     const std::vector<std::array<int, 3>>& lastFlipped() const { return lastFlipped_; }
 
@@ -94,8 +87,6 @@ public:
 private:
     VolumeParams params_;
     float minMeshWeight_;
-    bool refine_ = false;
-    float refineEpsilon_ = 0.0f;
     std::map<BlockCoord, ReferenceBlock> blocks_;
     RecyclingRule recycling_;
     uint32_t frame_ = 0;                             // integrate() calls so far (the GPU's frame number)

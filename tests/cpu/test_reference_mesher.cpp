@@ -102,7 +102,7 @@ cpu::MesherOptions unrefinedOptions() {
 
 struct RoomRun {
     VolumeParams params = smallParams();
-    cpu::ReferenceVolume volume{params, 1.0f, false};
+    cpu::ReferenceVolume volume{params, 1.0f};
     cpu::ReferenceMesher mesher{params, 1.0f, 1u << 20, 1u << 19, unrefinedOptions()};
     uint32_t frames = 0;
     std::vector<std::string> invariantFailures;  // "frame N: ..."
@@ -228,7 +228,7 @@ ClosedRun meshAllAround(const synth::SyntheticScene& scene, const Eigen::Vector3
     // artifact), which the baseline and this mesh both close into a tiny extra component.
     VolumeParams params = smallParams(0.04f);
     params.truncVoxels = 3;
-    cpu::ReferenceVolume volume(params, 1.0f, refine);
+    cpu::ReferenceVolume volume(params, 1.0f);
     cpu::ReferenceMesher mesher(params, 1.0f, 1u << 16, 1u << 16, mesherOptions(refine, false));
     const auto poses = test::orbitAround(centre, distance);
     uint32_t frame = 0;
@@ -406,7 +406,7 @@ TEST(ReferenceMesher, ExhaustedCubesAreRebuiltWhenNextDirty) {
     const uint32_t finalVertices = run.mesher.liveVertices(), highWater = run.mesher.vertexHighWater();
     ASSERT_GT(highWater, finalVertices + 200) << "the room run should peak above its final mesh";
     const uint32_t capacity = (finalVertices + highWater) / 2;
-    cpu::ReferenceVolume volume(run.params, 1.0f, false);   // sized from the unrefined RoomRun
+    cpu::ReferenceVolume volume(run.params, 1.0f);   // sized from the unrefined RoomRun
     cpu::ReferenceMesher mesher(run.params, 1.0f, capacity, 1u << 18, unrefinedOptions());
     uint64_t exhausted = 0;
     uint32_t frame = 0;
@@ -532,19 +532,17 @@ std::set<GlobalCube> retypeSetOf(const cpu::ReferenceVolume& volume) {
     return out;
 }
 
-void checkFlips(float minWeight, bool refine) {
+void checkFlips(float minWeight) {
     const VolumeParams params = smallParams();
-    cpu::ReferenceVolume volume(params, minWeight, refine);
-    const float eps = volume.refineEpsilon();
-    EXPECT_EQ(eps, 0.5f * params.voxelSize);
+    cpu::ReferenceVolume volume(params, minWeight);
     const auto path = synth::cameraPath(30, synth::PathKind::Orbit);
     size_t totalFlips = 0, totalRetype = 0, changedCubes = 0;
     for (uint32_t i = 0; i < 5; ++i) {
         const BlockMap before = volume.blocks();
         volume.integrate(render(room(), path[i * 2], true, i + 1), synth::kinectIntrinsics(kWidth, kHeight), path[i * 2]);
-        const std::string when = "frame " + std::to_string(i + 1) + (refine ? " (refine)" : "");
+        const std::string when = "frame " + std::to_string(i + 1);
 
-        // lastFlipped = exactly the corners whose (observed, sign[, near]) state changed.
+        // lastFlipped = exactly the corners whose (observed, sign) state changed.
         std::set<GlobalCube> expectedFlips;
         for (const auto& [coord, block] : volume.blocks()) {
             auto old = before.find(coord);
@@ -553,8 +551,7 @@ void checkFlips(float minWeight, bool refine) {
                 const float oldWeight = old == before.end() ? 0.0f : old->second.weight[v];
                 const float newSdf = block.sdf[v], newWeight = block.weight[v];
                 const bool wasObs = oldWeight >= minWeight, isObs = newWeight >= minWeight;
-                const bool flip = wasObs != isObs || (isObs && (oldSdf < 0) != (newSdf < 0)) ||
-                                  (refine && isObs && (std::fabs(oldSdf) < eps) != (std::fabs(newSdf) < eps));
+                const bool flip = wasObs != isObs || (isObs && (oldSdf < 0) != (newSdf < 0));
                 if (flip) expectedFlips.insert({coord[0] * 8 + v % 8, coord[1] * 8 + v / 8 % 8, coord[2] * 8 + v / 64});
             }
         }
@@ -573,64 +570,37 @@ void checkFlips(float minWeight, bool refine) {
         EXPECT_EQ(retype.size(), volume.retypeCubeCount()) << when;
         EXPECT_TRUE(retype == expectedRetype) << when << ": " << retype.size() << " vs " << expectedRetype.size();
 
-        // Every cube whose MC type changed is in the set. With refinement, every cube whose refined type changed
-        // has a corner that is a corner of a cube in the set (some cube within one of it is in the set): the
-        // corners the mesher re-decides (decide_mesh_signs lists the corners of the marked cubes).
-        const auto oldSig = cubeSignatures(before, minWeight, refine ? eps : -1.0f);
-        const auto newSig = cubeSignatures(volume.blocks(), minWeight, refine ? eps : -1.0f);
+        // Every cube whose MC type changed is in the set. (With refinement the mesher re-decides the meshing signs
+        // itself: checkStoredTypes below.)
+        const auto oldSig = cubeSignatures(before, minWeight, -1.0f);
+        const auto newSig = cubeSignatures(volume.blocks(), minWeight, -1.0f);
         size_t missed = 0;
         for (const auto& [g, sig] : newSig) {
             auto it = oldSig.find(g);
             const int old = it == oldSig.end() ? 0 : it->second;
             if (old == sig) continue;
             ++changedCubes;
-            const int reach = refine ? 1 : 0;
-            bool listed = false;
-            for (int z = -reach; z <= reach; ++z)
-                for (int y = -reach; y <= reach; ++y)
-                    for (int x = -reach; x <= reach; ++x) listed = listed || retype.count({g[0] + x, g[1] + y, g[2] + z}) > 0;
-            if (!listed) ++missed;
+            if (!retype.count(g)) ++missed;
         }
         EXPECT_EQ(missed, 0u) << when << ": cubes whose type could change but are not in the retype set";
         totalFlips += flips.size();
         totalRetype += retype.size();
     }
-    std::cout << "[ flips ] min weight " << minWeight << (refine ? ", refine" : "") << ": " << totalFlips
+    std::cout << "[ flips ] min weight " << minWeight << ": " << totalFlips
               << " flipped corners, " << totalRetype << " cubes to retype, " << changedCubes
               << " cubes whose type inputs changed (5 frames)\n";
     EXPECT_GT(changedCubes, 1000u);
 }
 
-TEST(ReferenceVolume, FlippedCornersAndRetypeSet) { checkFlips(1.0f, false); }
-TEST(ReferenceVolume, FlippedCornersAndRetypeSetWithRefinementAndMinWeight) { checkFlips(2.0f, true); }
-
-TEST(ReferenceVolume, RefinementFlagsMoreCorners) {
-    const VolumeParams params = smallParams();
-    cpu::ReferenceVolume off(params, 1.0f, false), on(params, 1.0f, true), custom(params);
-    custom.setRefinement(true, 0.02f);
-    EXPECT_FALSE(off.refinement());
-    EXPECT_TRUE(on.refinement());
-    EXPECT_EQ(custom.refineEpsilon(), 0.02f);
-    const auto path = synth::cameraPath(30, synth::PathKind::Orbit);
-    size_t flipsOff = 0, flipsOn = 0;
-    for (uint32_t i = 0; i < 3; ++i) {
-        const DepthImage depth = render(room(), path[i * 2], true, i + 1);
-        off.integrate(depth, synth::kinectIntrinsics(kWidth, kHeight), path[i * 2]);
-        on.integrate(depth, synth::kinectIntrinsics(kWidth, kHeight), path[i * 2]);
-        if (i > 0) {  // the first frame: every observed corner flips either way
-            flipsOff += off.lastFlipped().size();
-            flipsOn += on.lastFlipped().size();
-        }
-    }
-    EXPECT_GT(flipsOn, flipsOff);
-}
+TEST(ReferenceVolume, FlippedCornersAndRetypeSet) { checkFlips(1.0f); }
+TEST(ReferenceVolume, FlippedCornersAndRetypeSetWithMinWeight) { checkFlips(2.0f); }
 
 // ----------------------------------------------------------------------------------------------------------
 // Refinement and the lock-free order in the mesher.
 
 // For every cube of the mesher: its stored type is what the rule gives for the current TSDF. Unrefined: the
 // MC type t (0 unless observed). Refined: refinedCubeType of its 4x4x4 window, whose flipped corners all lie
-// within epsilon (fusion marks every cube whose refined type can change, so this holds after every frame).
+// within epsilon (the mesher re-decides every corner of its dirty blocks, so this holds after every frame).
 // Returns the number of refined cubes (stored type != t); counts violations in `bad`.
 size_t checkStoredTypes(const cpu::ReferenceMesher& mesher, const cpu::ReferenceVolume& volume, bool refine,
                         size_t& bad) {
@@ -658,7 +628,7 @@ size_t checkStoredTypes(const cpu::ReferenceMesher& mesher, const cpu::Reference
 TEST(ReferenceMesher, LockFreeOrderGivesTheSameMesh) {
     for (bool refine : {false, true}) {
         const VolumeParams params = smallParams();
-        cpu::ReferenceVolume volume(params, 1.0f, refine);
+        cpu::ReferenceVolume volume(params, 1.0f);
         cpu::ReferenceMesher plain(params, 1.0f, 1u << 18, 1u << 18, mesherOptions(refine, false));
         cpu::ReferenceMesher lockFree(params, 1.0f, 1u << 18, 1u << 18, mesherOptions(refine, true));
         EXPECT_TRUE(lockFree.options().lockFree);
@@ -710,8 +680,8 @@ TEST(ReferenceMesher, LockFreeOrderGivesTheSameMesh) {
 
 TEST(ReferenceMesher, RefinementKeepsTheInvariantsEveryFrame) {
     const VolumeParams params = smallParams();
-    cpu::ReferenceVolume volume(params, 1.0f, true);
-    cpu::ReferenceVolume plainVolume(params, 1.0f, false);
+    cpu::ReferenceVolume volume(params, 1.0f);
+    cpu::ReferenceVolume plainVolume(params, 1.0f);
     cpu::ReferenceMesher mesher(params, 1.0f, 1u << 18, 1u << 18, mesherOptions(true, false));
     cpu::ReferenceMesher plain(params, 1.0f, 1u << 18, 1u << 18, mesherOptions(false, false));
     EXPECT_EQ(mesher.refineEpsilon(), 0.5f * params.voxelSize);
@@ -757,16 +727,14 @@ TEST(ReferenceMesher, RefinementKeepsTheInvariantsEveryFrame) {
 
 TEST(ReferenceMesher, RetypeSetNeedsAMatchingVolume) {
     const VolumeParams params = smallParams();
-    cpu::ReferenceVolume plainVolume(params, 1.0f, false), refineVolume(params, 1.0f, true),
-        otherEps(params, 1.0f, true, 0.003f), heavier(params, 2.0f, false);
+    cpu::ReferenceVolume volume(params, 1.0f), heavier(params, 2.0f);
     cpu::ReferenceMesher refining(params, 1.0f, 1024, 1024, mesherOptions(true, false));
     cpu::ReferenceMesher plain(params, 1.0f, 1024, 1024, mesherOptions(false, false));
-    EXPECT_THROW(refining.update(plainVolume, {}, 1), Error);
-    EXPECT_THROW(refining.update(otherEps, {}, 1), Error);
     EXPECT_THROW(plain.update(heavier, {}, 1), Error);
-    EXPECT_NO_THROW(refining.update(refineVolume, {}, 1));
-    EXPECT_NO_THROW(plain.update(refineVolume, {}, 1));  // a superset of the corners it needs
-    EXPECT_NO_THROW(refining.updateAll(plainVolume, 1));  // every cube: no flipped corners needed
+    EXPECT_THROW(refining.update(heavier, {}, 1), Error);
+    EXPECT_NO_THROW(refining.update(volume, {}, 1));   // refinement needs nothing more of the volume: the mesher decides
+    EXPECT_NO_THROW(plain.update(volume, {}, 1));
+    EXPECT_NO_THROW(plain.updateAll(heavier, 1));   // every cube: no flipped corners needed
 }
 
 // ----------------------------------------------------------------------------------------------------------
@@ -866,8 +834,7 @@ void slantedPlaneRun(float voxel, double distance, float epsilonVoxels = 0.0f) {
     const VolumeParams params = smallParams(voxel);
     cpu::MesherOptions options = mesherOptions(true, false);
     if (epsilonVoxels > 0.0f) options.refineEpsilon = epsilonVoxels * params.voxelSize;
-    cpu::ReferenceVolume volumeOff(params, 1.0f, false),
-        volumeOn(params, 1.0f, true, epsilonVoxels > 0.0f ? *options.refineEpsilon : -1.0f);
+    cpu::ReferenceVolume volumeOff(params, 1.0f), volumeOn(params, 1.0f);
     cpu::ReferenceMesher off(params, 1.0f, 1u << 18, 1u << 18, mesherOptions(false, false));
     cpu::ReferenceMesher on(params, 1.0f, 1u << 18, 1u << 18, options);
     const uint32_t frames = 20;

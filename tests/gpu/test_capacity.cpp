@@ -183,7 +183,7 @@ void heapExhaustionAndGrowth(vk::Context& context, bool vertexHeap) {
     (vertexHeap ? config.vertexCapacity : config.chunkCapacity) = 256;
     config.refine = false;   // the complete mesh is compared with the (unrefined) baseline below
     gpu::GpuVolume volume(context, config);
-    cpu::ReferenceVolume reference(config.params, config.minMeshWeight, config.refine);
+    cpu::ReferenceVolume reference(config.params, config.minMeshWeight);
     FusedRun run = fuseRoom(volume, &reference, 4);
     const gpu::Counters& first = run.reports[0].counters;
     EXPECT_GT(vertexHeap ? first.vertexExhausted : first.chunkExhausted, 0u);

@@ -216,7 +216,7 @@ TEST_P(CpuReferenceTest, MatchesCpuReferenceMesherFrameByFrame) {
     config.refine = GetParam();
     const float epsilon = config.refineEpsilonVoxels * config.params.voxelSize;
     gpu::GpuVolume volume(context(), config);
-    cpu::ReferenceVolume referenceVolume(config.params, config.minMeshWeight, config.refine, epsilon);
+    cpu::ReferenceVolume referenceVolume(config.params, config.minMeshWeight);
     cpu::MesherOptions options;
     options.refine = config.refine;
     options.refineEpsilon = epsilon;

@@ -71,7 +71,7 @@ struct RunTotals {
 RunTotals runAndCompare(vk::Context& context, const gpu::GpuVolumeConfig& config, size_t frames, size_t pathLength) {
     static const synth::SyntheticScene scene = synth::SyntheticScene::defaultRoom();
     gpu::GpuVolume volume(context, config);
-    cpu::ReferenceVolume reference(config.params, config.minMeshWeight, config.refine);
+    cpu::ReferenceVolume reference(config.params, config.minMeshWeight);
     reference.setRecycling(config.keepRadius, config.recycle ? config.recycleAfterFrames : 0u, config.starveWeight);
     Intrinsics intr = synth::kinectIntrinsics(kWidth, kHeight);
     auto poses = synth::cameraPath(pathLength, synth::PathKind::Orbit);

@@ -10,7 +10,8 @@
 //   moved        the vertices whose edges' corners may have changed (list_*_vertices -> move_vertices);
 //   neighbours   each dirty block's 26 neighbour blocks (cache_neighbors -> the mesh passes' cubeRef);
 //   mesh signs   with refinement, one bit per corner: inside for meshing (decide_mesh_signs -> claim,
-//                triangulate); persistent, and derived from the TSDF alone (docs/REFINEMENT.md).
+//                triangulate), persistent and derived from the TSDF alone (docs/REFINEMENT.md); and one bit per
+//                corner whose |d| < epsilon changed (fuse -> list_sign_corners).
 #pragma once
 
 #include "core/map_format.h"
