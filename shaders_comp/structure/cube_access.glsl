@@ -161,7 +161,11 @@ bool cornerMeshInside(uint block, uint local) {
         keep += regularDistance(t);
         flip += regularDistance(t ^ (1u << o));
     }
-    return flip < keep ? !inside : inside;
+    // At most 2 of its 6 edge neighbours of its own raw sign: each would put a vertex clamped onto the flipped
+    // corner (refinedCornerInside in src/core/refinement.cpp explains the bound).
+    uint sameSign = uint(windowInside[4] == inside) + uint(windowInside[22] == inside) + uint(windowInside[10] == inside) +
+                    uint(windowInside[16] == inside) + uint(windowInside[12] == inside) + uint(windowInside[14] == inside);
+    return flip < keep && sameSign <= 2u ? !inside : inside;
 }
 
 // The type a listed cube is built with: its MC type t (from loadCube, 0 unless observed), or with refinement

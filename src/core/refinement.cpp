@@ -71,7 +71,17 @@ bool refinedCornerInside(const float d[kCornerWindowSize], const bool observed[k
         keep += regularDistance(t);
         flip += regularDistance(t ^ (1 << o));
     }
-    return flip < keep ? !inside : inside;  // strictly: a tie keeps the raw sign
+    // Flipped, the corner carries a vertex clamped onto it on each edge to a 6-neighbour of its own raw sign that
+    // keeps its sign. On a noisy plane one such neighbour lies across the plane and one in it (a two-corner
+    // bump); more would pile vertices onto the corner (zero-area triangles, and the surface pulled by up to
+    // epsilon), so the corner keeps its raw sign then.
+    int sameSign = 0;
+    for (int axis = 0; axis < 3; ++axis)
+        for (int side = -1; side <= 1; side += 2) {
+            const int w = cornerWindowIndex(axis == 0 ? side : 0, axis == 1 ? side : 0, axis == 2 ? side : 0);
+            sameSign += (d[w] < 0.0f) == inside;
+        }
+    return flip < keep && sameSign <= 2 ? !inside : inside;  // strictly: a tie keeps the raw sign
 }
 
 int refinedCubeType(const float d[kWindowSize], const bool observed[kWindowSize], float epsilon) {

