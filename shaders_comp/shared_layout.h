@@ -201,7 +201,8 @@ struct Counters {
     uint listDispatch[4];       // over the live block list, one workgroup per block
     uint collectDispatch[4];    // over the dirty blocks' retype-mask words, WG_LIST per group
     uint retypeDispatch[4];     // over the retype list, WG_LIST per group
-    uint vertexDispatch[4];     // list_dirty_vertices: VOXELS_PER_BLOCK / WG_BLOCK workgroups per dirty block, or 0;
+    uint vertexDispatch[4];     // with refinement, first decide_mesh_signs: over the listed corners (plan_sign_corners);
+                                // list_dirty_vertices: VOXELS_PER_BLOCK / WG_BLOCK workgroups per dirty block, or 0;
                                 // then (plan_move_vertices, after the listing) move_vertices: over the list
     uint heapDispatch[4];       // list_heap_vertices: over the heap up to its high water, or 0 (the cheaper runs)
     uint candidateDispatch[4];  // over the GC candidates, WG_LIST per group (first for list_new_vertices)

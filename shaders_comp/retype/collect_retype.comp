@@ -1,7 +1,7 @@
 #version 460
 // Incremental mesh: turns the dirty blocks' retype masks (set by fuse_depth, decide_mesh_signs, and by
-// mesh_triangulate for INCOMPLETE cubes) into one list of cubes, and clears the bits it listed. One invocation per mask word;
-// bits that do not fit in the list stay set for the next pass (counted).
+// mesh_triangulate for INCOMPLETE cubes) into one list of cubes, and clears the bits it listed. One invocation
+// per mask word; bits that do not fit in the list stay set for the next pass (counted).
 #extension GL_GOOGLE_include_directive : require
 #include "structure/frame.glsl"
 #include "structure/frame_lists.glsl"

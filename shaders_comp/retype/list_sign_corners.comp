@@ -5,9 +5,9 @@
 // state changed, and the corners within one of such a corner are exactly the corners of those 8 cubes; fusion
 // also flags the corners whose |d| < epsilon changed (nearChangeWord). So a corner is listed when it is
 // flagged, or when one of the 8 cubes it is a corner of (corner - o, o in {0,1}^3, in its block or the
-// blocks behind) is marked; the flags are cleared. One invocation per retype-mask
-// word of the dirty blocks (its 32 corners: 4 rows along x of one z layer); the list is the retype list, free
-// until collect_retype. Corners past its capacity are decided here.
+// blocks behind) is marked; the flags are cleared. One invocation per retype-mask word of the dirty blocks (its
+// 32 corners: 4 rows along x of one z layer); the list is the retype list, free until collect_retype. Corners
+// past its capacity are decided here.
 #extension GL_GOOGLE_include_directive : require
 #include "structure/frame.glsl"
 #include "retype/mesh_signs.glsl"
