@@ -12,6 +12,24 @@ namespace vkmesh::cpu {
 using namespace mesh_detail;
 using gpu::VOXELS_PER_BLOCK;
 
+namespace {
+
+// The TSDF corner at global grid position (x, y, z), from whichever block holds it: its value and whether it is
+// observed (its block exists and its weight is at least minMeshWeight). Absent: d = 0, not observed.
+void readVolumeCorner(const ReferenceVolume& volume, float minMeshWeight, int x, int y, int z, float& d, bool& observed) {
+    const int side = int(gpu::BLOCK_SIDE);
+    const BlockCoord c{blockOf(x), blockOf(y), blockOf(z)};
+    auto it = volume.blocks().find(c);
+    d = 0.0f;
+    observed = false;
+    if (it == volume.blocks().end()) return;
+    const uint32_t v = localIndex(x - c[0] * side, y - c[1] * side, z - c[2] * side);
+    d = it->second.sdf[v];
+    observed = it->second.weight[v] >= minMeshWeight;
+}
+
+}  // namespace
+
 std::vector<ReferenceMesher::DirtyBlock> ReferenceMesher::markDirty(const ReferenceVolume& volume,
                                                                     const std::vector<BlockCoord>& touched,
                                                                     RetypeScope scope, MeshFrameStats& stats) {
@@ -50,9 +68,9 @@ std::vector<ReferenceMesher::DirtyBlock> ReferenceMesher::markDirty(const Refere
     return dirty;
 }
 
-// decide_mesh_signs.comp: every corner of D gets refinedCornerInside() of its 3x3x3 window; where that differs
-// from the stored sign, the sign is stored and the 8 cubes around the corner (corner - o, o in {0,1}^3) are
-// listed. Those lie in D: a sign only changes with the TSDF within one corner of it, D holds every block
+// The meshing signs (decide_mesh_signs.comp, which decides only the corners list_sign_corners lists): every
+// corner of D gets refinedCornerInside() of its 3x3x3 window; where that differs from the stored sign, the sign
+// is stored and the 8 cubes around the corner (corner - o, o in {0,1}^3) are listed. Those lie in D: a sign only changes with the TSDF within one corner of it, D holds every block
 // within one block of a touched one, and every block is in D the frame it is created. (A mark outside D, which
 // would need a sign decided before its window's last change, the GPU keeps for a later frame; here it has
 // none to keep.)
@@ -60,23 +78,14 @@ void ReferenceMesher::decideMeshSigns(const ReferenceVolume& volume, std::vector
     const int side = int(gpu::BLOCK_SIDE);
     std::map<BlockCoord, DirtyBlock*> byCoord;
     for (DirtyBlock& b : dirty) byCoord[b.coord] = &b;
-    auto corner = [&](int x, int y, int z, float& d, bool& observed) {
-        const BlockCoord c{blockOf(x), blockOf(y), blockOf(z)};
-        auto it = volume.blocks().find(c);
-        d = 0.0f;
-        observed = false;
-        if (it == volume.blocks().end()) return;
-        const uint32_t v = localIndex(x - c[0] * side, y - c[1] * side, z - c[2] * side);
-        d = it->second.sdf[v];
-        observed = it->second.weight[v] >= minMeshWeight_;
-    };
     for (DirtyBlock& b : dirty) {
         for (uint32_t local = 0; local < VOXELS_PER_BLOCK; ++local) {
             const auto l = localCoords(local);
             const int g[3] = {b.coord[0] * side + int(l[0]), b.coord[1] * side + int(l[1]), b.coord[2] * side + int(l[2])};
             float d[kCornerWindowSize];
             bool observed[kCornerWindowSize];
-            for (int w = 0; w < kCornerWindowSize; ++w) corner(g[0] + w % 3 - 1, g[1] + (w / 3) % 3 - 1, g[2] + w / 9 - 1, d[w], observed[w]);
+            for (int w = 0; w < kCornerWindowSize; ++w)
+                readVolumeCorner(volume, minMeshWeight_, g[0] + w % 3 - 1, g[1] + (w / 3) % 3 - 1, g[2] + w / 9 - 1, d[w], observed[w]);
             const bool inside = refinedCornerInside(d, observed, refineEpsilon_);
             if (inside == b.state->meshInside.test(local)) continue;
             b.state->meshInside.flip(local);
@@ -101,19 +110,14 @@ void ReferenceMesher::chooseTypes(const ReferenceVolume& volume, std::vector<Dir
             if (!b.retype.test(cube)) continue;
             int t = 0;
             if (options_.refine) {
-                // The window, read from whichever blocks hold it (refinedCubeType.glsl looks them up in the hash).
-                float d[kWindowSize] = {};
-                bool observed[kWindowSize] = {};
+                // The window, read from whichever blocks hold it: the pure function of the TSDF, against which the
+                // stored signs (and the GPU's, which claim and triangulate read) are checked.
+                float d[kWindowSize];
+                bool observed[kWindowSize];
                 const auto l = localCoords(cube);
-                for (int w = 0; w < kWindowSize; ++w) {
-                    const int g[3] = {b.coord[0] * side + l[0] + w % 4 - 1, b.coord[1] * side + l[1] + (w / 4) % 4 - 1,
-                                      b.coord[2] * side + l[2] + w / 16 - 1};
-                    auto it = volume.blocks().find(BlockCoord{blockOf(g[0]), blockOf(g[1]), blockOf(g[2])});
-                    if (it == volume.blocks().end()) continue;
-                    const uint32_t v = localIndex(g[0] - it->first[0] * side, g[1] - it->first[1] * side, g[2] - it->first[2] * side);
-                    d[w] = it->second.sdf[v];
-                    observed[w] = it->second.weight[v] >= minMeshWeight_;
-                }
+                for (int w = 0; w < kWindowSize; ++w)
+                    readVolumeCorner(volume, minMeshWeight_, b.coord[0] * side + l[0] + w % 4 - 1, b.coord[1] * side + l[1] + (w / 4) % 4 - 1,
+                                     b.coord[2] * side + l[2] + w / 16 - 1, d[w], observed[w]);
                 t = refinedCubeType(d, observed, refineEpsilon_);
             } else {
                 const CubeCorners corners = readCorners(b.tsdf, cube, minMeshWeight_);
