@@ -289,6 +289,7 @@ int runFuse(const FuseArgs& args) {
     uint32_t unreferenced = 0;
     double sliverTriangleShare = 0, irregularCubeShare = 0;
     size_t boundaryEdges = 0, nonManifoldEdges = 0;   // of the shared-vertex mesh (a soup has no shared edges)
+    size_t coincidentVertices = 0;                    // vertices at exactly the position of another (0 by design)
     if (config.meshMode == gpu::MeshMode::Incremental) {
         gpu::ExportedMesh exported = volume.exportMesh(&meshMs);
         unreferenced = exported.unreferencedVertices;
@@ -308,6 +309,7 @@ int runFuse(const FuseArgs& args) {
         const TopologyReport topology = analyzeTopology(mesh);
         boundaryEdges = topology.boundaryEdges;
         nonManifoldEdges = topology.nonManifoldEdges;
+        coincidentVertices = countDuplicatePositions(mesh);
     } else {
         gpu::TriangleSoup soup = volume.extractBaselineMesh(&meshMs);
         mesh.positions = soup.vertices;
@@ -351,7 +353,8 @@ int runFuse(const FuseArgs& args) {
                      {"sliver_triangle_share", sliverTriangleShare},   // smallest angle < 10 degrees
                      {"irregular_cube_share", irregularCubeShare},
                      {"boundary_edges", boundaryEdges},
-                     {"non_manifold_edges", nonManifoldEdges}};
+                     {"non_manifold_edges", nonManifoldEdges},
+                     {"coincident_vertices", coincidentVertices}};
     if (config.meshMode == gpu::MeshMode::Incremental) {
         const gpu::GpuVolumeConfig& c = volume.config();
         stats["heaps"] = {{"vertices", {{"capacity", c.vertexCapacity}, {"live", k.verticesInUse}, {"free", k.vertexFreeTop},

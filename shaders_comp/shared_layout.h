@@ -164,6 +164,12 @@ struct VolumeParamsGpu {
 VKM_CONST VOLUME_FEATURE_COLOR = 1u;    // params.colorMode may be other than COLOR_MODE_OFF
 VKM_CONST VOLUME_FEATURE_REFINE = 2u;   // params.refine may be 1
 VKM_CONST VOLUME_FEATURES_ALL = 3u;
+// A refined mesh keeps every vertex off its edge's ends (edgeCrossing in structure/cube_access.glsl;
+// docs/REFINEMENT.md, "Vertices"), so that no two vertices share a position: one next to a corner that
+// refinement flipped stops 1/FLIPPED_EDGE_MARGIN_INVERSE of the edge before it, any other at least
+// 1/REFINED_EDGE_MARGIN_INVERSE from either end (exact in float for grid coordinates below 2^13).
+VKM_CONST FLIPPED_EDGE_MARGIN_INVERSE = 8u;
+VKM_CONST REFINED_EDGE_MARGIN_INVERSE = 1024u;
 // Colour fusion (docs/COLOR.md). Off: no colour is fused (and the colour buffer is a placeholder).
 VKM_CONST COLOR_MODE_OFF = 0u;
 VKM_CONST COLOR_MODE_AVERAGE = 1u;     // running average with the TSDF's weight (the paper's and Open3D's rule)

@@ -54,7 +54,7 @@ void main() {
                 uint e = triangleEdge(type, t);
                 uint lo = edgeLowCorner(e);
                 uint hi = lo | (1u << (e / 4u));
-                meshVertices[base + t] = vec4(edgeVertexPosition(r, lo, e / 4u, d[lo], d[hi]), 1.0);
+                meshVertices[base + t] = vec4(edgeVertexPosition(r, lo, e / 4u, edgeCrossing(d[lo], d[hi], false)), 1.0);
             }
         }
     }

@@ -97,15 +97,31 @@ uint edgeSlot(CubeRef r, uint e) {
     return (nb * VOXELS_PER_BLOCK + localOfCube(local)) * 3u + e / 4u;
 }
 
-// Position of the vertex on the edge from corner `lo` along `axis` of the cube: linear interpolation of
-// the zero crossing, in grid units, then metres. Written out so the CPU reference reproduces it bit for
-// bit; the baseline and the shared-vertex mesh use this one function, so their vertices coincide exactly.
-// s is clamped to [0, 1]: refinement can make an edge whose corners share a sign carry a vertex (one corner
-// flipped for meshing); the zero crossing extrapolated from its values lies beyond the flipped corner, and the
-// vertex stops at that corner, the nearest point of its edge. Where the corners differ in sign s is in (0, 1]
-// and unchanged. Equal values (only possible on such an edge): the midpoint.
-vec3 edgeVertexPosition(CubeRef r, uint lo, uint axis, float dLo, float dHi) {
-    precise float s = dLo == dHi ? 0.5 : clamp(dLo / (dLo - dHi), 0.0, 1.0);
+// Where the vertex of an edge sits along it, s from the low corner: the zero crossing interpolated from the
+// corners' values, in [0, 1] (the unrefined mesh and the baseline: exactly the crossing). In a refined mesh
+// (`refined`) no vertex may sit on a corner, so that no two vertices coincide (docs/REFINEMENT.md, "Vertices"):
+// - an edge whose corners share a raw sign carries a vertex only because refinement flipped one of its corners
+//   for meshing; the crossing extrapolated from its values lies beyond the flipped corner, and the vertex stops
+//   1/FLIPPED_EDGE_MARGIN_INVERSE of the edge before that corner. Up to two such edges meet at a flipped
+//   corner: clamped onto the corner itself their vertices would share its position;
+// - any other edge keeps s in [1/REFINED_EDGE_MARGIN_INVERSE, 1 - 1/REFINED_EDGE_MARGIN_INVERSE], so that
+//   a crossing a hair from a corner (or on it: d = 0) is not rounded onto the corner. That moves a vertex by
+//   at most 1/1024 of a voxel.
+// Every vertex then lies strictly inside its own edge, and edges share no inner point. Equal values (only on a
+// flipped edge): the midpoint. Written out so that the CPU reference (edgeCrossing in src/core/refinement.h)
+// reproduces it bit for bit.
+float edgeCrossing(float dLo, float dHi, bool refined) {
+    if (dLo == dHi) return 0.5;
+    uint inverse = !refined ? 0u : ((dLo < 0.0) == (dHi < 0.0) ? FLIPPED_EDGE_MARGIN_INVERSE : REFINED_EDGE_MARGIN_INVERSE);
+    float margin = inverse == 0u ? 0.0 : 1.0 / float(inverse);
+    precise float s = clamp(dLo / (dLo - dHi), margin, 1.0 - margin);
+    return s;
+}
+
+// Position of the vertex at s (edgeCrossing) on the edge from corner `lo` along `axis` of the cube, in grid
+// units, then metres. Written out so the CPU reference reproduces it bit for bit; the baseline and the
+// shared-vertex mesh use this one function, so their vertices coincide exactly where s does.
+vec3 edgeVertexPosition(CubeRef r, uint lo, uint axis, float s) {
     precise vec3 p = vec3(r.origin + ivec3(r.cube + cornerOffset(lo)));
     p[axis] += s;
     precise vec3 world = p * params.voxelSize;
@@ -161,8 +177,8 @@ bool cornerMeshInside(uint block, uint local) {
         keep += regularDistance(t);
         flip += regularDistance(t ^ (1u << o));
     }
-    // At most 2 of its 6 edge neighbours of its own raw sign: each would put a vertex clamped onto the flipped
-    // corner (refinedCornerInside in src/core/refinement.cpp explains the bound).
+    // At most 2 of its 6 edge neighbours of its own raw sign: each would put a vertex next to the flipped corner
+    // (refinedCornerInside in src/core/refinement.cpp explains the bound).
     uint sameSign = uint(windowInside[4] == inside) + uint(windowInside[22] == inside) + uint(windowInside[10] == inside) +
                     uint(windowInside[16] == inside) + uint(windowInside[12] == inside) + uint(windowInside[14] == inside);
     return flip < keep && sameSign <= 2u ? !inside : inside;

@@ -49,12 +49,11 @@ uint foldVoxelColor(uint old, float oldWeight, float newSdf, uvec3 rgb, ivec3 co
 }
 
 // A vertex's colour (Vertex::color, RGBA8, alpha 255) from the colours of its edge's corners, interpolated
-// like its position (t clamped to the edge; the midpoint when both corners hold the same value); 0 (alpha 0) when neither corner has a colour.
-uint vertexColorOnEdge(uint lo, uint hi, float dLo, float dHi) {
+// at its position's s along the edge (edgeCrossing in cube_access.glsl); 0 (alpha 0) when neither corner has a colour.
+uint vertexColorOnEdge(uint lo, uint hi, float t) {
     bool hasLo = (lo & VOXEL_COLOR_SET) != 0u, hasHi = (hi & VOXEL_COLOR_SET) != 0u;
     if (!hasLo && !hasHi) return 0u;
     vec3 a = unpackVoxelColor(hasLo ? lo : hi), b = unpackVoxelColor(hasHi ? hi : lo);
-    precise float t = dLo == dHi ? 0.5 : clamp(dLo / (dLo - dHi), 0.0, 1.0);   // as edgeVertexPosition
     precise vec3 c = a + (b - a) * t;
     precise vec3 rounded = c * (1.0 / float(VOXEL_COLOR_SCALE)) + 0.5;
     uvec3 o = uvec3(min(floor(rounded), vec3(255.0)));

@@ -1,5 +1,5 @@
 // Moving a vertex to the current zero crossing of its edge (paper §V.B): the position interpolated along
-// the edge (clamped to the edge on one that only a refined type uses), the normal from the owner cube's TSDF
+// the edge (edgeCrossing: kept off the edge's ends in a refined volume), the normal from the owner cube's TSDF
 // gradient, the colour interpolated between the edge's corners (voxel_color.glsl) when colour is fused.
 // Includes cube_access.glsl.
 #ifndef VKMESH_VERTEX_UPDATE_GLSL
@@ -11,10 +11,11 @@
 // r: the owner cube with its corners loaded into d/present; axis: which of its 3 edges.
 void moveVertex(uint v, CubeRef r, uint axis, float d[8], bool present[8]) {
     uint hi = 1u << axis;
-    // Also edges whose corners share a sign: refinement may use them (the vertex then sits at the flipped
-    // corner, edgeVertexPosition). Every vertex gets a position, so a new one never keeps a stale one.
+    // Also edges whose corners share a sign: refinement may use them (the vertex then sits next to the flipped
+    // corner, edgeCrossing). Every vertex gets a position, so a new one never keeps a stale one.
     if (!present[0] || !present[hi]) return;
-    vec3 p = edgeVertexPosition(r, 0u, axis, d[0], d[hi]);
+    float s = edgeCrossing(d[0], d[hi], volumeRefines());
+    vec3 p = edgeVertexPosition(r, 0u, axis, s);
     vec3 n = vec3(0.0);
     n[axis] = d[hi] - d[0] >= 0.0 ? 1.0 : -1.0;   // fallback: along the edge, toward free space
     bool all8 = true;
@@ -34,7 +35,7 @@ void moveVertex(uint v, CubeRef r, uint axis, float d[8], bool present[8]) {
         uvec3 local;
         uint hiBlock = blockHolding(r, r.cube + cornerOffset(hi), local);
         uint lo = voxelColor[voxelIndex(r.nb[0], r.cube)], high = voxelColor[voxelIndex(hiBlock, local)];
-        vertices[v].color = vertexColorOnEdge(lo, high, d[0], d[hi]);
+        vertices[v].color = vertexColorOnEdge(lo, high, s);
     }
 }
 #endif

@@ -71,10 +71,10 @@ bool refinedCornerInside(const float d[kCornerWindowSize], const bool observed[k
         keep += regularDistance(t);
         flip += regularDistance(t ^ (1 << o));
     }
-    // Flipped, the corner carries a vertex clamped onto it on each edge to a 6-neighbour of its own raw sign that
-    // keeps its sign. On a noisy plane one such neighbour lies across the plane and one in it (a two-corner
-    // bump); more would pile vertices onto the corner (zero-area triangles, and the surface pulled by up to
-    // epsilon), so the corner keeps its raw sign then.
+    // Flipped, the corner carries a vertex next to it (1/8 of the edge away, edgeCrossing) on each edge to a
+    // 6-neighbour of its own raw sign that keeps its sign. On a noisy plane one such neighbour lies across the
+    // plane and one in it (a two-corner bump); more would crowd vertices around the corner (sliver fans, and the
+    // surface pulled by up to epsilon), so the corner keeps its raw sign then.
     int sameSign = 0;
     for (int axis = 0; axis < 3; ++axis)
         for (int side = -1; side <= 1; side += 2) {

@@ -9,6 +9,8 @@
 #include <array>
 #include <cstdint>
 
+#include "shared_layout.h"
+
 namespace vkmesh {
 
 // The six regular types in vkmesh's corner numbering (corner i at (i&1, i>>1&1, i>>2&1)), in the order that
@@ -17,6 +19,20 @@ inline constexpr std::array<uint8_t, 6> kRegularTypes{0x0F, 0xF0, 0x33, 0xCC, 0x
 
 // The default refinement epsilon, metres: half a voxel (docs/REFINEMENT.md; GpuVolumeConfig::refineEpsilonVoxels).
 inline float defaultRefineEpsilon(float voxelSize) { return 0.5f * voxelSize; }
+
+// Where the vertex of an edge sits along it, s from the low corner: the zero crossing d_lo / (d_lo - d_hi) in
+// [0, 1] (the midpoint when the values are equal, which only an edge meshed across a flipped corner has).
+// Unrefined (and the baseline): exactly that. In a refined mesh no vertex sits on a corner, so that no two
+// vertices coincide: s stops 1/FLIPPED_EDGE_MARGIN_INVERSE before a flipped corner on an edge whose corners
+// share a raw sign, and stays 1/REFINED_EDGE_MARGIN_INVERSE off the ends on any other (docs/REFINEMENT.md,
+// "Vertices"). The float operations of edgeCrossing in shaders_comp/structure/cube_access.glsl.
+inline float edgeCrossing(float dLo, float dHi, bool refined) {
+    if (dLo == dHi) return 0.5f;
+    const uint32_t inverse = !refined ? 0u : ((dLo < 0.0f) == (dHi < 0.0f) ? gpu::FLIPPED_EDGE_MARGIN_INVERSE : gpu::REFINED_EDGE_MARGIN_INVERSE);
+    const float margin = inverse == 0u ? 0.0f : 1.0f / float(inverse);
+    const float s = dLo / (dLo - dHi);
+    return s < margin ? margin : (s > 1.0f - margin ? 1.0f - margin : s);
+}
 
 // True when t (0..255) is one of kRegularTypes.
 bool isRegularType(int t);

@@ -66,11 +66,12 @@ inline uint32_t foldVoxelColor(uint32_t old, float oldWeight, float newSdf, cons
     return packVoxelColor(q[0], q[1], q[2]);
 }
 
-inline uint32_t vertexColorOnEdge(uint32_t lo, uint32_t hi, float dLo, float dHi) {
+// A vertex's colour (Vertex::color, RGBA8, alpha 255) from its edge's corner colours, interpolated at its
+// position's t along the edge (edgeCrossing in core/marching_cubes.h); 0 (alpha 0) when neither has a colour.
+inline uint32_t vertexColorOnEdge(uint32_t lo, uint32_t hi, float t) {
     const bool hasLo = hasVoxelColor(lo), hasHi = hasVoxelColor(hi);
     if (!hasLo && !hasHi) return 0;
     const ColorChannels a = unpackVoxelColor(hasLo ? lo : hi), b = unpackVoxelColor(hasHi ? hi : lo);
-    const float t = dLo == dHi ? 0.5f : std::clamp(dLo / (dLo - dHi), 0.0f, 1.0f);
     uint32_t out = 255u << 24;
     for (int i = 0; i < 3; ++i) {
         const float c = a[i] + (b[i] - a[i]) * t;

@@ -3,6 +3,7 @@
 // their colours.
 #include "cpu/reference_mesh_internal.h"
 
+#include "core/refinement.h"
 #include "core/voxel_color.h"
 
 #include <algorithm>
@@ -46,11 +47,9 @@ void ReferenceMesher::updateVertex(const TsdfBlocks& tsdf, const BlockMeshState&
     const float dLo = corners.d[0], dHi = corners.d[hi];
     if (!corners.exists[0] || !corners.exists[hi]) return;  // keeps its position
 
-    // Exactly the float operations of ReferenceVolume::extractBaselineMesh, s clamped to [0, 1]: on an edge of a
-    // refined type whose corners have the same sign (one flipped for meshing) the extrapolated crossing lies
-    // beyond the flipped corner and the vertex stops there (docs/REFINEMENT.md); where they differ in sign s is
-    // in (0, 1] and the clamp changes nothing. Equal values (only on such an edge): the midpoint.
-    const float s = dLo == dHi ? 0.5f : std::clamp(dLo / (dLo - dHi), 0.0f, 1.0f);
+    // The float operations of the shaders' edgeCrossing: the zero crossing, kept off the edge's ends in a refined
+    // mesh (docs/REFINEMENT.md, "Vertices"); unrefined, exactly ReferenceVolume::extractBaselineMesh's.
+    const float s = edgeCrossing(dLo, dHi, options_.refine);
     const auto local = localCoords(cube);
     float p[3] = {float(owner.coord[0] * int(gpu::BLOCK_SIDE) + local[0]), float(owner.coord[1] * int(gpu::BLOCK_SIDE) + local[1]),
                   float(owner.coord[2] * int(gpu::BLOCK_SIDE) + local[2])};
@@ -76,7 +75,7 @@ void ReferenceMesher::updateVertex(const TsdfBlocks& tsdf, const BlockMeshState&
     vertex.ny = n[1];
     vertex.nz = n[2];
     // Colour: interpolated between the edge's corners like the position (structure/voxel_color.glsl).
-    if (params_.colorFusion != ColorFusion::Off) vertex.color = vertexColorOnEdge(corners.color[0], corners.color[hi], dLo, dHi);
+    if (params_.colorFusion != ColorFusion::Off) vertex.color = vertexColorOnEdge(corners.color[0], corners.color[hi], s);
 }
 
 }  // namespace vkmesh::cpu

@@ -296,3 +296,57 @@ TEST(CornerRefinement, UnobservedCubesHaveNoSurface) {
 
 }  // namespace
 }  // namespace vkmesh
+
+namespace vkmesh {
+namespace {
+
+// edgeCrossing (docs/REFINEMENT.md, "Vertices"): unrefined, exactly the zero crossing clamped to the edge; refined,
+// never on a corner, so that the vertices of two edges that meet at a corner never share a position.
+TEST(EdgeCrossing, RefinedVerticesStayOffTheCorners) {
+    const float flippedMargin = 1.0f / float(gpu::FLIPPED_EDGE_MARGIN_INVERSE);
+    const float margin = 1.0f / float(gpu::REFINED_EDGE_MARGIN_INVERSE);
+    // Unrefined: the crossing, clamped to the edge when extrapolated.
+    EXPECT_EQ(edgeCrossing(-0.25f, 0.75f, false), 0.25f);
+    EXPECT_EQ(edgeCrossing(0.0f, -1.0f, false), 0.0f);       // d = 0 on the low corner: the vertex on it
+    EXPECT_EQ(edgeCrossing(0.5f, 0.25f, false), 1.0f);       // one corner flipped: clamped onto it
+    EXPECT_EQ(edgeCrossing(0.3f, 0.3f, false), 0.5f);
+    // Refined: a flipped edge's vertex stops next to the flipped corner, whichever end it is.
+    EXPECT_EQ(edgeCrossing(0.5f, 0.25f, true), 1.0f - flippedMargin);
+    EXPECT_EQ(edgeCrossing(0.25f, 0.5f, true), flippedMargin);
+    EXPECT_EQ(edgeCrossing(-0.25f, -0.5f, true), flippedMargin);
+    EXPECT_EQ(edgeCrossing(0.3f, 0.3f, true), 0.5f);
+    // A crossing on a corner or a hair from it is kept off the corner; one inside the margins is unchanged.
+    EXPECT_EQ(edgeCrossing(0.0f, -1.0f, true), margin);
+    EXPECT_EQ(edgeCrossing(-1e-9f, 1.0f, true), margin);
+    EXPECT_EQ(edgeCrossing(-1.0f, 0.0f, true), 1.0f - margin);
+    EXPECT_EQ(edgeCrossing(-0.25f, 0.75f, true), 0.25f);
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> value(-1.0f, 1.0f);
+    for (int i = 0; i < 100000; ++i) {
+        float lo = value(rng), hi = value(rng);
+        if (i % 7 == 0) lo = 0.0f;
+        if (i % 11 == 0) hi = std::ldexp(hi, -30);
+        const float plain = edgeCrossing(lo, hi, false), refined = edgeCrossing(lo, hi, true);
+        ASSERT_GE(refined, margin) << lo << " " << hi;
+        ASSERT_LE(refined, 1.0f - margin) << lo << " " << hi;
+        ASSERT_TRUE(plain >= 0.0f && plain <= 1.0f);
+        // Where the corners differ in sign and the crossing is inside the margins, refinement leaves it alone.
+        if ((lo < 0.0f) != (hi < 0.0f) && plain >= margin && plain <= 1.0f - margin) ASSERT_EQ(refined, plain);
+    }
+    // Positions: the vertices of the 6 edges at a corner (3 leaving it, 3 arriving), each as near the corner as
+    // a refined mesh allows, are 6 distinct points, also far from the origin (grid coordinates up to 2^13).
+    for (float corner : {0.0f, 1.0f, 37.0f, 4095.0f, 8191.0f}) {
+        std::set<std::array<float, 3>> points;
+        for (int axis = 0; axis < 3; ++axis) {
+            std::array<float, 3> leaving{corner, corner, corner}, arriving{corner, corner, corner};
+            leaving[axis] = corner + margin;
+            arriving[axis] = (corner - 1.0f) + (1.0f - margin);
+            points.insert(leaving);
+            points.insert(arriving);
+        }
+        EXPECT_EQ(points.size(), 6u) << "corner at " << corner;
+    }
+}
+
+}  // namespace
+}  // namespace vkmesh

@@ -5,6 +5,7 @@
 
 #include <cmath>
 
+#include "core/refinement.h"
 #include "core/voxel_color.h"
 
 namespace vkmesh {
@@ -79,16 +80,20 @@ TEST(VoxelColor, RecentModeFollowsAChange) {
 TEST(VoxelColor, VertexInterpolatesItsEdge) {
     const uint32_t black = packVoxelColor(0, 0, 0), white = packVoxelColor(1020, 1020, 1020);
     auto rgb = [](uint32_t c) { return vertexColorRgb(c); };
+    auto at = [&](float dLo, float dHi, bool refined = false) { return rgb(vertexColorOnEdge(black, white, edgeCrossing(dLo, dHi, refined))); };
     // Zero crossing at the low corner, the middle, the high corner.
-    EXPECT_EQ(rgb(vertexColorOnEdge(black, white, 0.0f, 1.0f)), (std::array<uint8_t, 3>{0, 0, 0}));
-    EXPECT_EQ(rgb(vertexColorOnEdge(black, white, -0.5f, 0.5f)), (std::array<uint8_t, 3>{128, 128, 128}));
-    EXPECT_EQ(rgb(vertexColorOnEdge(black, white, -1.0f, 0.0f)), (std::array<uint8_t, 3>{255, 255, 255}));
-    // Extrapolated positions (refinement) clamp to the edge's colours.
-    EXPECT_EQ(rgb(vertexColorOnEdge(black, white, 0.5f, 0.25f)), (std::array<uint8_t, 3>{255, 255, 255}));
-    EXPECT_TRUE(vertexHasColor(vertexColorOnEdge(black, white, 0.0f, 1.0f)));
+    EXPECT_EQ(at(0.0f, 1.0f), (std::array<uint8_t, 3>{0, 0, 0}));
+    EXPECT_EQ(at(-0.5f, 0.5f), (std::array<uint8_t, 3>{128, 128, 128}));
+    EXPECT_EQ(at(-1.0f, 0.0f), (std::array<uint8_t, 3>{255, 255, 255}));
+    // Extrapolated positions (refinement) stop at the edge's end, or 1/8 of the edge before it in a refined mesh.
+    EXPECT_EQ(at(0.5f, 0.25f), (std::array<uint8_t, 3>{255, 255, 255}));
+    const uint8_t nearWhite = uint8_t(std::floor(1020.0 * (1.0 - 1.0 / gpu::FLIPPED_EDGE_MARGIN_INVERSE) / 4.0 + 0.5));
+    EXPECT_LT(nearWhite, 255);
+    EXPECT_EQ(at(0.5f, 0.25f, true), (std::array<uint8_t, 3>{nearWhite, nearWhite, nearWhite}));
+    EXPECT_TRUE(vertexHasColor(vertexColorOnEdge(black, white, 0.0f)));
     // One corner without colour: the other's; none: no colour (alpha 0).
-    EXPECT_EQ(rgb(vertexColorOnEdge(0, white, -0.5f, 0.5f)), (std::array<uint8_t, 3>{255, 255, 255}));
-    EXPECT_FALSE(vertexHasColor(vertexColorOnEdge(0, 0, -0.5f, 0.5f)));
+    EXPECT_EQ(rgb(vertexColorOnEdge(0, white, 0.5f)), (std::array<uint8_t, 3>{255, 255, 255}));
+    EXPECT_FALSE(vertexHasColor(vertexColorOnEdge(0, 0, 0.5f)));
 }
 
 TEST(VoxelColor, DitherIsInUnitIntervalAndVariesWithPositionAndFrame) {

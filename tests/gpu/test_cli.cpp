@@ -74,6 +74,8 @@ TEST(Cli, FuseWritesMeshAndStats) {
     EXPECT_TRUE(stats["mesh"].contains("boundary_edges"));
     EXPECT_TRUE(stats["mesh"].contains("non_manifold_edges"));
     EXPECT_EQ(stats["mesh"]["unreferenced_vertices"], 0);
+    EXPECT_EQ(stats["mesh"]["coincident_vertices"], 0);   // one vertex per position, refined too
+    EXPECT_EQ(countDuplicatePositions(mesh), 0u);
     EXPECT_EQ(stats["heaps"]["vertices"]["live"], mesh.positions.size());
     // The synthetic sequence has colour: fused by default (4 bytes per cube), on every vertex of the PLY.
     EXPECT_EQ(stats["bytes_per_cube"], 28);
