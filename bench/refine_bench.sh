@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Refinement on (the default) against --no-refine (docs/REFINEMENT.md; the table of docs/RESULTS.md, issue 13).
 # For each dataset: vkmesh fuse twice with --stats at 3 cm, then a table of what refinement changes:
-# irregular cube share, sliver share, boundary edges (the mesh must not crack), meshing and fusion GPU ms
+# irregular cube share, sliver share, boundary edges (the mesh must not crack), vertices at the position of
+# another (none, refined or not: docs/REFINEMENT.md "Vertices"), meshing and fusion GPU ms
 # (medians over frames), and on the synthetic room `vkmesh eval` against its ground truth (accuracy, F@1cm).
 # Usage: bench/refine_bench.sh [OUT_DIR]   (VKMESH=build/vkmesh, DATASETS=../shared/datasets, FRAMES=all)
 set -euo pipefail
@@ -36,8 +37,8 @@ def get(d, path):
     for k in path.split("."):
         d = d.get(k) if isinstance(d, dict) else None
     return d
-print("| dataset | refine | irregular cubes | sliver triangles | boundary edges | vertices | triangles | meshing ms (median) | fuse ms (median) | accuracy mean (mm) | F@1cm |")
-print("|---|---|---|---|---|---|---|---|---|---|---|")
+print("| dataset | refine | irregular cubes | sliver triangles | boundary edges | coincident vertices | vertices | triangles | meshing ms (median) | fuse ms (median) | accuracy mean (mm) | F@1cm |")
+print("|---|---|---|---|---|---|---|---|---|---|---|---|")
 for name in ["room", "iclnuim_office_traj0", "tum_fr1_rpy"]:
     for v in ["unrefined", "refined"]:
         s = json.loads((out / f"{name}_{v}.json").read_text())
@@ -49,7 +50,7 @@ for name in ["room", "iclnuim_office_traj0", "tum_fr1_rpy"]:
             f = [t for t in e["scores"] if abs(t["threshold"] - 0.01) < 1e-6]
             f1 = f"{f[0]['fscore']:.3f}" if f else "?"
         print(f"| {name} | {'on' if s['refine'] else 'off'} | {s['mesh']['irregular_cube_share']:.4f} | "
-              f"{s['mesh']['sliver_triangle_share']:.4f} | {s['mesh']['boundary_edges']} | {s['mesh']['vertices']} | "
+              f"{s['mesh']['sliver_triangle_share']:.4f} | {s['mesh']['boundary_edges']} | {s['mesh'].get('coincident_vertices', '-')} | {s['mesh']['vertices']} | "
               f"{s['mesh']['triangles']} | {get(s, 'gpu_ms_per_frame.mesh_total.median'):.2f} | "
               f"{get(s, 'gpu_ms_per_frame.fuse.median'):.2f} | {acc} | {f1} |")
 PY
