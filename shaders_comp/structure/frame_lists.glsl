@@ -23,18 +23,41 @@ layout(std430, set = 0, binding = BINDING_MOVED_VERTICES) buffer MovedVertices {
 // cube_access.glsl), and their pipelines need no hash buffers.
 layout(std430, set = 0, binding = BINDING_BLOCK_NEIGHBORS) buffer BlockNeighbors { uint blockNeighbors[]; };
 
-// With refinement (docs/REFINEMENT.md), per block MESH_SIGN_WORDS words. The first MASK_WORDS: bit `local` set
-// when the corner is inside for meshing; decide_mesh_signs keeps them (for the corners whose sign may have
-// changed, before the retype list is collected), claim and triangulate type a cube from its 8 corners' bits.
-// Persistent: a corner's bit only changes when the TSDF within one corner of it does. The next MASK_WORDS: the
-// corners whose |d| < epsilon changed in fusion (so their sign may have changed), which list_sign_corners
-// lists and clears.
+// With refinement (docs/REFINEMENT.md), per block MESH_SIGN_WORDS words (shared_layout.h). The first MASK_WORDS:
+// bit `local` set when the corner is inside for meshing; decide_mesh_signs keeps them (for every corner of the dirty
+// blocks, before the retype list is collected), claim and triangulate type a cube from its 8 corners' bits. Then
+// the masks of the TSDF (MESH_SIGN_RAW, _NEAR, _OBSERVED) that fusion, recycling and map loading keep exact and
+// decide_mesh_signs reads instead of the TSDF. Persistent: a corner's sign only changes when the TSDF within one
+// corner of it does.
 layout(std430, set = 0, binding = BINDING_MESH_SIGNS) coherent buffer MeshSigns { uint meshSigns[]; };
 
 uint meshSignWord(uint block, uint local) { return block * MESH_SIGN_WORDS + local / 32u; }
-uint nearChangeWord(uint block, uint local) { return block * MESH_SIGN_WORDS + MASK_WORDS + local / 32u; }
+uint tsdfMaskWord(uint block, uint mask, uint local) { return block * MESH_SIGN_WORDS + mask + local / 32u; }
 
 bool meshSignInside(uint block, uint local) { return ((meshSigns[meshSignWord(block, local)] >> (local % 32u)) & 1u) != 0u; }
+
+// The TSDF mask bits of one corner: bit 0 sdf < 0, bit 1 observed and |sdf| < refineEpsilon, bit 2 observed.
+uint tsdfMaskBits(float sdf, float weight) {
+    bool observed = weight >= params.minMeshWeight;
+    return uint(sdf < 0.0) | (uint(observed && abs(sdf) < params.refineEpsilon) << 1) | (uint(observed) << 2);
+}
+
+// Toggles the bits `change` (tsdfMaskBits old ^ new) of corner `local` of `block` in the three masks. Called by
+// every invocation of the subgroup (uniform control flow), each for its own corner: where the subgroup's corners
+// share their words (subgroups of <= 32 consecutive invocations over consecutive corners), one atomic per mask.
+void toggleTsdfMasks(uint block, uint local, uint change) {
+    uint at = tsdfMaskWord(block, MESH_SIGN_RAW, local), bit = 1u << (local % 32u);
+    uint raw = (change & 1u) != 0u ? bit : 0u, near = (change & 2u) != 0u ? bit : 0u, seen = (change & 4u) != 0u ? bit : 0u;
+    if (subgroupMin(at) == subgroupMax(at)) {
+        raw = subgroupOr(raw);
+        near = subgroupOr(near);
+        seen = subgroupOr(seen);
+        if (!subgroupElect()) return;
+    }
+    if (raw != 0u) atomicXor(meshSigns[at], raw);
+    if (near != 0u) atomicXor(meshSigns[at + (MESH_SIGN_NEAR - MESH_SIGN_RAW)], near);
+    if (seen != 0u) atomicXor(meshSigns[at + (MESH_SIGN_OBSERVED - MESH_SIGN_RAW)], seen);
+}
 
 uint neighborIndex(ivec3 offset) { return uint((offset.x + 1) + 3 * (offset.y + 1) + 9 * (offset.z + 1)); }
 uint cachedNeighbor(uint block, ivec3 offset) { return blockNeighbors[block * NEIGHBORS_PER_BLOCK + neighborIndex(offset)]; }
