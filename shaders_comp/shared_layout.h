@@ -279,7 +279,7 @@ struct Counters {
     uint movedCount;
     // With refinement, the corners whose meshing sign decide_mesh_signs decided from their 27-corner window this
     // mesh pass (near, at most 2 edge neighbours of their sign, window observed; every other corner takes its raw
-    // sign from the masks alone): reset by plan_mesh. Also in the former padding; the struct stays a multiple of 16 bytes.
+    // sign from the masks alone): reset by plan_mesh. Not reported; kept for tests and debugging. Also in the former padding; the struct stays a multiple of 16 bytes.
     uint signCornerCount;
 };
 VKM_CONST COUNTERS_PER_FRAME_OFFSET = 144u;  // byte offset of validPixels

@@ -82,10 +82,8 @@ void main() {
                 if ((flipped & (1u << k)) != 0u) markCornerRetype(block, gl_LocalInvocationIndex + k * WG_BLOCK);
             }
         }
-        if (volumeRefines()) {   // uniform: every invocation of the workgroup toggles its corners' bits
-            for (uint k = 0u; k < VOXELS_PER_INVOCATION; ++k)
-                toggleTsdfMasks(block, gl_LocalInvocationIndex + k * WG_BLOCK, (maskChange >> (3u * k)) & 7u);
-        }
+        // Uniform over the subgroup (most subgroups' corners change no mask bit: skipped with one subgroup op).
+        if (volumeRefines() && subgroupOr(maskChange) != 0u) toggleTsdfMasks(block, maskChange);
     }
     ADD_COUNTER(updatedVoxels, updated);
     ADD_COUNTER(fusedBlocks, fused);

@@ -38,10 +38,7 @@ void main() {
             }
         }
     }
-    if (volumeRefines()) {   // uniform over the workgroup
-        for (uint k = 0u; k < VOXELS_PER_INVOCATION; ++k)
-            toggleTsdfMasks(block, gl_LocalInvocationIndex + k * WG_BLOCK, (maskChange >> (3u * k)) & 7u);
-    }
+    if (volumeRefines() && subgroupOr(maskChange) != 0u) toggleTsdfMasks(block, maskChange);   // uniform over the subgroup
     if (params.incrementalMesh != 0u) {
         for (uint k = 0u; k < VOXELS_PER_INVOCATION && flipped != 0u; ++k)
             if ((flipped & (1u << k)) != 0u) markCornerRetype(block, gl_LocalInvocationIndex + k * WG_BLOCK);

@@ -6,7 +6,8 @@
 //     of the block and of its neighbours (a row end takes the x-neighbour's column, the word's first or last row
 //     the adjacent word's or the y-neighbour's row, a layer at 0 or 7 the z-neighbour's);
 //   - a corner may flip only when it is near (observed, |d| < epsilon), at most 2 of its 6 edge neighbours share
-//     its raw sign (bit-sliced, all 32 at once) and its 27 corners are observed (the AND of 27 shifted words);
+//     its raw sign (bit-sliced, all 32 at once, from 7 mask words) and its 27 corners are observed (the AND of 27
+//     shifted words, built only for the words where a corner is left);
 //   - each remaining corner is decided from its 27 window bits (pure ALU: cube types by shifts, regular
 //     distances by xor and bitCount).
 // Shared by the GPU (decide_mesh_signs.comp) and its CPU twin (refinedSignWord, src/core/refinement.cpp, unit-tested
@@ -127,14 +128,29 @@ SW_FN uint swDecideWord(uint block, uint word, SW_OUT(uint) evaluated) {
     uint cand = SIGN_WINDOW_MASK(block, MESH_SIGN_NEAR, z, rh);
     evaluated = 0u;
     if (cand == 0u) return raw;
+    // Rule 3 first, from the 6 edge neighbours' words only (7 mask words): at most 2 of them share the sign. On a
+    // surface a near corner has 4 or 5 (its layer's neighbours and one across), so this removes most of them.
+    {
+        int oy = rh == 0u ? -1 : 1;
+        uint mL = SIGN_WINDOW_MASK(SIGN_WINDOW_NEIGHBOR(block, -1, 0, 0), MESH_SIGN_RAW, z, rh);
+        uint mR = SIGN_WINDOW_MASK(SIGN_WINDOW_NEIGHBOR(block, 1, 0, 0), MESH_SIGN_RAW, z, rh);
+        uint other = SIGN_WINDOW_MASK(block, MESH_SIGN_RAW, z, 1u - rh);
+        uint beyond = SIGN_WINDOW_MASK(SIGN_WINDOW_NEIGHBOR(block, 0, oy, 0), MESH_SIGN_RAW, z, 1u - rh);
+        uint below = rh == 0u ? beyond >> 24 : other >> 24;
+        uint above = rh == 0u ? other & 0xFFu : beyond & 0xFFu;
+        uint zm = z == 0u ? SIGN_WINDOW_MASK(SIGN_WINDOW_NEIGHBOR(block, 0, 0, -1), MESH_SIGN_RAW, 7u, rh)
+                          : SIGN_WINDOW_MASK(block, MESH_SIGN_RAW, z - 1u, rh);
+        uint zp = z == 7u ? SIGN_WINDOW_MASK(SIGN_WINDOW_NEIGHBOR(block, 0, 0, 1), MESH_SIGN_RAW, 0u, rh)
+                          : SIGN_WINDOW_MASK(block, MESH_SIGN_RAW, z + 1u, rh);
+        cand &= swAtMostTwo(~(swShiftX(raw, mL, mR, -1) ^ raw), ~(swShiftX(raw, mL, mR, 1) ^ raw), ~(((raw << 8) | below) ^ raw),
+                            ~(((raw >> 8) | (above << 24)) ^ raw), ~(zm ^ raw), ~(zp ^ raw));
+    }
+    if (cand == 0u) return raw;
     uint s0, s1, s2, s3, s4, s5, s6, s7, s8, s9, s10, s11, s12, s13, s14, s15, s16, s17, s18, s19, s20, s21, s22, s23, s24,
         s25, s26;
     swLayer(block, MESH_SIGN_RAW, z, rh, -1, s0, s1, s2, s3, s4, s5, s6, s7, s8);
     swLayer(block, MESH_SIGN_RAW, z, rh, 0, s9, s10, s11, s12, s13, s14, s15, s16, s17);
     swLayer(block, MESH_SIGN_RAW, z, rh, 1, s18, s19, s20, s21, s22, s23, s24, s25, s26);
-    // Rule 3 first (cheap, and it removes most near corners): at most 2 of the 6 edge neighbours share the sign.
-    cand &= swAtMostTwo(~(s12 ^ raw), ~(s14 ^ raw), ~(s10 ^ raw), ~(s16 ^ raw), ~(s4 ^ raw), ~(s22 ^ raw));
-    if (cand == 0u) return raw;
     uint o0, o1, o2, o3, o4, o5, o6, o7, o8, o9, o10, o11, o12, o13, o14, o15, o16, o17, o18, o19, o20, o21, o22, o23, o24,
         o25, o26;
     swLayer(block, MESH_SIGN_OBSERVED, z, rh, -1, o0, o1, o2, o3, o4, o5, o6, o7, o8);

@@ -42,21 +42,35 @@ uint tsdfMaskBits(float sdf, float weight) {
     return uint(sdf < 0.0) | (uint(observed && abs(sdf) < params.refineEpsilon) << 1) | (uint(observed) << 2);
 }
 
-// Toggles the bits `change` (tsdfMaskBits old ^ new) of corner `local` of `block` in the three masks. Called by
-// every invocation of the subgroup (uniform control flow), each for its own corner: where the subgroup's corners
-// share their words (subgroups of <= 32 consecutive invocations over consecutive corners), one atomic per mask.
-void toggleTsdfMasks(uint block, uint local, uint change) {
-    uint at = tsdfMaskWord(block, MESH_SIGN_RAW, local), bit = 1u << (local % 32u);
-    uint raw = (change & 1u) != 0u ? bit : 0u, near = (change & 2u) != 0u ? bit : 0u, seen = (change & 4u) != 0u ? bit : 0u;
-    if (subgroupMin(at) == subgroupMax(at)) {
-        raw = subgroupOr(raw);
-        near = subgroupOr(near);
-        seen = subgroupOr(seen);
-        if (!subgroupElect()) return;
+// Toggles the TSDF mask bits that changed in a workgroup-per-block pass (fuse_depth, recycle_retire: invocation
+// `lid` holds corners lid + k WG_BLOCK, k < VOXELS_PER_INVOCATION): `change` bit 3 k + m is mask m (raw, near,
+// observed) of its corner k. Called by every invocation of the subgroup (uniform control flow). Where the subgroup
+// is S <= 32 consecutive invocations starting at a multiple of S (as on lavapipe, S = 8), its corners k fill S
+// consecutive bits of one word: the 12 (k, m) bit fields are packed 32 / S to a word, so the subgroup needs
+// 12 S / 32 subgroupOr (3 for S = 8) and one atomicXor per changed word; otherwise one atomic per changed bit.
+void toggleTsdfMasks(uint block, uint change) {
+    const uint combos = 3u * VOXELS_PER_INVOCATION;
+    uint lid = gl_LocalInvocationIndex, size = gl_SubgroupSize;
+    uint lo = subgroupMin(lid), hi = subgroupMax(lid);
+    if (size <= 32u && hi - lo == size - 1u && lo % size == 0u) {   // uniform over the subgroup
+        uint fields = 32u / size, rel = lid - lo, fieldMask = size == 32u ? 0xFFFFFFFFu : (1u << size) - 1u;
+        for (uint first = 0u; first < combos; first += fields) {
+            uint v = 0u;
+            for (uint f = 0u; f < fields && first + f < combos; ++f) v |= ((change >> (first + f)) & 1u) << (size * f + rel);
+            v = subgroupOr(v);
+            if (v != 0u && subgroupElect()) {
+                for (uint f = 0u; f < fields && first + f < combos; ++f) {
+                    uint bits = (v >> (size * f)) & fieldMask, c = first + f;
+                    if (bits != 0u) atomicXor(meshSigns[tsdfMaskWord(block, MESH_SIGN_RAW + MASK_WORDS * (c % 3u), lo + (c / 3u) * WG_BLOCK)], bits << (lo % 32u));
+                }
+            }
+        }
+        return;
     }
-    if (raw != 0u) atomicXor(meshSigns[at], raw);
-    if (near != 0u) atomicXor(meshSigns[at + (MESH_SIGN_NEAR - MESH_SIGN_RAW)], near);
-    if (seen != 0u) atomicXor(meshSigns[at + (MESH_SIGN_OBSERVED - MESH_SIGN_RAW)], seen);
+    for (uint c = 0u; c < combos; ++c) {
+        uint local = lid + (c / 3u) * WG_BLOCK;
+        if (((change >> c) & 1u) != 0u) atomicXor(meshSigns[tsdfMaskWord(block, MESH_SIGN_RAW + MASK_WORDS * (c % 3u), local)], 1u << (local % 32u));
+    }
 }
 
 uint neighborIndex(ivec3 offset) { return uint((offset.x + 1) + 3 * (offset.y + 1) + 9 * (offset.z + 1)); }

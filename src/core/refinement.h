@@ -50,7 +50,7 @@ int regularDistance(int t);
 // regularDistance() over those 8 cubes, each typed from the raw signs of its corners, and at most 2 of its 6
 // edge neighbours share its raw sign (more would pile clamped vertices onto it). Only signs and the one
 // |d| < epsilon test enter: integer arithmetic, exact. The GPU computes it once per corner
-// (cornerMeshInside, shaders_comp/structure/cube_access.glsl) and stores it.
+// (decide_mesh_signs, from per-block bit masks of the TSDF: refinedSignWord below) and stores it.
 inline constexpr int kCornerWindowSize = 27;
 constexpr int cornerWindowIndex(int x, int y, int z) { return (x + 1) + 3 * ((y + 1) + 3 * (z + 1)); }
 bool refinedCornerInside(const float d[kCornerWindowSize], const bool observed[kCornerWindowSize], float epsilon);
