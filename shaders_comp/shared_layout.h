@@ -105,11 +105,18 @@ VKM_CONST BINDING_EDGE_VERTEX_Z = 31u; // ... +z edge
 VKM_CONST BINDING_MOVED_VERTICES = 32u; // uint list of the vertices move_vertices moves this mesh pass
 VKM_CONST BINDING_BLOCK_NEIGHBORS = 33u; // uint per block x 27: the blocks around it (frame_lists.glsl), valid while it is dirty
 VKM_CONST NEIGHBORS_PER_BLOCK = 27u;      // offsets -1..1 per axis, index (x + 1) + 3 (y + 1) + 9 (z + 1)
-VKM_CONST BINDING_MESH_SIGNS = 34u;     // MESH_SIGN_WORDS uint per block: with refinement, corner signs for meshing (frame_lists.glsl)
+VKM_CONST BINDING_MESH_SIGNS = 34u;     // MESH_SIGN_WORDS uint per block: with refinement, corner signs for meshing and TSDF masks
 VKM_CONST BINDING_COUNT = 35u;
 VKM_CONST MASK_WORDS = 16u;            // VOXELS_PER_BLOCK / 32
 VKM_CONST MASK_ALL_CUBES = 0xFFFFFFFFu; // a retype-mask word with each of its 32 cubes listed
-VKM_CONST MESH_SIGN_WORDS = 32u;       // per block: MASK_WORDS of meshing signs, then MASK_WORDS of corners to re-decide
+// Per block, MESH_SIGN_WORDS uint at BINDING_MESH_SIGNS (with refinement; frame_lists.glsl), MASK_WORDS each, one bit
+// per corner (bit `local % 32` of word `local / 32`): the meshing signs (decide_mesh_signs), then three masks of
+// the TSDF that fusion and recycling keep exact (docs/REFINEMENT.md): sdf < 0; observed and |sdf| < refineEpsilon;
+// observed (weight >= minMeshWeight). All zero for a free block (whose TSDF is zero).
+VKM_CONST MESH_SIGN_WORDS = 64u;
+VKM_CONST MESH_SIGN_RAW = 16u;         // word offsets within a block's MESH_SIGN_WORDS
+VKM_CONST MESH_SIGN_NEAR = 32u;
+VKM_CONST MESH_SIGN_OBSERVED = 48u;
 
 VKM_CONST EMPTY_SLOT = 0xFFFFFFFFu;    // an edge with no vertex
 VKM_CONST CLAIMED_SLOT = 0xFFFFFFFEu;  // claimed, the winner is allocating (within one dispatch only)
@@ -207,8 +214,7 @@ struct Counters {
     uint listDispatch[4];       // over the live block list, one workgroup per block
     uint collectDispatch[4];    // over the dirty blocks' retype-mask words, WG_LIST per group
     uint retypeDispatch[4];     // over the retype list, WG_LIST per group
-    uint vertexDispatch[4];     // with refinement, first decide_mesh_signs: over the listed corners (plan_sign_corners);
-                                // list_dirty_vertices: VOXELS_PER_BLOCK / WG_BLOCK workgroups per dirty block, or 0;
+    uint vertexDispatch[4];     // list_dirty_vertices: VOXELS_PER_BLOCK / WG_BLOCK workgroups per dirty block, or 0;
                                 // then (plan_move_vertices, after the listing) move_vertices: over the list
     uint heapDispatch[4];       // list_heap_vertices: over the heap up to its high water, or 0 (the cheaper runs)
     uint candidateDispatch[4];  // over the GC candidates, WG_LIST per group (first for list_new_vertices)
@@ -277,8 +283,9 @@ struct Counters {
     // The vertices listed for move_vertices this mesh pass: reset by commit_vertices, which runs before the
     // listing passes (so it needs no per-frame clear). In the former padding: map files hold this struct.
     uint movedCount;
-    // With refinement, the corners listed for decide_mesh_signs this mesh pass (list_sign_corners): reset by
-    // plan_mesh. Also in the former padding; the struct stays a multiple of 16 bytes.
+    // With refinement, the corners whose meshing sign decide_mesh_signs decided from their 27-corner window this
+    // mesh pass (near, at most 2 edge neighbours of their sign, window observed; every other corner takes its raw
+    // sign from the masks alone): reset by plan_mesh. Not reported; kept for tests and debugging. Also in the former padding; the struct stays a multiple of 16 bytes.
     uint signCornerCount;
 };
 VKM_CONST COUNTERS_PER_FRAME_OFFSET = 144u;  // byte offset of validPixels

@@ -28,7 +28,7 @@ void main() {
         float trunc = params.truncation;
         bool withColor = volumeKeepsColor() && frameHasColor();
         uint flipped = 0u;   // which of this invocation's corners flipped (marked after the loop, which stays lean)
-        uint nearChanged = 0u;   // with refinement: which entered or left |d| < epsilon while observed
+        uint maskChange = 0u;    // with refinement: bits 3k..3k+2, how corner k's TSDF masks change (tsdfMaskBits)
         for (uint k = 0u; k < VOXELS_PER_INVOCATION; ++k) {
             uint local = gl_LocalInvocationIndex + k * WG_BLOCK;
             uvec3 l = uvec3(local % BLOCK_SIDE, (local / BLOCK_SIDE) % BLOCK_SIDE, local / (BLOCK_SIDE * BLOCK_SIDE));
@@ -67,11 +67,9 @@ void main() {
             }
             bool wasObserved = oldWeight >= params.minMeshWeight, isObserved = newWeight >= params.minMeshWeight;
             if (wasObserved != isObserved || (isObserved && (oldSdf < 0.0) != (newSdf < 0.0))) flipped |= 1u << k;
-            // With refinement an observed corner entering or leaving |d| < epsilon may change its meshing sign:
-            // list_sign_corners has decide_mesh_signs re-decide it. (A flip above re-decides it and the corners
-            // around it through the cubes it marks.)
-            if (volumeRefines() && isObserved && (abs(oldSdf) < params.refineEpsilon) != (abs(newSdf) < params.refineEpsilon))
-                nearChanged |= 1u << k;
+            // With refinement the masks of the TSDF that decide_mesh_signs reads (a fresh block's are zero, as are
+            // the old values it starts from).
+            if (volumeRefines()) maskChange |= (tsdfMaskBits(oldSdf, oldWeight) ^ tsdfMaskBits(newSdf, newWeight)) << (3u * k);
             if (fresh || newWeight != oldWeight || newSdf != oldSdf) {
                 voxelSdf[v] = newSdf;
                 voxelWeight[v] = newWeight;
@@ -83,11 +81,9 @@ void main() {
             for (uint k = 0u; k < VOXELS_PER_INVOCATION && flipped != 0u; ++k) {
                 if ((flipped & (1u << k)) != 0u) markCornerRetype(block, gl_LocalInvocationIndex + k * WG_BLOCK);
             }
-            for (uint k = 0u; k < VOXELS_PER_INVOCATION && nearChanged != 0u; ++k) {
-                uint local = gl_LocalInvocationIndex + k * WG_BLOCK;
-                if ((nearChanged & (1u << k)) != 0u) atomicOr(meshSigns[nearChangeWord(block, local)], 1u << (local % 32u));
-            }
         }
+        // Uniform over the subgroup (most subgroups' corners change no mask bit: skipped with one subgroup op).
+        if (volumeRefines() && subgroupOr(maskChange) != 0u) toggleTsdfMasks(block, maskChange);
     }
     ADD_COUNTER(updatedVoxels, updated);
     ADD_COUNTER(fusedBlocks, fused);

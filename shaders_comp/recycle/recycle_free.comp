@@ -44,7 +44,7 @@ void main() {
     // FRESH flag after a deferred frame (docs/MESH.md, "Capacities"), starts like a never-used one.
     for (uint k = 0u; k < VOXELS_PER_INVOCATION; ++k) voxelSdf[block * VOXELS_PER_BLOCK + gl_LocalInvocationIndex + k * WG_BLOCK] = 0.0;
     if (gl_LocalInvocationIndex < MASK_WORDS) retypeMask[block * MASK_WORDS + gl_LocalInvocationIndex] = 0u;
-    // Meshing signs: all corners unobserved and d = 0, so outside.
+    // Meshing signs and TSDF masks: all corners unobserved and d = 0, so outside, not near, not observed.
     if (gl_LocalInvocationIndex < MESH_SIGN_WORDS) meshSigns[block * MESH_SIGN_WORDS + gl_LocalInvocationIndex] = 0u;
     if (gl_LocalInvocationIndex == 0u) {
         uint slot = uint(blockCoords[block].w);

@@ -22,6 +22,7 @@ void main() {
     bool starve = !retire && blockStarves(block);
     if (!retire && !starve) return;             // uniform over the workgroup
     uint flipped = 0u;
+    uint maskChange = 0u;   // with refinement: bits 3k..3k+2, how corner k's TSDF masks change (tsdfMaskBits)
     for (uint k = 0u; k < VOXELS_PER_INVOCATION; ++k) {
         uint local = gl_LocalInvocationIndex + k * WG_BLOCK;
         uint v = block * VOXELS_PER_BLOCK + local;
@@ -29,8 +30,15 @@ void main() {
         precise float newWeight = retire ? 0.0 : max(oldWeight - params.starveWeight, 0.0);
         if (newWeight == oldWeight) continue;
         voxelWeight[v] = newWeight;
-        if ((oldWeight >= params.minMeshWeight) != (newWeight >= params.minMeshWeight)) flipped |= 1u << k;
+        if ((oldWeight >= params.minMeshWeight) != (newWeight >= params.minMeshWeight)) {
+            flipped |= 1u << k;
+            if (volumeRefines()) {
+                float sdf = voxelSdf[v];
+                maskChange |= (tsdfMaskBits(sdf, oldWeight) ^ tsdfMaskBits(sdf, newWeight)) << (3u * k);
+            }
+        }
     }
+    if (volumeRefines() && subgroupOr(maskChange) != 0u) toggleTsdfMasks(block, maskChange);   // uniform over the subgroup
     if (params.incrementalMesh != 0u) {
         for (uint k = 0u; k < VOXELS_PER_INVOCATION && flipped != 0u; ++k)
             if ((flipped & (1u << k)) != 0u) markCornerRetype(block, gl_LocalInvocationIndex + k * WG_BLOCK);

@@ -1,17 +1,60 @@
 #version 460
-// Incremental mesh with refinement (docs/REFINEMENT.md): re-decides the meshing sign of every corner that
-// list_sign_corners listed, before the retype list is collected (decideMeshSign, mesh_signs.glsl). One
-// invocation per listed corner, so that the corners near the surface, which read 27 corners each, keep every
-// SIMD lane busy.
+// Incremental mesh with refinement (docs/REFINEMENT.md): re-decides the meshing sign of every corner of the dirty
+// blocks, before the retype list is collected, from the masks of the TSDF that fusion keeps (raw sign, near,
+// observed: no sdf or weight is read). One invocation per mask word of each dirty block (its 32 corners: 4 rows
+// along x of one z layer); the word's window is a few shifts and ors of the mask words of the block and of its
+// neighbours (from the neighbour cache), and only the corners that may flip are decided bit by bit
+// (swDecideWord, retype/sign_window.h, the same function as refinedCornerInside in src/core/refinement.cpp).
+// Where a sign changed, the word is stored and the 8 cubes around each changed corner are marked for retyping:
+// in this block or, for corners on its low faces, in the blocks behind.
 #extension GL_GOOGLE_include_directive : require
 #include "structure/frame.glsl"
-#include "retype/mesh_signs.glsl"
+#include "structure/frame_lists.glsl"
+
+#define SIGN_WINDOW_MASK(b, m, layer, rowHalf) ((b) == NO_BLOCK ? 0u : meshSigns[(b) * MESH_SIGN_WORDS + (m) + 2u * (layer) + (rowHalf)])
+#define SIGN_WINDOW_NEIGHBOR(b, ox, oy, oz) cachedNeighbor(b, ivec3(ox, oy, oz))
+#include "retype/sign_window.h"
 
 layout(local_size_x = WG_LIST) in;
 
+// Sets the retype bits `bits` of word (layer, rowHalf) of the block at `offset` from `block` (if it exists).
+void markCubes(uint block, ivec3 offset, uint layer, uint rowHalf, uint bits) {
+    if (bits == 0u) return;
+    uint b = offset == ivec3(0) ? block : cachedNeighbor(block, offset);
+    if (b != NO_BLOCK) atomicOr(retypeMask[b * MASK_WORDS + 2u * layer + rowHalf], bits);
+}
+
 void main() {
     uint i = gl_GlobalInvocationID.x;
-    if (i >= min(counters.signCornerCount, params.retypeCapacity)) return;
-    uint id = retypeList[i];
-    decideMeshSign(id / VOXELS_PER_BLOCK, id % VOXELS_PER_BLOCK);
+    uint evaluated = 0u;
+    if (i < counters.dirtyCount * MASK_WORDS) {
+        uint block = dirtyList[i / MASK_WORDS], word = i % MASK_WORDS;
+        uint signs = swDecideWord(block, word, evaluated);
+        uint at = block * MESH_SIGN_WORDS + word;
+        uint changed = signs ^ meshSigns[at];
+        if (changed != 0u) {
+            meshSigns[at] = signs;   // this invocation's word only
+            // The cubes corner - o, o in {0,1}^3: one row along y lower (oy), one column along x lower (ox: corners
+            // at x = 0 reach x = 7 of the block at -x), one layer lower (oz: layer 0 reaches layer 7 at -z).
+            uint z = word / 2u, rh = word % 2u;
+            for (uint oz = 0u; oz < 2u; ++oz) {
+                int bz = oz == 1u && z == 0u ? -1 : 0;
+                uint layer = (z + BLOCK_SIDE - oz) % BLOCK_SIDE;
+                for (uint ox = 0u; ox < 2u; ++ox) {
+                    uint same = ox == 1u ? (changed >> 1) & 0x7F7F7F7Fu : changed;
+                    uint edge = ox == 1u ? (changed & 0x01010101u) << 7 : 0u;   // into the block at -x
+                    markCubes(block, ivec3(0, 0, bz), layer, rh, same);
+                    markCubes(block, ivec3(-1, 0, bz), layer, rh, edge);
+                    // oy = 1: rows 1..3 of the word move down in it; its row 0 becomes row 3 of the other word (rh = 1)
+                    // or row 7 of the block at -y (rh = 0).
+                    markCubes(block, ivec3(0, 0, bz), layer, rh, same >> 8);
+                    markCubes(block, ivec3(-1, 0, bz), layer, rh, edge >> 8);
+                    int by = rh == 0u ? -1 : 0;
+                    markCubes(block, ivec3(0, by, bz), layer, 1u - rh, (same & 0xFFu) << 24);
+                    markCubes(block, ivec3(-1, by, bz), layer, 1u - rh, (edge & 0xFFu) << 24);
+                }
+            }
+        }
+    }
+    ADD_COUNTER(signCornerCount, evaluated);
 }

@@ -1,6 +1,6 @@
 #version 460
 // One invocation after mark_dirty: one invocation per retype-mask word of the dirty blocks (cache_neighbors,
-// list_sign_corners, collect_retype); the corner list of list_sign_corners starts empty.
+// build_tsdf_masks, decide_mesh_signs, collect_retype); decide_mesh_signs' count of decided corners starts at 0.
 #extension GL_GOOGLE_include_directive : require
 #include "structure/frame.glsl"
 

@@ -128,61 +128,9 @@ vec3 edgeVertexPosition(CubeRef r, uint lo, uint axis, float s) {
     return world;
 }
 
-// ---- refinement, flips decided per corner (docs/REFINEMENT.md; src/core/refinement.cpp is the CPU twin) --------
-// The six half-cube types (a plane parallel to a face), in vkmesh's corner numbering.
-const uint REGULAR_TYPES[6] = uint[6](0x0Fu, 0xF0u, 0x33u, 0xCCu, 0x55u, 0xAAu);
-
-// Hamming distance from type t to the nearest of 0, 255 and the six regular types.
-int regularDistance(uint t) {
-    int best = min(bitCount(t), 8 - bitCount(t));
-    for (uint k = 0u; k < 6u; ++k) best = min(best, bitCount(REGULAR_TYPES[k] ^ t));
-    return best;
-}
-
-// Whether the corner `local` of `block` (a dirty block) is inside for meshing, with refinement on. A pure function
-// of the signs and observed states of the 3x3x3 corners around it and of its own |d| < refineEpsilon, the same as
-// refinedCornerInside() in src/core/refinement.cpp: computed once per corner by decide_mesh_signs and stored,
-// so every cube sharing the corner builds with the same sign (no cracks). The window's blocks come from the
-// block's neighbour cache.
-bool cornerMeshInside(uint block, uint local) {
-    uvec3 l = cubeOfLocal(local);
-    uint v = voxelIndex(block, l);
-    float d = voxelSdf[v];
-    bool inside = d < 0.0;
-    // Far from the surface, or not observed (then a cube around it is not, and it cannot flip): the raw sign.
-    if (!(abs(d) < params.refineEpsilon) || voxelWeight[v] < params.minMeshWeight) return inside;
-    // Window corner w at offset (w % 3, w / 3 % 3, w / 9) - 1: its sign. The 8 cubes around the corner are
-    // decided only when all 27 corners (exactly their corners) are observed: at the rim of the observed
-    // surface a flip would move the rim.
-    bool windowInside[27];
-    for (uint w = 0u; w < 27u; ++w) {
-        ivec3 g = ivec3(l) + ivec3(int(w % 3u), int((w / 3u) % 3u), int(w / 9u)) - 1;   // in [-1, 8]
-        ivec3 o = ivec3(greaterThanEqual(g, ivec3(BLOCK_SIDE))) - ivec3(lessThan(g, ivec3(0)));
-        uint nb = o == ivec3(0) ? block : cachedNeighbor(block, o);
-        if (nb == NO_BLOCK) return inside;
-        uint u = voxelIndex(nb, uvec3(g - o * int(BLOCK_SIDE)));
-        if (voxelWeight[u] < params.minMeshWeight) return inside;
-        windowInside[w] = voxelSdf[u] < 0.0;
-    }
-    // Cube o (corner 0 at the corner minus o, so the corner is its corner o), typed from raw signs: flip when
-    // that strictly lowers their summed distance to the good types (a tie keeps the raw sign).
-    int keep = 0, flip = 0;
-    for (uint o = 0u; o < 8u; ++o) {
-        uvec3 base = uvec3(1u) - cornerOffset(o);
-        uint t = 0u;
-        for (uint c = 0u; c < 8u; ++c) {
-            uvec3 p = base + cornerOffset(c);
-            if (windowInside[p.x + 3u * p.y + 9u * p.z]) t |= 1u << c;
-        }
-        keep += regularDistance(t);
-        flip += regularDistance(t ^ (1u << o));
-    }
-    // At most 2 of its 6 edge neighbours of its own raw sign: each would put a vertex next to the flipped corner
-    // (refinedCornerInside in src/core/refinement.cpp explains the bound).
-    uint sameSign = uint(windowInside[4] == inside) + uint(windowInside[22] == inside) + uint(windowInside[10] == inside) +
-                    uint(windowInside[16] == inside) + uint(windowInside[12] == inside) + uint(windowInside[14] == inside);
-    return flip < keep && sameSign <= 2u ? !inside : inside;
-}
+// ---- refinement, flips decided per corner (docs/REFINEMENT.md) ------------------------------------------------
+// Each corner's meshing sign is decided once and stored (decide_mesh_signs, from the masks of the TSDF:
+// retype/sign_window.h; refinedCornerInside in src/core/refinement.cpp is the CPU specification).
 
 // The type a listed cube is built with: its MC type t (from loadCube, 0 unless observed), or with refinement
 // the MC type of its corners' stored meshing signs (decide_mesh_signs), 0 unless observed.

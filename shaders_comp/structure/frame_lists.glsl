@@ -23,18 +23,55 @@ layout(std430, set = 0, binding = BINDING_MOVED_VERTICES) buffer MovedVertices {
 // cube_access.glsl), and their pipelines need no hash buffers.
 layout(std430, set = 0, binding = BINDING_BLOCK_NEIGHBORS) buffer BlockNeighbors { uint blockNeighbors[]; };
 
-// With refinement (docs/REFINEMENT.md), per block MESH_SIGN_WORDS words. The first MASK_WORDS: bit `local` set
-// when the corner is inside for meshing; decide_mesh_signs keeps them (for the corners whose sign may have
-// changed, before the retype list is collected), claim and triangulate type a cube from its 8 corners' bits.
-// Persistent: a corner's bit only changes when the TSDF within one corner of it does. The next MASK_WORDS: the
-// corners whose |d| < epsilon changed in fusion (so their sign may have changed), which list_sign_corners
-// lists and clears.
+// With refinement (docs/REFINEMENT.md), per block MESH_SIGN_WORDS words (shared_layout.h). The first MASK_WORDS:
+// bit `local` set when the corner is inside for meshing; decide_mesh_signs keeps them (for every corner of the dirty
+// blocks, before the retype list is collected), claim and triangulate type a cube from its 8 corners' bits. Then
+// the masks of the TSDF (MESH_SIGN_RAW, _NEAR, _OBSERVED) that fusion, recycling and map loading keep exact and
+// decide_mesh_signs reads instead of the TSDF. Persistent: a corner's sign only changes when the TSDF within one
+// corner of it does.
 layout(std430, set = 0, binding = BINDING_MESH_SIGNS) coherent buffer MeshSigns { uint meshSigns[]; };
 
 uint meshSignWord(uint block, uint local) { return block * MESH_SIGN_WORDS + local / 32u; }
-uint nearChangeWord(uint block, uint local) { return block * MESH_SIGN_WORDS + MASK_WORDS + local / 32u; }
+uint tsdfMaskWord(uint block, uint mask, uint local) { return block * MESH_SIGN_WORDS + mask + local / 32u; }
 
 bool meshSignInside(uint block, uint local) { return ((meshSigns[meshSignWord(block, local)] >> (local % 32u)) & 1u) != 0u; }
+
+// The TSDF mask bits of one corner: bit 0 sdf < 0, bit 1 observed and |sdf| < refineEpsilon, bit 2 observed.
+uint tsdfMaskBits(float sdf, float weight) {
+    bool observed = weight >= params.minMeshWeight;
+    return uint(sdf < 0.0) | (uint(observed && abs(sdf) < params.refineEpsilon) << 1) | (uint(observed) << 2);
+}
+
+// Toggles the TSDF mask bits that changed in a workgroup-per-block pass (fuse_depth, recycle_retire: invocation
+// `lid` holds corners lid + k WG_BLOCK, k < VOXELS_PER_INVOCATION): `change` bit 3 k + m is mask m (raw, near,
+// observed) of its corner k. Called by every invocation of the subgroup (uniform control flow). Where the subgroup
+// is S <= 32 consecutive invocations starting at a multiple of S (as on lavapipe, S = 8), its corners k fill S
+// consecutive bits of one word: the 12 (k, m) bit fields are packed 32 / S to a word, so the subgroup needs
+// 12 S / 32 subgroupOr (3 for S = 8) and one atomicXor per changed word; otherwise one atomic per changed bit.
+void toggleTsdfMasks(uint block, uint change) {
+    const uint combos = 3u * VOXELS_PER_INVOCATION;
+    uint lid = gl_LocalInvocationIndex, size = gl_SubgroupSize;
+    uint lo = subgroupMin(lid), hi = subgroupMax(lid);
+    if (size <= 32u && hi - lo == size - 1u && lo % size == 0u) {   // uniform over the subgroup
+        uint fields = 32u / size, rel = lid - lo, fieldMask = size == 32u ? 0xFFFFFFFFu : (1u << size) - 1u;
+        for (uint first = 0u; first < combos; first += fields) {
+            uint v = 0u;
+            for (uint f = 0u; f < fields && first + f < combos; ++f) v |= ((change >> (first + f)) & 1u) << (size * f + rel);
+            v = subgroupOr(v);
+            if (v != 0u && subgroupElect()) {
+                for (uint f = 0u; f < fields && first + f < combos; ++f) {
+                    uint bits = (v >> (size * f)) & fieldMask, c = first + f;
+                    if (bits != 0u) atomicXor(meshSigns[tsdfMaskWord(block, MESH_SIGN_RAW + MASK_WORDS * (c % 3u), lo + (c / 3u) * WG_BLOCK)], bits << (lo % 32u));
+                }
+            }
+        }
+        return;
+    }
+    for (uint c = 0u; c < combos; ++c) {
+        uint local = lid + (c / 3u) * WG_BLOCK;
+        if (((change >> c) & 1u) != 0u) atomicXor(meshSigns[tsdfMaskWord(block, MESH_SIGN_RAW + MASK_WORDS * (c % 3u), local)], 1u << (local % 32u));
+    }
+}
 
 uint neighborIndex(ivec3 offset) { return uint((offset.x + 1) + 3 * (offset.y + 1) + 9 * (offset.z + 1)); }
 uint cachedNeighbor(uint block, ivec3 offset) { return blockNeighbors[block * NEIGHBORS_PER_BLOCK + neighborIndex(offset)]; }

@@ -1,6 +1,9 @@
 #include "core/refinement.h"
 
 #include <bit>
+#include <cstddef>
+
+#include "shared_layout.h"
 #include <algorithm>
 #include <cmath>
 
@@ -99,6 +102,57 @@ int refinedCubeType(const float d[kWindowSize], const bool observed[kWindowSize]
         if (refinedCornerInside(window, seen, epsilon)) type |= 1 << c;
     }
     return type;
+}
+
+}  // namespace vkmesh
+
+// ---- decide_mesh_signs' word decision on the host: the shared code of shaders_comp/retype/sign_window.h ------------
+namespace vkmesh::gpu {
+namespace {
+// The block neighbourhood being decided; "block indices" are indices into it (the centre is 13).
+thread_local const std::array<const TsdfMasks*, 27>* tlSignBlocks = nullptr;
+
+uint32_t hostSignMask(uint32_t b, uint32_t m, uint32_t layer, uint32_t rowHalf) {
+    if (b == NO_BLOCK) return 0u;
+    const TsdfMasks& t = *(*tlSignBlocks)[b];
+    const std::array<uint32_t, 16>& a = m == MESH_SIGN_RAW ? t.raw : (m == MESH_SIGN_NEAR ? t.near : t.observed);
+    return a[2 * layer + rowHalf];
+}
+
+uint32_t hostSignNeighbor(int ox, int oy, int oz) {
+    const int i = cornerWindowIndex(ox, oy, oz);
+    return (*tlSignBlocks)[std::size_t(i)] ? uint32_t(i) : NO_BLOCK;
+}
+}  // namespace
+}  // namespace vkmesh::gpu
+
+#define SIGN_WINDOW_MASK(b, m, layer, rowHalf) hostSignMask(b, m, layer, rowHalf)
+#define SIGN_WINDOW_NEIGHBOR(b, ox, oy, oz) hostSignNeighbor(ox, oy, oz)
+#include "retype/sign_window.h"
+#undef SIGN_WINDOW_MASK
+#undef SIGN_WINDOW_NEIGHBOR
+
+namespace vkmesh {
+
+TsdfMasks tsdfMasks(const float sdf[512], const float weight[512], float minMeshWeight, float epsilon) {
+    TsdfMasks m;
+    for (uint32_t local = 0; local < 512; ++local) {
+        const uint32_t bit = 1u << (local % 32), w = local / 32;
+        const bool observed = weight[local] >= minMeshWeight;
+        if (sdf[local] < 0.0f) m.raw[w] |= bit;
+        if (observed && std::fabs(sdf[local]) < epsilon) m.near[w] |= bit;
+        if (observed) m.observed[w] |= bit;
+    }
+    return m;
+}
+
+uint32_t refinedSignWord(const std::array<const TsdfMasks*, 27>& blocks, uint32_t word, uint32_t* evaluated) {
+    gpu::tlSignBlocks = &blocks;
+    uint32_t n = 0;
+    const uint32_t signs = gpu::swDecideWord(uint32_t(cornerWindowIndex(0, 0, 0)), word, n);
+    gpu::tlSignBlocks = nullptr;
+    if (evaluated) *evaluated = n;
+    return signs;
 }
 
 }  // namespace vkmesh

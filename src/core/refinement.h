@@ -66,10 +66,24 @@ int regularDistance(int t);
 // regularDistance() over those 8 cubes, each typed from the raw signs of its corners, and at most 2 of its 6
 // edge neighbours share its raw sign (more would pile clamped vertices onto it). Only signs and the one
 // |d| < epsilon test enter: integer arithmetic, exact. The GPU computes it once per corner
-// (cornerMeshInside, shaders_comp/structure/cube_access.glsl) and stores it.
+// (decide_mesh_signs, from per-block bit masks of the TSDF: refinedSignWord below) and stores it.
 inline constexpr int kCornerWindowSize = 27;
 constexpr int cornerWindowIndex(int x, int y, int z) { return (x + 1) + 3 * ((y + 1) + 3 * (z + 1)); }
 bool refinedCornerInside(const float d[kCornerWindowSize], const bool observed[kCornerWindowSize], float epsilon);
+
+// ---- The GPU's word decision on the host (decide_mesh_signs; shaders_comp/retype/sign_window.h) ----------------
+// The masks of the TSDF of one block as fusion keeps them on the GPU (shared_layout.h, MESH_SIGN_RAW, _NEAR,
+// _OBSERVED): bit local % 32 of word local / 32 (local = x + 8 (y + 8 z)); raw: d < 0, near: observed and
+// |d| < epsilon, observed: weight >= minMeshWeight.
+struct TsdfMasks {
+    std::array<uint32_t, 16> raw{}, near{}, observed{};
+};
+TsdfMasks tsdfMasks(const float sdf[512], const float weight[512], float minMeshWeight, float epsilon);
+// The meshing signs of the 32 corners of word `word` of the block at the centre of `blocks` (the 3x3x3 blocks
+// around it, index cornerWindowIndex(x, y, z) of the block offset; nullptr: not allocated), computed by the very
+// code the GPU runs (sign_window.h). Bit i equals refinedCornerInside() of corner 32 word + i (tested).
+// `evaluated`: how many corners were decided from their window bit by bit.
+uint32_t refinedSignWord(const std::array<const TsdfMasks*, 27>& blocks, uint32_t word, uint32_t* evaluated = nullptr);
 
 // A 4x4x4 window of corners around a cube: offsets -1..2 on each axis from the cube's corner 0, index
 // windowIndex(x, y, z) with x, y, z in [-1, 2].

@@ -68,7 +68,7 @@ std::vector<ReferenceMesher::DirtyBlock> ReferenceMesher::markDirty(const Refere
     return dirty;
 }
 
-// The meshing signs (decide_mesh_signs.comp, which decides only the corners list_sign_corners lists): every
+// The meshing signs (decide_mesh_signs.comp, which decides every corner of D from the masks of the TSDF): every
 // corner of D gets refinedCornerInside() of its 3x3x3 window; where that differs from the stored sign, the sign
 // is stored and the 8 cubes around the corner (corner - o, o in {0,1}^3) are listed. Those lie in D: a sign only changes with the TSDF within one corner of it, D holds every block
 // within one block of a touched one, and every block is in D the frame it is created. (A mark outside D, which

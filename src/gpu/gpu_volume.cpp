@@ -336,6 +336,12 @@ MeshStateSnapshot GpuVolume::downloadMeshState() const { return mesh_.download(c
 
 std::array<uint64_t, 256> GpuVolume::surfaceCubeTypes() const { return mesh_.surfaceCubeTypes(); }
 
+std::vector<uint32_t> GpuVolume::downloadMeshSigns() const {
+    std::vector<uint32_t> words(size_t(lists_.capacities().blocks) * MESH_SIGN_WORDS);
+    vk::downloadFromBuffer(context_, lists_.meshSigns(), words.data(), words.size() * 4);
+    return words;
+}
+
 std::vector<BlockSnapshot> GpuVolume::downloadBlocks() const {
     std::vector<uint32_t> blocks;
     for (const BlockHash::Entry& e : hash_.downloadEntries())

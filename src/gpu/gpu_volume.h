@@ -247,6 +247,9 @@ public:
     std::array<uint64_t, 256> surfaceCubeTypes() const;
 
     std::vector<BlockSnapshot> downloadBlocks() const;
+    // With refinement: the mesh signs buffer, MESH_SIGN_WORDS words per pool block (the meshing signs, then the
+    // masks of the TSDF: shared_layout.h), for tests.
+    std::vector<uint32_t> downloadMeshSigns() const;
     Counters readCounters() const { return counters_.read(); }
     std::vector<PoolInfo> pools() const;
     // The configuration with the capacities as they are now (they grow with growCapacities).

@@ -191,8 +191,8 @@ void GpuVolume::restore(const map::MapData& m, const std::string& name) {
         throw Error(name + ": " + std::to_string(k.rehashLost) + " blocks found no hash slot within " + std::to_string(HASH_MAX_PROBES) +
                     " probes in a table of " + std::to_string(config_.hashCapacity) + " slots (give more --hash-slots)");
     if (config_.refine && config_.meshMode == MeshMode::Incremental) {
-        // The meshing signs are not saved (they follow from the TSDF): decided here for every corner of every
-        // block (every retype bit set lists them all), so that a dirty block's cube reading a clean neighbour's
+        // The meshing signs and the masks of the TSDF are not saved (they follow from the TSDF): the masks are
+        // set from the TSDF and the signs decided here for every corner of every block (all blocks dirty), so that a dirty block's cube reading a clean neighbour's
         // corner finds its sign. The mesh was built with the same signs, so the masks are then put back as saved,
         // and so are the counters.
         cmd = beginSubmission();
@@ -200,7 +200,7 @@ void GpuVolume::restore(const map::MapData& m, const std::string& name) {
         vkCmdFillBuffer(cmd, lists_.retypeMasks().handle(), 0, VK_WHOLE_SIZE, MASK_ALL_CUBES);
         vk::memoryBarrier(cmd);
         markDirty_.recordAll(cmd, lastPush_, config_.blockCapacity);
-        retype_.recordMeshSigns(cmd, lastPush_, counters_);
+        retype_.recordMeshSigns(cmd, lastPush_, counters_, true);
         vkCmdFillBuffer(cmd, lists_.retypeMasks().handle(), 0, VK_WHOLE_SIZE, 0);
         vk::memoryBarrier(cmd);
         recorder_.submitAndWait();

@@ -294,6 +294,107 @@ TEST(CornerRefinement, UnobservedCubesHaveNoSurface) {
     EXPECT_EQ(refinedCubeType(d, observed, 0.5f), 0);
 }
 
+
+// decide_mesh_signs' word decision (shaders_comp/retype/sign_window.h, run here by refinedSignWord) against the
+// specification: on random neighbourhoods of 3x3x3 blocks (some absent, some corners unobserved), every corner of
+// the centre block gets exactly refinedCornerInside() of its 27-corner window, read across the block faces.
+TEST(CornerRefinement, MaskWordDecisionEqualsTheCornerRuleOnRandomBlocks) {
+    constexpr float kEpsilon = 0.5f;
+    std::mt19937 rng(12345);
+    std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+    uint64_t corners = 0, flipped = 0, evaluatedTotal = 0;
+    for (int trial = 0; trial < 600; ++trial) {
+        // The field over 24^3 corners (global position g in [0, 24)): a tilted plane or sphere with noise (so that
+        // near corners and bumps occur), or random signs with every corner near (every window pattern).
+        const int kind = trial % 3;
+        const float nx = unit(rng), ny = unit(rng), nz = 2.0f + unit(rng), c = 12.0f + 2.0f * unit(rng);
+        const float noise = 0.2f + 0.6f * std::abs(unit(rng));
+        const float unobservedShare = trial % 4 == 0 ? 0.0f : 0.05f * std::abs(unit(rng));
+        std::vector<float> sdf(24 * 24 * 24), weight(sdf.size());
+        for (int z = 0; z < 24; ++z)
+            for (int y = 0; y < 24; ++y)
+                for (int x = 0; x < 24; ++x) {
+                    const size_t i = size_t(x + 24 * (y + 24 * z));
+                    float d;
+                    if (kind == 0) d = (nx * (x - 12) + ny * (y - 12) + nz * z - nz * c) / 2.0f + noise * unit(rng);
+                    else if (kind == 1) d = std::sqrt(float((x - 12) * (x - 12) + (y - 12) * (y - 12) + (z - 12) * (z - 12))) - c / 2.0f + noise * unit(rng);
+                    else d = unit(rng) < 0.0f ? -0.25f : 0.25f;
+                    sdf[i] = d;
+                    weight[i] = (unit(rng) * 0.5f + 0.5f) < unobservedShare ? 0.0f : 1.0f + float(trial % 5);
+                }
+        auto at = [&](int x, int y, int z) { return size_t(x + 24 * (y + 24 * z)); };
+        std::array<TsdfMasks, 27> masks;
+        std::array<const TsdfMasks*, 27> blocks{};
+        std::array<bool, 27> present{};
+        for (int b = 0; b < 27; ++b) {
+            present[size_t(b)] = b == 13 || (unit(rng) * 0.5f + 0.5f) > 0.1f;
+            const int bx = b % 3, by = (b / 3) % 3, bz = b / 9;
+            float s[512], w[512];
+            for (int l = 0; l < 512; ++l) {
+                const size_t i = at(8 * bx + l % 8, 8 * by + (l / 8) % 8, 8 * bz + l / 64);
+                s[l] = sdf[i];
+                w[l] = weight[i];
+            }
+            masks[size_t(b)] = tsdfMasks(s, w, 1.0f, kEpsilon);
+            if (present[size_t(b)]) blocks[size_t(b)] = &masks[size_t(b)];
+        }
+        for (uint32_t word = 0; word < 16; ++word) {
+            uint32_t evaluated = 0;
+            const uint32_t signs = refinedSignWord(blocks, word, &evaluated);
+            evaluatedTotal += evaluated;
+            for (uint32_t bit = 0; bit < 32; ++bit) {
+                const int local = int(word * 32 + bit);
+                const int gx = 8 + local % 8, gy = 8 + (local / 8) % 8, gz = 8 + local / 64;
+                float d[kCornerWindowSize];
+                bool observed[kCornerWindowSize];
+                for (int w = 0; w < kCornerWindowSize; ++w) {
+                    const int x = gx + w % 3 - 1, y = gy + (w / 3) % 3 - 1, z = gz + w / 9 - 1;
+                    const bool blockPresent = present[size_t(x / 8 + 3 * (y / 8) + 9 * (z / 8))];
+                    d[w] = blockPresent ? sdf[at(x, y, z)] : 0.0f;
+                    observed[w] = blockPresent && weight[at(x, y, z)] >= 1.0f;
+                }
+                const bool expected = refinedCornerInside(d, observed, kEpsilon);
+                ASSERT_EQ(((signs >> bit) & 1u) != 0u, expected)
+                    << "trial " << trial << " word " << word << " bit " << bit << " (corner " << gx - 8 << ", " << gy - 8 << ", " << gz - 8 << ")";
+                ++corners;
+                flipped += expected != (d[cornerWindowIndex(0, 0, 0)] < 0.0f);
+            }
+        }
+    }
+    std::cout << corners << " corners, " << flipped << " flipped, " << evaluatedTotal << " decided bit by bit\n";
+    EXPECT_GT(flipped, 1000u);
+}
+
+// The same rule on single windows: every 27-bit pattern of a near corner whose window is all observed, sampled.
+TEST(CornerRefinement, MaskWordDecisionEqualsTheCornerRuleOnRandomWindows) {
+    std::mt19937 rng(777);
+    uint64_t flips = 0;
+    for (int trial = 0; trial < 200000; ++trial) {
+        const uint32_t pattern = rng() & ((1u << 27) - 1);
+        // One block holding the window at corner (3, 2, 5) (inside the block, word 10 bit 19) and its
+        // neighbourhood; all other corners far and observed.
+        float s[512], w[512];
+        for (int l = 0; l < 512; ++l) { s[l] = 1.0f; w[l] = 1.0f; }
+        float d[kCornerWindowSize];
+        bool observed[kCornerWindowSize];
+        for (int k = 0; k < kCornerWindowSize; ++k) {
+            const int x = 3 + k % 3 - 1, y = 2 + (k / 3) % 3 - 1, z = 5 + k / 9 - 1;
+            d[k] = ((pattern >> k) & 1u) ? -0.1f : 0.1f;
+            observed[k] = true;
+            s[x + 8 * (y + 8 * z)] = d[k];
+        }
+        const TsdfMasks m = tsdfMasks(s, w, 1.0f, 0.5f);
+        std::array<const TsdfMasks*, 27> blocks{};
+        blocks[13] = &m;
+        const int local = 3 + 8 * (2 + 8 * 5);
+        const bool got = ((refinedSignWord(blocks, uint32_t(local / 32)) >> (local % 32)) & 1u) != 0u;
+        const bool expected = refinedCornerInside(d, observed, 0.5f);
+        ASSERT_EQ(got, expected) << "pattern " << pattern;
+        flips += expected != (d[13] < 0.0f);
+    }
+    EXPECT_GT(flips, 100u);
+}
+
 }  // namespace
 }  // namespace vkmesh
 

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <filesystem>
 #include <cstring>
@@ -13,6 +14,7 @@
 #include <set>
 
 #include "core/mesh_analysis.h"
+#include "core/refinement.h"
 #include "cpu/reference_volume.h"
 #include "gpu/gpu_volume.h"
 #include "gpu_fixture.h"
@@ -202,6 +204,68 @@ TEST_F(GpuTest, CliSoakAndFuseWithBoundedMaps) {
                             "\"hash_tombstones\"", "\"outside_keep_radius\""})
         EXPECT_NE(stats.find(key), std::string::npos) << key;
     std::filesystem::remove_all(dir);
+}
+
+
+// With refinement (on by default) the masks of the TSDF that decide_mesh_signs reads stay exact through fusion,
+// starving, retiring, freeing and pool growth: every live block's masks equal those of its downloaded TSDF, a
+// free block's are zero, and every live block's stored meshing signs equal the host twin of the GPU's word
+// decision (refinedSignWord, itself tested against refinedCornerInside) over its downloaded neighbourhood.
+TEST_F(GpuTest, RefinementMasksAndSignsFollowTheTsdfThroughRecyclingAndGrowth) {
+    static const synth::SyntheticScene scene = synth::SyntheticScene::defaultRoom();
+    gpu::GpuVolumeConfig config = recyclingConfig(1.5f, true);
+    config.blockCapacity = 64;   // grows several times (masks and signs are copied with the TSDF)
+    ASSERT_TRUE(config.refine);
+    gpu::GpuVolume volume(context(), config);
+    const float epsilon = config.refineEpsilonVoxels * config.params.voxelSize;
+    Intrinsics intr = synth::kinectIntrinsics(kWidth, kHeight);
+    auto poses = synth::cameraPath(30, synth::PathKind::Orbit);
+    uint64_t freed = 0, checkedBlocks = 0, flips = 0;
+    for (size_t i = 0; i < poses.size(); ++i) {
+        synth::RenderOptions options;
+        options.noise = true;
+        options.seed = uint32_t(i + 1);
+        auto r = volume.integrate(scene.renderDepth(intr, poses[i], options), intr, poses[i]);
+        freed += r.counters.blocksFreed;
+        if (i % 6 != 5) continue;
+        const std::vector<uint32_t> words = volume.downloadMeshSigns();
+        const std::vector<gpu::BlockSnapshot> blocks = volume.downloadBlocks();
+        std::map<cpu::BlockCoord, TsdfMasks> masks;
+        std::vector<bool> live(words.size() / gpu::MESH_SIGN_WORDS, false);
+        for (const gpu::BlockSnapshot& b : blocks) {
+            live[b.index] = true;
+            const TsdfMasks m = tsdfMasks(b.sdf.data(), b.weight.data(), config.minMeshWeight, epsilon);
+            masks[{b.coord.x(), b.coord.y(), b.coord.z()}] = m;
+            const uint32_t* w = &words[size_t(b.index) * gpu::MESH_SIGN_WORDS];
+            for (uint32_t k = 0; k < gpu::MASK_WORDS; ++k) {
+                ASSERT_EQ(w[gpu::MESH_SIGN_RAW + k], m.raw[k]) << "frame " << i << " block " << b.index << " word " << k;
+                ASSERT_EQ(w[gpu::MESH_SIGN_NEAR + k], m.near[k]) << "frame " << i << " block " << b.index << " word " << k;
+                ASSERT_EQ(w[gpu::MESH_SIGN_OBSERVED + k], m.observed[k]) << "frame " << i << " block " << b.index << " word " << k;
+            }
+        }
+        for (size_t b = 0; b < live.size(); ++b) {
+            if (live[b]) continue;
+            for (uint32_t k = 0; k < gpu::MESH_SIGN_WORDS; ++k) ASSERT_EQ(words[b * gpu::MESH_SIGN_WORDS + k], 0u) << "free block " << b;
+        }
+        for (const gpu::BlockSnapshot& b : blocks) {
+            std::array<const TsdfMasks*, 27> around{};
+            for (int n = 0; n < 27; ++n) {
+                auto it = masks.find({b.coord.x() + n % 3 - 1, b.coord.y() + (n / 3) % 3 - 1, b.coord.z() + n / 9 - 1});
+                if (it != masks.end()) around[size_t(n)] = &it->second;
+            }
+            for (uint32_t k = 0; k < gpu::MASK_WORDS; ++k) {
+                const uint32_t expected = refinedSignWord(around, k);
+                ASSERT_EQ(words[size_t(b.index) * gpu::MESH_SIGN_WORDS + k], expected) << "frame " << i << " block " << b.index << " word " << k;
+                flips += uint64_t(std::popcount(expected ^ masks[{b.coord.x(), b.coord.y(), b.coord.z()}].raw[k]));
+            }
+            ++checkedBlocks;
+        }
+    }
+    std::cout << checkedBlocks << " blocks checked, " << flips << " refined corners, " << freed << " blocks freed, pool "
+              << volume.config().blockCapacity << " blocks\n";
+    EXPECT_GT(freed, 0u);
+    EXPECT_GT(flips, 0u);
+    EXPECT_GT(volume.config().blockCapacity, 64u);
 }
 
 }  // namespace

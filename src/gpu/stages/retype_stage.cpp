@@ -8,23 +8,22 @@ RetypeStage::RetypeStage(const vk::Context& context, const vk::BindingTable& tab
     : refines_((table.features() & VOLUME_FEATURE_REFINE) != 0),
       plan_(context, table, "plan_mesh"),
       cacheNeighbors_(context, table, "cache_neighbors"),
-      listSignCorners_(context, table, "list_sign_corners"),
-      planSignCorners_(context, table, "plan_sign_corners"),
+      buildMasks_(context, table, "build_tsdf_masks"),
       decideSigns_(context, table, "decide_mesh_signs"),
       collect_(context, table, "collect_retype"),
       planRetype_(context, table, "plan_retype") {}
 
-void RetypeStage::recordMeshSigns(VkCommandBuffer cmd, const FramePush& push, const CounterBuffer& counters) const {
+void RetypeStage::recordMeshSigns(VkCommandBuffer cmd, const FramePush& push, const CounterBuffer& counters, bool fromTsdf) const {
     plan_.dispatch(cmd, &push, 1);
     vk::memoryBarrier(cmd);
     cacheNeighbors_.dispatchIndirect(cmd, &push, counters.buffer(), offsetof(Counters, collectDispatch));
     vk::memoryBarrier(cmd);
     if (!refines_) return;
-    listSignCorners_.dispatchIndirect(cmd, &push, counters.buffer(), offsetof(Counters, collectDispatch));
-    vk::memoryBarrier(cmd);
-    planSignCorners_.dispatch(cmd, &push, 1);
-    vk::memoryBarrier(cmd);
-    decideSigns_.dispatchIndirect(cmd, &push, counters.buffer(), offsetof(Counters, vertexDispatch));
+    if (fromTsdf) {
+        buildMasks_.dispatchIndirect(cmd, &push, counters.buffer(), offsetof(Counters, collectDispatch));
+        vk::memoryBarrier(cmd);
+    }
+    decideSigns_.dispatchIndirect(cmd, &push, counters.buffer(), offsetof(Counters, collectDispatch));
     vk::memoryBarrier(cmd);
 }
 

@@ -1,10 +1,10 @@
 // Stage: the cubes to retype (shaders_comp/retype/). Sizes the dispatches over the dirty blocks (plan_mesh),
-// caches each dirty block's neighbour blocks (cache_neighbors); with refinement lists the corners of the
-// marked cubes (list_sign_corners, plan_sign_corners), re-decides their meshing signs and marks the cubes
+// caches each dirty block's neighbour blocks (cache_neighbors); with refinement re-decides the meshing signs of
+// every corner of the dirty blocks from the masks of the TSDF, one invocation per mask word, and marks the cubes
 // around those that changed (decide_mesh_signs); then moves the retype-mask bits of the dirty blocks into the
 // retype list, as many as fit (collect_retype; the rest stay set for the next pass and are counted in
 // retypeDeferred), and sizes the passes over the list (plan_retype).
-//   reads  dirty list, hash, TSDF, retype masks, mesh signs
+//   reads  dirty list, hash, retype masks, mesh signs (and TSDF masks)
 //   writes block neighbours, mesh signs, retype list, masks (bits taken and set), dispatch arguments
 #pragma once
 
@@ -17,13 +17,14 @@ class RetypeStage {
 public:
     RetypeStage(const vk::Context& context, const vk::BindingTable& table);
     void record(VkCommandBuffer cmd, const FramePush& push, const CounterBuffer& counters) const;
-    // Up to the meshing signs (plan_mesh to decide_mesh_signs): with every retype bit set, the signs of every
-    // corner of the dirty blocks (after a map is loaded). Marks what changed, as record() does.
-    void recordMeshSigns(VkCommandBuffer cmd, const FramePush& push, const CounterBuffer& counters) const;
+    // Up to the meshing signs (plan_mesh to decide_mesh_signs): the signs of every corner of the dirty blocks.
+    // Marks what changed, as record() does. `fromTsdf` (after a map is loaded): first sets the dirty blocks'
+    // masks of the TSDF from the TSDF (build_tsdf_masks).
+    void recordMeshSigns(VkCommandBuffer cmd, const FramePush& push, const CounterBuffer& counters, bool fromTsdf = false) const;
 
 private:
     bool refines_;
-    vk::ComputePipeline plan_, cacheNeighbors_, listSignCorners_, planSignCorners_, decideSigns_, collect_, planRetype_;
+    vk::ComputePipeline plan_, cacheNeighbors_, buildMasks_, decideSigns_, collect_, planRetype_;
 };
 
 }  // namespace vkmesh::gpu

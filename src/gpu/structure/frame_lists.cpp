@@ -21,6 +21,7 @@ FrameLists::FrameLists(const vk::Context& context, const vk::BindingTable& table
     meshSigns_ = makeStorage(context, table, BINDING_MESH_SIGNS, VkDeviceSize(c.blocks) * MESH_SIGN_WORDS * 4, "mesh signs");
     vk::CommandRecorder recorder(context);
     VkCommandBuffer cmd = recorder.begin();
+    vkCmdFillBuffer(cmd, meshSigns_.handle(), 0, VK_WHOLE_SIZE, 0);   // zero TSDF, zero masks
     recordReset(cmd);
     recorder.submitAndWait();
 }
@@ -28,7 +29,8 @@ FrameLists::FrameLists(const vk::Context& context, const vk::BindingTable& table
 void FrameLists::recordReset(VkCommandBuffer cmd) const {
     vkCmdFillBuffer(cmd, meshStamps_.handle(), 0, VK_WHOLE_SIZE, 0);
     vkCmdFillBuffer(cmd, retypeMask_.handle(), 0, VK_WHOLE_SIZE, 0);
-    vkCmdFillBuffer(cmd, meshSigns_.handle(), 0, VK_WHOLE_SIZE, 0);
+    // The mesh signs buffer is kept: its masks describe the TSDF, which a reset mesh keeps, and the meshing signs
+    // are re-decided for every corner of the dirty blocks of every mesh pass.
     vk::memoryBarrier(cmd);
 }
 

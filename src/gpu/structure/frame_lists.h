@@ -10,8 +10,8 @@
 //   moved        the vertices whose edges' corners may have changed (list_*_vertices -> move_vertices);
 //   neighbours   each dirty block's 26 neighbour blocks (cache_neighbors -> the mesh passes' cubeRef);
 //   mesh signs   with refinement, one bit per corner: inside for meshing (decide_mesh_signs -> claim,
-//                triangulate), persistent and derived from the TSDF alone (docs/REFINEMENT.md); and one bit per
-//                corner whose |d| < epsilon changed (fuse -> list_sign_corners).
+//                triangulate), persistent and derived from the TSDF alone (docs/REFINEMENT.md); and the masks of
+//                the TSDF it is decided from: raw sign, near, observed (fuse, recycling, map load -> decide_mesh_signs).
 #pragma once
 
 #include "core/map_format.h"
@@ -35,7 +35,7 @@ public:
     const FrameListCapacities& capacities() const { return capacities_; }
     const vk::Buffer& retypeMasks() const { return retypeMask_; }
     const vk::Buffer& meshSigns() const { return meshSigns_; }
-    // Clears the stamps, masks and mesh signs (a new or reset mesh).
+    // Clears the stamps and retype masks (a new or reset mesh; the mesh signs and TSDF masks are kept).
     void recordReset(VkCommandBuffer cmd) const;
     // Between frames: lists for larger capacities (never smaller). The persistent parts (mesh stamps,
     // retype masks, mesh signs) keep their contents; the rest only ever holds the current frame's entries.

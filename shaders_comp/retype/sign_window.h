@@ -1,0 +1,184 @@
+// Refinement by bit operations (docs/REFINEMENT.md, "Decided once per corner"): the meshing signs of one word
+// of 32 corners (4 rows along x of one z layer: corner x + 8 (y + 8 z), word k = (z, rows 4 (k % 2) .. +3)),
+// decided from per-block bit masks of the TSDF that fusion keeps (shared_layout.h, MESH_SIGN_RAW/NEAR/OBSERVED)
+// instead of the corners' sdf and weight. The same pure function as refinedCornerInside (src/core/refinement.cpp):
+//   - the 27 words "mask at corner + (dx, dy, dz)" for the word's 32 corners are shifts and ors of the mask words
+//     of the block and of its neighbours (a row end takes the x-neighbour's column, the word's first or last row
+//     the adjacent word's or the y-neighbour's row, a layer at 0 or 7 the z-neighbour's);
+//   - a corner may flip only when it is near (observed, |d| < epsilon), at most 2 of its 6 edge neighbours share
+//     its raw sign (bit-sliced, all 32 at once, from 7 mask words) and its 27 corners are observed (the AND of 27
+//     shifted words, built only for the words where a corner is left);
+//   - each remaining corner is decided from its 27 window bits (pure ALU: cube types by shifts, regular
+//     distances by xor and bitCount).
+// Shared by the GPU (decide_mesh_signs.comp) and its CPU twin (refinedSignWord, src/core/refinement.cpp, unit-tested
+// against refinedCornerInside), so the two cannot drift apart. The includer defines how words are read:
+//   SIGN_WINDOW_MASK(b, m, layer, rowHalf)  word 2 layer + rowHalf of mask m (MESH_SIGN_*) of block b, 0 if b == NO_BLOCK
+//   SIGN_WINDOW_NEIGHBOR(b, ox, oy, oz)  the block at offset (ox, oy, oz) in {-1, 0, 1}^3 from b (b itself at 0)
+#ifndef VKMESH_SIGN_WINDOW_H
+#define VKMESH_SIGN_WINDOW_H
+
+#ifdef __cplusplus
+#include <bit>
+#include <cstdint>
+
+#include "shared_layout.h"
+namespace vkmesh::gpu {
+inline int bitCount(uint x) { return std::popcount(x); }
+inline int findLSB(uint x) { return x == 0u ? -1 : std::countr_zero(x); }
+#define SW_FN inline
+#define SW_OUT(T) T&
+#else
+#define SW_FN
+#define SW_OUT(T) out T
+#endif
+
+// A word of 4 rows with every corner replaced by its neighbour at dx along x: `left` and `right` are the same
+// rows of the blocks at -x and +x (their x = 7 and x = 0 columns enter at the row ends).
+SW_FN uint swShiftX(uint here, uint left, uint right, int dx) {
+    if (dx > 0) return ((here >> 1) & 0x7F7F7F7Fu) | ((right & 0x01010101u) << 7);
+    if (dx < 0) return ((here << 1) & 0xFEFEFEFEu) | ((left >> 7) & 0x01010101u);
+    return here;
+}
+
+// Rows 4 rh .. 4 rh + 3 of layer `layer` of mask m in block b, shifted by dy = -1 (down), 0 (mid), +1 (up): the
+// row below / above comes from the block's other word or, past the block's side, from block `by` (the
+// y-neighbour of b on that side: -y when rh = 0, +y when rh = 1).
+SW_FN void swColumnRows(uint b, uint by, uint m, uint layer, uint rh, SW_OUT(uint) down, SW_OUT(uint) mid, SW_OUT(uint) up) {
+    uint rows = SIGN_WINDOW_MASK(b, m, layer, rh);
+    uint other = SIGN_WINDOW_MASK(b, m, layer, 1u - rh);
+    uint beyond = SIGN_WINDOW_MASK(by, m, layer, 1u - rh);
+    uint below = rh == 0u ? beyond >> 24 : other >> 24;
+    uint above = rh == 0u ? other & 0xFFu : beyond & 0xFFu;
+    down = (rows << 8) | below;
+    mid = rows;
+    up = (rows >> 8) | (above << 24);
+}
+
+// The 9 shifted words of layer dz of the window, mask m: w[(dx + 1) + 3 (dy + 1)] = mask at corner + (dx, dy, dz)
+// for the 32 corners of word (z, rh) of `block`.
+SW_FN void swLayer(uint block, uint m, uint z, uint rh, int dz, SW_OUT(uint) w0, SW_OUT(uint) w1, SW_OUT(uint) w2,
+                   SW_OUT(uint) w3, SW_OUT(uint) w4, SW_OUT(uint) w5, SW_OUT(uint) w6, SW_OUT(uint) w7, SW_OUT(uint) w8) {
+    int zz = int(z) + dz;
+    int oz = zz < 0 ? -1 : (zz > 7 ? 1 : 0);
+    uint layer = uint(zz - 8 * oz);
+    int oy = rh == 0u ? -1 : 1;
+    uint dL, mL, uL, d0, m0, u0, dR, mR, uR;
+    swColumnRows(SIGN_WINDOW_NEIGHBOR(block, -1, 0, oz), SIGN_WINDOW_NEIGHBOR(block, -1, oy, oz), m, layer, rh, dL, mL, uL);
+    swColumnRows(SIGN_WINDOW_NEIGHBOR(block, 0, 0, oz), SIGN_WINDOW_NEIGHBOR(block, 0, oy, oz), m, layer, rh, d0, m0, u0);
+    swColumnRows(SIGN_WINDOW_NEIGHBOR(block, 1, 0, oz), SIGN_WINDOW_NEIGHBOR(block, 1, oy, oz), m, layer, rh, dR, mR, uR);
+    w0 = swShiftX(d0, dL, dR, -1);
+    w1 = d0;
+    w2 = swShiftX(d0, dL, dR, 1);
+    w3 = swShiftX(m0, mL, mR, -1);
+    w4 = m0;
+    w5 = swShiftX(m0, mL, mR, 1);
+    w6 = swShiftX(u0, uL, uR, -1);
+    w7 = u0;
+    w8 = swShiftX(u0, uL, uR, 1);
+}
+
+// Bit-sliced over 32 corners: set where at most 2 of the 6 bits e1..e6 are set.
+SW_FN uint swAtMostTwo(uint e1, uint e2, uint e3, uint e4, uint e5, uint e6) {
+    uint sa = e1 ^ e2 ^ e3, ca = (e1 & e2) | (e3 & (e1 ^ e2));
+    uint sb = e4 ^ e5 ^ e6, cb = (e4 & e5) | (e6 & (e4 ^ e5));
+    uint s0 = sa ^ sb, c0 = sa & sb;   // count = s0 + 2 (ca + cb + c0)
+    uint s1 = ca ^ cb ^ c0, s2 = (ca & cb) | (c0 & (ca ^ cb));
+    return ~(s2 | (s1 & s0));
+}
+
+// regularDistance (src/core/refinement.cpp): Hamming distance from t to the nearest of 0, 255 and the six half-cube
+// types; those come in complementary pairs, so the distance to a pair {r, ~r} is min(n, 8 - n), n = bitCount(t ^ r).
+SW_FN int swRegularDistance(uint t) {
+    int best = 8;
+    for (uint k = 0u; k < 4u; ++k) {
+        uint r = k == 0u ? 0u : (k == 1u ? 0x0Fu : (k == 2u ? 0x33u : 0x55u));
+        int n = bitCount(t ^ r);
+        n = n < 8 - n ? n : 8 - n;
+        best = n < best ? n : best;
+    }
+    return best;
+}
+
+// The MC type of cube o around the window's centre (its corner 0 at the centre minus o), from the window's raw
+// signs `win` (bit (x + 1) + 3 (y + 1) + 9 (z + 1)): its corners c are window bits w0 + {0, 1, 3, 4, 9, 10, 12, 13}.
+SW_FN uint swCubeType(uint win, uint o) {
+    uint w0 = (1u - (o & 1u)) + 3u * (1u - ((o >> 1) & 1u)) + 9u * (1u - ((o >> 2) & 1u));
+    uint x = win >> w0;
+    return (x & 3u) | ((x >> 1) & 0xCu) | ((x >> 5) & 0x30u) | ((x >> 6) & 0xC0u);
+}
+
+// Whether a near corner with an all-observed window flips (refinedCornerInside's rules 2 and 3).
+SW_FN bool swFlips(uint win) {
+    int keep = 0, flip = 0;
+    for (uint o = 0u; o < 8u; ++o) {
+        uint t = swCubeType(win, o);
+        keep += swRegularDistance(t);
+        flip += swRegularDistance(t ^ (1u << o));
+    }
+    const uint edgeNeighbours = (1u << 4) | (1u << 10) | (1u << 12) | (1u << 14) | (1u << 16) | (1u << 22);
+    uint sameSign = ((win >> 13) & 1u) != 0u ? win & edgeNeighbours : ~win & edgeNeighbours;
+    return flip < keep && bitCount(sameSign) <= 2;
+}
+
+// The meshing signs of word `word` of `block` (bit i: corner 32 word + i inside for meshing). `evaluated`: the
+// corners whose window had to be decided bit by bit (the others kept their raw sign by the masks alone).
+SW_FN uint swDecideWord(uint block, uint word, SW_OUT(uint) evaluated) {
+    uint z = word / 2u, rh = word % 2u;
+    uint raw = SIGN_WINDOW_MASK(block, MESH_SIGN_RAW, z, rh);
+    uint cand = SIGN_WINDOW_MASK(block, MESH_SIGN_NEAR, z, rh);
+    evaluated = 0u;
+    if (cand == 0u) return raw;
+    // Rule 3 first, from the 6 edge neighbours' words only (7 mask words): at most 2 of them share the sign. On a
+    // surface a near corner has 4 or 5 (its layer's neighbours and one across), so this removes most of them.
+    {
+        int oy = rh == 0u ? -1 : 1;
+        uint mL = SIGN_WINDOW_MASK(SIGN_WINDOW_NEIGHBOR(block, -1, 0, 0), MESH_SIGN_RAW, z, rh);
+        uint mR = SIGN_WINDOW_MASK(SIGN_WINDOW_NEIGHBOR(block, 1, 0, 0), MESH_SIGN_RAW, z, rh);
+        uint other = SIGN_WINDOW_MASK(block, MESH_SIGN_RAW, z, 1u - rh);
+        uint beyond = SIGN_WINDOW_MASK(SIGN_WINDOW_NEIGHBOR(block, 0, oy, 0), MESH_SIGN_RAW, z, 1u - rh);
+        uint below = rh == 0u ? beyond >> 24 : other >> 24;
+        uint above = rh == 0u ? other & 0xFFu : beyond & 0xFFu;
+        uint zm = z == 0u ? SIGN_WINDOW_MASK(SIGN_WINDOW_NEIGHBOR(block, 0, 0, -1), MESH_SIGN_RAW, 7u, rh)
+                          : SIGN_WINDOW_MASK(block, MESH_SIGN_RAW, z - 1u, rh);
+        uint zp = z == 7u ? SIGN_WINDOW_MASK(SIGN_WINDOW_NEIGHBOR(block, 0, 0, 1), MESH_SIGN_RAW, 0u, rh)
+                          : SIGN_WINDOW_MASK(block, MESH_SIGN_RAW, z + 1u, rh);
+        cand &= swAtMostTwo(~(swShiftX(raw, mL, mR, -1) ^ raw), ~(swShiftX(raw, mL, mR, 1) ^ raw), ~(((raw << 8) | below) ^ raw),
+                            ~(((raw >> 8) | (above << 24)) ^ raw), ~(zm ^ raw), ~(zp ^ raw));
+    }
+    if (cand == 0u) return raw;
+    uint s0, s1, s2, s3, s4, s5, s6, s7, s8, s9, s10, s11, s12, s13, s14, s15, s16, s17, s18, s19, s20, s21, s22, s23, s24,
+        s25, s26;
+    swLayer(block, MESH_SIGN_RAW, z, rh, -1, s0, s1, s2, s3, s4, s5, s6, s7, s8);
+    swLayer(block, MESH_SIGN_RAW, z, rh, 0, s9, s10, s11, s12, s13, s14, s15, s16, s17);
+    swLayer(block, MESH_SIGN_RAW, z, rh, 1, s18, s19, s20, s21, s22, s23, s24, s25, s26);
+    uint o0, o1, o2, o3, o4, o5, o6, o7, o8, o9, o10, o11, o12, o13, o14, o15, o16, o17, o18, o19, o20, o21, o22, o23, o24,
+        o25, o26;
+    swLayer(block, MESH_SIGN_OBSERVED, z, rh, -1, o0, o1, o2, o3, o4, o5, o6, o7, o8);
+    swLayer(block, MESH_SIGN_OBSERVED, z, rh, 0, o9, o10, o11, o12, o13, o14, o15, o16, o17);
+    swLayer(block, MESH_SIGN_OBSERVED, z, rh, 1, o18, o19, o20, o21, o22, o23, o24, o25, o26);
+    cand &= o0 & o1 & o2 & o3 & o4 & o5 & o6 & o7 & o8 & o9 & o10 & o11 & o12 & o13 & o14 & o15 & o16 & o17 & o18 & o19 &
+            o20 & o21 & o22 & o23 & o24 & o25 & o26;
+    uint flips = 0u;
+    for (uint k = 0u; k < 32u && cand != 0u; ++k) {   // over the candidates (at most 32)
+        uint b = uint(findLSB(cand));
+        cand &= cand - 1u;
+        uint win = ((s0 >> b) & 1u) | (((s1 >> b) & 1u) << 1u) | (((s2 >> b) & 1u) << 2u) | (((s3 >> b) & 1u) << 3u) |
+                   (((s4 >> b) & 1u) << 4u) | (((s5 >> b) & 1u) << 5u) | (((s6 >> b) & 1u) << 6u) | (((s7 >> b) & 1u) << 7u) |
+                   (((s8 >> b) & 1u) << 8u) | (((s9 >> b) & 1u) << 9u) | (((s10 >> b) & 1u) << 10u) | (((s11 >> b) & 1u) << 11u) |
+                   (((s12 >> b) & 1u) << 12u) | (((s13 >> b) & 1u) << 13u) | (((s14 >> b) & 1u) << 14u) |
+                   (((s15 >> b) & 1u) << 15u) | (((s16 >> b) & 1u) << 16u) | (((s17 >> b) & 1u) << 17u) |
+                   (((s18 >> b) & 1u) << 18u) | (((s19 >> b) & 1u) << 19u) | (((s20 >> b) & 1u) << 20u) |
+                   (((s21 >> b) & 1u) << 21u) | (((s22 >> b) & 1u) << 22u) | (((s23 >> b) & 1u) << 23u) |
+                   (((s24 >> b) & 1u) << 24u) | (((s25 >> b) & 1u) << 25u) | (((s26 >> b) & 1u) << 26u);
+        ++evaluated;
+        if (swFlips(win)) flips |= 1u << b;
+    }
+    return raw ^ flips;
+}
+
+#undef SW_FN
+#undef SW_OUT
+#ifdef __cplusplus
+}  // namespace vkmesh::gpu
+#endif
+#endif
