@@ -1,7 +1,7 @@
 #version 460
-// Incremental mesh, pass 2c: one invocation per listed vertex (list_*_vertices) moves it to the zero
+// Incremental mesh, pass 2b: one invocation per listed vertex (list_moved_vertices) moves it to the zero
 // crossing of its edge (vertex_update.glsl). Listing first and moving second keeps every SIMD lane of this,
-// the expensive part, busy: a cube or heap entry that owns no vertex to move costs only the listing's loads.
+// the expensive part, busy.
 #extension GL_GOOGLE_include_directive : require
 #include "structure/frame.glsl"
 #include "structure/cube_mesh.glsl"
