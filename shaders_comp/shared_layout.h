@@ -102,7 +102,7 @@ VKM_CONST BINDING_RETYPE_MASK = 28u;   // 16 uint per block: cubes that may chan
 VKM_CONST BINDING_RETYPE_LIST = 29u;   // uint list of this frame's retype candidates: block * 512 + cube
 VKM_CONST BINDING_EDGE_VERTEX_Y = 30u; // ... +y edge (one array per axis keeps each under 128 MiB for 65,536 blocks)
 VKM_CONST BINDING_EDGE_VERTEX_Z = 31u; // ... +z edge
-VKM_CONST BINDING_MOVED_VERTICES = 32u; // uint list of the vertices move_vertices moves this mesh pass
+VKM_CONST BINDING_MOVED_VERTICES = 32u; // uint list of the edge slots whose vertices move_vertices moves this mesh pass
 VKM_CONST BINDING_BLOCK_NEIGHBORS = 33u; // uint per block x 27: the blocks around it (frame_lists.glsl), valid while it is dirty
 VKM_CONST NEIGHBORS_PER_BLOCK = 27u;      // offsets -1..1 per axis, index (x + 1) + 3 (y + 1) + 9 (z + 1)
 VKM_CONST BINDING_MESH_SIGNS = 34u;     // MESH_SIGN_WORDS uint per block: with refinement, corner signs for meshing (frame_lists.glsl)
@@ -210,8 +210,8 @@ struct Counters {
     uint retypeDispatch[4];     // over the retype list, WG_LIST per group
     uint vertexDispatch[4];     // with refinement, first decide_mesh_signs: over the listed corners (plan_sign_corners);
                                 // then (plan_move_vertices, after the listing) move_vertices: over the moved list
-    uint ownedDispatch[4];      // list_moved_vertices (commit_vertices): over the dirty blocks' owned-slot mask words
-                                // and the vertices created so far, WG_LIST per group
+    uint ownedDispatch[4];      // list_moved_vertices (commit_vertices): over the dirty blocks' owned-slot masks
+                                // (6 invocations per block) and the vertices created so far, WG_LIST per group
     uint candidateDispatch[4];  // over the GC candidates, WG_LIST per group (commit_chunks, for free_vertices)
     uint releaseDispatch[4];    // over the released chunks, WG_LIST per group
     // --- per frame: reset at the start of every frame ---

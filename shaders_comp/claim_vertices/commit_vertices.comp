@@ -1,6 +1,6 @@
 #version 460
 // One invocation after mesh_claim: pops the vertices handed out from the heap's free stack, and sizes
-// list_moved_vertices' dispatch: one invocation per owned-slot mask word of each dirty block, then one per vertex
+// list_moved_vertices' dispatch: 6 invocations per dirty block (8 owned-slot mask words each), then one per vertex
 // created so far (the GC candidates), so its cost follows the frame, never the size of the map.
 #extension GL_GOOGLE_include_directive : require
 #include "structure/frame.glsl"
@@ -14,7 +14,7 @@ void main() {
     counters.verticesInUse += granted;
     counters.vertexHighWater = max(counters.vertexHighWater, counters.verticesInUse);
     uint created = min(counters.candidateCount, params.vertexCapacity);   // the GC candidates so far
-    uint items = counters.dirtyCount * OWNED_SLOT_WORDS + created;
+    uint items = counters.dirtyCount * (OWNED_SLOT_WORDS / 8u) + created;   // 8: list_moved_vertices' WORDS_PER_INVOCATION
     counters.movedCount = 0u;
     counters.ownedDispatch[0] = (items + WG_LIST - 1u) / WG_LIST;
     counters.ownedDispatch[1] = counters.ownedDispatch[2] = 1u;

@@ -1,8 +1,8 @@
 // Stage: move vertices to the current zero crossing of their edge (paper §V.B; shaders_comp/update_vertices/).
-// First the vertices to move are listed (list_moved_vertices): the set bits of every dirty block's owned-slot
-// mask (the slots that hold a vertex, kept by claim and GC) plus this frame's new vertices whose owner block
-// is not dirty; the cost follows the frame, not the map. Then move_vertices moves each listed vertex, with
-// every SIMD lane busy (plan_move_vertices sizes it).
+// First the vertices to move are listed by their edge slots (list_moved_vertices): the set bits of every dirty
+// block's owned-slot mask (the slots that hold a vertex, kept by claim and GC) plus this frame's new vertices
+// whose owner block is not dirty; the cost follows the frame, not the map. Then move_vertices moves the vertex
+// of each listed slot, with every SIMD lane busy (plan_move_vertices sizes it).
 //   reads  TSDF, edge slots, owned-slot masks, dirty list, new vertices   writes moved list, vertex positions, normals, colours
 #pragma once
 
