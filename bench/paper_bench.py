@@ -47,9 +47,10 @@ ROOT = Path(__file__).resolve().parent.parent
 BEGIN_MARK = "<!-- paper-bench:begin -->"
 END_MARK = "<!-- paper-bench:end -->"
 # Per-block cost on the GPU (TSDF sdf + weight, cube state, 3 edge slots: 24 B x 512 cubes) plus its
-# share of the hash table; vertices 32 B + owner/remap/free stack; chunks 60 B + stacks. Used only to
-# size the sweep's pools and warn before asking for more memory than the machine has.
-BLOCK_BYTES = 24 * 512 + 64
+# share of the hash table and its owned-slot mask (192 B); vertices 32 B + owner/remap/free stack; chunks
+# 60 B + stacks. Used only to size the sweep's pools and warn before asking for more memory than the
+# machine has.
+BLOCK_BYTES = 24 * 512 + 64 + 192
 VERTEX_BYTES = 44
 CHUNK_BYTES = 68
 DEFAULT_BLOCKS, DEFAULT_VERTICES, DEFAULT_CHUNKS = 16384, 1 << 20, 1 << 19

@@ -90,7 +90,7 @@ VKM_CONST BINDING_VERTEX_OWNER = 19u;  // uint per vertex: global edge id (block
 VKM_CONST BINDING_VERTEX_FREE = 20u;   // uint stack of free vertex indices
 // The frame's garbage, two uint lists in one buffer (one binding fewer for the passes that write both):
 // [0, vertexCapacity) vertices that may have lost their last triangle (GC candidates; also the new vertices
-// list_new_vertices lists), [vertexCapacity, vertexCapacity + chunkCapacity) chunks released this frame.
+// list_moved_vertices lists), [vertexCapacity, vertexCapacity + chunkCapacity) chunks released this frame.
 VKM_CONST BINDING_GARBAGE = 21u;
 VKM_CONST BINDING_CHUNK_TRIANGLES = 22u; // uint: 5 triangles x 3 vertex indices per chunk
 VKM_CONST BINDING_CHUNK_FREE = 23u;    // uint stack of free chunk indices
@@ -102,11 +102,14 @@ VKM_CONST BINDING_RETYPE_MASK = 28u;   // 16 uint per block: cubes that may chan
 VKM_CONST BINDING_RETYPE_LIST = 29u;   // uint list of this frame's retype candidates: block * 512 + cube
 VKM_CONST BINDING_EDGE_VERTEX_Y = 30u; // ... +y edge (one array per axis keeps each under 128 MiB for 65,536 blocks)
 VKM_CONST BINDING_EDGE_VERTEX_Z = 31u; // ... +z edge
-VKM_CONST BINDING_MOVED_VERTICES = 32u; // uint list of the vertices move_vertices moves this mesh pass
+VKM_CONST BINDING_MOVED_VERTICES = 32u; // uint list of the edge slots whose vertices move_vertices moves this mesh pass
 VKM_CONST BINDING_BLOCK_NEIGHBORS = 33u; // uint per block x 27: the blocks around it (frame_lists.glsl), valid while it is dirty
 VKM_CONST NEIGHBORS_PER_BLOCK = 27u;      // offsets -1..1 per axis, index (x + 1) + 3 (y + 1) + 9 (z + 1)
 VKM_CONST BINDING_MESH_SIGNS = 34u;     // MESH_SIGN_WORDS uint per block: with refinement, corner signs for meshing and TSDF masks
-VKM_CONST BINDING_COUNT = 35u;
+// Per block OWNED_SLOT_WORDS uint: bit (axis * VOXELS_PER_BLOCK + cube) set iff the cube's edge slot along that
+// axis holds a vertex (claim sets it, GC clears it; cube_mesh.glsl). The vertex update visits only these bits.
+VKM_CONST BINDING_OWNED_SLOTS = 35u;
+VKM_CONST BINDING_COUNT = 36u;
 VKM_CONST MASK_WORDS = 16u;            // VOXELS_PER_BLOCK / 32
 VKM_CONST MASK_ALL_CUBES = 0xFFFFFFFFu; // a retype-mask word with each of its 32 cubes listed
 // Per block, MESH_SIGN_WORDS uint at BINDING_MESH_SIGNS (with refinement; frame_lists.glsl), MASK_WORDS each, one bit
@@ -117,6 +120,7 @@ VKM_CONST MESH_SIGN_WORDS = 64u;
 VKM_CONST MESH_SIGN_RAW = 16u;         // word offsets within a block's MESH_SIGN_WORDS
 VKM_CONST MESH_SIGN_NEAR = 32u;
 VKM_CONST MESH_SIGN_OBSERVED = 48u;
+VKM_CONST OWNED_SLOT_WORDS = 48u;      // per block: 3 axes x MASK_WORDS, one bit per edge slot (BINDING_OWNED_SLOTS)
 
 VKM_CONST EMPTY_SLOT = 0xFFFFFFFFu;    // an edge with no vertex
 VKM_CONST CLAIMED_SLOT = 0xFFFFFFFEu;  // claimed, the winner is allocating (within one dispatch only)
@@ -152,7 +156,7 @@ struct VolumeParamsGpu {
     uint incrementalMesh;   // 1: fusion marks the cubes whose corners flip, for the incremental mesh
     uint refine;            // 1: Hamming-distance refinement of cube types (docs/REFINEMENT.md)
     float refineEpsilon;    // metres: only corners with |sdf| below it may be flipped by refinement
-    uint vertexUpdate;      // VERTEX_UPDATE_*: how vertices are moved each frame
+    uint vertexUpdate;      // VERTEX_UPDATE_*: no effect any more (every value lists the owned-slot masks), kept for the API and map files
     // Bounded maps (docs/MESH.md, "Recycling blocks"); both 0 = off, and then no recycling pass runs.
     float keepRadius;       // metres: blocks whose centre is farther from the camera are not allocated, and freed
     uint starveAfterFrames; // blocks not touched for this many frames lose starveWeight per frame; freed at 0
@@ -192,9 +196,12 @@ VKM_CONST VOXEL_COLOR_SET = 0x40000000u;
 // RGBA8 words after the depth samples in BINDING_DEPTH).
 VKM_CONST FRAME_HAS_COLOR = 0x80000000u;
 VKM_CONST FRAME_HEIGHT_MASK = 0x7FFFu;
-VKM_CONST VERTEX_UPDATE_AUTO = 0u;     // whichever of the two visits fewer entries this frame
-VKM_CONST VERTEX_UPDATE_HEAP = 1u;     // scan the heap (list_heap_vertices)
-VKM_CONST VERTEX_UPDATE_DIRTY = 2u;    // the dirty blocks' cubes + new vertices (list_dirty_vertices, list_new_vertices)
+// Once the choice of how the vertices to move were listed (a heap scan or the dirty blocks' cubes); both are gone:
+// list_moved_vertices visits the dirty blocks' owned-slot masks, whatever the value. Kept so that code and map
+// files that name them still build and load.
+VKM_CONST VERTEX_UPDATE_AUTO = 0u;
+VKM_CONST VERTEX_UPDATE_HEAP = 1u;
+VKM_CONST VERTEX_UPDATE_DIRTY = 2u;
 
 // One mesh vertex, as stored in the heap and in the compacted export (stride 36: a renderer reads the
 // position at offset 0, the normal at offset 16 and the colour at offset 32 as R8G8B8A8_UNORM).
@@ -214,10 +221,10 @@ struct Counters {
     uint listDispatch[4];       // over the live block list, one workgroup per block
     uint collectDispatch[4];    // over the dirty blocks' retype-mask words, WG_LIST per group
     uint retypeDispatch[4];     // over the retype list, WG_LIST per group
-    uint vertexDispatch[4];     // list_dirty_vertices: VOXELS_PER_BLOCK / WG_BLOCK workgroups per dirty block, or 0;
-                                // then (plan_move_vertices, after the listing) move_vertices: over the list
-    uint heapDispatch[4];       // list_heap_vertices: over the heap up to its high water, or 0 (the cheaper runs)
-    uint candidateDispatch[4];  // over the GC candidates, WG_LIST per group (first for list_new_vertices)
+    uint vertexDispatch[4];     // (plan_move_vertices, after the listing) move_vertices: over the moved list
+    uint ownedDispatch[4];      // list_moved_vertices (commit_vertices): over the dirty blocks' owned-slot masks
+                                // (6 invocations per block) and the vertices created so far, WG_LIST per group
+    uint candidateDispatch[4];  // over the GC candidates, WG_LIST per group (commit_chunks, for free_vertices)
     uint releaseDispatch[4];    // over the released chunks, WG_LIST per group
     // --- per frame: reset at the start of every frame ---
     uint validPixels;           // pixels with a depth inside [minDepth, maxDepth]

@@ -54,7 +54,7 @@ if [[ $parts == all || $parts == gpu-av ]]; then
     GpuTest.BaselineMeshMatchesReference                       # baseline marching cubes (mesh_baseline)
     Refinement/IncrementalTest.IncrementalMeshEqualsRebuildFromScratch/true  # incremental mesh, mark-all-dirty rebuild, export
     GpuTest.VertexColoursMatchReferenceMesherAndRebuild        # colour: fused corner colours, vertex colours
-    GpuTest.BothVertexUpdatePathsGiveTheSameMesh               # both vertex-update modes
+    GpuTest.OwnedSlotMasksHoldExactlyTheOccupiedSlots          # owned-slot masks: claims, GC, recycling, growth, map load, rebuild
     GpuTest.RecyclingWithLockFreeClaims                        # lock-free claims, recycling, hash rebuild (rehash_*)
     GpuTest.RefinementOnASlantedPlaneKeepsTheMeshWhole         # refinement per corner (retype passes), against unrefined
     MeshDeltas.FollowHeapExhaustionGrowthAndRecycling          # deltas (diff_*, plan_deltas), heap growth, pending dirty

@@ -1,9 +1,7 @@
 #version 460
-// One invocation after mesh_claim: pops the vertices handed out from the heap's free stack, and chooses
-// how this frame's vertices to move are listed: a scan of the heap up to its high water (list_heap_vertices,
-// cost ~ size of the map) or a pass over the dirty blocks' cubes plus the new vertices (list_dirty_vertices +
-// list_new_vertices, cost ~ size of the frame), whichever visits fewer entries; the other dispatches
-// are sized 0. move_vertices then moves what was listed. Measured on lavapipe a heap entry costs about twice a cube, hence the factor 2.
+// One invocation after mesh_claim: pops the vertices handed out from the heap's free stack, and sizes
+// list_moved_vertices' dispatch: 6 invocations per dirty block (8 owned-slot mask words each), then one per vertex
+// created so far (the GC candidates), so its cost follows the frame, never the size of the map.
 #extension GL_GOOGLE_include_directive : require
 #include "structure/frame.glsl"
 
@@ -16,14 +14,8 @@ void main() {
     counters.verticesInUse += granted;
     counters.vertexHighWater = max(counters.vertexHighWater, counters.verticesInUse);
     uint created = min(counters.candidateCount, params.vertexCapacity);   // the GC candidates so far
-    uint dirtyCubes = counters.dirtyCount * VOXELS_PER_BLOCK;
-    bool scanHeap = params.vertexUpdate == VERTEX_UPDATE_AUTO ? 2u * counters.vertexHighWater < dirtyCubes
-                                                              : params.vertexUpdate == VERTEX_UPDATE_HEAP;
+    uint items = counters.dirtyCount * (OWNED_SLOT_WORDS / 8u) + created;   // 8: list_moved_vertices' WORDS_PER_INVOCATION
     counters.movedCount = 0u;
-    counters.heapDispatch[0] = scanHeap ? (counters.vertexHighWater + WG_LIST - 1u) / WG_LIST : 0u;
-    counters.vertexDispatch[0] = scanHeap ? 0u : counters.dirtyCount * (VOXELS_PER_BLOCK / WG_BLOCK);
-    counters.candidateDispatch[0] = scanHeap ? 0u : (created + WG_LIST - 1u) / WG_LIST;
-    counters.heapDispatch[1] = counters.heapDispatch[2] = 1u;
-    counters.vertexDispatch[1] = counters.vertexDispatch[2] = 1u;
-    counters.candidateDispatch[1] = counters.candidateDispatch[2] = 1u;
+    counters.ownedDispatch[0] = (items + WG_LIST - 1u) / WG_LIST;
+    counters.ownedDispatch[1] = counters.ownedDispatch[2] = 1u;
 }

@@ -6,7 +6,8 @@
 //    triangles read the slot in the next pass.
 //  - Lock-free (PARITY_CLASS = 0..3, one dispatch each): only cubes whose global parity (x&1, y&1, z&1)
 //    is in the class {p, 7 - p} run; no two of them share an edge, so a plain read and write suffice.
-// Every new vertex is a GC candidate (freed after triangulation if no triangle ended up using it).
+// Every new vertex is a GC candidate (freed after triangulation if no triangle ended up using it), and sets
+// its slot's bit in the owner block's owned-slot mask (one atomicOr: cubes of a block share the mask words).
 #extension GL_GOOGLE_include_directive : require
 #include "structure/frame.glsl"
 #include "structure/cube_mesh.glsl"
@@ -27,6 +28,7 @@ uint allocateVertex(uint slot) {
     vertices[v].createdFrame = frame.frameNumber;
     vertices[v].color = 0u;                                    // until the vertex update gives it one
     vertexOwner[v] = slot;
+    markSlotOwned(slot);                                       // the caller stores v in the slot
     uint c = atomicAdd(counters.candidateCount, 1u);
     if (c < params.vertexCapacity) setGcCandidate(c, v);
     return v;

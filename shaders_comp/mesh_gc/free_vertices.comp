@@ -1,8 +1,8 @@
 #version 460
 // Incremental mesh, pass 3 (paper §V.E, garbage collection), in its own dispatch so that no free stack is
 // popped and pushed at once: every GC candidate still without triangles is freed: refcount 0 -> DEAD with
-// one compare-and-swap (a vertex listed twice is freed once), its edge slot emptied, its index pushed
-// above the committed top of the free stack.
+// one compare-and-swap (a vertex listed twice is freed once), its edge slot emptied and the slot's bit of the
+// owned-slot mask cleared (one atomicAnd), its index pushed above the committed top of the free stack.
 #extension GL_GOOGLE_include_directive : require
 #include "structure/frame.glsl"
 #include "structure/cube_mesh.glsl"
@@ -15,6 +15,8 @@ void main() {
     if (i >= min(counters.candidateCount, params.vertexCapacity)) return;
     uint v = gcCandidate(i);
     if (atomicCompSwap(vertices[v].refcount, 0u, DEAD_REFCOUNT) != 0u) return;
-    edgeStore(vertexOwner[v], EMPTY_SLOT);
+    uint slot = vertexOwner[v];
+    edgeStore(slot, EMPTY_SLOT);
+    markSlotEmpty(slot);
     vertexFree[counters.vertexFreeTop + atomicAdd(counters.vertexPushes, 1u)] = v;
 }

@@ -1,7 +1,7 @@
 // Component: the per-frame lists (src/gpu/frame_lists.h), what one pass hands the next: the blocks a frame
 // touched, the live-block list of whole-volume passes, the dirty blocks (deduplicated with per-block mesh
 // stamps), the retype masks and list of cubes to re-mesh, the vertices that may have lost their last
-// triangle (GC candidates) and the chunks released this frame, the vertices to move this mesh pass, and
+// triangle (GC candidates) and the chunks released this frame, the vertices to move this mesh pass (their edge slots), and
 // the dirty blocks' neighbour blocks, and with refinement each corner's sign for meshing. Their lengths are in
 // Counters.
 #ifndef VKMESH_FRAME_LISTS_GLSL
@@ -93,7 +93,8 @@ uint reserveMovedVertices(uint count) {
     return subgroupBroadcastFirst(base) + offset;
 }
 
-void listMovedVertex(uint at, uint v) {
-    if (at < params.vertexCapacity) movedVertices[at] = v;
+// `slot`: the edge slot holding the vertex (move_vertices reads the vertex there).
+void listMovedVertex(uint at, uint slot) {
+    if (at < params.vertexCapacity) movedVertices[at] = slot;
 }
 #endif

@@ -1,7 +1,6 @@
 #version 460
-// One invocation after the listing passes: sizes move_vertices' dispatch to the vertices listed, in
-// Counters::vertexDispatch, which list_dirty_vertices has finished reading (a field of its own would grow
-// Counters, which map files hold).
+// One invocation after the listing (list_moved_vertices): sizes move_vertices' dispatch to the vertices listed,
+// in Counters::vertexDispatch.
 #extension GL_GOOGLE_include_directive : require
 #include "structure/frame.glsl"
 

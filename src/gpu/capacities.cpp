@@ -58,6 +58,7 @@ void checkCapacities(const GpuVolumeConfig& c, uint64_t maxBufferBytes, uint64_t
         planned.push_back({"cube state", 4ull * VOXELS_PER_BLOCK, c.blockCapacity, "blockCapacity (--blocks)"});
         for (const char* axis : {"edge vertex slots x", "edge vertex slots y", "edge vertex slots z"})
             planned.push_back({axis, 4ull * VOXELS_PER_BLOCK, c.blockCapacity, "blockCapacity (--blocks)"});
+        planned.push_back({"owned slot masks", 4ull * OWNED_SLOT_WORDS, c.blockCapacity, "blockCapacity (--blocks)"});
         planned.push_back({"vertex heap", sizeof(Vertex), c.vertexCapacity, "vertexCapacity (--vertices)"});
         planned.push_back({"triangle chunks", 4ull * CHUNK_WORDS, c.chunkCapacity, "chunkCapacity (--chunks)"});
         planned.push_back({"retype list", 4, c.retypeCapacity, "retypeCapacity"});

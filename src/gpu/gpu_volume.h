@@ -71,7 +71,7 @@ struct GpuVolumeConfig {
     bool refine = true;
     float refineEpsilonVoxels = 0.5f;    // corners within this distance of the surface may be flipped
     bool lockFree = false;               // the paper's lock-free claim: 4 parity-class passes, no slot atomics
-    uint32_t vertexUpdate = VERTEX_UPDATE_AUTO;   // how vertices are moved (both ways give the same mesh)
+    uint32_t vertexUpdate = VERTEX_UPDATE_AUTO;   // no effect any more (the vertex update lists the owned-slot masks); kept for the API and map files
     // Compact the mesh on the GPU at the end of every integrate(), into draw-ready buffers (meshBuffers()):
     // what a renderer embedding vkmesh needs. Incremental mode only.
     bool publishMesh = false;

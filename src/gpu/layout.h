@@ -13,7 +13,7 @@ static_assert(sizeof(Counters) % 16 == 0);
 static_assert(offsetof(Counters, touchedListDispatch) == 0 && offsetof(Counters, blockDispatch) == 16 &&
               offsetof(Counters, listDispatch) == 32 && offsetof(Counters, collectDispatch) == 48 &&
               offsetof(Counters, retypeDispatch) == 64 && offsetof(Counters, vertexDispatch) == 80 &&
-              offsetof(Counters, heapDispatch) == 96 && offsetof(Counters, candidateDispatch) == 112 &&
+              offsetof(Counters, ownedDispatch) == 96 && offsetof(Counters, candidateDispatch) == 112 &&
               offsetof(Counters, releaseDispatch) == 128,
               "indirect arguments at 16-byte offsets");
 static_assert(sizeof(Vertex) == 36 && offsetof(Vertex, nx) == 16 && offsetof(Vertex, color) == 32,

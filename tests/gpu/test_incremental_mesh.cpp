@@ -7,9 +7,11 @@
 #include <array>
 #include <cmath>
 #include <map>
+#include <memory>
 #include <set>
 
 #include "api/exported_mesh.h"
+#include "core/map_format.h"
 #include "core/mesh_analysis.h"
 #include "cpu/reference_mesher.h"
 #include "cpu/reference_volume.h"
@@ -149,31 +151,60 @@ TEST_F(GpuTest, SameInputSameMesh) {
     EXPECT_EQ(vertexCounts[0], vertexCounts[2]);
 }
 
-// The two ways of moving vertices (scan the heap; visit the dirty blocks' cubes and the new vertices) give
-// the same mesh, positions and normals included.
-TEST_F(GpuTest, BothVertexUpdatePathsGiveTheSameMesh) {
+// The owned-slot masks (cube_mesh.glsl), from which the vertex update lists the vertices to move, hold a bit
+// for exactly the edge slots that hold a vertex, through everything that writes the slots: claims, GC, recycled
+// blocks, every capacity growing from tiny (heaps, block pool, hash), a map saved and loaded, a rebuild from
+// scratch. Conservation: the bits set add up to the live vertices, frame after frame.
+TEST_F(GpuTest, OwnedSlotMasksHoldExactlyTheOccupiedSlots) {
     auto config = meshConfig();
-    config.vertexUpdate = gpu::VERTEX_UPDATE_HEAP;
-    gpu::GpuVolume heap(context(), config);
-    config.vertexUpdate = gpu::VERTEX_UPDATE_DIRTY;
-    gpu::GpuVolume dirty(context(), config);
-    integrateRoom(heap, 8);
-    integrateRoom(dirty, 8);
-    Mesh a = toMesh(heap.exportMesh()), b = toMesh(dirty.exportMesh());
-    ASSERT_EQ(a.positions.size(), b.positions.size());
-    EXPECT_EQ(canonicalTriangles(a), canonicalTriangles(b));
-    // The same (position, normal) pairs. Matched as a multiset: with refinement (the default) vertices clamped
-    // to one flipped corner share its position, with different normals.
-    auto pairs = [](const Mesh& m) {
-        std::vector<std::array<float, 6>> out;
-        for (size_t i = 0; i < m.positions.size(); ++i)
-            out.push_back({m.positions[i].x(), m.positions[i].y(), m.positions[i].z(), m.normals[i].x(), m.normals[i].y(), m.normals[i].z()});
-        std::sort(out.begin(), out.end());
-        return out;
+    config.blockCapacity = 8;
+    config.hashCapacity = 16;
+    config.vertexCapacity = 64;
+    config.chunkCapacity = 64;
+    config.keepRadius = 1.8f;
+    config.recycle = true;
+    config.recycleAfterFrames = 4;
+    config.starveWeight = 3.0f;
+    config.hashRebuildTombstoneFraction = 0.01f;
+    auto owned = [](const gpu::MeshStateSnapshot& s) {
+        uint64_t bits = 0;
+        for (uint32_t w : s.ownedSlots) bits += uint64_t(__builtin_popcount(w));
+        return bits;
     };
-    EXPECT_TRUE(pairs(a) == pairs(b)) << "vertex positions or normals differ";
-    auto problems = checkInvariants(dirty.downloadMeshState(), dirty.config());
-    EXPECT_TRUE(problems.empty()) << problems.front();
+    auto check = [&](const gpu::GpuVolume& volume, const std::string& when) {
+        const gpu::MeshStateSnapshot state = volume.downloadMeshState();
+        const auto problems = checkInvariants(state, volume.config());   // includes mask == occupied slots
+        EXPECT_TRUE(problems.empty()) << when << ": " << problems.front();
+        EXPECT_EQ(owned(state), state.counters.verticesInUse) << when;
+        EXPECT_EQ(state.ownedSlots.size(), size_t(volume.config().blockCapacity) * gpu::OWNED_SLOT_WORDS) << when;
+    };
+    gpu::GpuVolume volume(context(), config);
+    static const synth::SyntheticScene scene = synth::SyntheticScene::defaultRoom();
+    const Intrinsics intr = synth::kinectIntrinsics(kWidth, kHeight);
+    const auto poses = synth::cameraPath(24, synth::PathKind::Orbit);
+    uint64_t freedBlocks = 0, freedVertices = 0, growths = 0;
+    for (size_t i = 0; i < 30; ++i) {
+        synth::RenderOptions options;
+        options.noise = true;
+        options.seed = uint32_t(i + 1);
+        const Pose& pose = poses[i % poses.size()];
+        const gpu::FrameReport r = volume.integrate(scene.renderDepth(intr, pose, options), intr, pose);
+        EXPECT_TRUE(r.warnings.empty()) << "frame " << i << ": " << r.warnings.front();
+        freedBlocks += r.counters.blocksFreed;
+        freedVertices += r.counters.vertexPushes;
+        growths += r.growth.size();
+        check(volume, "frame " + std::to_string(i));
+    }
+    EXPECT_GT(freedBlocks, 0u) << "recycling freed no block";
+    EXPECT_GT(freedVertices, 0u) << "GC freed no vertex";
+    EXPECT_GT(growths, 2u) << "the capacities did not grow";
+    // A map saved and loaded: the masks are rebuilt from the edge slots.
+    const map::MapData saved = map::parse(map::serialize(volume.saveMap()), "owned.vkmap");
+    std::unique_ptr<gpu::GpuVolume> loaded = gpu::GpuVolume::load(context(), saved, gpu::GpuVolume::mapConfig(saved), "owned.vkmap");
+    check(*loaded, "after the map was loaded");
+    // A rebuild from scratch.
+    volume.rebuildMesh();
+    check(volume, "after rebuildMesh");
 }
 
 TEST_F(GpuTest, EmptyVolumeExportsAnEmptyMesh) {

@@ -61,6 +61,22 @@ inline std::vector<std::string> checkInvariants(const gpu::MeshStateSnapshot& s,
         if (v >= s.vertices.size() || s.vertices[v].refcount == gpu::DEAD_REFCOUNT || s.vertexOwner[v] != slot)
             fail("edge slot " + std::to_string(slot) + " holds " + std::to_string(v) + ", not a live vertex it owns");
     }
+    // The owned-slot masks (cube_mesh.glsl): a bit set exactly for each slot that holds a vertex.
+    const size_t blocks = s.edgeVertex.size() / (3 * gpu::VOXELS_PER_BLOCK);
+    if (s.ownedSlots.size() != blocks * gpu::OWNED_SLOT_WORDS) {
+        fail("owned-slot masks: " + std::to_string(s.ownedSlots.size()) + " words for " + std::to_string(blocks) + " blocks");
+    } else {
+        size_t wrong = 0, first = 0;
+        for (size_t slot = 0; slot < s.edgeVertex.size(); ++slot) {
+            const size_t cube = slot / 3, axis = slot % 3;
+            const size_t word = (cube / gpu::VOXELS_PER_BLOCK) * gpu::OWNED_SLOT_WORDS + axis * gpu::MASK_WORDS + (cube % gpu::VOXELS_PER_BLOCK) / 32;
+            const bool bit = (s.ownedSlots[word] >> (cube % 32)) & 1u;
+            if (bit != (s.edgeVertex[slot] != gpu::EMPTY_SLOT) && wrong++ == 0) first = slot;
+        }
+        if (wrong)
+            fail("owned-slot masks disagree with the edge slots at " + std::to_string(wrong) + " slots (first: slot " + std::to_string(first) +
+                 " holds " + std::to_string(s.edgeVertex[first]) + ")");
+    }
     const gpu::Counters& k = s.counters;
     if (live != k.verticesInUse) fail("verticesInUse " + std::to_string(k.verticesInUse) + " but " + std::to_string(live) + " live");
     if (k.vertexFreeTop + k.verticesInUse != config.vertexCapacity) fail("vertex heap: free + in use != capacity");

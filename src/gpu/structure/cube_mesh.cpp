@@ -18,6 +18,7 @@ CubeMesh::CubeMesh(const vk::Context& context, const vk::BindingTable& table, ui
     const VkDeviceSize cubes = VkDeviceSize(blockCapacity) * VOXELS_PER_BLOCK;
     cubeState_ = makeStorage(context, table, BINDING_CUBE_STATE, cubes * 4, "cube state");
     for (int a = 0; a < 3; ++a) edgeVertex_[a] = makeStorage(context, table, kEdgeBindings[a], cubes * 4, kEdgeNames[a]);
+    ownedSlots_ = makeStorage(context, table, BINDING_OWNED_SLOTS, VkDeviceSize(blockCapacity) * OWNED_SLOT_WORDS * 4, "owned slot masks");
     vertices_ = makeStorage(context, table, BINDING_VERTICES, VkDeviceSize(vertexCapacity) * sizeof(Vertex), "vertex heap");
     vertexOwner_ = makeStorage(context, table, BINDING_VERTEX_OWNER, VkDeviceSize(vertexCapacity) * 4, "vertex owners");
     vertexFree_ = makeStorage(context, table, BINDING_VERTEX_FREE, VkDeviceSize(vertexCapacity) * 4, "vertex free stack");
@@ -31,6 +32,7 @@ void CubeMesh::reset(CounterBuffer& counters) {
     VkCommandBuffer cmd = recorder.begin();
     vkCmdFillBuffer(cmd, cubeState_.handle(), 0, VK_WHOLE_SIZE, 0);
     for (const vk::Buffer& b : edgeVertex_) vkCmdFillBuffer(cmd, b.handle(), 0, VK_WHOLE_SIZE, EMPTY_SLOT);
+    vkCmdFillBuffer(cmd, ownedSlots_.handle(), 0, VK_WHOLE_SIZE, 0);   // every slot EMPTY
     vkCmdFillBuffer(cmd, vertices_.handle(), 0, VK_WHOLE_SIZE, kDeadVertexWord);
     vkCmdFillBuffer(cmd, chunkTriangles_.handle(), 0, VK_WHOLE_SIZE, INVALID_INDEX);   // every triangle slot empty
     vk::memoryBarrier(cmd);
@@ -54,6 +56,7 @@ void CubeMesh::growCubes(uint32_t blockCapacity) {
     VkCommandBuffer cmd = recorder.begin();
     growStorage(cmd, context_, table_, BINDING_CUBE_STATE, cubeState_, cubes * 4, 0, retired);
     for (int a = 0; a < 3; ++a) growStorage(cmd, context_, table_, kEdgeBindings[a], edgeVertex_[a], cubes * 4, EMPTY_SLOT, retired);
+    growStorage(cmd, context_, table_, BINDING_OWNED_SLOTS, ownedSlots_, VkDeviceSize(blockCapacity) * OWNED_SLOT_WORDS * 4, 0, retired);
     vk::memoryBarrier(cmd);
     recorder.submitAndWait();
     blockCapacity_ = blockCapacity;
@@ -105,6 +108,7 @@ MeshStateSnapshot CubeMesh::download(const Counters& counters) const {
         vk::downloadFromBuffer(context_, edgeVertex_[a], axis.data(), cubes * 4);
         for (size_t i = 0; i < cubes; ++i) s.edgeVertex[i * 3 + a] = axis[i];
     }
+    s.ownedSlots = downloadWords(context_, ownedSlots_, size_t(blockCapacity_) * OWNED_SLOT_WORDS);
     std::vector<uint32_t> state(cubes), chunks(size_t(chunkCapacity_) * CHUNK_WORDS);
     vk::downloadFromBuffer(context_, cubeState_, state.data(), state.size() * 4);
     vk::downloadFromBuffer(context_, chunkTriangles_, chunks.data(), chunks.size() * 4);
@@ -150,6 +154,17 @@ void CubeMesh::save(map::MapData& map, const std::vector<uint32_t>& blocks, cons
 void CubeMesh::load(const map::MapData& map, const std::vector<uint32_t>& blocks, CounterBuffer& counters) {
     const vk::Buffer* arrays[4] = {&cubeState_, &edgeVertex_[0], &edgeVertex_[1], &edgeVertex_[2]};
     for (int i = 0; i < 4; ++i) uploadRecords(context_, *arrays[i], 4 * VOXELS_PER_BLOCK, blocks, map.corners(kCornerTags[i])->words.data());
+    // The owned-slot masks follow from the edge slots (a bit per slot that holds a vertex); the other blocks'
+    // masks are 0 already (a new mesh).
+    std::vector<uint32_t> owned(blocks.size() * OWNED_SLOT_WORDS, 0);
+    for (uint32_t a = 0; a < 3; ++a) {
+        const std::vector<uint32_t>& slots = map.corners(kCornerTags[1 + a])->words;
+        for (size_t b = 0; b < blocks.size(); ++b)
+            for (uint32_t cube = 0; cube < VOXELS_PER_BLOCK; ++cube)
+                if (slots[b * VOXELS_PER_BLOCK + cube] != EMPTY_SLOT)
+                    owned[b * OWNED_SLOT_WORDS + a * MASK_WORDS + cube / 32] |= 1u << (cube % 32);
+    }
+    uploadRecords(context_, ownedSlots_, 4 * OWNED_SLOT_WORDS, blocks, owned.data());
     if (!map.vertices.empty())
         vk::uploadToBuffer(context_, vertices_, map.vertices.data(), VkDeviceSize(map.vertices.size()) * sizeof(Vertex));
     uploadWords(context_, vertexOwner_, map.vertexOwners);

@@ -7,7 +7,7 @@
 //                INCOMPLETE cubes) wait for the next pass (fuse, recycling -> collect_retype);
 //   retype list  the cubes of this pass (collect_retype -> claim, triangulate);
 //   garbage      GC candidate vertices and released chunks (claim, triangulate -> mesh_gc);
-//   moved        the vertices whose edges' corners may have changed (list_*_vertices -> move_vertices);
+//   moved        the edge slots of the vertices whose corners may have changed (list_moved_vertices -> move_vertices);
 //   neighbours   each dirty block's 26 neighbour blocks (cache_neighbors -> the mesh passes' cubeRef);
 //   mesh signs   with refinement, one bit per corner: inside for meshing (decide_mesh_signs -> claim,
 //                triangulate), persistent and derived from the TSDF alone (docs/REFINEMENT.md); and the masks of
