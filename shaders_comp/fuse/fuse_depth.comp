@@ -54,7 +54,7 @@ void main() {
                         newSdf = (oldSdf * oldWeight + tsdf) / (oldWeight + 1.0);
                         newWeight = min(oldWeight + 1.0, params.maxWeight);
                         ++updated;
-                        uint rgba = withColor && sdf < trunc ? colorAt(pixel, size.x * size.y) : 0u;
+                        uint rgba = withColor ? colorAt(pixel, size.x * size.y) : 0u;
                         if ((rgba >> 24) != 0u) {
                             uint oldColor = fresh ? 0u : voxelColor[v];
                             uvec3 rgb = uvec3(rgba, rgba >> 8, rgba >> 16) & 0xFFu;

@@ -45,9 +45,7 @@ uint32_t fuseBlock(ReferenceBlock& block, const BlockCoord& c, const DepthImage&
         block.sdf[v] = newSdf;
         block.weight[v] = newWeight;
         ++updated;
-        // Colour only within the truncation band (as fuse_depth.comp): the free space in front of it never holds a
-        // vertex's corner.
-        if (withColor && sdf < truncation)
+        if (withColor)
             block.color[v] = foldVoxelColor(block.color[v], oldWeight, newSdf, color->at(int(pu), int(pv)),
                                             {c[0] * side + lx, c[1] * side + ly, c[2] * side + lz}, uint32_t(rule.colorFusion),
                                             rule.colorRecency);
