@@ -121,6 +121,9 @@ VKM_CONST MESH_SIGN_RAW = 16u;         // word offsets within a block's MESH_SIG
 VKM_CONST MESH_SIGN_NEAR = 32u;
 VKM_CONST MESH_SIGN_OBSERVED = 48u;
 VKM_CONST OWNED_SLOT_WORDS = 48u;      // per block: 3 axes x MASK_WORDS, one bit per edge slot (BINDING_OWNED_SLOTS)
+// list_moved_vertices reads this many owned-slot words of one axis per invocation (commit_vertices sizes its
+// dispatch with it): OWNED_SLOT_WORDS / OWNED_WORDS_PER_INVOCATION invocations per dirty block.
+VKM_CONST OWNED_WORDS_PER_INVOCATION = 8u;
 
 VKM_CONST EMPTY_SLOT = 0xFFFFFFFFu;    // an edge with no vertex
 VKM_CONST CLAIMED_SLOT = 0xFFFFFFFEu;  // claimed, the winner is allocating (within one dispatch only)

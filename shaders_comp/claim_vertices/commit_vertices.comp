@@ -14,7 +14,7 @@ void main() {
     counters.verticesInUse += granted;
     counters.vertexHighWater = max(counters.vertexHighWater, counters.verticesInUse);
     uint created = min(counters.candidateCount, params.vertexCapacity);   // the GC candidates so far
-    uint items = counters.dirtyCount * (OWNED_SLOT_WORDS / 8u) + created;   // 8: list_moved_vertices' WORDS_PER_INVOCATION
+    uint items = counters.dirtyCount * (OWNED_SLOT_WORDS / OWNED_WORDS_PER_INVOCATION) + created;
     counters.movedCount = 0u;
     counters.ownedDispatch[0] = (items + WG_LIST - 1u) / WG_LIST;
     counters.ownedDispatch[1] = counters.ownedDispatch[2] = 1u;

@@ -1,9 +1,9 @@
 // Component: the per-frame lists (src/gpu/frame_lists.h), what one pass hands the next: the blocks a frame
 // touched, the live-block list of whole-volume passes, the dirty blocks (deduplicated with per-block mesh
 // stamps), the retype masks and list of cubes to re-mesh, the vertices that may have lost their last
-// triangle (GC candidates) and the chunks released this frame, the vertices to move this mesh pass (their edge slots), and
-// the dirty blocks' neighbour blocks, and with refinement each corner's sign for meshing. Their lengths are in
-// Counters.
+// triangle (GC candidates) and the chunks released this frame, the vertices to move this mesh pass (their edge
+// slots), the dirty blocks' neighbour blocks, and with refinement each corner's sign for meshing and the masks of
+// the TSDF it is decided from. Their lengths are in Counters.
 #ifndef VKMESH_FRAME_LISTS_GLSL
 #define VKMESH_FRAME_LISTS_GLSL
 #include "structure/frame.glsl"

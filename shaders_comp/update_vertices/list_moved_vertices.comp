@@ -17,7 +17,7 @@
 
 layout(local_size_x = WG_LIST) in;
 
-const uint WORDS_PER_INVOCATION = 8u;   // of one axis (MASK_WORDS = 16 per axis): 256 cubes
+const uint WORDS_PER_INVOCATION = OWNED_WORDS_PER_INVOCATION;   // of one axis (MASK_WORDS = 16 per axis): 256 cubes
 const uint GROUPS_PER_BLOCK = OWNED_SLOT_WORDS / WORDS_PER_INVOCATION;
 
 void main() {

@@ -67,7 +67,7 @@ inline uint32_t foldVoxelColor(uint32_t old, float oldWeight, float newSdf, cons
 }
 
 // A vertex's colour (Vertex::color, RGBA8, alpha 255) from its edge's corner colours, interpolated at its
-// position's t along the edge (edgeCrossing in core/marching_cubes.h); 0 (alpha 0) when neither has a colour.
+// position's t along the edge (edgeCrossing in core/refinement.h); 0 (alpha 0) when neither has a colour.
 inline uint32_t vertexColorOnEdge(uint32_t lo, uint32_t hi, float t) {
     const bool hasLo = hasVoxelColor(lo), hasHi = hasVoxelColor(hi);
     if (!hasLo && !hasHi) return 0;

@@ -192,8 +192,8 @@ void GpuVolume::restore(const map::MapData& m, const std::string& name) {
                     " probes in a table of " + std::to_string(config_.hashCapacity) + " slots (give more --hash-slots)");
     if (config_.refine && config_.meshMode == MeshMode::Incremental) {
         // The meshing signs and the masks of the TSDF are not saved (they follow from the TSDF): the masks are
-        // set from the TSDF and the signs decided here for every corner of every block (all blocks dirty), so that a dirty block's cube reading a clean neighbour's
-        // corner finds its sign. The mesh was built with the same signs, so the masks are then put back as saved,
+        // set from the TSDF and the signs decided here for every corner of every block (all blocks dirty), so
+        // that a dirty block's cube reading a clean neighbour's corner finds its sign. The mesh was built with the same signs, so the masks are then put back as saved,
         // and so are the counters.
         cmd = beginSubmission();
         counters_.recordClearFrame(cmd);
