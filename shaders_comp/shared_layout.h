@@ -363,6 +363,65 @@ struct FramePush {
     float maxDepth;
 };
 
+// ---- camera tracking (docs/TRACKING.md; src/gpu/tracking, shaders_comp/track) ---------------------------
+// The tracker's passes have a descriptor set and numbering of their own. Every per-pixel map is a pyramid
+// of TRACK_LEVELS levels in one buffer: level l (width >> l by height >> l) starts at pixel
+// TrackPush::offset; level 0 is the depth image's grid.
+VKM_CONST TRACK_LEVELS = 3u;
+VKM_CONST TRACK_BINDING_PARAMS = 0u;          // uniform TrackParamsGpu
+VKM_CONST TRACK_BINDING_RAW_DEPTH = 1u;       // float per pixel: the frame's depth in metres as given (0 = none)
+VKM_CONST TRACK_BINDING_DEPTH = 2u;           // float per pyramid pixel: filtered, downsampled depth (0 = none)
+VKM_CONST TRACK_BINDING_VERTICES = 3u;        // vec4 per pyramid pixel: camera-space point, w = 1 (0 = none)
+VKM_CONST TRACK_BINDING_NORMALS = 4u;         // vec4 per pyramid pixel: camera-space unit normal facing the
+                                              // camera, w = 1 (0 = none: a missing neighbour or a depth edge)
+VKM_CONST TRACK_BINDING_MODEL_POSITIONS = 5u; // vec4 per pyramid pixel: world-space point of the mesh drawn at
+                                              // the model pose, w = 1 (0 = no model there)
+VKM_CONST TRACK_BINDING_MODEL_NORMALS = 6u;   // vec4 per pyramid pixel: its world-space unit normal
+VKM_CONST TRACK_BINDING_PARTIALS = 7u;        // float: TRACK_SUM_COUNT per workgroup of track_icp_reduce
+VKM_CONST TRACK_BINDING_SUMS = 8u;            // float: TRACK_SUM_COUNT, the partials summed in a fixed order
+VKM_CONST TRACK_BINDING_COUNT = 9u;
+// What one ICP iteration sums over the pixels (one float each). J = [p x n, n] (6) is the residual
+// r = n . (p - q)'s derivative with respect to a twist applied on the left of the camera pose; w the robust
+// weight. The 6x6 system is symmetric: its upper triangle, row by row.
+VKM_CONST TRACK_SUM_JTJ = 0u;                 // 21 values: sum w J_i J_j for i <= j
+VKM_CONST TRACK_SUM_JTR = 21u;                // 6 values: sum w J_i r
+VKM_CONST TRACK_SUM_WEIGHTED_ERROR = 27u;     // sum w r^2
+VKM_CONST TRACK_SUM_INLIERS = 28u;            // pixels that passed the gates
+VKM_CONST TRACK_SUM_SQUARED_ERROR = 29u;      // sum r^2 over the inliers (unweighted)
+VKM_CONST TRACK_SUM_VALID = 30u;              // pixels with a point and a normal of the frame
+VKM_CONST TRACK_SUM_MODEL_HITS = 31u;         //  ... that project onto the model (before the gates)
+VKM_CONST TRACK_SUM_COUNT = 32u;
+VKM_CONST WG_TRACK_PIXELS_X = 16u;            // the per-pixel passes: 16 x 16 pixels per workgroup
+VKM_CONST WG_TRACK_PIXELS_Y = 16u;
+VKM_CONST WG_TRACK_REDUCE = 64u;              // track_icp_reduce: invocations per workgroup, and
+VKM_CONST TRACK_PIXELS_PER_INVOCATION = 16u;  //  ... pixels each one sums before the workgroup's tree
+VKM_CONST TRACK_MAX_PARTIALS = 16384u;        // workgroups track_icp_sum adds up (16 Mpx per level; below lavapipe's loop cut)
+
+// Settings of the tracker's passes, constant for a tracker (TrackerOptions).
+struct TrackParamsGpu {
+    float filterSpatialSigma;   // bilateral filter: pixels
+    float filterDepthSigma;     //  ... metres
+    uint filterRadius;          //  ... window half-size, pixels
+    float minDepth;             // samples outside [minDepth, maxDepth] are no measurement
+    float maxDepth;             // metres (0: no limit)
+    float edgeJumpFraction;     // neighbours further apart than this fraction of the depth: an edge, no normal
+    float distanceGate;         // association: the model point lies within this distance (metres)
+    float normalGateCos;        //  ... and the normals agree within this angle (its cosine)
+    float huberDelta;           // robust weight: 1 below, delta / |r| above (metres)
+    float pad0, pad1, pad2;
+};
+
+// Push constants of the tracker's compute passes (128 bytes).
+struct TrackPush {
+    VKM_ROWS3(cameraToWorld);     // the frame's pose as estimated so far
+    VKM_ROWS3(modelWorldToCamera);// the inverse of the pose the model maps were drawn at
+    VKM_VEC4(intrinsics);         // fx, fy, cx, cy of this level
+    uint size;                    // width | height << 16 of this level
+    uint offset;                  // this level's first pixel in the pyramid buffers
+    uint finerOffset;             // downsampling: the finer level's first pixel
+    uint finerWidth;              //  ... and its width
+};
+
 #ifdef __cplusplus
 }  // namespace vkmesh::gpu
 #endif

@@ -31,7 +31,10 @@ Reconstructor::Reconstructor(const vk::ExternalDevice& device, const Reconstruct
 
 // The volume (its buffers) goes before the context (its command pool, and the device when owned); a frame
 // still in flight is waited for by the volume's command recorder.
-Reconstructor::~Reconstructor() { volume_.reset(); }
+Reconstructor::~Reconstructor() {
+    tracker_.reset();
+    volume_.reset();
+}
 
 gpu::FrameReport Reconstructor::integrate(const DepthImage& depth, const Intrinsics& intrinsics, const Pose& cameraToWorld,
                                           const vk::SubmitSync& sync) {
@@ -47,13 +50,42 @@ void Reconstructor::createVolume(int width, int height) {
     volume_ = std::make_unique<gpu::GpuVolume>(*context_, config);
 }
 
+void Reconstructor::given(const Pose& cameraToWorld) {
+    trajectory_.push_back(cameraToWorld);
+    if (tracker_) tracker_->start(cameraToWorld);
+}
+
 gpu::FrameReport Reconstructor::integrate(const DepthImage& depth, const ColorImage* color, const Intrinsics& intrinsics,
                                           const Pose& cameraToWorld, const vk::SubmitSync& sync) {
     finish();   // an asynchronous frame before this one
     createVolume(depth.width, depth.height);
     gpu::FrameReport report = volume_->integrate(depth, color, intrinsics, cameraToWorld, sync);
     lastDelta_ = report.delta;
+    given(cameraToWorld);
     return report;
+}
+
+TrackedFrame Reconstructor::integrate(const DepthImage& depth, const ColorImage* color, const Intrinsics& intrinsics,
+                                      const vk::SubmitSync& sync) {
+    finish();
+    createVolume(depth.width, depth.height);
+    if (!tracker_) {
+        tracker_ = std::make_unique<gpu::PoseTracker>(*context_, options_.tracker);
+        tracker_->start(trajectory_.empty() ? Pose::Identity() : trajectory_.back());
+    }
+    TrackedFrame out;
+    // Nothing fused yet (a new reconstruction): the frame starts the map where the tracker stands.
+    out.tracking = volume_->framesIntegrated() == 0 ? tracker_->start(tracker_->prediction())
+                                                    : tracker_->track(depth, intrinsics, volume_->meshBuffers());
+    out.cameraToWorld = out.tracking.cameraToWorld;
+    trajectory_.push_back(out.cameraToWorld);
+    if (out.tracking.tracked) {
+        out.fused = volume_->integrate(depth, color, intrinsics, out.cameraToWorld, sync);
+        lastDelta_ = out.fused->delta;
+    } else {
+        lastDelta_ = MeshDelta{};
+    }
+    return out;
 }
 
 gpu::FrameReport Reconstructor::integrate(const gpu::GpuImageInput& depth, const gpu::GpuImageInput& color,
@@ -63,6 +95,7 @@ gpu::FrameReport Reconstructor::integrate(const gpu::GpuImageInput& depth, const
     volume_->submitFrame(gpuFrameInput(depth, color, intrinsics, cameraToWorld, sync));
     gpu::FrameReport report = volume_->finishFrame();
     lastDelta_ = report.delta;
+    given(cameraToWorld);
     return report;
 }
 
@@ -93,6 +126,7 @@ Reconstructor::AsyncFrame Reconstructor::integrateAsync(const DepthImage& depth,
     input.intrinsics = intrinsics;
     input.cameraToWorld = cameraToWorld;
     input.sync = sync;
+    given(cameraToWorld);
     return submitAsync(input);
 }
 
@@ -100,6 +134,7 @@ Reconstructor::AsyncFrame Reconstructor::integrateAsync(const gpu::GpuImageInput
                                                         const Intrinsics& intrinsics, const Pose& cameraToWorld,
                                                         const vk::SubmitSync& sync) {
     createVolume(intrinsics.width, intrinsics.height);
+    given(cameraToWorld);
     return submitAsync(gpuFrameInput(depth, color, intrinsics, cameraToWorld, sync));
 }
 

@@ -33,6 +33,7 @@
 #include "core/mesh_delta.h"
 #include "core/types.h"
 #include "gpu/gpu_volume.h"
+#include "gpu/tracking/pose_tracker.h"
 #include "vk/commands.h"
 #include "vk/context.h"
 
@@ -46,6 +47,17 @@ struct ReconstructorOptions {
     bool trackDeltas = false;
     // For the constructor that creates its own Vulkan device: which device, validation layer.
     vk::ContextOptions device;
+    // Camera tracking for frames integrated without a pose (docs/TRACKING.md).
+    gpu::TrackerOptions tracker;
+};
+
+// A frame integrated without a pose: the pose tracking found (or predicted, when the frame was lost) and
+// what fusing it did (empty when the frame was lost: nothing was fused, the map is as it was).
+struct TrackedFrame {
+    Pose cameraToWorld = Pose::Identity();
+    gpu::TrackingReport tracking;
+    std::optional<gpu::FrameReport> fused;
+    bool lost() const { return !fused.has_value(); }
 };
 
 class Reconstructor {
@@ -68,6 +80,14 @@ public:
     // corners as options.volume.params.colorFusion says (docs/COLOR.md); nullptr: depth only this frame.
     gpu::FrameReport integrate(const DepthImage& depth, const ColorImage* color, const Intrinsics& intrinsics,
                                const Pose& cameraToWorld, const vk::SubmitSync& sync = {});
+    // Without a pose: the camera is tracked against the mesh fused so far (the very first frame is fused at the
+    // identity, or where the last frame given with a pose left the camera), and the frame fused at the tracked
+    // pose. A lost frame (TrackedFrame::lost()) is not fused and gets the predicted pose; tracking picks up
+    // again when a later frame matches. Frames given with a pose restart tracking from that pose.
+    TrackedFrame integrate(const DepthImage& depth, const ColorImage* color, const Intrinsics& intrinsics,
+                           const vk::SubmitSync& sync = {});
+    // The camera-to-world pose used for every frame so far (given, tracked, or predicted for a lost frame).
+    const std::vector<Pose>& trajectory() const { return trajectory_; }
 
     // ---- asynchronous frames: the application's frame never waits for vkmesh's GPU work ----
     // integrateAsync() checks and copies the input, records the frame and submits it, and returns at once.
@@ -132,6 +152,10 @@ private:
     ReconstructorOptions options_;
     std::unique_ptr<gpu::GpuVolume> volume_;
     MeshDelta lastDelta_;
+    std::unique_ptr<gpu::PoseTracker> tracker_;   // created by the first frame integrated without a pose
+    std::vector<Pose> trajectory_;
+    // A frame given with a pose: the trajectory records it and tracking restarts from it.
+    void given(const Pose& cameraToWorld);
 };
 
 }  // namespace vkmesh

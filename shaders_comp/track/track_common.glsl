@@ -1,0 +1,47 @@
+// What the tracker's passes see (shared_layout.h, "camera tracking"): their settings, the push constants of
+// the level being processed, and the pyramids of per-pixel maps. Same rules as structure/frame.glsl: no
+// invocation waits for another, every loop has a small static bound, and sums are formed in a fixed order so
+// that the same frames give the same poses bit for bit (no float atomics).
+#ifndef VKMESH_TRACK_COMMON_GLSL
+#define VKMESH_TRACK_COMMON_GLSL
+#ifndef VKMESH_HASH32
+#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require   // shared_layout.h declares 64-bit constants
+#endif
+
+#include "shared_layout.h"
+
+layout(std140, set = 0, binding = TRACK_BINDING_PARAMS) uniform TrackParamsBuffer { TrackParamsGpu track; };
+layout(std430, set = 0, binding = TRACK_BINDING_RAW_DEPTH) readonly buffer RawDepth { float rawDepth[]; };
+layout(std430, set = 0, binding = TRACK_BINDING_DEPTH) buffer DepthPyramid { float depthPyramid[]; };
+layout(std430, set = 0, binding = TRACK_BINDING_VERTICES) buffer VertexPyramid { vec4 vertexPyramid[]; };
+layout(std430, set = 0, binding = TRACK_BINDING_NORMALS) buffer NormalPyramid { vec4 normalPyramid[]; };
+layout(std430, set = 0, binding = TRACK_BINDING_MODEL_POSITIONS) buffer ModelPositions { vec4 modelPositions[]; };
+layout(std430, set = 0, binding = TRACK_BINDING_MODEL_NORMALS) buffer ModelNormals { vec4 modelNormals[]; };
+layout(std430, set = 0, binding = TRACK_BINDING_PARTIALS) buffer Partials { float partials[]; };
+layout(std430, set = 0, binding = TRACK_BINDING_SUMS) writeonly buffer Sums { float sums[]; };
+
+layout(push_constant) uniform Push { TrackPush pass; };
+
+uvec2 levelSize() { return uvec2(pass.size & 0xFFFFu, pass.size >> 16); }
+
+// x' = R x + t with R, t as 3 rows of [R | t], in the order the CPU reference (src/cpu/reference_tracking.cpp)
+// repeats: every float expression the reference must reproduce is `precise` (no contraction).
+vec3 trackTransform(vec4 rows[3], vec3 p) {
+    precise vec3 q;
+    q.x = rows[0].x * p.x + rows[0].y * p.y + rows[0].z * p.z + rows[0].w;
+    q.y = rows[1].x * p.x + rows[1].y * p.y + rows[1].z * p.z + rows[1].w;
+    q.z = rows[2].x * p.x + rows[2].y * p.y + rows[2].z * p.z + rows[2].w;
+    return q;
+}
+vec3 trackRotate(vec4 rows[3], vec3 v) {
+    precise vec3 q;
+    q.x = rows[0].x * v.x + rows[0].y * v.y + rows[0].z * v.z;
+    q.y = rows[1].x * v.x + rows[1].y * v.y + rows[1].z * v.z;
+    q.z = rows[2].x * v.x + rows[2].y * v.y + rows[2].z * v.z;
+    return q;
+}
+
+// A depth sample is a measurement when it lies in [minDepth, maxDepth] (maxDepth 0: no upper limit); NaN and
+// infinities never are.
+bool measured(float d) { return d >= track.minDepth && d > 0.0 && (track.maxDepth <= 0.0 || d <= track.maxDepth) && !isinf(d); }
+#endif

@@ -1,0 +1,77 @@
+#version 450
+// Tracking, one ICP iteration at one level, part 1: projective data association and the point-to-plane terms
+// of every pixel, summed per workgroup.
+// For a frame pixel with a point p and normal m (camera space): p_w = T p with T the pose estimated so far;
+// p_w is projected into the model maps (drawn at the model pose); the model point q and normal n there are
+// associated when |p_w - q| <= distanceGate and (R m) . n >= normalGateCos. Residual r = n . (p_w - q);
+// J = [p_w x n, n] its derivative for a twist applied on the left of T; Huber weight w. Each invocation sums
+// TRACK_PIXELS_PER_INVOCATION pixels in order, then the workgroup adds its invocations' sums by a fixed binary
+// tree in shared memory: the order of every addition is fixed, so the partials are the same bit for bit on
+// every run (no float atomics). track_icp_sum adds the partials up.
+#extension GL_GOOGLE_include_directive : require
+#include "track/track_common.glsl"
+
+layout(local_size_x = WG_TRACK_REDUCE) in;
+
+shared float tree[TRACK_SUM_COUNT * WG_TRACK_REDUCE];
+
+void main() {
+    uvec2 size = levelSize();
+    uint pixels = size.x * size.y;
+    uint lane = gl_LocalInvocationID.x;
+    float acc[TRACK_SUM_COUNT];
+    for (uint k = 0u; k < TRACK_SUM_COUNT; ++k) acc[k] = 0.0;
+
+    for (uint k = 0u; k < TRACK_PIXELS_PER_INVOCATION; ++k) {
+        uint i = (gl_WorkGroupID.x * TRACK_PIXELS_PER_INVOCATION + k) * WG_TRACK_REDUCE + lane;
+        if (i >= pixels) continue;
+        uint index = pass.offset + i;
+        vec4 point = vertexPyramid[index];
+        vec4 normal = normalPyramid[index];
+        if (point.w == 0.0 || normal.w == 0.0) continue;
+        acc[TRACK_SUM_VALID] += 1.0;
+        precise vec3 world = trackTransform(pass.cameraToWorld, point.xyz);
+        precise vec3 model = trackTransform(pass.modelWorldToCamera, world);
+        if (!(model.z > 0.0)) continue;
+        precise float u = pass.intrinsics.x * (model.x / model.z) + pass.intrinsics.z;
+        precise float v = pass.intrinsics.y * (model.y / model.z) + pass.intrinsics.w;
+        // Pixel centres are at integer coordinates in the intrinsics' convention: round to the nearest.
+        float fu = floor(u + 0.5), fv = floor(v + 0.5);
+        if (!(fu >= 0.0 && fv >= 0.0 && fu < float(size.x) && fv < float(size.y))) continue;
+        uint modelIndex = pass.offset + uint(fv) * size.x + uint(fu);
+        vec4 q = modelPositions[modelIndex];
+        if (q.w == 0.0) continue;
+        acc[TRACK_SUM_MODEL_HITS] += 1.0;
+        vec3 n = modelNormals[modelIndex].xyz;
+        precise vec3 diff = world - q.xyz;
+        precise float distance2 = dot(diff, diff);
+        if (distance2 > track.distanceGate * track.distanceGate) continue;
+        precise vec3 frameNormal = trackRotate(pass.cameraToWorld, normal.xyz);
+        if (dot(frameNormal, n) < track.normalGateCos) continue;
+        precise float r = dot(n, diff);
+        precise float w = abs(r) <= track.huberDelta ? 1.0 : track.huberDelta / abs(r);
+        precise vec3 jr = cross(world, n);
+        float J[6] = float[6](jr.x, jr.y, jr.z, n.x, n.y, n.z);
+        uint slot = TRACK_SUM_JTJ;
+        for (uint a = 0u; a < 6u; ++a) {
+            precise float wa = w * J[a];
+            for (uint b = a; b < 6u; ++b) {
+                acc[slot] += wa * J[b];
+                ++slot;
+            }
+            acc[TRACK_SUM_JTR + a] += wa * r;
+        }
+        acc[TRACK_SUM_WEIGHTED_ERROR] += w * r * r;
+        acc[TRACK_SUM_INLIERS] += 1.0;
+        acc[TRACK_SUM_SQUARED_ERROR] += r * r;
+    }
+
+    for (uint k = 0u; k < TRACK_SUM_COUNT; ++k) tree[k * WG_TRACK_REDUCE + lane] = acc[k];
+    for (uint stride = WG_TRACK_REDUCE / 2u; stride > 0u; stride /= 2u) {
+        barrier();
+        if (lane < stride)
+            for (uint k = 0u; k < TRACK_SUM_COUNT; ++k) tree[k * WG_TRACK_REDUCE + lane] += tree[k * WG_TRACK_REDUCE + lane + stride];
+    }
+    barrier();
+    if (lane < TRACK_SUM_COUNT) partials[gl_WorkGroupID.x * TRACK_SUM_COUNT + lane] = tree[lane * WG_TRACK_REDUCE];
+}

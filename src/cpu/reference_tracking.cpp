@@ -1,0 +1,191 @@
+#include "cpu/reference_tracking.h"
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/camera.h"
+
+namespace vkmesh::cpu {
+namespace {
+
+bool measured(float d, const gpu::TrackParamsGpu& p) {
+    return d >= p.minDepth && d > 0.0f && (p.maxDepth <= 0.0f || d <= p.maxDepth) && !std::isinf(d);
+}
+
+Eigen::Vector3f backProject(int x, int y, float d, const Intrinsics& k) {
+    return {(float(x) - k.cx) / k.fx * d, (float(y) - k.cy) / k.fy * d, d};
+}
+
+Eigen::Vector3f rotate(const RigidRows& m, const Eigen::Vector3f& v) {
+    Eigen::Vector3f q;
+    for (int i = 0; i < 3; ++i) q[i] = m.r[i][0] * v.x() + m.r[i][1] * v.y() + m.r[i][2] * v.z();
+    return q;
+}
+
+std::vector<float> filterDepth(const DepthImage& raw, const gpu::TrackParamsGpu& p) {
+    const int w = raw.width, h = raw.height;
+    std::vector<float> out(size_t(w) * h, 0.0f);
+    const int radius = std::min(int(p.filterRadius), 4);
+    const float spatial = -0.5f / (p.filterSpatialSigma * p.filterSpatialSigma);
+    const float range = -0.5f / (p.filterDepthSigma * p.filterDepthSigma);
+    for (int y = 0; y < h; ++y) {
+        for (int x = 0; x < w; ++x) {
+            const float centre = raw.meters[size_t(y) * w + x];
+            if (!measured(centre, p)) continue;
+            float sum = 0.0f, weights = 0.0f;
+            for (int dy = -radius; dy <= radius; ++dy) {
+                for (int dx = -radius; dx <= radius; ++dx) {
+                    const int qx = x + dx, qy = y + dy;
+                    if (qx < 0 || qy < 0 || qx >= w || qy >= h) continue;
+                    const float d = raw.meters[size_t(qy) * w + qx];
+                    if (!measured(d, p)) continue;
+                    const float diff = d - centre;
+                    const float weight = std::exp(float(dx * dx + dy * dy) * spatial + diff * diff * range);
+                    sum += weight * d;
+                    weights += weight;
+                }
+            }
+            out[size_t(y) * w + x] = sum / weights;
+        }
+    }
+    return out;
+}
+
+std::vector<float> downsampleDepth(const std::vector<float>& fine, int fineWidth, int width, int height, const gpu::TrackParamsGpu& p) {
+    std::vector<float> out(size_t(width) * height, 0.0f);
+    for (int y = 0; y < height; ++y) {
+        for (int x = 0; x < width; ++x) {
+            float samples[4];
+            for (int k = 0; k < 4; ++k) samples[k] = fine[size_t(2 * y + (k >> 1)) * fineWidth + 2 * x + (k & 1)];
+            float reference = 0.0f;
+            for (float s : samples)
+                if (reference == 0.0f && s > 0.0f) reference = s;
+            float sum = 0.0f, count = 0.0f;
+            for (float s : samples)
+                if (s > 0.0f && std::abs(s - reference) <= 3.0f * p.filterDepthSigma) sum += s, count += 1.0f;
+            out[size_t(y) * width + x] = count > 0.0f ? sum / count : 0.0f;
+        }
+    }
+    return out;
+}
+
+void pointsAndNormals(TrackingLevel& level, const gpu::TrackParamsGpu& p) {
+    const int w = level.width, h = level.height;
+    level.points.assign(size_t(w) * h, Eigen::Vector4f::Zero());
+    level.normals.assign(size_t(w) * h, Eigen::Vector4f::Zero());
+    for (int y = 0; y < h; ++y) {
+        for (int x = 0; x < w; ++x) {
+            const size_t i = size_t(y) * w + x;
+            const float d = level.depth[i];
+            if (d <= 0.0f) continue;
+            const Eigen::Vector3f pt = backProject(x, y, d, level.intrinsics);
+            level.points[i] << pt, 1.0f;
+            if (x + 1 >= w || y + 1 >= h) continue;
+            const float right = level.depth[i + 1], down = level.depth[i + w];
+            const float jump = p.edgeJumpFraction * d;
+            if (!(right > 0.0f && down > 0.0f && std::abs(right - d) <= jump && std::abs(down - d) <= jump)) continue;
+            Eigen::Vector3f n = (backProject(x + 1, y, right, level.intrinsics) - pt).cross(backProject(x, y + 1, down, level.intrinsics) - pt);
+            const float length2 = n.dot(n);
+            if (!(length2 > 0.0f)) continue;
+            n /= std::sqrt(length2);
+            if (n.dot(pt) > 0.0f) n = -n;
+            level.normals[i] << n, 1.0f;
+        }
+    }
+}
+
+}  // namespace
+
+std::vector<TrackingLevel> referenceTrackingPyramid(const DepthImage& depth, const Intrinsics& intrinsics, const gpu::TrackParamsGpu& params) {
+    std::vector<TrackingLevel> levels(gpu::TRACK_LEVELS);
+    Intrinsics k = intrinsics;
+    k.width = depth.width, k.height = depth.height;
+    for (int l = 0; l < int(gpu::TRACK_LEVELS); ++l) {
+        TrackingLevel& level = levels[l];
+        level.intrinsics = pyramidLevelIntrinsics(k, l);
+        level.width = depth.width >> l;
+        level.height = depth.height >> l;
+        level.depth = l == 0 ? filterDepth(depth, params)
+                             : downsampleDepth(levels[l - 1].depth, levels[l - 1].width, level.width, level.height, params);
+        pointsAndNormals(level, params);
+    }
+    return levels;
+}
+
+void referenceDownsampleModel(const std::vector<Eigen::Vector4f>& positions, const std::vector<Eigen::Vector4f>& normals, int width,
+                              int height, const gpu::TrackParamsGpu& params, std::vector<Eigen::Vector4f>& coarsePositions,
+                              std::vector<Eigen::Vector4f>& coarseNormals) {
+    const int cw = width >> 1, ch = height >> 1;
+    coarsePositions.assign(size_t(cw) * ch, Eigen::Vector4f::Zero());
+    coarseNormals.assign(size_t(cw) * ch, Eigen::Vector4f::Zero());
+    for (int y = 0; y < ch; ++y) {
+        for (int x = 0; x < cw; ++x) {
+            size_t fine[4];
+            for (int k = 0; k < 4; ++k) fine[k] = size_t(2 * y + (k >> 1)) * width + 2 * x + (k & 1);
+            Eigen::Vector4f reference = Eigen::Vector4f::Zero();
+            for (size_t f : fine)
+                if (reference.w() == 0.0f && positions[f].w() != 0.0f) reference = positions[f];
+            Eigen::Vector3f position = Eigen::Vector3f::Zero(), normal = Eigen::Vector3f::Zero();
+            float count = 0.0f;
+            for (size_t f : fine) {
+                if (positions[f].w() == 0.0f || (positions[f].head<3>() - reference.head<3>()).norm() > params.distanceGate) continue;
+                position += positions[f].head<3>();
+                normal += normals[f].head<3>();
+                count += 1.0f;
+            }
+            const float length2 = normal.dot(normal);
+            if (count == 0.0f || length2 <= 0.0f) continue;
+            coarsePositions[size_t(y) * cw + x] << position / count, 1.0f;
+            coarseNormals[size_t(y) * cw + x] << normal / std::sqrt(length2), 1.0f;
+        }
+    }
+}
+
+IcpSums referenceIcpSums(const TrackingLevel& frame, const std::vector<Eigen::Vector4f>& modelPositions,
+                         const std::vector<Eigen::Vector4f>& modelNormals, const Pose& estimate, const Pose& modelPose,
+                         const gpu::TrackParamsGpu& params) {
+    using namespace gpu;
+    IcpSums sums{};
+    const RigidRows toWorld = rigidRows(estimate), toModel = rigidRows(inverseRigid(modelPose));
+    const Intrinsics& k = frame.intrinsics;
+    const int w = frame.width, h = frame.height;
+    for (size_t i = 0; i < frame.points.size(); ++i) {
+        const Eigen::Vector4f& point = frame.points[i];
+        const Eigen::Vector4f& normal = frame.normals[i];
+        if (point.w() == 0.0f || normal.w() == 0.0f) continue;
+        sums[TRACK_SUM_VALID] += 1;
+        const Eigen::Vector3f world = toWorld.apply(point.head<3>());
+        const Eigen::Vector3f model = toModel.apply(world);
+        if (!(model.z() > 0.0f)) continue;
+        const float u = k.fx * (model.x() / model.z()) + k.cx;
+        const float v = k.fy * (model.y() / model.z()) + k.cy;
+        const float fu = std::floor(u + 0.5f), fv = std::floor(v + 0.5f);
+        if (!(fu >= 0.0f && fv >= 0.0f && fu < float(w) && fv < float(h))) continue;
+        const size_t m = size_t(fv) * w + size_t(fu);
+        const Eigen::Vector4f& q = modelPositions[m];
+        if (q.w() == 0.0f) continue;
+        sums[TRACK_SUM_MODEL_HITS] += 1;
+        const Eigen::Vector3f n = modelNormals[m].head<3>();
+        const Eigen::Vector3f diff = world - q.head<3>();
+        if (diff.dot(diff) > params.distanceGate * params.distanceGate) continue;
+        if (rotate(toWorld, normal.head<3>()).dot(n) < params.normalGateCos) continue;
+        const float r = n.dot(diff);
+        const float weight = std::abs(r) <= params.huberDelta ? 1.0f : params.huberDelta / std::abs(r);
+        const Eigen::Vector3f jr = world.cross(n);
+        const float J[6] = {jr.x(), jr.y(), jr.z(), n.x(), n.y(), n.z()};
+        uint32_t slot = TRACK_SUM_JTJ;
+        for (int a = 0; a < 6; ++a) {
+            const float wa = weight * J[a];
+            for (int b = a; b < 6; ++b) sums[slot++] += double(wa * J[b]);
+            sums[TRACK_SUM_JTR + a] += double(wa * r);
+        }
+        sums[TRACK_SUM_WEIGHTED_ERROR] += double(weight * r * r);
+        sums[TRACK_SUM_INLIERS] += 1;
+        sums[TRACK_SUM_SQUARED_ERROR] += double(r * r);
+    }
+    return sums;
+}
+
+}  // namespace vkmesh::cpu

@@ -1,0 +1,42 @@
+// CPU reference of the tracking stage's compute passes (shaders_comp/track/, docs/TRACKING.md): the same
+// float operations in the same order, one pixel at a time. The tests compare the GPU's pyramid maps and ICP
+// sums with these. The model maps themselves come from the rasterizer; the reference takes them as input
+// (the GPU's, downloaded) and checks the passes that read them.
+#pragma once
+
+#include <Eigen/Core>
+
+#include <vector>
+
+#include "core/icp_solve.h"
+#include "core/types.h"
+#include "shared_layout.h"
+
+namespace vkmesh::cpu {
+
+// One pyramid level's maps, row-major, width x height.
+struct TrackingLevel {
+    int width = 0, height = 0;
+    Intrinsics intrinsics;                   // of this level (pyramidLevelIntrinsics)
+    std::vector<float> depth;                // 0 = none
+    std::vector<Eigen::Vector4f> points;     // camera space, w = 1 (0 = none)
+    std::vector<Eigen::Vector4f> normals;    // camera space, facing the camera, w = 1 (0 = none)
+};
+
+// The frame's pyramid (TRACK_LEVELS levels): bilateral filter, downsampling, points and normals.
+std::vector<TrackingLevel> referenceTrackingPyramid(const DepthImage& depth, const Intrinsics& intrinsics,
+                                                    const gpu::TrackParamsGpu& params);
+
+// Level l + 1 of a model map pair from level l (track_downsample_model.comp).
+void referenceDownsampleModel(const std::vector<Eigen::Vector4f>& positions, const std::vector<Eigen::Vector4f>& normals,
+                              int width, int height, const gpu::TrackParamsGpu& params, std::vector<Eigen::Vector4f>& coarsePositions,
+                              std::vector<Eigen::Vector4f>& coarseNormals);
+
+// One ICP iteration's sums (track_icp_reduce.comp) at one level: the frame's points and normals against the
+// model maps (world space, drawn at modelPose), for the frame at `estimate`. Each pixel's terms are formed in
+// float as on the GPU and summed in double (the GPU sums in float: compare with a tolerance).
+IcpSums referenceIcpSums(const TrackingLevel& frame, const std::vector<Eigen::Vector4f>& modelPositions,
+                         const std::vector<Eigen::Vector4f>& modelNormals, const Pose& estimate, const Pose& modelPose,
+                         const gpu::TrackParamsGpu& params);
+
+}  // namespace vkmesh::cpu

@@ -1,0 +1,217 @@
+#include "gpu/tracking/camera_tracker.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <numbers>
+#include <string>
+
+#include "core/camera.h"
+
+namespace vkmesh::gpu {
+namespace {
+
+constexpr VkBufferUsageFlags kStorage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
+
+uint32_t levelWidth(int width, int level) { return uint32_t(width) >> level; }
+uint32_t levelHeight(int height, int level) { return uint32_t(height) >> level; }
+uint32_t groupsFor(uint32_t n, uint32_t size) { return (n + size - 1) / size; }
+uint32_t reduceGroups(uint32_t pixels) { return groupsFor(pixels, WG_TRACK_REDUCE * TRACK_PIXELS_PER_INVOCATION); }
+
+}  // namespace
+
+TrackParamsGpu trackParamsFor(const TrackerOptions& o) {
+    if (o.filterRadius > 4) throw Error("tracking: filter radius " + std::to_string(o.filterRadius) + " is above 4 pixels");
+    for (int n : o.iterations)
+        if (n < 0 || n > 100) throw Error("tracking: " + std::to_string(n) + " iterations per level is outside 0..100");
+    if (!(o.distanceGate > 0) || !(o.huberDelta > 0) || !(o.normalGateDegrees > 0 && o.normalGateDegrees <= 180) ||
+        !(o.filterSpatialSigma > 0) || !(o.filterDepthSigma > 0) || !(o.edgeJumpFraction > 0))
+        throw Error("tracking: gates, Huber delta and filter sigmas must be positive (normal gate at most 180 degrees)");
+    TrackParamsGpu p{};
+    p.filterSpatialSigma = o.filterSpatialSigma;
+    p.filterDepthSigma = o.filterDepthSigma;
+    p.filterRadius = o.filterRadius;
+    p.minDepth = o.minDepth;
+    p.maxDepth = o.maxDepth;
+    p.edgeJumpFraction = o.edgeJumpFraction;
+    p.distanceGate = o.distanceGate;
+    p.normalGateCos = float(std::cos(double(o.normalGateDegrees) * std::numbers::pi / 180.0));
+    p.huberDelta = o.huberDelta;
+    return p;
+}
+
+namespace {
+
+void copyRows(float (&dst)[3][4], const Pose& pose) {
+    RigidRows rows = rigidRows(pose);
+    std::memcpy(dst, rows.r, sizeof(dst));
+}
+
+}  // namespace
+
+Intrinsics CameraTracker::levelIntrinsics(const Intrinsics& k, int level) { return pyramidLevelIntrinsics(k, level); }
+
+static uint32_t pyramidSize(int width, int height, std::array<uint32_t, TRACK_LEVELS>& offsets) {
+    if (width < int(1u << (TRACK_LEVELS - 1)) * 2 || height < int(1u << (TRACK_LEVELS - 1)) * 2 || width > 16384 || height > 16384)
+        throw Error("tracking: image size " + std::to_string(width) + "x" + std::to_string(height) + " is outside 8x8..16384x16384");
+    uint32_t total = 0;
+    for (int l = 0; l < int(TRACK_LEVELS); ++l) {
+        offsets[l] = total;
+        total += levelWidth(width, l) * levelHeight(height, l);
+    }
+    return total;
+}
+
+CameraTracker::CameraTracker(const vk::Context& context, int width, int height, const TrackerOptions& options)
+    : context_(context), width_(width), height_(height), options_(options),
+      pyramidPixels_(pyramidSize(width, height, offsets_)),
+      table_(context, sizeof(TrackPush)),
+      params_(context, sizeof(TrackParamsGpu), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, vk::MemoryUse::Upload, "tracking params"),
+      rawDepth_(context, VkDeviceSize(width) * height * sizeof(float), kStorage, vk::MemoryUse::Upload, "tracking depth input"),
+      depth_(context, VkDeviceSize(pyramidPixels_) * sizeof(float), kStorage, vk::MemoryUse::Device, "tracking depth pyramid"),
+      points_(context, VkDeviceSize(pyramidPixels_) * 16, kStorage, vk::MemoryUse::Device, "tracking point pyramid"),
+      normals_(context, VkDeviceSize(pyramidPixels_) * 16, kStorage, vk::MemoryUse::Device, "tracking normal pyramid"),
+      modelPositions_(context, VkDeviceSize(pyramidPixels_) * 16, kStorage, vk::MemoryUse::Device, "tracking model positions"),
+      modelNormals_(context, VkDeviceSize(pyramidPixels_) * 16, kStorage, vk::MemoryUse::Device, "tracking model normals"),
+      partials_(context, VkDeviceSize(std::max(1u, reduceGroups(uint32_t(width) * height))) * TRACK_SUM_COUNT * sizeof(float), kStorage,
+                vk::MemoryUse::Device, "tracking partial sums"),
+      sums_(context, TRACK_SUM_COUNT * sizeof(float), kStorage, vk::MemoryUse::Readback, "tracking sums"),
+      filter_(context, table_, "track_filter_depth"),
+      downsampleDepth_(context, table_, "track_downsample_depth"),
+      vertexNormals_(context, table_, "track_vertex_normals"),
+      downsampleModel_(context, table_, "track_downsample_model"),
+      reduce_(context, table_, "track_icp_reduce"),
+      sum_(context, table_, "track_icp_sum"),
+      modelMaps_(context, width, height),
+      recorder_(context),
+      timer_(context, 16) {
+    if (reduceGroups(uint32_t(width) * height) > TRACK_MAX_PARTIALS) throw Error("tracking: image too large for the ICP sums");
+    const TrackParamsGpu p = trackParamsFor(options);
+    std::memcpy(params_.mapped(), &p, sizeof(p));
+    table_.bind(TRACK_BINDING_PARAMS, params_);
+    table_.bind(TRACK_BINDING_RAW_DEPTH, rawDepth_);
+    table_.bind(TRACK_BINDING_DEPTH, depth_);
+    table_.bind(TRACK_BINDING_VERTICES, points_);
+    table_.bind(TRACK_BINDING_NORMALS, normals_);
+    table_.bind(TRACK_BINDING_MODEL_POSITIONS, modelPositions_);
+    table_.bind(TRACK_BINDING_MODEL_NORMALS, modelNormals_);
+    table_.bind(TRACK_BINDING_PARTIALS, partials_);
+    table_.bind(TRACK_BINDING_SUMS, sums_);
+}
+
+CameraTracker::~CameraTracker() { recorder_.wait(); }
+
+TrackPush CameraTracker::levelPush(int level, const Pose& estimate) const {
+    TrackPush push{};
+    copyRows(push.cameraToWorld, estimate);
+    copyRows(push.modelWorldToCamera, inverseRigid(modelPose_));
+    const Intrinsics k = levelIntrinsics(intrinsics_, level);
+    push.intrinsics[0] = k.fx, push.intrinsics[1] = k.fy, push.intrinsics[2] = k.cx, push.intrinsics[3] = k.cy;
+    push.size = levelWidth(width_, level) | levelHeight(height_, level) << 16;
+    push.offset = offsets_[level];
+    if (level > 0) {
+        push.finerOffset = offsets_[level - 1];
+        push.finerWidth = levelWidth(width_, level - 1);
+    }
+    return push;
+}
+
+void CameraTracker::prepare(const DepthImage& depth, const Intrinsics& intrinsics, const MeshBuffers& mesh, const Pose& modelPose) {
+    if (depth.width != width_ || depth.height != height_ || depth.meters.size() != size_t(width_) * size_t(height_))
+        throw Error("tracking: a " + std::to_string(depth.width) + "x" + std::to_string(depth.height) + " depth image for a tracker of " +
+                    std::to_string(width_) + "x" + std::to_string(height_));
+    intrinsics_ = intrinsics;
+    intrinsics_.width = width_, intrinsics_.height = height_;
+    modelPose_ = modelPose;
+    VkCommandBuffer cmd = recorder_.begin();   // waits for the last submission: the input buffer is free
+    std::memcpy(rawDepth_.mapped(), depth.meters.data(), depth.meters.size() * sizeof(float));
+    timer_.reset(cmd);
+    timer_.mark(cmd, "start");
+    const Pose none = Pose::Identity();
+    auto pixelGroups = [&](const vk::ComputePipeline& pipeline, int level) {
+        TrackPush push = levelPush(level, none);
+        pipeline.dispatch(cmd, &push, groupsFor(levelWidth(width_, level), WG_TRACK_PIXELS_X),
+                          groupsFor(levelHeight(height_, level), WG_TRACK_PIXELS_Y));
+    };
+    pixelGroups(filter_, 0);
+    vk::memoryBarrier(cmd);
+    for (int l = 1; l < int(TRACK_LEVELS); ++l) {
+        pixelGroups(downsampleDepth_, l);
+        vk::memoryBarrier(cmd);
+    }
+    for (int l = 0; l < int(TRACK_LEVELS); ++l) pixelGroups(vertexNormals_, l);
+    vk::memoryBarrier(cmd);
+    timer_.mark(cmd, "track_pyramid");
+    const float nearDepth = std::max(0.01f, options_.minDepth * 0.5f);
+    const float farDepth = options_.maxDepth > 0 ? options_.maxDepth * 2.0f : 100.0f;
+    modelMaps_.record(cmd, mesh, modelPose, intrinsics_, nearDepth, farDepth, modelPositions_, modelNormals_);
+    for (int l = 1; l < int(TRACK_LEVELS); ++l) {
+        pixelGroups(downsampleModel_, l);
+        vk::memoryBarrier(cmd);
+    }
+    timer_.mark(cmd, "track_model");
+    recorder_.submitAndWait();
+    gpuMs_ = 0;
+    for (const auto& [name, ms] : timer_.read()) gpuMs_ += ms;
+}
+
+IcpSums CameraTracker::sums(int level, const Pose& estimate) {
+    if (level < 0 || level >= int(TRACK_LEVELS)) throw Error("tracking: no pyramid level " + std::to_string(level));
+    const uint32_t groups = reduceGroups(levelWidth(width_, level) * levelHeight(height_, level));
+    VkCommandBuffer cmd = recorder_.begin();
+    timer_.reset(cmd);
+    timer_.mark(cmd, "start");
+    TrackPush push = levelPush(level, estimate);
+    reduce_.dispatch(cmd, &push, groups);
+    vk::memoryBarrier(cmd);
+    TrackPush sumPush{};
+    sumPush.size = groups;
+    sum_.dispatch(cmd, &sumPush, 1);
+    vk::memoryBarrier(cmd);
+    timer_.mark(cmd, "track_icp");
+    recorder_.submitAndWait();
+    for (const auto& [name, ms] : timer_.read()) gpuMs_ += ms;
+    sums_.invalidate();
+    float values[TRACK_SUM_COUNT];
+    std::memcpy(values, sums_.mapped(), sizeof(values));
+    IcpSums out{};
+    for (uint32_t k = 0; k < TRACK_SUM_COUNT; ++k) out[k] = values[k];
+    return out;
+}
+
+IcpResult CameraTracker::align(const Pose& initial) {
+    IcpResult result;
+    result.cameraToWorld = initial;
+    result.submissions = 1;   // prepare()
+    result.solved = true;
+    for (int level = int(TRACK_LEVELS) - 1; level >= 0; --level) {
+        for (int it = 0; it < options_.iterations[level]; ++it) {
+            IcpSystem system = icpSystem(sums(level, result.cameraToWorld));
+            ++result.iterations;
+            ++result.submissions;
+            IcpStep step = solveIcpStep(system);
+            if (level == 0) result.finalSystem = system, result.finalStep = step;
+            if (!step.solved) {
+                result.solved = false;
+                break;
+            }
+            result.cameraToWorld = applyTwist(step.twist, result.cameraToWorld);
+            if (step.twist.head<3>().norm() < options_.stopRotation && step.twist.tail<3>().norm() < options_.stopTranslation) break;
+        }
+    }
+    return result;
+}
+
+CameraTracker::Maps CameraTracker::downloadMaps() const {
+    Maps maps;
+    maps.depth.resize(pyramidPixels_);
+    vk::downloadFromBuffer(context_, depth_, maps.depth.data(), maps.depth.size() * sizeof(float));
+    for (auto [buffer, out] : {std::pair{&points_, &maps.points}, {&normals_, &maps.normals}, {&modelPositions_, &maps.modelPositions},
+                               {&modelNormals_, &maps.modelNormals}}) {
+        out->resize(pyramidPixels_);
+        vk::downloadFromBuffer(context_, *buffer, out->data(), out->size() * sizeof(Eigen::Vector4f));
+    }
+    return maps;
+}
+
+}  // namespace vkmesh::gpu

@@ -1,0 +1,126 @@
+// Stage: camera tracking (docs/TRACKING.md; shaders_comp/track/, shaders_render/track_model.*). Aligns a depth
+// frame to vkmesh's own mesh by point-to-plane ICP, frame to model:
+//   prepare()  one submission: the frame's depth -> bilateral filter -> TRACK_LEVELS-level pyramid -> point and
+//              normal maps per level; the mesh drawn at the model pose (ModelMapRenderer) -> model position and
+//              normal maps, downsampled alike.
+//   sums()     one submission per ICP iteration: projective association with distance and normal gates, Huber
+//              weights, the 6x6 system's terms summed per workgroup by a fixed tree and the partials added in
+//              a fixed order (the same frames give the same poses, bit for bit); the host solves in double
+//              (core/icp_solve.h).
+//   align()    coarse to fine from an initial pose, TrackerOptions::iterations per level, stopping a level
+//              early when the step is tiny.
+// The loss policy (too few inliers, a jump, an ill-conditioned system, a rising error) and the prediction are
+// PoseTracker's (pose_tracker.h). CPU reference: src/cpu/reference_tracking.h.
+#pragma once
+
+#include <array>
+#include <memory>
+#include <vector>
+
+#include "core/icp_solve.h"
+#include "core/types.h"
+#include "gpu/gpu_volume.h"
+#include "gpu/layout.h"
+#include "gpu/tracking/model_maps.h"
+#include "vk/buffer.h"
+#include "vk/commands.h"
+#include "vk/context.h"
+#include "vk/pipeline.h"
+
+namespace vkmesh::gpu {
+
+struct TrackerOptions {
+    // ICP iterations per pyramid level, finest (level 0) first; the coarsest level runs first.
+    std::array<int, TRACK_LEVELS> iterations{10, 5, 4};
+    // A level stops early once a step rotates less than this (radians) and moves less than this (metres).
+    double stopRotation = 1e-5;
+    double stopTranslation = 1e-5;
+    // Bilateral filter of the depth before tracking (fusion takes the raw depth).
+    float filterSpatialSigma = 4.5f;   // pixels
+    float filterDepthSigma = 0.03f;    // metres
+    uint32_t filterRadius = 2;         // window half-size in pixels, at most 4
+    // Neighbours further apart in depth than this fraction of the depth: a depth edge, no normal.
+    float edgeJumpFraction = 0.05f;
+    // Association gates and robust weight.
+    float distanceGate = 0.10f;        // metres
+    float normalGateDegrees = 20.0f;
+    float huberDelta = 0.02f;          // metres
+    // Depth samples outside [minDepth, maxDepth] are ignored (maxDepth 0: no limit).
+    float minDepth = 0.1f;
+    float maxDepth = 0.0f;
+    // Loss (PoseTracker): a frame is lost when, after ICP,
+    double minInlierFraction = 0.10;   //  fewer than this share of its valid pixels are inliers (level 0),
+    double minInliers = 100;           //  or fewer than this many;
+    double minConditioning = 1e-6;     //  the system's smallest / largest eigenvalue is below this (a direction
+                                       //  of motion unconstrained, e.g. one plane);
+    double maxJumpMetres = 0.30;       //  the pose moved further than this from the last tracked one,
+    double maxJumpDegrees = 30.0;      //  or turned further;
+    double maxErrorRise = 3.0;         //  its inlier RMSE exceeds this many times the recent tracked frames'
+    double minErrorForRise = 0.005;    //  (and this many metres: a tiny error may triple harmlessly).
+};
+
+// The options as the shaders read them (TrackParamsGpu); throws Error naming a value out of range.
+TrackParamsGpu trackParamsFor(const TrackerOptions& options);
+
+// What align() found.
+struct IcpResult {
+    Pose cameraToWorld = Pose::Identity();
+    IcpSystem finalSystem;          // the last iteration's sums at level 0 (before its step)
+    IcpStep finalStep;
+    int iterations = 0;             // over all levels
+    uint32_t submissions = 0;       // GPU submissions waited for (one per iteration, plus prepare)
+    bool solved = false;            // every level's last system could be solved
+};
+
+class CameraTracker {
+public:
+    // Frames of width x height pixels (the pyramid: width >> l by height >> l).
+    CameraTracker(const vk::Context& context, int width, int height, const TrackerOptions& options = {});
+    ~CameraTracker();
+    CameraTracker(const CameraTracker&) = delete;
+    CameraTracker& operator=(const CameraTracker&) = delete;
+
+    // The frame's pyramid and the model maps of `mesh` drawn at `modelPose` (one submission). `mesh` may be
+    // empty (no model: every pixel unassociated). The depth must be width x height.
+    void prepare(const DepthImage& depth, const Intrinsics& intrinsics, const MeshBuffers& mesh, const Pose& modelPose);
+    // One ICP iteration's sums at `level` for the frame at `estimate` (after prepare; one submission).
+    IcpSums sums(int level, const Pose& estimate);
+    // ICP from `initial`, coarse to fine (after prepare).
+    IcpResult align(const Pose& initial);
+
+    // Milliseconds the GPU spent in the last prepare() and in the ICP passes since (timestamps; 0 without).
+    double gpuMilliseconds() const { return gpuMs_; }
+    int width() const { return width_; }
+    int height() const { return height_; }
+    const TrackerOptions& options() const { return options_; }
+    // The intrinsics of pyramid level `level` (core/icp_solve.h, pyramidLevelIntrinsics).
+    static Intrinsics levelIntrinsics(const Intrinsics& intrinsics, int level);
+
+    // The maps of the last prepare(), for the tests and the CPU reference: every level, concatenated as on the
+    // GPU (level l starts at pixelOffset(l)).
+    struct Maps {
+        std::vector<float> depth;
+        std::vector<Eigen::Vector4f> points, normals, modelPositions, modelNormals;
+    };
+    Maps downloadMaps() const;
+    uint32_t pixelOffset(int level) const { return offsets_[level]; }
+
+private:
+    TrackPush levelPush(int level, const Pose& estimate) const;
+    const vk::Context& context_;
+    int width_, height_;
+    TrackerOptions options_;
+    std::array<uint32_t, TRACK_LEVELS> offsets_{};
+    uint32_t pyramidPixels_ = 0;
+    Intrinsics intrinsics_;
+    Pose modelPose_ = Pose::Identity();
+    vk::BindingTable table_;
+    vk::Buffer params_, rawDepth_, depth_, points_, normals_, modelPositions_, modelNormals_, partials_, sums_;
+    vk::ComputePipeline filter_, downsampleDepth_, vertexNormals_, downsampleModel_, reduce_, sum_;
+    ModelMapRenderer modelMaps_;
+    vk::CommandRecorder recorder_;
+    vk::StageTimer timer_;
+    double gpuMs_ = 0;
+};
+
+}  // namespace vkmesh::gpu

@@ -1,0 +1,274 @@
+#include "gpu/tracking/model_maps.h"
+
+#include <cstring>
+#include <map>
+#include <span>
+#include <string>
+
+#include "../../../shaders_render/track_model.h"
+#include "core/camera.h"
+#include "vk/check.h"
+
+namespace vkmesh::shaders {
+const std::map<std::string, std::span<const uint32_t>>& graphics();   // cmake/EmbedShaders.cmake
+}  // namespace vkmesh::shaders
+
+namespace vkmesh::gpu {
+namespace {
+
+constexpr VkFormat kMapFormat = VK_FORMAT_R32G32B32A32_SFLOAT;
+constexpr VkFormat kDepthFormat = VK_FORMAT_D32_SFLOAT;
+
+VkShaderModule createModule(VkDevice device, const std::string& name) {
+    const auto& table = shaders::graphics();
+    auto it = table.find(name);
+    if (it == table.end()) throw Error("graphics shader '" + name + "' is not embedded in this build");
+    VkShaderModuleCreateInfo info{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
+    info.codeSize = it->second.size() * sizeof(uint32_t);
+    info.pCode = it->second.data();
+    VkShaderModule module = VK_NULL_HANDLE;
+    VKM_CHECK(vkCreateShaderModule(device, &info, nullptr, &module));
+    return module;
+}
+
+void requireFormat(const vk::Context& context, VkFormat format, VkFormatFeatureFlags feature, const char* what) {
+    VkFormatProperties props{};
+    vkGetPhysicalDeviceFormatProperties(context.physicalDevice(), format, &props);
+    if (!(props.optimalTilingFeatures & feature))
+        throw Error("device '" + context.info().name + "' cannot render tracking's model maps: no " + what);
+}
+
+}  // namespace
+
+ModelMapRenderer::ModelMapRenderer(const vk::Context& context, int width, int height)
+    : context_(context), width_(width), height_(height) {
+    uint32_t familyCount = 0;
+    vkGetPhysicalDeviceQueueFamilyProperties(context.physicalDevice(), &familyCount, nullptr);
+    std::vector<VkQueueFamilyProperties> families(familyCount);
+    vkGetPhysicalDeviceQueueFamilyProperties(context.physicalDevice(), &familyCount, families.data());
+    if (context.queueFamily() >= familyCount || !(families[context.queueFamily()].queueFlags & VK_QUEUE_GRAPHICS_BIT))
+        throw Error("device '" + context.info().name + "': vkmesh's queue does not support graphics, which tracking needs "
+                    "(it draws the mesh at the predicted pose)");
+    requireFormat(context, kMapFormat, VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BIT, "R32G32B32A32_SFLOAT colour attachment");
+    requireFormat(context, kDepthFormat, VK_FORMAT_FEATURE_DEPTH_STENCIL_ATTACHMENT_BIT, "D32_SFLOAT depth attachment");
+
+    VkDevice device = context.device();
+    VkShaderModule vert = VK_NULL_HANDLE, frag = VK_NULL_HANDLE;
+    try {
+        for (int i = 0; i < 3; ++i) {
+            const bool depth = i == 2;
+            VkImageCreateInfo info{VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO};
+            info.imageType = VK_IMAGE_TYPE_2D;
+            info.format = depth ? kDepthFormat : kMapFormat;
+            info.extent = {uint32_t(width), uint32_t(height), 1};
+            info.mipLevels = 1;
+            info.arrayLayers = 1;
+            info.samples = VK_SAMPLE_COUNT_1_BIT;
+            info.tiling = VK_IMAGE_TILING_OPTIMAL;
+            info.usage = depth ? VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT
+                               : VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
+            info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
+            info.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+            VKM_CHECK(vkCreateImage(device, &info, nullptr, &images_[i]));
+            VkMemoryRequirements req{};
+            vkGetImageMemoryRequirements(device, images_[i], &req);
+            VkMemoryAllocateInfo alloc{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+            alloc.allocationSize = req.size;
+            alloc.memoryTypeIndex = context.findMemoryType(req.memoryTypeBits, 0, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
+            VKM_CHECK(vkAllocateMemory(device, &alloc, nullptr, &memory_[i]));
+            VKM_CHECK(vkBindImageMemory(device, images_[i], memory_[i], 0));
+            VkImageViewCreateInfo viewInfo{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
+            viewInfo.image = images_[i];
+            viewInfo.viewType = VK_IMAGE_VIEW_TYPE_2D;
+            viewInfo.format = info.format;
+            viewInfo.subresourceRange = {VkImageAspectFlags(depth ? VK_IMAGE_ASPECT_DEPTH_BIT : VK_IMAGE_ASPECT_COLOR_BIT), 0, 1, 0, 1};
+            VKM_CHECK(vkCreateImageView(device, &viewInfo, nullptr, &views_[i]));
+        }
+
+        VkAttachmentDescription attachments[3]{};
+        for (int i = 0; i < 3; ++i) {
+            attachments[i].format = i == 2 ? kDepthFormat : kMapFormat;
+            attachments[i].samples = VK_SAMPLE_COUNT_1_BIT;
+            attachments[i].loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
+            attachments[i].storeOp = i == 2 ? VK_ATTACHMENT_STORE_OP_DONT_CARE : VK_ATTACHMENT_STORE_OP_STORE;
+            attachments[i].stencilLoadOp = VK_ATTACHMENT_LOAD_OP_DONT_CARE;
+            attachments[i].stencilStoreOp = VK_ATTACHMENT_STORE_OP_DONT_CARE;
+            attachments[i].initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+            attachments[i].finalLayout = i == 2 ? VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL : VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
+        }
+        VkAttachmentReference colorRefs[2] = {{0, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL}, {1, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL}};
+        VkAttachmentReference depthRef{2, VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL};
+        VkSubpassDescription subpass{};
+        subpass.pipelineBindPoint = VK_PIPELINE_BIND_POINT_GRAPHICS;
+        subpass.colorAttachmentCount = 2;
+        subpass.pColorAttachments = colorRefs;
+        subpass.pDepthStencilAttachment = &depthRef;
+        VkSubpassDependency deps[2]{};
+        // Before: the clears come after the last frame's copies out of the maps (and its depth tests).
+        deps[0].srcSubpass = VK_SUBPASS_EXTERNAL;
+        deps[0].dstSubpass = 0;
+        deps[0].srcStageMask = VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT | VK_PIPELINE_STAGE_EARLY_FRAGMENT_TESTS_BIT |
+                               VK_PIPELINE_STAGE_LATE_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT;
+        deps[0].dstStageMask = VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT | VK_PIPELINE_STAGE_EARLY_FRAGMENT_TESTS_BIT |
+                               VK_PIPELINE_STAGE_LATE_FRAGMENT_TESTS_BIT;
+        deps[0].srcAccessMask = VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT | VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT | VK_ACCESS_TRANSFER_READ_BIT;
+        deps[0].dstAccessMask = VK_ACCESS_COLOR_ATTACHMENT_READ_BIT | VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT |
+                                VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_READ_BIT | VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT;
+        // After: the maps are copied into the pyramid buffers.
+        deps[1].srcSubpass = 0;
+        deps[1].dstSubpass = VK_SUBPASS_EXTERNAL;
+        deps[1].srcStageMask = VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT;
+        deps[1].dstStageMask = VK_PIPELINE_STAGE_TRANSFER_BIT;
+        deps[1].srcAccessMask = VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT;
+        deps[1].dstAccessMask = VK_ACCESS_TRANSFER_READ_BIT;
+        VkRenderPassCreateInfo rpInfo{VK_STRUCTURE_TYPE_RENDER_PASS_CREATE_INFO};
+        rpInfo.attachmentCount = 3;
+        rpInfo.pAttachments = attachments;
+        rpInfo.subpassCount = 1;
+        rpInfo.pSubpasses = &subpass;
+        rpInfo.dependencyCount = 2;
+        rpInfo.pDependencies = deps;
+        VKM_CHECK(vkCreateRenderPass(device, &rpInfo, nullptr, &renderPass_));
+
+        VkFramebufferCreateInfo fbInfo{VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO};
+        fbInfo.renderPass = renderPass_;
+        fbInfo.attachmentCount = 3;
+        fbInfo.pAttachments = views_;
+        fbInfo.width = uint32_t(width);
+        fbInfo.height = uint32_t(height);
+        fbInfo.layers = 1;
+        VKM_CHECK(vkCreateFramebuffer(device, &fbInfo, nullptr, &framebuffer_));
+
+        VkPushConstantRange range{VK_SHADER_STAGE_VERTEX_BIT, 0, sizeof(ModelMapPush)};
+        VkPipelineLayoutCreateInfo layoutInfo{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
+        layoutInfo.pushConstantRangeCount = 1;
+        layoutInfo.pPushConstantRanges = &range;
+        VKM_CHECK(vkCreatePipelineLayout(device, &layoutInfo, nullptr, &pipelineLayout_));
+
+        vert = createModule(device, "track_model.vert");
+        frag = createModule(device, "track_model.frag");
+        VkPipelineShaderStageCreateInfo stages[2]{};
+        for (int i = 0; i < 2; ++i) {
+            stages[i].sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO;
+            stages[i].stage = i == 0 ? VK_SHADER_STAGE_VERTEX_BIT : VK_SHADER_STAGE_FRAGMENT_BIT;
+            stages[i].module = i == 0 ? vert : frag;
+            stages[i].pName = "main";
+        }
+        VkVertexInputBindingDescription binding{0, MeshBuffers::kStride, VK_VERTEX_INPUT_RATE_VERTEX};
+        VkVertexInputAttributeDescription vertexAttributes[2] = {
+            {MODEL_LOC_POSITION, 0, VK_FORMAT_R32G32B32_SFLOAT, MeshBuffers::kPositionOffset},
+            {MODEL_LOC_NORMAL, 0, VK_FORMAT_R32G32B32_SFLOAT, MeshBuffers::kNormalOffset},
+        };
+        VkPipelineVertexInputStateCreateInfo vertexInput{VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
+        vertexInput.vertexBindingDescriptionCount = 1;
+        vertexInput.pVertexBindingDescriptions = &binding;
+        vertexInput.vertexAttributeDescriptionCount = 2;
+        vertexInput.pVertexAttributeDescriptions = vertexAttributes;
+        VkPipelineInputAssemblyStateCreateInfo assembly{VK_STRUCTURE_TYPE_PIPELINE_INPUT_ASSEMBLY_STATE_CREATE_INFO};
+        assembly.topology = VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST;
+        VkPipelineViewportStateCreateInfo viewportState{VK_STRUCTURE_TYPE_PIPELINE_VIEWPORT_STATE_CREATE_INFO};
+        VkViewport viewport{0.0f, 0.0f, float(width), float(height), 0.0f, 1.0f};
+        VkRect2D scissor{{0, 0}, {uint32_t(width), uint32_t(height)}};
+        viewportState.viewportCount = 1;
+        viewportState.pViewports = &viewport;
+        viewportState.scissorCount = 1;
+        viewportState.pScissors = &scissor;
+        VkPipelineRasterizationStateCreateInfo raster{VK_STRUCTURE_TYPE_PIPELINE_RASTERIZATION_STATE_CREATE_INFO};
+        raster.polygonMode = VK_POLYGON_MODE_FILL;
+        raster.cullMode = VK_CULL_MODE_NONE;   // the nearest surface, whichever side (and a negative fy mirrors)
+        raster.frontFace = VK_FRONT_FACE_COUNTER_CLOCKWISE;
+        raster.lineWidth = 1.0f;
+        VkPipelineMultisampleStateCreateInfo multisample{VK_STRUCTURE_TYPE_PIPELINE_MULTISAMPLE_STATE_CREATE_INFO};
+        multisample.rasterizationSamples = VK_SAMPLE_COUNT_1_BIT;
+        VkPipelineDepthStencilStateCreateInfo depthState{VK_STRUCTURE_TYPE_PIPELINE_DEPTH_STENCIL_STATE_CREATE_INFO};
+        depthState.depthTestEnable = VK_TRUE;
+        depthState.depthWriteEnable = VK_TRUE;
+        depthState.depthCompareOp = VK_COMPARE_OP_LESS;
+        VkPipelineColorBlendAttachmentState blendAttachments[2]{};
+        for (auto& b : blendAttachments)
+            b.colorWriteMask = VK_COLOR_COMPONENT_R_BIT | VK_COLOR_COMPONENT_G_BIT | VK_COLOR_COMPONENT_B_BIT | VK_COLOR_COMPONENT_A_BIT;
+        VkPipelineColorBlendStateCreateInfo blend{VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO};
+        blend.attachmentCount = 2;
+        blend.pAttachments = blendAttachments;
+        VkGraphicsPipelineCreateInfo info{VK_STRUCTURE_TYPE_GRAPHICS_PIPELINE_CREATE_INFO};
+        info.stageCount = 2;
+        info.pStages = stages;
+        info.pVertexInputState = &vertexInput;
+        info.pInputAssemblyState = &assembly;
+        info.pViewportState = &viewportState;
+        info.pRasterizationState = &raster;
+        info.pMultisampleState = &multisample;
+        info.pDepthStencilState = &depthState;
+        info.pColorBlendState = &blend;
+        info.layout = pipelineLayout_;
+        info.renderPass = renderPass_;
+        info.subpass = 0;
+        VKM_CHECK(vkCreateGraphicsPipelines(device, VK_NULL_HANDLE, 1, &info, nullptr, &pipeline_));
+    } catch (...) {
+        if (vert) vkDestroyShaderModule(device, vert, nullptr);
+        if (frag) vkDestroyShaderModule(device, frag, nullptr);
+        release();
+        throw;
+    }
+    vkDestroyShaderModule(device, vert, nullptr);
+    vkDestroyShaderModule(device, frag, nullptr);
+}
+
+ModelMapRenderer::~ModelMapRenderer() { release(); }
+
+void ModelMapRenderer::release() {
+    VkDevice device = context_.device();
+    if (pipeline_) vkDestroyPipeline(device, pipeline_, nullptr);
+    if (pipelineLayout_) vkDestroyPipelineLayout(device, pipelineLayout_, nullptr);
+    if (framebuffer_) vkDestroyFramebuffer(device, framebuffer_, nullptr);
+    if (renderPass_) vkDestroyRenderPass(device, renderPass_, nullptr);
+    for (int i = 0; i < 3; ++i) {
+        if (views_[i]) vkDestroyImageView(device, views_[i], nullptr);
+        if (images_[i]) vkDestroyImage(device, images_[i], nullptr);
+        if (memory_[i]) vkFreeMemory(device, memory_[i], nullptr);
+        views_[i] = VK_NULL_HANDLE, images_[i] = VK_NULL_HANDLE, memory_[i] = VK_NULL_HANDLE;
+    }
+    pipeline_ = VK_NULL_HANDLE, pipelineLayout_ = VK_NULL_HANDLE, framebuffer_ = VK_NULL_HANDLE, renderPass_ = VK_NULL_HANDLE;
+}
+
+void ModelMapRenderer::record(VkCommandBuffer cmd, const MeshBuffers& mesh, const Pose& cameraToWorld, const Intrinsics& intrinsics,
+                              float nearDepth, float farDepth, const vk::Buffer& positions, const vk::Buffer& normals) const {
+    ModelMapPush push{};
+    RigidRows rows = rigidRows(inverseRigid(cameraToWorld));
+    std::memcpy(push.worldToCamera, rows.r, sizeof(push.worldToCamera));
+    push.intrinsics[0] = intrinsics.fx, push.intrinsics[1] = intrinsics.fy;
+    push.intrinsics[2] = intrinsics.cx, push.intrinsics[3] = intrinsics.cy;
+    push.viewport[0] = float(width_), push.viewport[1] = float(height_);
+    push.viewport[2] = nearDepth, push.viewport[3] = farDepth;
+
+    const bool hasMesh = mesh.vertices && mesh.indices && mesh.drawIndirect;
+    if (hasMesh) recordMeshReadBarrier(cmd);
+    VkClearValue clears[3]{};   // position and normal 0 (w = 0: no model), depth 1 (the far plane)
+    clears[2].depthStencil = {1.0f, 0};
+    VkRenderPassBeginInfo begin{VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO};
+    begin.renderPass = renderPass_;
+    begin.framebuffer = framebuffer_;
+    begin.renderArea = {{0, 0}, {uint32_t(width_), uint32_t(height_)}};
+    begin.clearValueCount = 3;
+    begin.pClearValues = clears;
+    vkCmdBeginRenderPass(cmd, &begin, VK_SUBPASS_CONTENTS_INLINE);
+    if (hasMesh) {
+        vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline_);
+        vkCmdPushConstants(cmd, pipelineLayout_, VK_SHADER_STAGE_VERTEX_BIT, 0, sizeof(push), &push);
+        VkDeviceSize zero = 0;
+        vkCmdBindVertexBuffers(cmd, 0, 1, &mesh.vertices, &zero);
+        vkCmdBindIndexBuffer(cmd, mesh.indices, 0, VK_INDEX_TYPE_UINT32);
+        vkCmdDrawIndexedIndirect(cmd, mesh.drawIndirect, mesh.drawIndirectOffset, 1, 0);
+    }
+    vkCmdEndRenderPass(cmd);
+
+    // The render pass left both maps in TRANSFER_SRC_OPTIMAL with their writes visible to transfers.
+    VkBufferImageCopy region{};
+    region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+    region.imageExtent = {uint32_t(width_), uint32_t(height_), 1};
+    vkCmdCopyImageToBuffer(cmd, images_[0], VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, positions.handle(), 1, &region);
+    vkCmdCopyImageToBuffer(cmd, images_[1], VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, normals.handle(), 1, &region);
+    vk::memoryBarrier(cmd);
+}
+
+}  // namespace vkmesh::gpu

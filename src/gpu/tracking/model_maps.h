@@ -1,0 +1,43 @@
+// Tracking's model maps: vkmesh's mesh drawn by the Vulkan rasterizer at a camera pose with the depth camera's
+// own intrinsics, into a world-space position map and a unit-normal map (RGBA32F, w = 1 where the mesh is,
+// 0 elsewhere), then copied into level 0 of the tracker's model pyramid buffers. One draw replaces a raycast
+// of the TSDF (shaders_render/track_model.*). The draw reads the mesh buffers as they are (MeshBuffers, an
+// indirect indexed draw), so no mesh goes through the host.
+#pragma once
+
+#include "core/types.h"
+#include "gpu/gpu_volume.h"
+#include "vk/buffer.h"
+#include "vk/context.h"
+
+namespace vkmesh::gpu {
+
+class ModelMapRenderer {
+public:
+    // Maps of width x height pixels. Throws Error when the queue has no graphics or the device cannot render
+    // to R32G32B32A32_SFLOAT / D32_SFLOAT.
+    ModelMapRenderer(const vk::Context& context, int width, int height);
+    ~ModelMapRenderer();
+    ModelMapRenderer(const ModelMapRenderer&) = delete;
+    ModelMapRenderer& operator=(const ModelMapRenderer&) = delete;
+
+    // Records the draw of `mesh` seen from `cameraToWorld` (depth range [near, far] metres) and the copies of
+    // the two maps to the start of `positions` and `normals` (width x height vec4 each), followed by a barrier
+    // that makes them visible to compute shaders. An empty mesh (no buffers yet) clears the maps to 0.
+    void record(VkCommandBuffer cmd, const MeshBuffers& mesh, const Pose& cameraToWorld, const Intrinsics& intrinsics,
+                float nearDepth, float farDepth, const vk::Buffer& positions, const vk::Buffer& normals) const;
+
+private:
+    void release();
+    const vk::Context& context_;
+    int width_, height_;
+    VkImage images_[3]{};               // position, normal, depth
+    VkDeviceMemory memory_[3]{};
+    VkImageView views_[3]{};
+    VkRenderPass renderPass_ = VK_NULL_HANDLE;
+    VkFramebuffer framebuffer_ = VK_NULL_HANDLE;
+    VkPipelineLayout pipelineLayout_ = VK_NULL_HANDLE;
+    VkPipeline pipeline_ = VK_NULL_HANDLE;
+};
+
+}  // namespace vkmesh::gpu

@@ -1,0 +1,328 @@
+// Camera tracking (src/gpu/tracking, shaders_comp/track, docs/TRACKING.md): the GPU passes against the CPU
+// reference (src/cpu/reference_tracking.h), the model maps against exact ray casts, and the tracker over
+// synthetic sequences with exact ground truth. GpuTest: the validation layer is on and any message fails.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <limits>
+
+#include "api/reconstructor.h"
+#include "core/camera.h"
+#include "core/icp_solve.h"
+#include "cpu/reference_tracking.h"
+#include "gpu/tracking/camera_tracker.h"
+#include "gpu/tracking/pose_tracker.h"
+#include "gpu_fixture.h"
+#include "synth/synthetic_scene.h"
+#include "test_support.h"
+
+namespace vkmesh {
+namespace {
+
+using gpu::CameraTracker;
+using gpu::PoseTracker;
+using gpu::TrackerOptions;
+
+constexpr int kWidth = 320, kHeight = 240;
+
+const synth::SyntheticScene& room() {
+    static const synth::SyntheticScene scene = synth::SyntheticScene::defaultRoom();
+    return scene;
+}
+
+// Poses of a 360-frame orbit of the room: about 2.4 cm and 1 degree from one frame to the next.
+const std::vector<Pose>& orbit() {
+    static const std::vector<Pose> poses = synth::cameraPath(360);
+    return poses;
+}
+
+DepthImage roomDepth(size_t frame, bool noise) {
+    synth::RenderOptions options;
+    options.noise = noise;
+    options.seed = uint32_t(frame + 1);
+    options.maxRange = 5.0f;
+    return room().renderDepth(synth::kinectIntrinsics(kWidth, kHeight), orbit()[frame], options);
+}
+
+gpu::GpuVolumeConfig volumeConfig(float voxel) {
+    gpu::GpuVolumeConfig config;
+    config.params.voxelSize = voxel;
+    config.params.maxDepth = 5.0f;
+    config.imageWidth = kWidth;
+    config.imageHeight = kHeight;
+    config.blockCapacity = 8192;
+    config.vertexCapacity = 1u << 18;
+    config.chunkCapacity = 1u << 17;
+    config.publishMesh = true;
+    return config;
+}
+
+// A host mesh in GPU buffers that the tracker's draw reads as it reads vkmesh's own (MeshBuffers).
+struct UploadedMesh {
+    vk::Buffer vertices, indices, indirect;
+    gpu::MeshBuffers buffers() const {
+        gpu::MeshBuffers b;
+        b.vertices = vertices.handle();
+        b.indices = indices.handle();
+        b.drawIndirect = indirect.handle();
+        return b;
+    }
+};
+UploadedMesh upload(const vk::Context& context, const std::vector<gpu::Vertex>& vertices, const std::vector<uint32_t>& indices) {
+    UploadedMesh m;
+    m.vertices = vk::Buffer(context, vertices.size() * sizeof(gpu::Vertex), VK_BUFFER_USAGE_VERTEX_BUFFER_BIT, vk::MemoryUse::Upload, "test vertices");
+    m.indices = vk::Buffer(context, indices.size() * 4, VK_BUFFER_USAGE_INDEX_BUFFER_BIT, vk::MemoryUse::Upload, "test indices");
+    m.indirect = vk::Buffer(context, sizeof(VkDrawIndexedIndirectCommand), VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT, vk::MemoryUse::Upload, "test draw");
+    std::memcpy(m.vertices.mapped(), vertices.data(), vertices.size() * sizeof(gpu::Vertex));
+    std::memcpy(m.indices.mapped(), indices.data(), indices.size() * 4);
+    VkDrawIndexedIndirectCommand draw{uint32_t(indices.size()), 1, 0, 0, 0};
+    std::memcpy(m.indirect.mapped(), &draw, sizeof(draw));
+    return m;
+}
+
+// A square of side 2 * half in the world plane z = depth, normal -z (facing a camera at the origin looking
+// along +z), split into n x n quads.
+void planeMesh(float depth, float half, int n, std::vector<gpu::Vertex>& vertices, std::vector<uint32_t>& indices) {
+    for (int j = 0; j <= n; ++j)
+        for (int i = 0; i <= n; ++i)
+            vertices.push_back(gpu::Vertex{-half + 2 * half * i / n, -half + 2 * half * j / n, depth, 1u, 0, 0, -1, 0, 0});
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            uint32_t a = j * (n + 1) + i, b = a + 1, c = a + n + 1, d = c + 1;
+            indices.insert(indices.end(), {a, b, d, a, d, c});
+        }
+}
+
+std::vector<Eigen::Vector4f> levelOf(const std::vector<Eigen::Vector4f>& all, const CameraTracker& t, int level) {
+    const size_t n = size_t(kWidth >> level) * size_t(kHeight >> level);
+    return {all.begin() + t.pixelOffset(level), all.begin() + t.pixelOffset(level) + n};
+}
+
+class Tracking : public test::GpuTest {};
+
+TEST_F(Tracking, PyramidMatchesCpuReference) {
+    const DepthImage depth = roomDepth(10, /*noise=*/true);   // dropouts and edges, so every rejection is exercised
+    const Intrinsics k = synth::kinectIntrinsics(kWidth, kHeight);
+    TrackerOptions options;
+    CameraTracker tracker(context(), kWidth, kHeight, options);
+    tracker.prepare(depth, k, gpu::MeshBuffers{}, orbit()[10]);
+    const CameraTracker::Maps gpuMaps = tracker.downloadMaps();
+    const auto reference = cpu::referenceTrackingPyramid(depth, k, gpu::trackParamsFor(options));
+    for (int l = 0; l < int(gpu::TRACK_LEVELS); ++l) {
+        const cpu::TrackingLevel& ref = reference[l];
+        size_t depthMismatch = 0, pointMismatch = 0, normalMismatch = 0, normals = 0;
+        for (size_t i = 0; i < ref.depth.size(); ++i) {
+            const size_t g = tracker.pixelOffset(l) + i;
+            // exp() differs in the last bits between the GPU and libm: 1e-5 relative, and no pixel may gain
+            // or lose its measurement.
+            if ((ref.depth[i] > 0) != (gpuMaps.depth[g] > 0) || std::abs(ref.depth[i] - gpuMaps.depth[g]) > 1e-5f * ref.depth[i])
+                ++depthMismatch;
+            if ((ref.points[i] - gpuMaps.points[g]).norm() > 1e-4f) ++pointMismatch;
+            normals += ref.normals[i].w() != 0;
+            if (ref.normals[i].w() != gpuMaps.normals[g].w() ||
+                (ref.normals[i].w() != 0 && ref.normals[i].head<3>().dot(gpuMaps.normals[g].head<3>()) < 0.9999f))
+                ++normalMismatch;
+        }
+        EXPECT_EQ(depthMismatch, 0u) << "level " << l;
+        EXPECT_EQ(pointMismatch, 0u) << "level " << l;
+        // A normal on the edge gate's boundary may go either way with rounding: at most 0.1 % of them.
+        EXPECT_LE(normalMismatch, normals / 1000) << "level " << l << ": " << normals << " normals";
+        EXPECT_GT(normals, ref.depth.size() / 3) << "level " << l;
+    }
+}
+
+TEST_F(Tracking, ModelMapsOfAPlaneAreItsRayIntersections) {
+    std::vector<gpu::Vertex> vertices;
+    std::vector<uint32_t> indices;
+    const float depth = 2.0f;
+    planeMesh(depth, 1.0f, 8, vertices, indices);
+    UploadedMesh mesh = upload(context(), vertices, indices);
+    for (float fySign : {1.0f, -1.0f}) {   // ICL-NUIM's negative fy mirrors the picture vertically
+        Intrinsics k = synth::kinectIntrinsics(kWidth, kHeight);
+        k.fy *= fySign;
+        CameraTracker tracker(context(), kWidth, kHeight);
+        DepthImage none;
+        none.width = kWidth, none.height = kHeight;
+        none.meters.assign(size_t(kWidth) * kHeight, 0.0f);
+        tracker.prepare(none, k, mesh.buffers(), Pose::Identity());
+        const CameraTracker::Maps maps = tracker.downloadMaps();
+        size_t inside = 0, wrong = 0, outsideWithModel = 0;
+        for (int y = 0; y < kHeight; ++y) {
+            for (int x = 0; x < kWidth; ++x) {
+                const Eigen::Vector4f& p = maps.modelPositions[size_t(y) * kWidth + x];
+                const Eigen::Vector4f& n = maps.modelNormals[size_t(y) * kWidth + x];
+                // The ray through pixel centre (x, y) meets the plane at depth 2.
+                const Eigen::Vector3f expected((x - k.cx) / k.fx * depth, (y - k.cy) / k.fy * depth, depth);
+                const bool onPlane = std::abs(expected.x()) < 0.99f && std::abs(expected.y()) < 0.99f;
+                const bool offPlane = std::abs(expected.x()) > 1.01f || std::abs(expected.y()) > 1.01f;
+                if (onPlane) {
+                    ++inside;
+                    if (p.w() != 1.0f || (p.head<3>() - expected).norm() > 1e-4f || (n.head<3>() - Eigen::Vector3f(0, 0, -1)).norm() > 1e-5f)
+                        ++wrong;
+                } else if (offPlane && p.w() != 0.0f) {
+                    ++outsideWithModel;
+                }
+            }
+        }
+        EXPECT_GT(inside, 10000u);
+        EXPECT_EQ(wrong, 0u) << "fy " << k.fy;
+        EXPECT_EQ(outsideWithModel, 0u) << "fy " << k.fy;
+        // The coarser levels: the CPU reference's downsampling of the GPU's level 0.
+        std::vector<Eigen::Vector4f> positions = levelOf(maps.modelPositions, tracker, 0), normals = levelOf(maps.modelNormals, tracker, 0);
+        for (int l = 1; l < int(gpu::TRACK_LEVELS); ++l) {
+            std::vector<Eigen::Vector4f> coarseP, coarseN;
+            cpu::referenceDownsampleModel(positions, normals, kWidth >> (l - 1), kHeight >> (l - 1), gpu::trackParamsFor(TrackerOptions{}), coarseP, coarseN);
+            const auto gpuP = levelOf(maps.modelPositions, tracker, l);
+            size_t mismatch = 0;
+            for (size_t i = 0; i < coarseP.size(); ++i)
+                if (coarseP[i].w() != gpuP[i].w() || (coarseP[i] - gpuP[i]).norm() > 1e-5f) ++mismatch;
+            EXPECT_EQ(mismatch, 0u) << "level " << l;
+            positions = coarseP, normals = coarseN;
+        }
+    }
+}
+
+// The ICP sums at every level: the GPU's against the CPU reference fed with the GPU's own maps, for a frame
+// one orbit step away from the model pose.
+TEST_F(Tracking, IcpSumsMatchCpuReference) {
+    gpu::GpuVolume volume(context(), volumeConfig(0.03f));
+    const Intrinsics k = synth::kinectIntrinsics(kWidth, kHeight);
+    volume.integrate(roomDepth(0, true), k, orbit()[0]);
+    TrackerOptions options;
+    CameraTracker tracker(context(), kWidth, kHeight, options);
+    tracker.prepare(roomDepth(2, true), k, volume.meshBuffers(), orbit()[0]);
+    const CameraTracker::Maps maps = tracker.downloadMaps();
+    const gpu::TrackParamsGpu params = gpu::trackParamsFor(options);
+    const auto frame = cpu::referenceTrackingPyramid(roomDepth(2, true), k, params);
+    for (int l = 0; l < int(gpu::TRACK_LEVELS); ++l) {
+        cpu::TrackingLevel level = frame[l];
+        level.points = levelOf(maps.points, tracker, l);   // the GPU's own maps: this checks the ICP pass alone
+        level.normals = levelOf(maps.normals, tracker, l);
+        for (const Pose& estimate : {orbit()[0], orbit()[1]}) {
+            const IcpSums gpuSums = tracker.sums(l, estimate);
+            const IcpSums ref = cpu::referenceIcpSums(level, levelOf(maps.modelPositions, tracker, l), levelOf(maps.modelNormals, tracker, l),
+                                                      estimate, orbit()[0], params);
+            ASSERT_GT(ref[gpu::TRACK_SUM_INLIERS], 100) << "level " << l;
+            // Counts: the same pixels pass the same gates (computed the same way in float).
+            EXPECT_EQ(gpuSums[gpu::TRACK_SUM_VALID], ref[gpu::TRACK_SUM_VALID]) << "level " << l;
+            EXPECT_NEAR(gpuSums[gpu::TRACK_SUM_MODEL_HITS], ref[gpu::TRACK_SUM_MODEL_HITS], 2) << "level " << l;
+            EXPECT_NEAR(gpuSums[gpu::TRACK_SUM_INLIERS], ref[gpu::TRACK_SUM_INLIERS], 2 + ref[gpu::TRACK_SUM_INLIERS] * 1e-3) << "level " << l;
+            // Float sums of up to 76,800 terms against double ones: 1e-3 of the largest term's scale.
+            double scale = 0;
+            for (uint32_t i = 0; i < gpu::TRACK_SUM_JTR; ++i) scale = std::max(scale, std::abs(ref[i]));
+            for (uint32_t i = 0; i < gpu::TRACK_SUM_WEIGHTED_ERROR; ++i)
+                EXPECT_NEAR(gpuSums[i], ref[i], 1e-3 * scale + 1e-3 * std::abs(ref[i])) << "level " << l << " sum " << i;
+            EXPECT_NEAR(gpuSums[gpu::TRACK_SUM_SQUARED_ERROR], ref[gpu::TRACK_SUM_SQUARED_ERROR], 1e-3 * ref[gpu::TRACK_SUM_SQUARED_ERROR] + 1e-9);
+            // And the steps solved from them agree.
+            const IcpStep a = solveIcpStep(icpSystem(gpuSums)), b = solveIcpStep(icpSystem(ref));
+            ASSERT_TRUE(a.solved && b.solved);
+            EXPECT_LT((a.twist - b.twist).norm(), 1e-3 * b.twist.norm() + 1e-6) << "level " << l;
+        }
+    }
+}
+
+struct TrackedRun {
+    std::vector<Pose> poses;
+    std::vector<gpu::TrackingReport> reports;
+};
+
+// Fuses `frames` frames of the orbit, every pose after the first tracked.
+TrackedRun trackOrbit(const vk::Context& context, size_t frames, bool noise, float voxel) {
+    gpu::GpuVolume volume(context, volumeConfig(voxel));
+    const Intrinsics k = synth::kinectIntrinsics(kWidth, kHeight);
+    TrackerOptions options;
+    options.maxDepth = 5.0f;
+    PoseTracker tracker(context, options);
+    TrackedRun run;
+    for (size_t i = 0; i < frames; ++i) {
+        const DepthImage depth = roomDepth(i, noise);
+        gpu::TrackingReport r = i == 0 ? tracker.start(orbit()[0]) : tracker.track(depth, k, volume.meshBuffers());
+        run.poses.push_back(r.cameraToWorld);
+        run.reports.push_back(r);
+        if (r.tracked) volume.integrate(depth, k, r.cameraToWorld);
+    }
+    return run;
+}
+
+double positionRmse(const std::vector<Pose>& estimated) {
+    double sum = 0;
+    for (size_t i = 0; i < estimated.size(); ++i) sum += (estimated[i].block<3, 1>(0, 3) - orbit()[i].block<3, 1>(0, 3)).squaredNorm();
+    return std::sqrt(sum / double(estimated.size()));
+}
+
+TEST_F(Tracking, NoiselessSequenceTrackedFromItsFirstPoseWithinTwoMillimetres) {
+    const TrackedRun run = trackOrbit(context(), 30, /*noise=*/false, 0.02f);
+    for (size_t i = 0; i < run.reports.size(); ++i) EXPECT_TRUE(run.reports[i].tracked) << "frame " << i << ": " << run.reports[i].lostReason;
+    // Against the exact poses, without any alignment (the first pose is the true one).
+    const double rmse = positionRmse(run.poses);
+    double worstDegrees = 0;
+    for (size_t i = 0; i < run.poses.size(); ++i) worstDegrees = std::max(worstDegrees, rotationDegrees(inverseRigid(orbit()[i]) * run.poses[i]));
+    std::printf("30 noiseless frames, 2 cm voxels, 320x240: position RMSE %.3f mm, worst rotation error %.4f degrees\n", rmse * 1e3, worstDegrees);
+    EXPECT_LT(rmse, 0.002);
+    EXPECT_LT(worstDegrees, 0.3);
+}
+
+TEST_F(Tracking, SameFramesGiveTheSameTrajectoryBitForBit) {
+    const TrackedRun a = trackOrbit(context(), 6, /*noise=*/true, 0.03f);
+    const TrackedRun b = trackOrbit(context(), 6, /*noise=*/true, 0.03f);
+    ASSERT_EQ(a.poses.size(), b.poses.size());
+    for (size_t i = 0; i < a.poses.size(); ++i) {
+        EXPECT_TRUE(a.reports[i].tracked) << "frame " << i;
+        EXPECT_EQ(std::memcmp(a.poses[i].data(), b.poses[i].data(), sizeof(double) * 16), 0) << "frame " << i;
+    }
+}
+
+TEST_F(Tracking, JumpPastTheBoundIsRejectedAndTrackingPicksUpAgain) {
+    gpu::GpuVolume volume(context(), volumeConfig(0.03f));
+    const Intrinsics k = synth::kinectIntrinsics(kWidth, kHeight);
+    TrackerOptions options;
+    options.maxJumpMetres = 0.05;   // frame 4 lies about 10 cm from frame 0
+    PoseTracker tracker(context(), options);
+    tracker.start(orbit()[0]);
+    volume.integrate(roomDepth(0, false), k, orbit()[0]);
+    const gpu::TrackingReport jump = tracker.track(roomDepth(4, false), k, volume.meshBuffers());
+    EXPECT_FALSE(jump.tracked);
+    EXPECT_NE(jump.lostReason.find("jump"), std::string::npos) << jump.lostReason;
+    EXPECT_TRUE(jump.cameraToWorld.isApprox(orbit()[0], 1e-12)) << "a lost frame gets the predicted pose";
+    const gpu::TrackingReport next = tracker.track(roomDepth(1, false), k, volume.meshBuffers());
+    EXPECT_TRUE(next.tracked) << next.lostReason;
+    EXPECT_LT((next.cameraToWorld.block<3, 1>(0, 3) - orbit()[1].block<3, 1>(0, 3)).norm(), 0.005);
+}
+
+// Frames tracking cannot use: no depth at all, NaN everywhere, another scene. Each is lost with its reason,
+// nothing is fused, and the map is bit-identical afterwards; a good frame then tracks again.
+TEST_F(Tracking, UnusableFramesAreLostAndLeaveTheMapBitIdentical) {
+    ReconstructorOptions options;
+    options.volume = volumeConfig(0.03f);
+    options.device.validation = true;
+    Reconstructor rec(options);
+    const Intrinsics k = synth::kinectIntrinsics(kWidth, kHeight);
+    ASSERT_FALSE(rec.integrate(roomDepth(0, false), nullptr, k).lost());   // the first frame: fused at identity
+    const Pose start = rec.trajectory().back();
+    EXPECT_TRUE(start.isApprox(Pose::Identity()));
+    const map::MapData before = rec.volume()->saveMap();
+    const auto mapBytes = [](const map::MapData& m) { return map::serialize(m); };
+
+    DepthImage empty = roomDepth(1, false);
+    std::fill(empty.meters.begin(), empty.meters.end(), 0.0f);
+    DepthImage nan = empty;
+    std::fill(nan.meters.begin(), nan.meters.end(), std::numeric_limits<float>::quiet_NaN());
+    const DepthImage other = synth::SyntheticScene::singleSphere(Eigen::Vector3d(0, 0, 2.5), 0.2).renderDepth(k, Pose::Identity());
+    for (const auto& [name, depth] : {std::pair<const char*, const DepthImage*>{"no depth", &empty}, {"NaN", &nan}, {"another scene", &other}}) {
+        const TrackedFrame f = rec.integrate(*depth, nullptr, k);
+        EXPECT_TRUE(f.lost()) << name;
+        EXPECT_FALSE(f.tracking.lostReason.empty()) << name;
+        EXPECT_TRUE(f.cameraToWorld.isApprox(start, 1e-9)) << name;
+        EXPECT_EQ(mapBytes(rec.volume()->saveMap()), mapBytes(before)) << name << ": the map changed";
+    }
+    EXPECT_EQ(rec.trajectory().size(), 4u);
+    // The room seen from the start pose again (the camera did not move): tracked, fused.
+    const TrackedFrame again = rec.integrate(roomDepth(0, false), nullptr, k);
+    EXPECT_FALSE(again.lost()) << again.tracking.lostReason;
+    EXPECT_LT(translationMetres(again.cameraToWorld), 0.002);
+}
+
+}  // namespace
+}  // namespace vkmesh
