@@ -7,6 +7,14 @@
 //                 timestamps that are small integers (frame indices). fy is negative (-480) with its poses.
 //   Redwood       a *.log trajectory (Zhou-Koltun format) + depth/*.png in millimetres.
 //   7-Scenes      frame-NNNNNN.depth.png (mm, 0 and 65535 invalid) + frame-NNNNNN.pose.txt.
+//   Folder        a plain folder of depth images with a camera.json and no poses (a RealSense recording, a
+//                 phone scan): *.png 16-bit in depth/ (or in the folder itself when it has no depth/), in
+//                 name order with numbers compared as numbers; camera.json must give fx, fy, cx, cy and
+//                 depth_scale (there is no default to fall back on). Detected last.
+// Sequences without poses (TUM/ICL-NUIM without groundtruth.txt, Redwood without its *.log, 7-Scenes
+// without frame-*.pose.txt, any Folder) open only with DatasetOptions::requirePoses = false, for camera
+// tracking to estimate the poses; a depth/ folder with neither a *.log nor a camera.json is then read as
+// Redwood (its default calibration, with a warning).
 // Any layout may carry a camera.json ({"fx","fy","cx","cy","depth_scale"}, all optional; colour intrinsics
 // "color_fx","color_fy","color_cx","color_cy" and "color_width","color_height" when the colour camera differs).
 //
@@ -15,6 +23,8 @@
 //                 or with the same frame index (ICL-NUIM).
 //   Redwood       color/ or rgb/ beside depth/: the k-th image (name order) goes with the k-th depth image.
 //   7-Scenes      frame-NNNNNN.color.png or frame-NNNNNN.color.jpg beside the depth image.
+//   Folder        color/ or rgb/: the image with the depth image's name stem, else (no stem matches and the
+//                 counts are equal) the k-th image in name order.
 // JPEG or PNG, 8-bit: 3-channel (BGR in the file as OpenCV decodes it, RGB in ColorImage), 4-channel (alpha
 // dropped) or grayscale (grey RGB). 16-bit images are rejected (usually a depth image listed by mistake).
 // Colour is registered to the depth grid: without colour intrinsics the images must be the depth images'
@@ -29,6 +39,7 @@
 #pragma once
 
 #include "core/types.h"
+#include "io/trajectory.h"  // validatePose, the check every pose read here passes
 
 #include <cstddef>
 #include <cstdint>
@@ -40,22 +51,32 @@
 
 namespace vkmesh {
 
-enum class DatasetKind { TUM, ICLNUIM, Redwood, SevenScenes };
+enum class DatasetKind { TUM, ICLNUIM, Redwood, SevenScenes, Folder };
 std::string toString(DatasetKind kind);
 
 struct DatasetOptions {
     std::optional<Intrinsics> intrinsics;  // --intrinsics fx,fy,cx,cy override (width/height come from the images)
     std::optional<double> depthScale;      // --depth-scale: raw uint16 units per metre (5000 TUM, 1000 mm)
     float maxDepth = 0;                    // --max-depth in metres; 0 = no limit; deeper samples become 0
-    size_t maxFrames = 0;                  // --frames N: keep the first N frames that have a pose; 0 = all
+    size_t maxFrames = 0;                  // --frames N: keep the first N frames that have a pose (every
+                                           // listed frame without requirePoses); 0 = all
+    // false when camera tracking will estimate the poses (vkmesh fuse --track): a sequence without pose files
+    // opens, and a listed depth frame with no pose near enough is kept (FrameInfo::hasPose false) instead of
+    // skipped. true: a sequence without poses is an error saying that --track exists.
+    bool requirePoses = true;
 };
 
 struct FrameInfo {
     size_t index = 0;          // position in the Dataset (frame(i).index == i)
-    double timestamp = 0;      // seconds (TUM), frame index (ICL-NUIM), frame number (Redwood, 7-Scenes)
+    // Seconds (TUM), frame index (ICL-NUIM), frame number (7-Scenes: from the name; Redwood: the image's
+    // position in name order, which is what its .log's ids count); Folder: the number in the file name (the
+    // whole stem when it is a number, else its last run of digits), or the frame's position in name order
+    // when a name has none or the numbers do not increase in name order.
+    double timestamp = 0;
     std::filesystem::path depthPath;  // absolute or relative to the working directory, ready to open
     std::filesystem::path colorPath;  // the frame's colour image, as depthPath; empty when it has none
-    Pose cameraToWorld = Pose::Identity();
+    Pose cameraToWorld = Pose::Identity();  // the dataset's pose when hasPose, identity otherwise
+    bool hasPose = false;                   // whether the dataset gave this frame's pose
 };
 
 class Dataset {
@@ -63,7 +84,7 @@ public:
     // Detects the layout of `folder`, reads its index and trajectory files, associates depth frames with
     // poses and reads frame 0's PNG for the image size. Throws vkmesh::Error (naming the file, line or
     // value at fault) on anything it cannot use; frames without a pose are skipped and reported in
-    // warnings() instead, unless no frame has one.
+    // warnings() instead, unless no frame has one; with options.requirePoses false they are kept without one.
     static std::unique_ptr<Dataset> open(const std::filesystem::path& folder, const DatasetOptions& options = {});
 
     DatasetKind kind() const { return kind_; }
@@ -73,6 +94,8 @@ public:
     float maxDepth() const { return maxDepth_; }
 
     size_t size() const { return frames_.size(); }
+    // Whether any frame has a pose from the dataset (always, when opened with requirePoses).
+    bool hasPoses() const { return hasPoses_; }
     const FrameInfo& frame(size_t i) const;
 
     // Human-readable notes from open(): skipped frames and why, fallbacks to default intrinsics, duplicates.
@@ -108,6 +131,7 @@ private:
     std::vector<std::string> warnings_;
     size_t skippedFrames_ = 0;
     bool hasColor_ = false;
+    bool hasPoses_ = false;
     // Colour camera calibration from camera.json, when it differs from the depth camera's.
     std::optional<Intrinsics> colorIntrinsics_;
     // With colorIntrinsics_: for every depth pixel, where it lies in the colour image (x, y; cv::remap maps).
@@ -132,10 +156,5 @@ Intrinsics parseIntrinsics(const std::string& text);
 // Checks a camera's fx, fy, cx, cy: finite, fx > 0, fy non-zero (negative only with ICL-NUIM's poses, which
 // Dataset::open checks against the layout). Throws Error starting with `source` and naming the bad value.
 void checkIntrinsics(const Intrinsics& intrinsics, const std::string& source);
-
-// Checks that `pose` is a rigid camera-to-world transform: finite, rotation orthonormal within 1e-3
-// (max |R^T R - I|), determinant +1 (not a reflection), bottom row 0 0 0 1. Throws Error starting with
-// `where` (a file and line, or a frame) otherwise.
-void validatePose(const Pose& pose, const std::string& where);
 
 }  // namespace vkmesh

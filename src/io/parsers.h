@@ -8,6 +8,7 @@
 #pragma once
 
 #include "core/types.h"
+#include "io/trajectory.h"  // io::parseTrajectory and io::TimedPose, TUM's trajectory format (vkmesh_base)
 
 #include <opencv2/core.hpp>
 
@@ -22,12 +23,6 @@
 
 namespace vkmesh::io {
 
-struct TimedPose {
-    double timestamp;
-    size_t line;  // 1-based line in the source
-    Pose cameraToWorld;
-};
-
 struct TimedPath {
     double timestamp;
     size_t line;
@@ -40,9 +35,8 @@ struct IndexedPose {
     Pose cameraToWorld;
 };
 
-// TUM groundtruth.txt and ICL-NUIM's *.gt.freiburg: "timestamp tx ty tz qx qy qz qw" per line, '#' comments.
-// Every pose is validated (finite, quaternion norm about 1, rigid). Order and duplicates are left as written.
-std::vector<TimedPose> parseTrajectory(std::istream& in, const std::string& source);
+// TUM groundtruth.txt and ICL-NUIM's *.gt.freiburg: io::parseTrajectory in io/trajectory.h, shared with
+// readTumTrajectory (the trajectories vkmesh writes).
 
 // TUM depth.txt: "timestamp path" per line.
 std::vector<TimedPath> parseDepthList(std::istream& in, const std::string& source, const std::filesystem::path& folder);

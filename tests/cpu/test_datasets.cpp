@@ -1096,3 +1096,210 @@ TEST(DatasetReal, ColourOfTheSharedSequences) {
         }
     }
 }
+
+// ------------------------------------------------------------------------------------------ without poses
+// Sequences whose poses camera tracking will estimate (DatasetOptions::requirePoses = false).
+
+namespace {
+
+DatasetOptions withoutPoses() {
+    DatasetOptions o;
+    o.requirePoses = false;
+    return o;
+}
+
+void expectNoPoses(const Dataset& ds) {
+    EXPECT_FALSE(ds.hasPoses());
+    for (size_t i = 0; i < ds.size(); ++i) {
+        EXPECT_FALSE(ds.frame(i).hasPose) << "frame " << i;
+        EXPECT_TRUE(ds.frame(i).cameraToWorld.isIdentity()) << "frame " << i;
+        EXPECT_EQ(ds.frame(i).index, i);
+    }
+}
+
+void expectTimestamps(const Dataset& ds, const std::vector<double>& expected) {
+    ASSERT_EQ(ds.size(), expected.size());
+    for (size_t i = 0; i < ds.size(); ++i) EXPECT_DOUBLE_EQ(ds.frame(i).timestamp, expected[i]) << "frame " << i;
+}
+
+void expectMentionsTracking(const std::string& message, const std::string& file) {
+    EXPECT_NE(message.find(file), std::string::npos) << message;
+    EXPECT_NE(message.find("vkmesh fuse --track estimates them"), std::string::npos) << message;
+}
+
+// A plain folder: camera.json and 16-bit depth PNGs named `names` (in depth/ when `inDepthDir`), frame k
+// holding ramp(k) in millimetres.
+fs::path makeFolder(const fs::path& dir, const std::vector<std::string>& names, bool inDepthDir = true) {
+    writeText(dir / "camera.json", R"({"fx": 500, "fy": 501, "cx": 3.5, "cy": 2.5, "depth_scale": 1000})");
+    for (size_t k = 0; k < names.size(); ++k)
+        writeDepth((inDepthDir ? dir / "depth" : dir) / names[k], [&](int x, int y) { return ramp(int(k), x, y); });
+    return dir;
+}
+
+}  // namespace
+
+TEST(DatasetWithoutPoses, TumWithoutGroundtruthKeepsEveryListedFrame) {
+    TumFixture f = makeTum();
+    fs::remove(f.dir / "groundtruth.txt");
+    expectMentionsTracking(errorMessageOf([&] { Dataset::open(f.dir); }), "groundtruth.txt");
+
+    auto ds = Dataset::open(f.dir, withoutPoses());
+    EXPECT_EQ(ds->kind(), DatasetKind::TUM);
+    EXPECT_EQ(ds->skippedFrames(), 0u);
+    expectTimestamps(*ds, f.depthTimes);
+    expectNoPoses(*ds);
+    EXPECT_FLOAT_EQ(ds->loadDepth(3).at(2, 1), ramp(3, 2, 1) / 5000.0f);
+
+    // maxFrames: the first N listed frames.
+    DatasetOptions o = withoutPoses();
+    o.maxFrames = 2;
+    expectTimestamps(*Dataset::open(f.dir, o), {f.depthTimes[0], f.depthTimes[1]});
+}
+
+TEST(DatasetWithoutPoses, TumWithGroundtruthKeepsFramesWithoutAPose) {
+    // Frame 3 (t = 100.300) has no groundtruth tick within 20 ms: skipped by default, kept without a pose here.
+    TumFixture f = makeTum();
+    auto ds = Dataset::open(f.dir, withoutPoses());
+    expectTimestamps(*ds, f.depthTimes);
+    EXPECT_EQ(ds->skippedFrames(), 0u);
+    EXPECT_TRUE(ds->hasPoses());
+    for (size_t i = 0; i < ds->size(); ++i) EXPECT_EQ(ds->frame(i).hasPose, i != 3) << "frame " << i;
+    EXPECT_TRUE(ds->frame(3).cameraToWorld.isIdentity());
+    // The first frame (t = 100.004) gets the pose of the nearest tick, 100.00, as with requirePoses.
+    expectPoseNear(ds->frame(0).cameraToWorld, tumPoseAt(100.00), 1e-6);
+    EXPECT_EQ(ds->frame(0).cameraToWorld, Dataset::open(f.dir)->frame(0).cameraToWorld);
+    EXPECT_TRUE(anyContains(ds->warnings(), "1 of 6 depth frames have no pose within 20 ms")) << joinLines(ds->warnings());
+}
+
+TEST(DatasetWithoutPoses, IclNuimWithoutGroundtruth) {
+    auto dir = makeIcl("ICL_office_traj2", {0, 1, 2, 3}, {});  // an empty groundtruth.txt
+    expectMentionsTracking(errorMessageOf([&] { Dataset::open(dir); }), "groundtruth.txt");
+    expectNoPoses(*Dataset::open(dir, withoutPoses()));
+
+    fs::remove(dir / "groundtruth.txt");
+    expectMentionsTracking(errorMessageOf([&] { Dataset::open(dir); }), "groundtruth.txt");
+    auto ds = Dataset::open(dir, withoutPoses());
+    EXPECT_EQ(ds->kind(), DatasetKind::ICLNUIM);
+    EXPECT_FLOAT_EQ(ds->intrinsics().fy, -480.0f);
+    expectTimestamps(*ds, {0, 1, 2, 3});
+    expectNoPoses(*ds);
+}
+
+TEST(DatasetWithoutPoses, RedwoodWithoutItsLog) {
+    auto dir = makeRedwood({}, 4);  // an empty .log
+    expectMentionsTracking(errorMessageOf([&] { Dataset::open(dir); }), "livingroom1-traj.log");
+    expectNoPoses(*Dataset::open(dir, withoutPoses()));
+
+    fs::remove(dir / "livingroom1-traj.log");
+    expectMentionsTracking(errorMessageOf([&] { Dataset::open(dir); }), dir.string());
+    auto ds = Dataset::open(dir, withoutPoses());
+    EXPECT_EQ(ds->kind(), DatasetKind::Redwood);
+    EXPECT_DOUBLE_EQ(ds->depthScale(), 1000.0);
+    expectTimestamps(*ds, {0, 1, 2, 3});  // the position in name order, as the .log's ids count frames
+    expectNoPoses(*ds);
+    // Nothing said which camera this is: the default calibration is named as a guess.
+    EXPECT_TRUE(anyContains(ds->warnings(), "Redwood's default intrinsics")) << joinLines(ds->warnings());
+    EXPECT_FLOAT_EQ(ds->loadDepth(2).at(1, 4), ramp(2, 1, 4) / 1000.0f);
+
+    // A log with a gap: the frame without a pose is kept.
+    writeText(dir / "livingroom1-traj.log", logBlock(0, redwoodPose(0)) + logBlock(2, redwoodPose(2)));
+    ds = Dataset::open(dir, withoutPoses());
+    ASSERT_EQ(ds->size(), 4u);
+    EXPECT_TRUE(ds->hasPoses());
+    for (size_t i = 0; i < 4; ++i) EXPECT_EQ(ds->frame(i).hasPose, i == 0 || i == 2) << "frame " << i;
+    expectPoseNear(ds->frame(2).cameraToWorld, redwoodPose(2), 1e-12);
+}
+
+TEST(DatasetWithoutPoses, SevenScenesWithoutPoseFiles) {
+    auto dir = makeSevenScenes(test::makeTempDir("7s_nopose") / "chess" / "seq-02", 3, [](int) { return std::string(); });
+    // Frame numbers come from the names: renumber them so that they differ from the positions.
+    for (int i = 2; i >= 0; --i) {
+        char from[40], to[40];
+        std::snprintf(from, sizeof from, "frame-%06d.depth.png", i);
+        std::snprintf(to, sizeof to, "frame-%06d.depth.png", 10 + 5 * i);
+        fs::rename(dir / from, dir / to);
+    }
+    expectMentionsTracking(errorMessageOf([&] { Dataset::open(dir); }), "frame-*.pose.txt");
+    auto ds = Dataset::open(dir, withoutPoses());
+    EXPECT_EQ(ds->kind(), DatasetKind::SevenScenes);
+    expectTimestamps(*ds, {10, 15, 20});
+    expectNoPoses(*ds);
+
+    // Where some frames have pose files, those keep their poses.
+    writeText(dir / "frame-000015.pose.txt", matrixText(redwoodPose(1)));
+    ds = Dataset::open(dir, withoutPoses());
+    ASSERT_EQ(ds->size(), 3u);
+    EXPECT_TRUE(ds->hasPoses());
+    EXPECT_FALSE(ds->frame(0).hasPose);
+    EXPECT_TRUE(ds->frame(1).hasPose);
+    expectPoseNear(ds->frame(1).cameraToWorld, redwoodPose(1), 1e-8);
+    EXPECT_EQ(Dataset::open(dir)->size(), 1u);  // with requirePoses, as before: the others are skipped
+}
+
+TEST(DatasetWithoutPoses, FolderOfDepthImagesWithCameraJson) {
+    // Unpadded numbers: natural order 1, 2, 10 (not 1, 10, 2); colour paired by name stem, one image missing.
+    auto dir = makeFolder(test::makeTempDir("folder") / "scan", {"depth_1.png", "depth_2.png", "depth_10.png"});
+    for (int k : {0, 2}) {
+        const std::string stem = k == 0 ? "depth_1" : "depth_10";
+        writeColor(dir / "color" / (stem + ".png"), [&](int x, int y) { return colorRamp(k, x, y); });
+    }
+    expectMentionsTracking(errorMessageOf([&] { Dataset::open(dir); }), dir.string());
+    EXPECT_NE(errorMessageOf([&] { Dataset::open(dir); }).find("no poses; vkmesh fuse --track"), std::string::npos);
+
+    auto ds = Dataset::open(dir, withoutPoses());
+    EXPECT_EQ(ds->kind(), DatasetKind::Folder);
+    EXPECT_EQ(toString(ds->kind()), "folder");
+    expectTimestamps(*ds, {1, 2, 10});
+    expectNoPoses(*ds);
+    EXPECT_EQ(ds->frame(2).depthPath.filename(), "depth_10.png");
+    EXPECT_FLOAT_EQ(ds->intrinsics().fx, 500.0f);
+    EXPECT_FLOAT_EQ(ds->intrinsics().fy, 501.0f);
+    EXPECT_DOUBLE_EQ(ds->depthScale(), 1000.0);
+    EXPECT_FLOAT_EQ(ds->loadDepth(2).at(3, 2), ramp(2, 3, 2) / 1000.0f);
+    EXPECT_TRUE(ds->hasColor());
+    expectColorRamp(ds->loadColor(0), 0);
+    expectColorRamp(ds->loadColor(2), 2);
+    EXPECT_TRUE(ds->frame(1).colorPath.empty());
+    EXPECT_TRUE(anyContains(ds->warnings(), "depth_2.png has no colour image of the same name")) << joinLines(ds->warnings());
+
+    DatasetOptions o = withoutPoses();
+    o.maxFrames = 2;
+    expectTimestamps(*Dataset::open(dir, o), {1, 2});
+}
+
+TEST(DatasetWithoutPoses, FolderItselfNamesWithoutNumbersAndColourByPosition) {
+    // No depth/: the PNGs are in the folder itself; names without digits number the frames by position;
+    // colour names that match no depth image pair by position when the counts are equal.
+    auto dir = makeFolder(test::makeTempDir("folder_flat") / "phone_scan", {"a.png", "b.png", "c.png"}, false);
+    for (int k = 0; k < 3; ++k)
+        writeColor(dir / "rgb" / ("colour_" + std::to_string(k) + ".jpg"), [&](int x, int y) { return colorRamp(k, x, y); });
+    auto ds = Dataset::open(dir, withoutPoses());
+    EXPECT_EQ(ds->kind(), DatasetKind::Folder);
+    expectTimestamps(*ds, {0, 1, 2});
+    EXPECT_TRUE(anyContains(ds->warnings(), "has no number in its name")) << joinLines(ds->warnings());
+    EXPECT_EQ(ds->frame(1).colorPath.filename(), "colour_1.jpg");
+    EXPECT_FLOAT_EQ(ds->loadDepth(1).at(0, 0), ramp(1, 0, 0) / 1000.0f);
+
+    // Timestamps in the names (Unix seconds) stay seconds.
+    auto stamped = makeFolder(test::makeTempDir("folder_stamped") / "rec",
+                              {"1305031102.175304.png", "1305031102.211214.png"});
+    expectTimestamps(*Dataset::open(stamped, withoutPoses()), {1305031102.175304, 1305031102.211214});
+}
+
+TEST(DatasetWithoutPoses, FolderNeedsAFullCameraJson) {
+    auto dir = makeFolder(test::makeTempDir("folder_cal") / "scan", {"0.png", "1.png"});
+    writeText(dir / "camera.json", R"({"fx": 500, "fy": 500, "cx": 3.5, "cy": 2.5})");
+    std::string msg = errorMessageOf([&] { Dataset::open(dir, withoutPoses()); });
+    EXPECT_NE(msg.find((dir / "camera.json").string()), std::string::npos) << msg;
+    EXPECT_NE(msg.find("missing depth_scale"), std::string::npos) << msg;
+    DatasetOptions o = withoutPoses();
+    o.depthScale = 5000;  // the option completes it
+    EXPECT_DOUBLE_EQ(Dataset::open(dir, o)->depthScale(), 5000.0);
+
+    // PNGs with no camera.json at all: not a dataset vkmesh can calibrate; the message says what is missing.
+    auto bare = test::makeTempDir("folder_bare") / "pngs";
+    writeDepth(bare / "0.png", [](int, int) { return uint16_t(1000); });
+    msg = errorMessageOf([&] { Dataset::open(bare, withoutPoses()); });
+    EXPECT_NE(msg.find(bare.string()), std::string::npos) << msg;
+    EXPECT_NE(msg.find("no camera.json"), std::string::npos) << msg;
+}
