@@ -18,6 +18,7 @@ std::unique_ptr<Dataset> DatasetArgs::open() const {
     if (depthScale > 0) options.depthScale = depthScale;
     options.maxDepth = maxDepth;
     options.maxFrames = frames;
+    options.requirePoses = !posesOptional;
     return Dataset::open(dataset, options);
 }
 

@@ -25,6 +25,8 @@ struct DatasetArgs {
     float maxDepth = 4.0f;
     std::string intrinsics;
     double depthScale = 0;
+    // Frames without a camera pose are kept (the camera is tracked): a dataset without pose files opens.
+    bool posesOptional = false;
 
     void add(CLI::App* cmd);
     std::unique_ptr<Dataset> open() const;

@@ -7,6 +7,8 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
+#include <sstream>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -28,10 +30,12 @@
 #include "core/mesh_analysis.h"
 #include "core/refinement.h"
 #include "gpu/gpu_volume.h"
+#include "gpu/tracking/pose_tracker.h"
 #include "io/dataset.h"
 #include "io/delta_stream.h"
 #include "io/ply.h"
 #include "io/png.h"
+#include "io/trajectory.h"
 #include "render/mesh_renderer.h"
 #include "vk/context.h"
 
@@ -59,6 +63,10 @@ struct FuseArgs {
     std::string loadPath;
     std::string savePath;
     size_t firstFrame = 0;
+    // Camera tracking (docs/TRACKING.md): estimate every pose after the first against the mesh.
+    bool track = false;
+    std::string trajectoryPath;        // the pose used for every frame, TUM format
+    std::string trackIterations;       // "10,5,4": ICP iterations per level, finest first
     const CLI::App* cmd = nullptr;   // which options were given (a loaded map's settings fill the others)
 };
 
@@ -84,6 +92,38 @@ void takeMapSettings(const CLI::App& cmd, const gpu::GpuVolumeConfig& map, gpu::
     if (!given("--color-recency")) c.params.colorRecency = map.params.colorRecency;
 }
 
+// "10,5,4" -> iterations per pyramid level, finest first. Throws Error naming the value.
+std::array<int, gpu::TRACK_LEVELS> parseIterations(const std::string& text) {
+    std::array<int, gpu::TRACK_LEVELS> out{};
+    std::stringstream stream(text);
+    std::string item;
+    size_t n = 0;
+    while (std::getline(stream, item, ',')) {
+        size_t used = 0;
+        int v = -1;
+        try {
+            v = std::stoi(item, &used);
+        } catch (const std::exception&) {
+            used = 0;
+        }
+        if (used == 0 || used != item.size() || v < 0 || v > 100 || n >= out.size())
+            throw Error("bad --track-iterations '" + text + "': expected " + std::to_string(out.size()) +
+                        " numbers 0..100 separated by commas (finest level first), e.g. 10,5,4");
+        out[n++] = v;
+    }
+    if (n != out.size())
+        throw Error("bad --track-iterations '" + text + "': expected " + std::to_string(out.size()) + " numbers, got " + std::to_string(n));
+    return out;
+}
+
+// The value below which `share` of the values lie (nearest rank).
+double percentile(std::vector<double> values, double share) {
+    if (values.empty()) return 0;
+    std::sort(values.begin(), values.end());
+    size_t rank = size_t(std::ceil(share * double(values.size())));
+    return values[std::clamp<size_t>(rank, 1, values.size()) - 1];
+}
+
 json statsOf(std::vector<double> values) {
     if (values.empty()) return json{{"median", nullptr}, {"mean", nullptr}, {"max", nullptr}};
     double mean = std::accumulate(values.begin(), values.end(), 0.0) / values.size();
@@ -99,7 +139,12 @@ int runFuse(const FuseArgs& args) {
     if (!args.loadPath.empty()) loaded = map::readFile(args.loadPath);
     if (args.growHeaps)
         std::cerr << "note: --grow-heaps is deprecated and has no effect: capacities grow by default (--no-grow keeps them fixed)\n";
-    auto dataset = args.data.open();
+    if (!args.trackIterations.empty() && !args.track) throw Error("--track-iterations needs --track");
+    std::optional<std::array<int, gpu::TRACK_LEVELS>> iterations;
+    if (!args.trackIterations.empty()) iterations = parseIterations(args.trackIterations);
+    DatasetArgs data = args.data;
+    data.posesOptional = args.track;
+    auto dataset = data.open();
     for (const auto& w : dataset->warnings()) std::cerr << "warning: " << w << "\n";
     if (dataset->size() == 0) throw Error("no usable frame in " + args.data.dataset);
     const Intrinsics& intrinsics = dataset->intrinsics();
@@ -125,7 +170,7 @@ int runFuse(const FuseArgs& args) {
     if ((rendering || !args.deltasPath.empty()) && config.meshMode != gpu::MeshMode::Incremental)
         throw Error("--render-every and --deltas need --mode incremental (the baseline keeps no mesh between frames)");
     if (rendering && args.renderDir.empty()) throw Error("--render-every needs --render-dir");
-    config.publishMesh = rendering;
+    config.publishMesh = rendering || args.track;   // tracking draws the mesh fused so far
     config.trackDeltas = !args.deltasPath.empty();
     double loadMs = 0;
     std::unique_ptr<gpu::GpuVolume> volumeOwner;
@@ -148,6 +193,18 @@ int runFuse(const FuseArgs& args) {
         renderOptions.color = render::parseColorMode(args.renderColor);
         if (renderOptions.color == render::ColorMode::Auto) renderOptions.color = fuseColor ? render::ColorMode::Rgb : render::ColorMode::Shade;
     }
+    std::optional<gpu::PoseTracker> tracker;
+    if (args.track) {
+        if (config.meshMode != gpu::MeshMode::Incremental) throw Error("--track needs --mode incremental (it tracks against the mesh)");
+        gpu::TrackerOptions trackerOptions;
+        trackerOptions.maxDepth = args.data.maxDepth;
+        if (iterations) trackerOptions.iterations = *iterations;
+        tracker.emplace(context, trackerOptions);
+    }
+    std::vector<TimedPose> trajectory;   // the pose used for every frame (tracked, predicted or given)
+    std::vector<double> trackMs, trackGpuMs, trackIterations, trackSubmissions, trackRmse, trackInlierShare;
+    size_t lostFrames = 0;
+    std::vector<json> lostList;
     std::optional<DeltaStreamWriter> deltaStream;
     if (!args.deltasPath.empty()) deltaStream.emplace(args.deltasPath);
     size_t picturesWritten = 0;
@@ -180,6 +237,40 @@ int runFuse(const FuseArgs& args) {
             continue;
         }
         size_t valid = std::count_if(depth.meters.begin(), depth.meters.end(), [&](float d) { return d > 0.0f; });
+        // The pose to fuse at: the dataset's, or with --track the first frame's (the dataset's or identity) and
+        // then the tracked one. A lost frame is not fused (the map stays as it was) and gets the predicted pose.
+        Pose pose = dataset->frame(i).cameraToWorld;
+        if (tracker) {
+            gpu::TrackingReport tr;
+            if (!tracker->started()) {
+                if (valid == 0) {
+                    warn("frame " + std::to_string(i) + " skipped: no valid depth in " + dataset->frame(i).depthPath.string());
+                    ++skipped;
+                    continue;
+                }
+                tr = tracker->start(dataset->frame(i).hasPose ? dataset->frame(i).cameraToWorld : Pose::Identity());
+            } else {
+                tr = tracker->track(depth, intrinsics, volume.meshBuffers());
+                trackMs.push_back(tr.milliseconds);
+                trackGpuMs.push_back(tr.gpuMilliseconds);
+                trackIterations.push_back(tr.iterations);
+                trackSubmissions.push_back(tr.submissions);
+                if (tr.tracked) {
+                    trackRmse.push_back(tr.rmse);
+                    trackInlierShare.push_back(tr.validPixels > 0 ? tr.inliers / tr.validPixels : 0.0);
+                }
+            }
+            pose = tr.cameraToWorld;
+            trajectory.push_back({dataset->frame(i).timestamp, pose});
+            if (!tr.tracked) {
+                ++lostFrames;
+                if (lostList.size() < 1000) lostList.push_back({{"frame", i}, {"reason", tr.lostReason}});
+                warn("frame " + std::to_string(i) + " lost (not fused): " + tr.lostReason);
+                continue;
+            }
+        } else {
+            trajectory.push_back({dataset->frame(i).timestamp, pose});
+        }
         if (valid == 0) {
             warn("frame " + std::to_string(i) + " skipped: no valid depth in " + dataset->frame(i).depthPath.string());
             ++skipped;
@@ -193,7 +284,7 @@ int runFuse(const FuseArgs& args) {
             framesWithColor += !color.empty();
         }
         auto t0 = std::chrono::steady_clock::now();
-        gpu::FrameReport report = volume.integrate(depth, &color, intrinsics, dataset->frame(i).cameraToWorld);
+        gpu::FrameReport report = volume.integrate(depth, &color, intrinsics, pose);
         frameWallMs.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
         ++integrated;
         double meshMs = 0;
@@ -239,7 +330,6 @@ int runFuse(const FuseArgs& args) {
         framesDeferred += report.deferredAttempts;
         if (deltaStream) deltaStream->write(report.delta);
         if (rendering) {
-            const Pose& pose = dataset->frame(i).cameraToWorld;
             Eigen::Vector3f eye = pose.block<3, 1>(0, 3).cast<float>();
             seenMin = seenMin.cwiseMin(eye - Eigen::Vector3f::Constant(args.data.maxDepth));
             seenMax = seenMax.cwiseMax(eye + Eigen::Vector3f::Constant(args.data.maxDepth));
@@ -247,7 +337,7 @@ int runFuse(const FuseArgs& args) {
         if (rendering && integrated % args.renderEvery == 0 && volume.meshBuffers().triangleCount > 0) {
             Eigen::Vector3f lo = seenMin, hi = seenMax;
             if (args.renderView == "sensor") {
-                renderOptions.camera = render::sensorCamera(dataset->frame(i).cameraToWorld, intrinsics);
+                renderOptions.camera = render::sensorCamera(pose, intrinsics);
             } else {
                 // The overview frames the mesh built so far, so its bounds are read (one small download).
                 gpu::ExportedMesh sofar = volume.exportMesh();
@@ -268,6 +358,7 @@ int runFuse(const FuseArgs& args) {
     if (tty && !args.quiet) std::cerr << "\n";
     if (integrated == 0 && args.loadPath.empty()) throw Error("none of the " + std::to_string(dataset->size()) + " frames could be fused");
     const double fuseSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (!args.trajectoryPath.empty()) writeTumTrajectory(args.trajectoryPath, trajectory);
 
     // The map is saved before the mesh is exported: the export may re-mesh cubes left pending, which a run
     // continuing from the map would otherwise do at another time than an uninterrupted one.
@@ -407,6 +498,27 @@ int runFuse(const FuseArgs& args) {
     stats["map"] = {{"loaded", args.loadPath}, {"load_ms", loadMs}, {"first_frame", args.firstFrame}, {"saved", args.savePath},
                     {"save_ms", saveMs}, {"bytes", mapBytes}, {"live_blocks", k.blocksInUse},
                     {"bytes_per_live_block", k.blocksInUse ? double(mapBytes) / k.blocksInUse : 0.0}};
+    if (tracker) {
+        json ms = statsOf(trackMs);
+        ms["p90"] = percentile(trackMs, 0.9);
+        json gpuTrackMs = statsOf(trackGpuMs);
+        gpuTrackMs["p90"] = percentile(trackGpuMs, 0.9);
+        json its = statsOf(trackIterations);
+        its["total"] = std::accumulate(trackIterations.begin(), trackIterations.end(), 0.0);
+        stats["tracking"] = {{"enabled", true},
+                             {"frames_tracked", trackMs.size() - lostFrames},
+                             {"lost_frames", lostFrames},
+                             {"lost", lostList},
+                             {"ms_per_frame", ms},
+                             {"gpu_ms_per_frame", gpuTrackMs},
+                             {"iterations", its},
+                             {"submissions_per_frame", statsOf(trackSubmissions)},
+                             {"rmse_m", statsOf(trackRmse)},
+                             {"inlier_share", statsOf(trackInlierShare)},
+                             {"trajectory", args.trajectoryPath}};
+    } else {
+        stats["tracking"] = {{"enabled", false}, {"trajectory", args.trajectoryPath}};
+    }
     stats["warnings"] = warnings;
     if (!args.statsPath.empty()) {
         std::ofstream file(args.statsPath);
@@ -422,6 +534,10 @@ int runFuse(const FuseArgs& args) {
               << "  GPU per frame (median): allocate " << median("allocate") << " ms, fuse " << median("fuse") << " ms, mesh "
               << median("mesh_total") << " ms; "
               << "wall " << statsOf(frameWallMs)["median"].get<double>() << " ms/frame\n";
+    if (tracker)
+        std::cout << "  tracking: " << trackMs.size() - lostFrames << " frames tracked, " << lostFrames << " lost; "
+                  << statsOf(trackMs)["median"] << " ms/frame (median), " << statsOf(trackIterations)["mean"] << " iterations/frame (mean)"
+                  << (args.trajectoryPath.empty() ? std::string() : " -> " + args.trajectoryPath) << "\n";
     if (rendering) std::cout << "  " << picturesWritten << " pictures (" << args.renderView << " view) -> " << args.renderDir << "\n";
     if (deltaStream) std::cout << "  mesh deltas: " << deltaStream->bytesWritten() << " bytes -> " << args.deltasPath << "\n";
     if (!args.loadPath.empty()) std::cout << "  map loaded from " << args.loadPath << " (" << loadMs << " ms), frames from " << args.firstFrame << "\n";
@@ -460,6 +576,13 @@ Run addFuseCommand(CLI::App& app) {
     cmd->add_option("--load", args->loadPath,
                     "continue the map in this file (its settings unless given; with --first-frame, the frames it does not hold yet)");
     cmd->add_option("--first-frame", args->firstFrame, "start at this frame of the dataset (0-based; frames before it are skipped)");
+    cmd->add_flag("--track", args->track,
+                  "estimate the camera poses: every frame after the first is tracked against the mesh fused so far "
+                  "(the first frame's pose is the dataset's, or identity when it has none; its other poses are not used). "
+                  "Datasets without poses need it");
+    cmd->add_option("--trajectory", args->trajectoryPath,
+                    "write the pose used for every frame (tracked or given) in TUM format: timestamp tx ty tz qx qy qz qw");
+    cmd->add_option("--track-iterations", args->trackIterations, "ICP iterations per pyramid level, finest first (default 10,5,4)");
     args->cmd = cmd;
     return [args] { return runFuse(*args); };
 }

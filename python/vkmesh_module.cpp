@@ -204,6 +204,14 @@ Intrinsics toIntrinsics(const py::handle& object, int width, int height) {
 }
 
 // A 4 x 4 camera-to-world matrix, checked as the dataset reader checks every pose it reads (validatePose).
+py::array poseToPython(const Pose& pose) {
+    py::array_t<double> out({py::ssize_t(4), py::ssize_t(4)});
+    auto view = out.mutable_unchecked<2>();
+    for (int r = 0; r < 4; ++r)
+        for (int c = 0; c < 4; ++c) view(r, c) = pose(r, c);
+    return out;
+}
+
 Pose toPose(const py::handle& object, const std::string& where) {
     py::array a = asArray(object);
     if (a.ndim() != 2 || a.shape(0) != 4 || a.shape(1) != 4)
@@ -356,16 +364,18 @@ public:
     }
 
     // py::object rather than py::array: any array-like is accepted, and a wrong one is a ValueError naming it.
-    void integrate(const py::object& depthObject, const py::object& intrinsicsObject, const py::object& poseObject,
-                   double depthScale, const py::object& colorObject) {
+    // pose None: the camera is tracked (Reconstructor::integrate without a pose); returns what tracking did.
+    py::object integrate(const py::object& depthObject, const py::object& intrinsicsObject, const py::object& poseObject,
+                         double depthScale, const py::object& colorObject) {
         // Arguments first, with the GIL: nothing reaches the GPU unless all of them are right.
         const DepthInput depth = checkDepth(depthObject);
         const Intrinsics intrinsics = toIntrinsics(intrinsicsObject, depth.width, depth.height);
-        const Pose pose = toPose(poseObject, "integrate()");
+        const std::optional<Pose> pose = poseObject.is_none() ? std::nullopt : std::optional<Pose>(toPose(poseObject, "integrate()"));
         const std::optional<py::array> color = checkColor(colorObject, depth);
         if (depth.raw && !(std::isfinite(depthScale) && depthScale > 0))
             throw py::value_error("depth_scale " + std::to_string(depthScale) + " must be a positive finite number");
         uint32_t frame = 0;
+        std::optional<TrackedFrame> tracked;
         std::vector<std::string> warnings = locked([&](Reconstructor& rec) {
             if (const gpu::GpuVolume* v = rec.volume(); v && (v->config().imageWidth != depth.width || v->config().imageHeight != depth.height))
                 throw py::value_error("depth image is " + std::to_string(depth.width) + "x" + std::to_string(depth.height) +
@@ -374,13 +384,35 @@ public:
             convertDepth(depth, depthScale, maxDepth(rec), depth_);
             if (color) convertColor(*color, color_);
             const auto t0 = std::chrono::steady_clock::now();
-            lastReport_ = rec.integrate(depth_, color ? &color_ : nullptr, intrinsics, pose);
+            if (pose) {
+                lastReport_ = rec.integrate(depth_, color ? &color_ : nullptr, intrinsics, *pose);
+            } else {
+                tracked = rec.integrate(depth_, color ? &color_ : nullptr, intrinsics);
+                lastReport_ = tracked->fused ? std::move(*tracked->fused) : gpu::FrameReport{};
+                tracked->fused.reset();
+            }
             lastCppSeconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
             lastReport_.delta = MeshDelta{};   // the Reconstructor keeps it (lastDelta); one copy is enough
             frame = rec.framesIntegrated();
             return lastReport_.warnings;
         });
         warnCapacity(warnings, frame);
+        if (!tracked) return py::none();
+        const gpu::TrackingReport& t = tracked->tracking;
+        return py::dict("pose"_a = poseToPython(tracked->cameraToWorld), "tracked"_a = t.tracked, "lost_reason"_a = t.lostReason,
+                        "iterations"_a = t.iterations, "inliers"_a = t.inliers, "valid_pixels"_a = t.validPixels, "rmse"_a = t.rmse,
+                        "ms"_a = t.milliseconds);
+    }
+
+    // Every frame's camera-to-world pose so far (given, tracked, or predicted for a lost frame): N x 4 x 4.
+    py::array trajectory() {
+        std::vector<Pose> poses = locked([](Reconstructor& rec) { return rec.trajectory(); });
+        py::array_t<double> out({py::ssize_t(poses.size()), py::ssize_t(4), py::ssize_t(4)});
+        auto view = out.mutable_unchecked<3>();
+        for (size_t i = 0; i < poses.size(); ++i)
+            for (int r = 0; r < 4; ++r)
+                for (int c = 0; c < 4; ++c) view(py::ssize_t(i), r, c) = poses[i](r, c);
+        return out;
     }
 
     py::object mesh() {
@@ -797,7 +829,7 @@ Bad settings raise ValueError; no usable device or a capacity that does not fit 
              "retype_capacity"_a = dc.retypeCapacity, "delta_record_capacity"_a = dc.deltaRecordCapacity,
              "grow_capacities"_a = dc.growCapacities, "keep_radius"_a = shortest(dc.keepRadius), "recycle"_a = dc.recycle,
              "recycle_after_frames"_a = dc.recycleAfterFrames, "starve_weight"_a = shortest(dc.starveWeight), "validation"_a = false)
-        .def("integrate", &PyReconstructor::integrate, "depth"_a, "intrinsics"_a, "pose"_a, "depth_scale"_a = 5000.0,
+        .def("integrate", &PyReconstructor::integrate, "depth"_a, "intrinsics"_a, "pose"_a = py::none(), "depth_scale"_a = 5000.0,
              "color"_a = py::none(), R"doc(
 Fuses one frame and updates the mesh; returns when the GPU has finished it.
 
@@ -806,11 +838,18 @@ depth        H x W numpy array: uint16 raw sensor units (divided by depth_scale,
              frame must have the first frame's size. Arrays that are not C-contiguous are copied once.
 intrinsics   (fx, fy, cx, cy) in pixels, or a 3x3 camera matrix.
 pose         4x4 camera-to-world matrix (the camera's pose in the world), rigid: a rotation and a translation.
+             None: the camera is tracked against the mesh fused so far (docs/TRACKING.md); the very first frame
+             is fused at the identity (or at the last pose given). Returns then a dict: "pose" (the 4x4 pose
+             used), "tracked" (False: the frame was lost and not fused; "pose" is the prediction),
+             "lost_reason", "iterations", "inliers", "valid_pixels", "rmse" (metres), "ms". With a pose: None.
 depth_scale  raw units per metre for uint16 depth (5000: TUM; 1000: millimetres); ignored for float32.
 color        None or an H x W x 3 uint8 array (red, green, blue) registered to the depth image.
 
 Raises ValueError (wrong dtype, shape or value; a pose that is not rigid) before anything reaches the GPU,
 vkmesh.Error for Vulkan problems. Capacity problems are vkmesh.CapacityWarning warnings.
+)doc")
+        .def("trajectory", &PyReconstructor::trajectory, R"doc(
+Every frame's camera-to-world pose so far (given, tracked, or predicted for a lost frame), as an N x 4 x 4 array.
 )doc")
         .def("mesh", &PyReconstructor::mesh, R"doc(
 The mesh after the last frame, copied from the GPU: a vkmesh.Mesh with vertices (N, 3) float32, triangles

@@ -380,9 +380,9 @@ VKM_CONST TRACK_BINDING_MODEL_NORMALS = 6u;   // vec4 per pyramid pixel: its wor
 VKM_CONST TRACK_BINDING_PARTIALS = 7u;        // float: TRACK_SUM_COUNT per workgroup of track_icp_reduce
 VKM_CONST TRACK_BINDING_SUMS = 8u;            // float: TRACK_SUM_COUNT, the partials summed in a fixed order
 VKM_CONST TRACK_BINDING_COUNT = 9u;
-// What one ICP iteration sums over the pixels (one float each). J = [p x n, n] (6) is the residual
-// r = n . (p - q)'s derivative with respect to a twist applied on the left of the camera pose; w the robust
-// weight. The 6x6 system is symmetric: its upper triangle, row by row.
+// What one ICP iteration sums over the pixels (one float each). J = [(p - c) x n, n] (6) is the residual
+// r = n . (p - q)'s derivative with respect to a step of the camera pose: a rotation about the camera's
+// centre c and a translation, both in world axes (core/icp_solve.h, applyTwist); w the robust weight. The 6x6 system is symmetric: its upper triangle, row by row.
 VKM_CONST TRACK_SUM_JTJ = 0u;                 // 21 values: sum w J_i J_j for i <= j
 VKM_CONST TRACK_SUM_JTR = 21u;                // 6 values: sum w J_i r
 VKM_CONST TRACK_SUM_WEIGHTED_ERROR = 27u;     // sum w r^2
@@ -397,7 +397,7 @@ VKM_CONST WG_TRACK_REDUCE = 64u;              // track_icp_reduce: invocations p
 VKM_CONST TRACK_PIXELS_PER_INVOCATION = 16u;  //  ... pixels each one sums before the workgroup's tree
 VKM_CONST TRACK_MAX_PARTIALS = 16384u;        // workgroups track_icp_sum adds up (16 Mpx per level; below lavapipe's loop cut)
 
-// Settings of the tracker's passes, constant for a tracker (TrackerOptions).
+// Settings of the tracker's passes (TrackerOptions), and the pose the model maps were drawn at (per frame).
 struct TrackParamsGpu {
     float filterSpatialSigma;   // bilateral filter: pixels
     float filterDepthSigma;     //  ... metres
@@ -405,21 +405,25 @@ struct TrackParamsGpu {
     float minDepth;             // samples outside [minDepth, maxDepth] are no measurement
     float maxDepth;             // metres (0: no limit)
     float edgeJumpFraction;     // neighbours further apart than this fraction of the depth: an edge, no normal
-    float distanceGate;         // association: the model point lies within this distance (metres)
-    float normalGateCos;        //  ... and the normals agree within this angle (its cosine)
-    float huberDelta;           // robust weight: 1 below, delta / |r| above (metres)
-    float pad0, pad1, pad2;
+    float modelMergeDistance;   // model maps' downsampling: fine pixels further than this from the first are not averaged
+    float pad0;
+    VKM_ROWS3(modelWorldToCamera); // the inverse of the pose the model maps were drawn at
 };
 
-// Push constants of the tracker's compute passes (128 bytes).
+// Push constants of the tracker's compute passes.
 struct TrackPush {
     VKM_ROWS3(cameraToWorld);     // the frame's pose as estimated so far
-    VKM_ROWS3(modelWorldToCamera);// the inverse of the pose the model maps were drawn at
     VKM_VEC4(intrinsics);         // fx, fy, cx, cy of this level
-    uint size;                    // width | height << 16 of this level
+    uint size;                    // width | height << 16 of this level (track_icp_sum: the number of partials)
     uint offset;                  // this level's first pixel in the pyramid buffers
     uint finerOffset;             // downsampling: the finer level's first pixel
     uint finerWidth;              //  ... and its width
+    // Association at this level: the model point within distanceGate metres, the normals within the angle
+    // whose cosine is normalGateCos; Huber weight 1 below huberDelta metres, huberDelta / |r| above.
+    float distanceGate;
+    float normalGateCos;
+    float huberDelta;
+    float pad;
 };
 
 #ifdef __cplusplus

@@ -7,7 +7,7 @@
 // and libvulkan.so.1: scripts/pack_gpubench.sh packs it with the loader for a bare machine (bench/README.md).
 //
 //   vkmesh_gpubench [--voxel 0.03,0.01] [--frames 60] [--repeat 1] [--warmup 10] [--device I] [--json FILE]
-//                   [--publish] [--quick] [--devices]
+//                   [--publish] [--track] [--quick] [--devices]
 //
 // Prints a table per voxel size (median and p90 GPU ms per stage, the frame's GPU and wall time, the meshing
 // total) and writes the same as JSON. Exit codes: 0 done; 1 validation messages (VKMESH_VALIDATION=1);
@@ -35,12 +35,14 @@
 #include <memory>
 #include <mutex>
 #include <numeric>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "core/types.h"
 #include "gpu/gpu_volume.h"
+#include "gpu/tracking/pose_tracker.h"
 #include "synth/synthetic_scene.h"
 #include "vk/context.h"
 
@@ -72,6 +74,7 @@ struct Options {
     int device = -1;
     bool validation = false;
     bool publish = false;
+    bool track = false;        // every frame after a run's first tracked against the mesh (docs/TRACKING.md)
     bool quick = false;
     std::string jsonPath;
 };
@@ -169,6 +172,10 @@ struct VoxelRun {
     size_t growths = 0, deferredAttempts = 0, warnings = 0;
     size_t gpuBytes = 0;
     double seconds = 0;
+    // --track: per tracked frame, the tracker's GPU and wall time, host round trips and the position error
+    // against the rendered pose; frames lost.
+    std::vector<double> trackGpuMs, trackWallMs, trackSubmissions, trackErrorMm;
+    size_t lostFrames = 0;
 };
 
 vkmesh::gpu::GpuVolumeConfig volumeConfig(double voxel, bool publish) {
@@ -185,17 +192,42 @@ vkmesh::gpu::GpuVolumeConfig volumeConfig(double voxel, bool publish) {
 
 // Fuses frames 0..count-1 of the loop (frame i is rendered[i % rendered.size()]) into a fresh volume.
 // `run` is null for the untimed warm-up.
+// With `track`, the first frame is fused at its true pose and every later one at the pose tracked against the
+// mesh (lost frames are not fused), as `vkmesh fuse --track` does.
 void fuseSequence(const vkmesh::vk::Context& context, const std::vector<Frame>& rendered, size_t count, double voxel,
-                  bool publish, VoxelRun* run) {
-    vkmesh::gpu::GpuVolume volume(context, volumeConfig(voxel, publish));
+                  bool publish, bool track, VoxelRun* run) {
+    vkmesh::gpu::GpuVolume volume(context, volumeConfig(voxel, publish || track));
     const Intrinsics intrinsics = vkmesh::synth::kinectIntrinsics(kWidth, kHeight);
+    std::optional<vkmesh::gpu::PoseTracker> tracker;
+    if (track) {
+        vkmesh::gpu::TrackerOptions options;
+        options.maxDepth = kMaxDepth;
+        tracker.emplace(context, options);
+    }
     for (size_t i = 0; i < count; ++i) {
         const Frame& frame = rendered[i % rendered.size()];
+        Pose pose = frame.pose;
+        if (tracker && i == 0) {
+            tracker->start(frame.pose);
+        } else if (tracker) {
+            const auto t0 = Clock::now();
+            const vkmesh::gpu::TrackingReport tr = tracker->track(frame.depth, intrinsics, volume.meshBuffers());
+            const double wallMs = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+            if (run) {
+                run->trackGpuMs.push_back(tr.gpuMilliseconds);
+                run->trackWallMs.push_back(wallMs);
+                run->trackSubmissions.push_back(tr.submissions);
+                run->trackErrorMm.push_back(1e3 * (tr.cameraToWorld.block<3, 1>(0, 3) - frame.pose.block<3, 1>(0, 3)).norm());
+                run->lostFrames += !tr.tracked;
+            }
+            if (!tr.tracked) continue;
+            pose = tr.cameraToWorld;
+        }
         // The stage times are those of the frame's last submission: a frame run again after growing a capacity is
         // timed on its second attempt, and mesh completion passes after a heap growth are not timed; the wall
         // time holds all of it, and the depth/colour upload before the first stage too.
         const auto t0 = Clock::now();
-        vkmesh::gpu::FrameReport report = volume.integrate(frame.depth, &frame.color, intrinsics, frame.pose);
+        vkmesh::gpu::FrameReport report = volume.integrate(frame.depth, &frame.color, intrinsics, pose);
         const double wallMs = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
         for (const std::string& w : report.warnings) std::cerr << "warning: " << cm(voxel) << ", frame " << i << ": " << w << "\n";
         for (const std::string& g : report.growth) std::cerr << "note: " << cm(voxel) << ", frame " << i << ": grew " << g << "\n";
@@ -291,6 +323,13 @@ void printRun(const VoxelRun& r, size_t repeat) {
         row("whole frame, GPU", summarize(r.gpuFrameMs));
     }
     row("whole frame, wall", summarize(r.wallMs));
+    if (!r.trackWallMs.empty()) {
+        row("tracking, GPU", summarize(r.trackGpuMs));
+        row("tracking, wall", summarize(r.trackWallMs));
+        row("tracking, round trips", summarize(r.trackSubmissions));
+        row("tracking, error (mm)", summarize(r.trackErrorMm));
+        std::printf("  frames lost by tracking: %zu\n", r.lostFrames);
+    }
 }
 
 json runJson(const VoxelRun& r) {
@@ -310,7 +349,13 @@ json runJson(const VoxelRun& r) {
                 {"capacity_growths", r.growths},
                 {"deferred_attempts", r.deferredAttempts},
                 {"warnings", r.warnings},
-                {"wall_s", r.seconds}};
+                {"wall_s", r.seconds},
+                {"tracking", r.trackWallMs.empty() ? json(nullptr)
+                                                   : json{{"gpu_ms_per_frame", toJson(summarize(r.trackGpuMs))},
+                                                          {"wall_ms_per_frame", toJson(summarize(r.trackWallMs))},
+                                                          {"submissions_per_frame", toJson(summarize(r.trackSubmissions))},
+                                                          {"position_error_mm", toJson(summarize(r.trackErrorMm))},
+                                                          {"lost_frames", r.lostFrames}}}};
 }
 
 std::string utcNow() {
@@ -328,6 +373,9 @@ int run(Options o, const CLI::App& cli) {
         if (!given("--frames")) o.frames = 3;
         if (!given("--warmup")) o.warmup = 0;
     }
+    // Tracking follows a camera that moves a few centimetres per frame, as a sensor at 30 Hz does; the 60-pose
+    // orbit steps 14 cm and 6 degrees.
+    if (o.track && !given("--loop-frames")) o.loopFrames = 240;
     for (double v : o.voxels)
         if (!(v >= 0.004 && v <= 0.5)) throw Error("--voxel " + std::to_string(v) + " m: give sizes between 0.004 and 0.5");
     const size_t renderCount = std::min(std::max(o.frames, o.warmup), o.loopFrames);
@@ -358,7 +406,7 @@ int run(Options o, const CLI::App& cli) {
 
     if (o.warmup > 0) {   // raises the GPU's clocks and fills the driver's caches before anything is timed
         std::fprintf(stderr, "warm-up: %zu untimed frames at %s\n", o.warmup, cm(o.voxels.front()).c_str());
-        fuseSequence(context, rendered, o.warmup, o.voxels.front(), o.publish, nullptr);
+        fuseSequence(context, rendered, o.warmup, o.voxels.front(), o.publish, o.track, nullptr);
     }
     std::vector<VoxelRun> runs;
     // Written after every voxel size, so that a run stopped part way (run.sh's --timeout) leaves what it measured.
@@ -383,7 +431,7 @@ int run(Options o, const CLI::App& cli) {
                     {"scene", {{"name", "synthetic room (vkmesh synth defaults)"}, {"path", "orbit"},
                                {"loop_frames", o.loopFrames}, {"width", kWidth}, {"height", kHeight},
                                {"max_depth", kMaxDepth}, {"color", true}, {"render_s", renderSeconds}}},
-                    {"pipeline", {{"mode", "incremental"}, {"color_fusion", "average"}, {"publish_mesh", o.publish}}},
+                    {"pipeline", {{"mode", "incremental"}, {"color_fusion", "average"}, {"publish_mesh", o.publish}, {"track", o.track}}},
                     {"frames_per_run", o.frames},
                     {"repeat", o.repeat},
                     {"warmup_frames", o.warmup},
@@ -404,7 +452,7 @@ int run(Options o, const CLI::App& cli) {
         const auto t0 = Clock::now();
         for (size_t rep = 0; rep < o.repeat; ++rep) {
             std::fprintf(stderr, "fusing %zu frames at %s (%zu/%zu)...\n", o.frames, cm(voxel).c_str(), rep + 1, o.repeat);
-            fuseSequence(context, rendered, o.frames, voxel, o.publish, &r);
+            fuseSequence(context, rendered, o.frames, voxel, o.publish, o.track, &r);
         }
         r.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
         printRun(r, o.repeat);
@@ -454,6 +502,10 @@ int main(int argc, char** argv) {
     cli.add_flag("--devices", listDevices, "list the Vulkan devices and whether vkmesh can use them, then exit");
     cli.add_flag("--validation", o.validation, "Khronos validation layer on (or VKMESH_VALIDATION=1); any message: exit 1");
     cli.add_flag("--publish", o.publish, "also compact the mesh into draw-ready buffers every frame (an embedding renderer's cost)");
+    cli.add_flag("--track", o.track,
+                 "track the camera: every frame after a run's first is aligned to the mesh (ICP against the mesh drawn at "
+                 "the predicted pose) and fused at the tracked pose; reports the tracker's GPU time and its error "
+                 "(with it, the orbit has 240 poses unless --loop-frames says)");
     cli.add_option("--json", o.jsonPath, "write the results as JSON to this file");
     cli.add_flag("--quick", o.quick, "smoke run for a CPU device (lavapipe): 3 frames per voxel size, no warm-up, "
                                      "unless --frames / --warmup say otherwise");

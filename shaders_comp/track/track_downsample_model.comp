@@ -1,6 +1,6 @@
 #version 450
 // Tracking, model maps (once per coarser level): level l+1 of the model's position and normal maps from
-// level l. Like the depth pyramid: the 2 x 2 fine pixels with a model that lie within the distance gate of the
+// level l. Like the depth pyramid: the 2 x 2 fine pixels with a model that lie within modelMergeDistance of the
 // first one are averaged (normals renormalised), so that no coarse pixel joins two surfaces.
 #extension GL_GOOGLE_include_directive : require
 #include "track/track_common.glsl"
@@ -24,7 +24,7 @@ void main() {
         uvec2 q = pixel * 2u + uvec2(k & 1u, k >> 1u);
         uint fine = pass.finerOffset + q.y * pass.finerWidth + q.x;
         vec4 p = modelPositions[fine];
-        if (p.w == 0.0 || distance(p.xyz, reference.xyz) > track.distanceGate) continue;
+        if (p.w == 0.0 || distance(p.xyz, reference.xyz) > track.modelMergeDistance) continue;
         position += p.xyz;
         normal += modelNormals[fine].xyz;
         count += 1.0;

@@ -4,7 +4,8 @@
 // For a frame pixel with a point p and normal m (camera space): p_w = T p with T the pose estimated so far;
 // p_w is projected into the model maps (drawn at the model pose); the model point q and normal n there are
 // associated when |p_w - q| <= distanceGate and (R m) . n >= normalGateCos. Residual r = n . (p_w - q);
-// J = [p_w x n, n] its derivative for a twist applied on the left of T; Huber weight w. Each invocation sums
+// J = [(p_w - c) x n, n] its derivative for a rotation about the camera's centre c and a translation (both
+// in world axes); Huber weight w. Gates and Huber delta are the level's (TrackPush). Each invocation sums
 // TRACK_PIXELS_PER_INVOCATION pixels in order, then the workgroup adds its invocations' sums by a fixed binary
 // tree in shared memory: the order of every addition is fixed, so the partials are the same bit for bit on
 // every run (no float atomics). track_icp_sum adds the partials up.
@@ -31,7 +32,7 @@ void main() {
         if (point.w == 0.0 || normal.w == 0.0) continue;
         acc[TRACK_SUM_VALID] += 1.0;
         precise vec3 world = trackTransform(pass.cameraToWorld, point.xyz);
-        precise vec3 model = trackTransform(pass.modelWorldToCamera, world);
+        precise vec3 model = trackTransform(track.modelWorldToCamera, world);
         if (!(model.z > 0.0)) continue;
         precise float u = pass.intrinsics.x * (model.x / model.z) + pass.intrinsics.z;
         precise float v = pass.intrinsics.y * (model.y / model.z) + pass.intrinsics.w;
@@ -45,12 +46,13 @@ void main() {
         vec3 n = modelNormals[modelIndex].xyz;
         precise vec3 diff = world - q.xyz;
         precise float distance2 = dot(diff, diff);
-        if (distance2 > track.distanceGate * track.distanceGate) continue;
+        if (distance2 > pass.distanceGate * pass.distanceGate) continue;
         precise vec3 frameNormal = trackRotate(pass.cameraToWorld, normal.xyz);
-        if (dot(frameNormal, n) < track.normalGateCos) continue;
+        if (dot(frameNormal, n) < pass.normalGateCos) continue;
         precise float r = dot(n, diff);
-        precise float w = abs(r) <= track.huberDelta ? 1.0 : track.huberDelta / abs(r);
-        precise vec3 jr = cross(world, n);
+        precise float w = abs(r) <= pass.huberDelta ? 1.0 : pass.huberDelta / abs(r);
+        precise vec3 centre = vec3(pass.cameraToWorld[0].w, pass.cameraToWorld[1].w, pass.cameraToWorld[2].w);
+        precise vec3 jr = cross(world - centre, n);
         float J[6] = float[6](jr.x, jr.y, jr.z, n.x, n.y, n.z);
         uint slot = TRACK_SUM_JTJ;
         for (uint a = 0u; a < 6u; ++a) {

@@ -55,10 +55,9 @@ Pose applyTwist(const Twist& twist, const Pose& pose) {
     const Eigen::Vector3d omega = twist.head<3>();
     const double angle = omega.norm();
     Eigen::Matrix3d rotation = angle > 0 ? Eigen::AngleAxisd(angle, omega / angle).toRotationMatrix() : Eigen::Matrix3d::Identity();
-    Pose step = Pose::Identity();
-    step.block<3, 3>(0, 0) = rotation;
-    step.block<3, 1>(0, 3) = twist.tail<3>();
-    Pose result = step * pose;
+    Pose result = pose;
+    result.block<3, 3>(0, 0) = rotation * pose.block<3, 3>(0, 0);
+    result.block<3, 1>(0, 3) = pose.block<3, 1>(0, 3) + twist.tail<3>();
     // Keep the rotation orthonormal over many steps (each is orthonormal; their product drifts by rounding).
     Eigen::JacobiSVD<Eigen::Matrix3d> svd(result.block<3, 3>(0, 0), Eigen::ComputeFullU | Eigen::ComputeFullV);
     result.block<3, 3>(0, 0) = svd.matrixU() * svd.matrixV().transpose();

@@ -39,8 +39,17 @@ struct IcpStep {
 // origin is a fair choice; 1 when unknown).
 IcpStep solveIcpStep(const IcpSystem& system, double sceneScale = 1.0);
 
-// exp(twist) * pose: the rotation by the axis-angle vector, then the translation, applied in world space.
+// The step applied to a camera pose: rotated by the axis-angle vector about its own centre, then moved by the
+// translation, both in world axes (R' = exp(omega) R, t' = t + translation). Linearised about the camera
+// rather than the world origin, a step stays accurate however far the camera is from the origin.
 Pose applyTwist(const Twist& twist, const Pose& pose);
+
+// The association gates and robust weight of one pyramid level (TrackerOptions; TrackPush).
+struct IcpGates {
+    float distance = 0.1f;      // metres between the frame's point and the model's
+    float normalCos = 0.94f;    // cosine of the largest angle between their normals
+    float huber = 0.02f;        // metres: weight 1 below, huber / |r| above
+};
 
 // The intrinsics of tracking's pyramid level `level` (0: the image itself): focal lengths halved per level,
 // pixel centres kept at integer coordinates ((c + 0.5) / 2^level - 0.5), width and height >> level.

@@ -130,7 +130,7 @@ void referenceDownsampleModel(const std::vector<Eigen::Vector4f>& positions, con
             Eigen::Vector3f position = Eigen::Vector3f::Zero(), normal = Eigen::Vector3f::Zero();
             float count = 0.0f;
             for (size_t f : fine) {
-                if (positions[f].w() == 0.0f || (positions[f].head<3>() - reference.head<3>()).norm() > params.distanceGate) continue;
+                if (positions[f].w() == 0.0f || (positions[f].head<3>() - reference.head<3>()).norm() > params.modelMergeDistance) continue;
                 position += positions[f].head<3>();
                 normal += normals[f].head<3>();
                 count += 1.0f;
@@ -145,7 +145,7 @@ void referenceDownsampleModel(const std::vector<Eigen::Vector4f>& positions, con
 
 IcpSums referenceIcpSums(const TrackingLevel& frame, const std::vector<Eigen::Vector4f>& modelPositions,
                          const std::vector<Eigen::Vector4f>& modelNormals, const Pose& estimate, const Pose& modelPose,
-                         const gpu::TrackParamsGpu& params) {
+                         const IcpGates& gates) {
     using namespace gpu;
     IcpSums sums{};
     const RigidRows toWorld = rigidRows(estimate), toModel = rigidRows(inverseRigid(modelPose));
@@ -169,11 +169,12 @@ IcpSums referenceIcpSums(const TrackingLevel& frame, const std::vector<Eigen::Ve
         sums[TRACK_SUM_MODEL_HITS] += 1;
         const Eigen::Vector3f n = modelNormals[m].head<3>();
         const Eigen::Vector3f diff = world - q.head<3>();
-        if (diff.dot(diff) > params.distanceGate * params.distanceGate) continue;
-        if (rotate(toWorld, normal.head<3>()).dot(n) < params.normalGateCos) continue;
+        if (diff.dot(diff) > gates.distance * gates.distance) continue;
+        if (rotate(toWorld, normal.head<3>()).dot(n) < gates.normalCos) continue;
         const float r = n.dot(diff);
-        const float weight = std::abs(r) <= params.huberDelta ? 1.0f : params.huberDelta / std::abs(r);
-        const Eigen::Vector3f jr = world.cross(n);
+        const float weight = std::abs(r) <= gates.huber ? 1.0f : gates.huber / std::abs(r);
+        const Eigen::Vector3f centre(toWorld.r[0][3], toWorld.r[1][3], toWorld.r[2][3]);
+        const Eigen::Vector3f jr = (world - centre).cross(n);
         const float J[6] = {jr.x(), jr.y(), jr.z(), n.x(), n.y(), n.z()};
         uint32_t slot = TRACK_SUM_JTJ;
         for (int a = 0; a < 6; ++a) {

@@ -33,10 +33,10 @@ void referenceDownsampleModel(const std::vector<Eigen::Vector4f>& positions, con
                               std::vector<Eigen::Vector4f>& coarseNormals);
 
 // One ICP iteration's sums (track_icp_reduce.comp) at one level: the frame's points and normals against the
-// model maps (world space, drawn at modelPose), for the frame at `estimate`. Each pixel's terms are formed in
+// model maps (world space, drawn at modelPose), for the frame at `estimate`, with the level's gates. Each pixel's terms are formed in
 // float as on the GPU and summed in double (the GPU sums in float: compare with a tolerance).
 IcpSums referenceIcpSums(const TrackingLevel& frame, const std::vector<Eigen::Vector4f>& modelPositions,
                          const std::vector<Eigen::Vector4f>& modelNormals, const Pose& estimate, const Pose& modelPose,
-                         const gpu::TrackParamsGpu& params);
+                         const IcpGates& gates);
 
 }  // namespace vkmesh::cpu

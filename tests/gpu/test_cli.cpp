@@ -9,8 +9,10 @@
 #include <fstream>
 #include <sstream>
 
+#include "core/camera.h"
 #include "core/mesh_analysis.h"
 #include "io/ply.h"
+#include "io/trajectory.h"
 #include "test_support.h"
 
 namespace vkmesh {
@@ -364,6 +366,93 @@ TEST(Cli, SaveLoadAndFirstFrameResumeTheRun) {
     CliRun past = runCli("fuse " + seq + " --first-frame 6 -o " + (out / "x.ply").string() + " -q");
     EXPECT_EQ(past.exitCode, 2);
     EXPECT_NE(past.err.find("--first-frame 6"), std::string::npos) << past.err;
+}
+
+}  // namespace
+}  // namespace vkmesh
+
+namespace vkmesh {
+namespace {
+
+// A synthetic sequence whose camera moves as a sensor's does (240 poses to the orbit: about 3.6 cm and
+// 1.5 degrees per frame), for tracking; made once.
+const std::filesystem::path& trackingSequence() {
+    static std::filesystem::path dir = [] {
+        std::filesystem::path d = test::makeTempDir("cli_track_seq");
+        test::CliRun r = test::runCli("synth " + d.string() + " --frames 240 --width 160 --height 120");
+        EXPECT_EQ(r.exitCode, 0) << r.err;
+        return d;
+    }();
+    return dir;
+}
+
+// The frames' poses relative to the first one, from a TUM trajectory file.
+std::vector<Pose> relativePoses(const std::vector<TimedPose>& poses, size_t count) {
+    std::vector<Pose> out;
+    for (size_t i = 0; i < count && i < poses.size(); ++i) out.push_back(inverseRigid(poses[0].cameraToWorld) * poses[i].cameraToWorld);
+    return out;
+}
+
+// `fuse --track` on a folder without poses (refused without --track, and the error says that --track exists):
+// the trajectory starts at identity, follows the true motion within a centimetre, carries the dataset's
+// timestamps, and --stats reports tracking.
+TEST(Cli, TrackFusesASequenceWithoutPoses) {
+    namespace fs = std::filesystem;
+    fs::path d = test::makeTempDir("cli_track");
+    fs::copy(trackingSequence(), d / "seq", fs::copy_options::recursive);
+    const std::vector<TimedPose> truth = readTumTrajectory(d / "seq" / "groundtruth.txt");
+    fs::remove(d / "seq" / "groundtruth.txt");
+    test::CliRun r = test::runCli("fuse " + (d / "seq").string() + " -o " + (d / "m.ply").string());
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_NE(r.err.find("--track"), std::string::npos) << r.err;
+
+    r = test::runCli("fuse " + (d / "seq").string() + " --track --frames 12 --voxel 0.03 --trajectory " + (d / "t.txt").string() +
+                     " --stats " + (d / "s.json").string() + " -o " + (d / "m.ply").string() + " --validation");
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_EQ(r.err.find("[validation"), std::string::npos) << r.err;
+    const std::vector<TimedPose> tracked = readTumTrajectory(d / "t.txt");
+    ASSERT_EQ(tracked.size(), 12u);
+    EXPECT_TRUE(tracked[0].cameraToWorld.isApprox(Pose::Identity(), 1e-9));
+    const std::vector<Pose> want = relativePoses(truth, 12);
+    for (size_t i = 0; i < tracked.size(); ++i) {
+        EXPECT_DOUBLE_EQ(tracked[i].timestamp, truth[i].timestamp) << "frame " << i;
+        EXPECT_LT((tracked[i].cameraToWorld.block<3, 1>(0, 3) - want[i].block<3, 1>(0, 3)).norm(), 0.01) << "frame " << i;
+    }
+    const auto stats = nlohmann::json::parse(test::readText(d / "s.json"));
+    EXPECT_EQ(stats["frames"]["integrated"], 12);
+    EXPECT_EQ(stats["tracking"]["lost_frames"], 0);
+    EXPECT_EQ(stats["tracking"]["frames_tracked"], 11);
+    for (const char* key : {"median", "p90", "max"}) EXPECT_TRUE(stats["tracking"]["ms_per_frame"].contains(key)) << key;
+    EXPECT_GT(stats["tracking"]["iterations"]["total"].get<double>(), 11);
+    fs::remove_all(d);
+}
+
+// With poses in the dataset, --track takes the first one and estimates the others; --trajectory without
+// --track writes the dataset's poses as used. Bad --track-iterations is a clear error.
+TEST(Cli, TrackStartsFromTheDatasetsFirstPose) {
+    namespace fs = std::filesystem;
+    fs::path d = test::makeTempDir("cli_track_gt");
+    const std::vector<TimedPose> truth = readTumTrajectory(trackingSequence() / "groundtruth.txt");
+    test::CliRun r = test::runCli("fuse " + trackingSequence().string() + " --track --frames 8 --voxel 0.03 --trajectory " +
+                                  (d / "t.txt").string() + " -o " + (d / "m.ply").string());
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    const std::vector<TimedPose> tracked = readTumTrajectory(d / "t.txt");
+    ASSERT_EQ(tracked.size(), 8u);
+    EXPECT_LT((tracked[0].cameraToWorld - truth[0].cameraToWorld).cwiseAbs().maxCoeff(), 1e-8);
+    for (size_t i = 1; i < tracked.size(); ++i)
+        EXPECT_LT((tracked[i].cameraToWorld.block<3, 1>(0, 3) - truth[i].cameraToWorld.block<3, 1>(0, 3)).norm(), 0.01) << i;
+
+    r = test::runCli("fuse " + trackingSequence().string() + " --frames 3 --voxel 0.05 --trajectory " + (d / "given.txt").string() +
+                     " -o " + (d / "m.ply").string());
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    const std::vector<TimedPose> given = readTumTrajectory(d / "given.txt");
+    ASSERT_EQ(given.size(), 3u);
+    for (size_t i = 0; i < 3; ++i) EXPECT_LT((given[i].cameraToWorld - truth[i].cameraToWorld).cwiseAbs().maxCoeff(), 1e-8) << i;
+
+    r = test::runCli("fuse " + trackingSequence().string() + " --track --track-iterations 10,x,4 -o " + (d / "m.ply").string());
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_NE(r.err.find("--track-iterations"), std::string::npos) << r.err;
+    fs::remove_all(d);
 }
 
 }  // namespace

@@ -203,7 +203,7 @@ TEST_F(Tracking, IcpSumsMatchCpuReference) {
         for (const Pose& estimate : {orbit()[0], orbit()[1]}) {
             const IcpSums gpuSums = tracker.sums(l, estimate);
             const IcpSums ref = cpu::referenceIcpSums(level, levelOf(maps.modelPositions, tracker, l), levelOf(maps.modelNormals, tracker, l),
-                                                      estimate, orbit()[0], params);
+                                                      estimate, orbit()[0], gpu::icpGatesFor(options, l));
             ASSERT_GT(ref[gpu::TRACK_SUM_INLIERS], 100) << "level " << l;
             // Counts: the same pixels pass the same gates (computed the same way in float).
             EXPECT_EQ(gpuSums[gpu::TRACK_SUM_VALID], ref[gpu::TRACK_SUM_VALID]) << "level " << l;

@@ -41,10 +41,13 @@ struct TrackerOptions {
     uint32_t filterRadius = 2;         // window half-size in pixels, at most 4
     // Neighbours further apart in depth than this fraction of the depth: a depth edge, no normal.
     float edgeJumpFraction = 0.05f;
-    // Association gates and robust weight.
-    float distanceGate = 0.10f;        // metres
-    float normalGateDegrees = 20.0f;
-    float huberDelta = 0.02f;          // metres
+    // Association gates and robust weight per level, finest first: wider at the coarse levels, which must
+    // catch the motion the prediction missed (a fast turn moves a point at 2 m by 10-20 cm).
+    std::array<float, TRACK_LEVELS> distanceGates{0.10f, 0.20f, 0.30f};   // metres
+    std::array<float, TRACK_LEVELS> normalGateDegrees{20.0f, 25.0f, 30.0f};
+    std::array<float, TRACK_LEVELS> huberDeltas{0.01f, 0.02f, 0.04f};     // metres
+    // Model maps' downsampling: fine pixels further than this from the first are not averaged (metres).
+    float modelMergeDistance = 0.05f;
     // Depth samples outside [minDepth, maxDepth] are ignored (maxDepth 0: no limit).
     float minDepth = 0.1f;
     float maxDepth = 0.0f;
@@ -59,8 +62,11 @@ struct TrackerOptions {
     double minErrorForRise = 0.005;    //  (and this many metres: a tiny error may triple harmlessly).
 };
 
-// The options as the shaders read them (TrackParamsGpu); throws Error naming a value out of range.
+// The options as the shaders read them (TrackParamsGpu, without the model pose); throws Error naming a value
+// out of range.
 TrackParamsGpu trackParamsFor(const TrackerOptions& options);
+// The association gates of pyramid level `level`.
+IcpGates icpGatesFor(const TrackerOptions& options, int level);
 
 // What align() found.
 struct IcpResult {
@@ -115,6 +121,7 @@ private:
     Intrinsics intrinsics_;
     Pose modelPose_ = Pose::Identity();
     vk::BindingTable table_;
+    TrackParamsGpu paramValues_{};   // what params_ holds (the model pose changes every prepare())
     vk::Buffer params_, rawDepth_, depth_, points_, normals_, modelPositions_, modelNormals_, partials_, sums_;
     vk::ComputePipeline filter_, downsampleDepth_, vertexNormals_, downsampleModel_, reduce_, sum_;
     ModelMapRenderer modelMaps_;

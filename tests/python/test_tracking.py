@@ -1,0 +1,42 @@
+"""Camera tracking from Python (docs/TRACKING.md): integrate() without a pose tracks the camera against the mesh,
+returns what tracking did, and trajectory() gives every frame's pose."""
+
+import numpy as np
+
+import vkmesh
+
+
+def test_integrate_without_a_pose_tracks_the_camera(tmp_path):
+    # 240 frames to the orbit: about 3.6 cm and 1.5 degrees between neighbours. Only the first 10 are used.
+    folder = vkmesh.synth(tmp_path / "room", frames=240, width=160, height=120)
+    frames = list(vkmesh.open_dataset(folder, frames=10))
+    r = vkmesh.Reconstructor(voxel_size=0.03)
+    results = [r.integrate(f.depth, f.intrinsics, color=f.color) for f in frames]
+    assert all(res["tracked"] for res in results), [res["lost_reason"] for res in results]
+    assert set(results[1]) >= {"pose", "tracked", "lost_reason", "iterations", "inliers", "valid_pixels", "rmse", "ms"}
+    assert results[1]["iterations"] > 0 and results[1]["inliers"] > 1000
+    trajectory = r.trajectory()
+    assert trajectory.shape == (10, 4, 4)
+    np.testing.assert_array_equal(trajectory[0], np.eye(4))   # the first frame is fused at the identity
+    # The tracked poses relative to the first equal the true ones relative to the first.
+    first = np.linalg.inv(frames[0].pose)
+    for i, f in enumerate(frames):
+        truth = first @ f.pose
+        np.testing.assert_array_equal(trajectory[i], results[i]["pose"])
+        assert np.linalg.norm(trajectory[i][:3, 3] - truth[:3, 3]) < 0.01, i
+
+    # A frame without depth is lost: not fused, the pose predicted, and tracking picks up afterwards.
+    integrated = r.frames_integrated
+    lost = r.integrate(np.zeros_like(frames[0].depth), frames[0].intrinsics)
+    assert not lost["tracked"] and "depth" in lost["lost_reason"]
+    assert r.frames_integrated == integrated
+    again = r.integrate(frames[-1].depth, frames[-1].intrinsics)
+    assert again["tracked"], again["lost_reason"]
+
+
+def test_integrate_with_a_pose_returns_none_and_is_in_the_trajectory(small_sequence):
+    frames = list(vkmesh.open_dataset(small_sequence, frames=2))
+    r = vkmesh.Reconstructor(voxel_size=0.04)
+    for f in frames:
+        assert r.integrate(f.depth, f.intrinsics, f.pose) is None
+    np.testing.assert_allclose(r.trajectory(), np.stack([f.pose for f in frames]))
