@@ -237,6 +237,14 @@ int runFuse(const FuseArgs& args) {
             continue;
         }
         size_t valid = std::count_if(depth.meters.begin(), depth.meters.end(), [&](float d) { return d > 0.0f; });
+        // Colour: fused, and read by tracking's photometric term.
+        ColorImage color;
+        if (fuseColor || (tracker && tracker->options().colorWeight > 0 && dataset->hasColor())) {
+            std::string problem;
+            color = dataset->loadColor(i, &problem);
+            if (color.empty() && !problem.empty()) warn("frame " + std::to_string(i) + (fuseColor ? " fused" : " tracked") + " without colour: " + problem);
+            framesWithColor += fuseColor && !color.empty();
+        }
         // The pose to fuse at: the dataset's, or with --track the first frame's (the dataset's or identity) and
         // then the tracked one. A lost frame is not fused (the map stays as it was) and gets the predicted pose.
         Pose pose = dataset->frame(i).cameraToWorld;
@@ -250,7 +258,7 @@ int runFuse(const FuseArgs& args) {
                 }
                 tr = tracker->start(dataset->frame(i).hasPose ? dataset->frame(i).cameraToWorld : Pose::Identity());
             } else {
-                tr = tracker->track(depth, intrinsics, volume.meshBuffers());
+                tr = tracker->track(depth, intrinsics, volume.meshBuffers(), &color);
                 trackMs.push_back(tr.milliseconds);
                 trackGpuMs.push_back(tr.gpuMilliseconds);
                 trackIterations.push_back(tr.iterations);
@@ -276,15 +284,8 @@ int runFuse(const FuseArgs& args) {
             ++skipped;
             continue;
         }
-        ColorImage color;
-        if (fuseColor) {
-            std::string problem;
-            color = dataset->loadColor(i, &problem);
-            if (color.empty() && !problem.empty()) warn("frame " + std::to_string(i) + " fused without colour: " + problem);
-            framesWithColor += !color.empty();
-        }
         auto t0 = std::chrono::steady_clock::now();
-        gpu::FrameReport report = volume.integrate(depth, &color, intrinsics, pose);
+        gpu::FrameReport report = volume.integrate(depth, fuseColor ? &color : nullptr, intrinsics, pose);
         frameWallMs.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
         ++integrated;
         double meshMs = 0;

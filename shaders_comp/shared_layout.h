@@ -379,7 +379,9 @@ VKM_CONST TRACK_BINDING_MODEL_POSITIONS = 5u; // vec4 per pyramid pixel: world-s
 VKM_CONST TRACK_BINDING_MODEL_NORMALS = 6u;   // vec4 per pyramid pixel: its world-space unit normal
 VKM_CONST TRACK_BINDING_PARTIALS = 7u;        // float: TRACK_SUM_COUNT per workgroup of track_icp_reduce
 VKM_CONST TRACK_BINDING_SUMS = 8u;            // float: TRACK_SUM_COUNT, the partials summed in a fixed order
-VKM_CONST TRACK_BINDING_COUNT = 9u;
+VKM_CONST TRACK_BINDING_INTENSITY = 9u;       // float per pyramid pixel: the frame's intensity in [0, 1] (< 0: none)
+VKM_CONST TRACK_BINDING_MODEL_INTENSITY = 10u;// float per pyramid pixel: the mesh's vertex colour as intensity (< 0: none)
+VKM_CONST TRACK_BINDING_COUNT = 11u;
 // What one ICP iteration sums over the pixels (one float each). J = [(p - c) x n, n] (6) is the residual
 // r = n . (p - q)'s derivative with respect to a step of the camera pose: a rotation about the camera's
 // centre c and a translation, both in world axes (core/icp_solve.h, applyTwist); w the robust weight. The 6x6 system is symmetric: its upper triangle, row by row.
@@ -406,7 +408,12 @@ struct TrackParamsGpu {
     float maxDepth;             // metres (0: no limit)
     float edgeJumpFraction;     // neighbours further apart than this fraction of the depth: an edge, no normal
     float modelMergeDistance;   // model maps' downsampling: fine pixels further than this from the first are not averaged
-    float pad0;
+    // The photometric term (TrackerOptions::colorWeight): the frame's intensity against the mesh's vertex colours
+    // drawn at the model pose, added to the geometric system with this weight per pixel (0: off).
+    float colorWeight;
+    float colorHuber;           // Huber delta of the intensity residual (intensities in [0, 1])
+    uint frameHasColor;         // 1 when this frame's intensity pyramid holds an image
+    float pad0, pad1;
     VKM_ROWS3(modelWorldToCamera); // the inverse of the pose the model maps were drawn at
 };
 

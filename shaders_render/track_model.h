@@ -3,9 +3,10 @@
 #ifndef VKMESH_TRACK_MODEL_H
 #define VKMESH_TRACK_MODEL_H
 
-// Vertex input locations: vkmesh's Vertex layout (position at 0, normal at 16, stride 36).
+// Vertex input locations: vkmesh's Vertex layout (position at 0, normal at 16, colour at 32, stride 36).
 #define MODEL_LOC_POSITION 0
 #define MODEL_LOC_NORMAL 1
+#define MODEL_LOC_COLOR 2   // R8G8B8A8_UNORM at offset 32: alpha 0 = the vertex has no colour
 
 #ifdef __cplusplus
 #include <cstdint>

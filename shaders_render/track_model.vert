@@ -8,13 +8,18 @@
 
 layout(location = MODEL_LOC_POSITION) in vec3 inPosition;
 layout(location = MODEL_LOC_NORMAL) in vec3 inNormal;
+layout(location = MODEL_LOC_COLOR) in vec4 inColor;
 
 layout(location = 0) out vec3 worldPos;
 layout(location = 1) out vec3 worldNormal;
+// The vertex colour's intensity (Rec. 601 luma, as the frame's), -1 without colour. A triangle with one
+// uncoloured vertex interpolates to below 0 somewhere: the fragment stage then writes "none".
+layout(location = 2) out float intensity;
 
 void main() {
     worldPos = inPosition;
     worldNormal = inNormal;
+    intensity = inColor.a > 0.0 ? dot(inColor.rgb, vec3(0.299, 0.587, 0.114)) : -4.0;
     vec3 c;
     c.x = dot(pc.worldToCamera[0].xyz, inPosition) + pc.worldToCamera[0].w;
     c.y = dot(pc.worldToCamera[1].xyz, inPosition) + pc.worldToCamera[1].w;

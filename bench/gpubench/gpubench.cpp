@@ -211,7 +211,7 @@ void fuseSequence(const vkmesh::vk::Context& context, const std::vector<Frame>& 
             tracker->start(frame.pose);
         } else if (tracker) {
             const auto t0 = Clock::now();
-            const vkmesh::gpu::TrackingReport tr = tracker->track(frame.depth, intrinsics, volume.meshBuffers());
+            const vkmesh::gpu::TrackingReport tr = tracker->track(frame.depth, intrinsics, volume.meshBuffers(), &frame.color);
             const double wallMs = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
             if (run) {
                 run->trackGpuMs.push_back(tr.gpuMilliseconds);

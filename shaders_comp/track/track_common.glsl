@@ -19,6 +19,8 @@ layout(std430, set = 0, binding = TRACK_BINDING_MODEL_POSITIONS) buffer ModelPos
 layout(std430, set = 0, binding = TRACK_BINDING_MODEL_NORMALS) buffer ModelNormals { vec4 modelNormals[]; };
 layout(std430, set = 0, binding = TRACK_BINDING_PARTIALS) buffer Partials { float partials[]; };
 layout(std430, set = 0, binding = TRACK_BINDING_SUMS) writeonly buffer Sums { float sums[]; };
+layout(std430, set = 0, binding = TRACK_BINDING_INTENSITY) buffer IntensityPyramid { float intensityPyramid[]; };
+layout(std430, set = 0, binding = TRACK_BINDING_MODEL_INTENSITY) buffer ModelIntensity { float modelIntensity[]; };
 
 layout(push_constant) uniform Push { TrackPush pass; };
 
@@ -38,6 +40,15 @@ vec3 trackRotate(vec4 rows[3], vec3 v) {
     q.x = rows[0].x * v.x + rows[0].y * v.y + rows[0].z * v.z;
     q.y = rows[1].x * v.x + rows[1].y * v.y + rows[1].z * v.z;
     q.z = rows[2].x * v.x + rows[2].y * v.y + rows[2].z * v.z;
+    return q;
+}
+
+// R^T v for R given as the 3 rows of [R | t].
+vec3 trackRotateTransposed(vec4 rows[3], vec3 v) {
+    precise vec3 q;
+    q.x = rows[0].x * v.x + rows[1].x * v.y + rows[2].x * v.z;
+    q.y = rows[0].y * v.x + rows[1].y * v.y + rows[2].y * v.z;
+    q.z = rows[0].z * v.x + rows[1].z * v.y + rows[2].z * v.z;
     return q;
 }
 

@@ -19,7 +19,8 @@ void main() {
     }
     precise vec3 position = vec3(0.0);
     precise vec3 normal = vec3(0.0);
-    float count = 0.0;
+    precise float intensity = 0.0;
+    float count = 0.0, coloured = 0.0;
     for (uint k = 0u; k < 4u; ++k) {
         uvec2 q = pixel * 2u + uvec2(k & 1u, k >> 1u);
         uint fine = pass.finerOffset + q.y * pass.finerWidth + q.x;
@@ -28,9 +29,12 @@ void main() {
         position += p.xyz;
         normal += modelNormals[fine].xyz;
         count += 1.0;
+        float i = modelIntensity[fine];
+        if (i >= 0.0) intensity += i, coloured += 1.0;
     }
     uint index = pass.offset + pixel.y * size.x + pixel.x;
     float length2 = dot(normal, normal);
+    modelIntensity[index] = coloured > 0.0 && length2 > 0.0 ? intensity / coloured : -1.0;
     if (count == 0.0 || length2 <= 0.0) {
         modelPositions[index] = vec4(0.0);
         modelNormals[index] = vec4(0.0);

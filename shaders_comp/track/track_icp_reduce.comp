@@ -16,6 +16,20 @@ layout(local_size_x = WG_TRACK_REDUCE) in;
 
 shared float tree[TRACK_SUM_COUNT * WG_TRACK_REDUCE];
 
+// Adds w J^T J and w J^T r of one residual r with J = [jr, jt] to the invocation's sums.
+void addTerm(inout float acc[TRACK_SUM_COUNT], vec3 jr, vec3 jt, float r, float w) {
+    float J[6] = float[6](jr.x, jr.y, jr.z, jt.x, jt.y, jt.z);
+    uint slot = TRACK_SUM_JTJ;
+    for (uint a = 0u; a < 6u; ++a) {
+        precise float wa = w * J[a];
+        for (uint b = a; b < 6u; ++b) {
+            acc[slot] += wa * J[b];
+            ++slot;
+        }
+        acc[TRACK_SUM_JTR + a] += wa * r;
+    }
+}
+
 void main() {
     uvec2 size = levelSize();
     uint pixels = size.x * size.y;
@@ -52,20 +66,37 @@ void main() {
         precise float r = dot(n, diff);
         precise float w = abs(r) <= pass.huberDelta ? 1.0 : pass.huberDelta / abs(r);
         precise vec3 centre = vec3(pass.cameraToWorld[0].w, pass.cameraToWorld[1].w, pass.cameraToWorld[2].w);
-        precise vec3 jr = cross(world - centre, n);
-        float J[6] = float[6](jr.x, jr.y, jr.z, n.x, n.y, n.z);
-        uint slot = TRACK_SUM_JTJ;
-        for (uint a = 0u; a < 6u; ++a) {
-            precise float wa = w * J[a];
-            for (uint b = a; b < 6u; ++b) {
-                acc[slot] += wa * J[b];
-                ++slot;
-            }
-            acc[TRACK_SUM_JTR + a] += wa * r;
-        }
+        precise vec3 lever = world - centre;
+        addTerm(acc, cross(lever, n), n, r, w);
         acc[TRACK_SUM_WEIGHTED_ERROR] += w * r * r;
         acc[TRACK_SUM_INLIERS] += 1.0;
         acc[TRACK_SUM_SQUARED_ERROR] += r * r;
+
+        // The photometric term, for a pixel the geometry associated: the model's intensity, bilinear at the
+        // projection (all four pixels around it coloured), minus the frame's. Its gradient a in world space
+        // (the image gradient through the projection and the model camera's rotation) takes the place of n:
+        // J = [(p - c) x a, a].
+        if (track.colorWeight <= 0.0 || track.frameHasColor == 0u) continue;
+        float frameIntensity = intensityPyramid[index];
+        float x0 = floor(u), y0 = floor(v);
+        if (!(frameIntensity >= 0.0 && x0 >= 0.0 && y0 >= 0.0 && x0 + 1.0 < float(size.x) && y0 + 1.0 < float(size.y))) continue;
+        uint corner = pass.offset + uint(y0) * size.x + uint(x0);
+        float i00 = modelIntensity[corner], i10 = modelIntensity[corner + 1u];
+        float i01 = modelIntensity[corner + size.x], i11 = modelIntensity[corner + size.x + 1u];
+        if (min(min(i00, i10), min(i01, i11)) < 0.0) continue;
+        precise float tx = u - x0, ty = v - y0;
+        precise float top = i00 + tx * (i10 - i00);
+        precise float bottom = i01 + tx * (i11 - i01);
+        precise float rc = top + ty * (bottom - top) - frameIntensity;
+        precise float gx = (i10 - i00) + ty * ((i11 - i01) - (i10 - i00));
+        precise float gy = bottom - top;
+        precise float iz = 1.0 / model.z;
+        precise vec3 gradCamera = vec3(gx * pass.intrinsics.x * iz, gy * pass.intrinsics.y * iz,
+                                       -(gx * pass.intrinsics.x * model.x + gy * pass.intrinsics.y * model.y) * iz * iz);
+        precise vec3 a = trackRotateTransposed(track.modelWorldToCamera, gradCamera);
+        precise float wc = track.colorWeight * (abs(rc) <= track.colorHuber ? 1.0 : track.colorHuber / abs(rc));
+        addTerm(acc, cross(lever, a), a, rc, wc);
+        acc[TRACK_SUM_WEIGHTED_ERROR] += wc * rc * rc;
     }
 
     for (uint k = 0u; k < TRACK_SUM_COUNT; ++k) tree[k * WG_TRACK_REDUCE + lane] = acc[k];

@@ -76,7 +76,7 @@ TrackedFrame Reconstructor::integrate(const DepthImage& depth, const ColorImage*
     TrackedFrame out;
     // Nothing fused yet (a new reconstruction): the frame starts the map where the tracker stands.
     out.tracking = volume_->framesIntegrated() == 0 ? tracker_->start(tracker_->prediction())
-                                                    : tracker_->track(depth, intrinsics, volume_->meshBuffers());
+                                                    : tracker_->track(depth, intrinsics, volume_->meshBuffers(), color);
     out.cameraToWorld = out.tracking.cameraToWorld;
     trajectory_.push_back(out.cameraToWorld);
     if (out.tracking.tracked) {

@@ -96,6 +96,17 @@ void pointsAndNormals(TrackingLevel& level, const gpu::TrackParamsGpu& p) {
     }
 }
 
+// Adds w J^T J and w J^T r of one residual r with J = [jr, jt] (each product formed in float, as on the GPU).
+void addTerm(IcpSums& sums, const Eigen::Vector3f& jr, const Eigen::Vector3f& jt, float r, float weight) {
+    const float J[6] = {jr.x(), jr.y(), jr.z(), jt.x(), jt.y(), jt.z()};
+    uint32_t slot = gpu::TRACK_SUM_JTJ;
+    for (int a = 0; a < 6; ++a) {
+        const float wa = weight * J[a];
+        for (int b = a; b < 6; ++b) sums[slot++] += double(wa * J[b]);
+        sums[gpu::TRACK_SUM_JTR + a] += double(wa * r);
+    }
+}
+
 }  // namespace
 
 std::vector<TrackingLevel> referenceTrackingPyramid(const DepthImage& depth, const Intrinsics& intrinsics, const gpu::TrackParamsGpu& params) {
@@ -145,7 +156,7 @@ void referenceDownsampleModel(const std::vector<Eigen::Vector4f>& positions, con
 
 IcpSums referenceIcpSums(const TrackingLevel& frame, const std::vector<Eigen::Vector4f>& modelPositions,
                          const std::vector<Eigen::Vector4f>& modelNormals, const Pose& estimate, const Pose& modelPose,
-                         const IcpGates& gates) {
+                         const IcpGates& gates, const PhotometricLevel& photometric) {
     using namespace gpu;
     IcpSums sums{};
     const RigidRows toWorld = rigidRows(estimate), toModel = rigidRows(inverseRigid(modelPose));
@@ -174,17 +185,32 @@ IcpSums referenceIcpSums(const TrackingLevel& frame, const std::vector<Eigen::Ve
         const float r = n.dot(diff);
         const float weight = std::abs(r) <= gates.huber ? 1.0f : gates.huber / std::abs(r);
         const Eigen::Vector3f centre(toWorld.r[0][3], toWorld.r[1][3], toWorld.r[2][3]);
-        const Eigen::Vector3f jr = (world - centre).cross(n);
-        const float J[6] = {jr.x(), jr.y(), jr.z(), n.x(), n.y(), n.z()};
-        uint32_t slot = TRACK_SUM_JTJ;
-        for (int a = 0; a < 6; ++a) {
-            const float wa = weight * J[a];
-            for (int b = a; b < 6; ++b) sums[slot++] += double(wa * J[b]);
-            sums[TRACK_SUM_JTR + a] += double(wa * r);
-        }
+        const Eigen::Vector3f lever = world - centre;
+        addTerm(sums, lever.cross(n), n, r, weight);
         sums[TRACK_SUM_WEIGHTED_ERROR] += double(weight * r * r);
         sums[TRACK_SUM_INLIERS] += 1;
         sums[TRACK_SUM_SQUARED_ERROR] += double(r * r);
+
+        // The photometric term (track_icp_reduce.comp): bilinear model intensity at (u, v) minus the frame's.
+        if (!(photometric.weight > 0.0f) || !photometric.frame || !photometric.model) continue;
+        const float frameIntensity = (*photometric.frame)[i];
+        const float x0 = std::floor(u), y0 = std::floor(v);
+        if (!(frameIntensity >= 0.0f && x0 >= 0.0f && y0 >= 0.0f && x0 + 1.0f < float(w) && y0 + 1.0f < float(h))) continue;
+        const size_t corner = size_t(y0) * w + size_t(x0);
+        const std::vector<float>& mi = *photometric.model;
+        const float i00 = mi[corner], i10 = mi[corner + 1], i01 = mi[corner + w], i11 = mi[corner + w + 1];
+        if (std::min(std::min(i00, i10), std::min(i01, i11)) < 0.0f) continue;
+        const float tx = u - x0, ty = v - y0;
+        const float top = i00 + tx * (i10 - i00), bottom = i01 + tx * (i11 - i01);
+        const float rc = top + ty * (bottom - top) - frameIntensity;
+        const float gx = (i10 - i00) + ty * ((i11 - i01) - (i10 - i00)), gy = bottom - top;
+        const float iz = 1.0f / model.z();
+        const Eigen::Vector3f gradCamera(gx * k.fx * iz, gy * k.fy * iz, -(gx * k.fx * model.x() + gy * k.fy * model.y()) * iz * iz);
+        Eigen::Vector3f a;   // R^T gradCamera with R the model camera's world-to-camera rotation
+        for (int c = 0; c < 3; ++c) a[c] = toModel.r[0][c] * gradCamera.x() + toModel.r[1][c] * gradCamera.y() + toModel.r[2][c] * gradCamera.z();
+        const float wc = photometric.weight * (std::abs(rc) <= photometric.huber ? 1.0f : photometric.huber / std::abs(rc));
+        addTerm(sums, lever.cross(a), a, rc, wc);
+        sums[TRACK_SUM_WEIGHTED_ERROR] += double(wc * rc * rc);
     }
     return sums;
 }

@@ -3,8 +3,10 @@
 // synthetic sequences with exact ground truth. GpuTest: the validation layer is on and any message fails.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <limits>
 
@@ -184,41 +186,68 @@ TEST_F(Tracking, ModelMapsOfAPlaneAreItsRayIntersections) {
     }
 }
 
+DepthImage roomFrame(size_t frame, ColorImage* color) {
+    synth::RenderOptions options;
+    options.noise = true;
+    options.seed = uint32_t(frame + 1);
+    options.maxRange = 5.0f;
+    return room().renderDepth(synth::kinectIntrinsics(kWidth, kHeight), orbit()[frame], options, color);
+}
+
 // The ICP sums at every level: the GPU's against the CPU reference fed with the GPU's own maps, for a frame
-// one orbit step away from the model pose.
+// one orbit step away from the model pose; geometry only, and with the photometric term against the mesh's
+// fused colours.
 TEST_F(Tracking, IcpSumsMatchCpuReference) {
-    gpu::GpuVolume volume(context(), volumeConfig(0.03f));
+    gpu::GpuVolumeConfig config = volumeConfig(0.03f);
+    config.params.colorFusion = ColorFusion::Average;
+    gpu::GpuVolume volume(context(), config);
     const Intrinsics k = synth::kinectIntrinsics(kWidth, kHeight);
-    volume.integrate(roomDepth(0, true), k, orbit()[0]);
-    TrackerOptions options;
-    CameraTracker tracker(context(), kWidth, kHeight, options);
-    tracker.prepare(roomDepth(2, true), k, volume.meshBuffers(), orbit()[0]);
-    const CameraTracker::Maps maps = tracker.downloadMaps();
-    const gpu::TrackParamsGpu params = gpu::trackParamsFor(options);
-    const auto frame = cpu::referenceTrackingPyramid(roomDepth(2, true), k, params);
-    for (int l = 0; l < int(gpu::TRACK_LEVELS); ++l) {
-        cpu::TrackingLevel level = frame[l];
-        level.points = levelOf(maps.points, tracker, l);   // the GPU's own maps: this checks the ICP pass alone
-        level.normals = levelOf(maps.normals, tracker, l);
-        for (const Pose& estimate : {orbit()[0], orbit()[1]}) {
-            const IcpSums gpuSums = tracker.sums(l, estimate);
-            const IcpSums ref = cpu::referenceIcpSums(level, levelOf(maps.modelPositions, tracker, l), levelOf(maps.modelNormals, tracker, l),
-                                                      estimate, orbit()[0], gpu::icpGatesFor(options, l));
-            ASSERT_GT(ref[gpu::TRACK_SUM_INLIERS], 100) << "level " << l;
-            // Counts: the same pixels pass the same gates (computed the same way in float).
-            EXPECT_EQ(gpuSums[gpu::TRACK_SUM_VALID], ref[gpu::TRACK_SUM_VALID]) << "level " << l;
-            EXPECT_NEAR(gpuSums[gpu::TRACK_SUM_MODEL_HITS], ref[gpu::TRACK_SUM_MODEL_HITS], 2) << "level " << l;
-            EXPECT_NEAR(gpuSums[gpu::TRACK_SUM_INLIERS], ref[gpu::TRACK_SUM_INLIERS], 2 + ref[gpu::TRACK_SUM_INLIERS] * 1e-3) << "level " << l;
-            // Float sums of up to 76,800 terms against double ones: 1e-3 of the largest term's scale.
-            double scale = 0;
-            for (uint32_t i = 0; i < gpu::TRACK_SUM_JTR; ++i) scale = std::max(scale, std::abs(ref[i]));
-            for (uint32_t i = 0; i < gpu::TRACK_SUM_WEIGHTED_ERROR; ++i)
-                EXPECT_NEAR(gpuSums[i], ref[i], 1e-3 * scale + 1e-3 * std::abs(ref[i])) << "level " << l << " sum " << i;
-            EXPECT_NEAR(gpuSums[gpu::TRACK_SUM_SQUARED_ERROR], ref[gpu::TRACK_SUM_SQUARED_ERROR], 1e-3 * ref[gpu::TRACK_SUM_SQUARED_ERROR] + 1e-9);
-            // And the steps solved from them agree.
-            const IcpStep a = solveIcpStep(icpSystem(gpuSums)), b = solveIcpStep(icpSystem(ref));
-            ASSERT_TRUE(a.solved && b.solved);
-            EXPECT_LT((a.twist - b.twist).norm(), 1e-3 * b.twist.norm() + 1e-6) << "level " << l;
+    ColorImage color0, color2;
+    const DepthImage depth0 = roomFrame(0, &color0), depth2 = roomFrame(2, &color2);
+    volume.integrate(depth0, &color0, k, orbit()[0]);
+    for (float colorWeight : {0.0f, 0.05f}) {
+        TrackerOptions options;
+        options.colorWeight = colorWeight;
+        CameraTracker tracker(context(), kWidth, kHeight, options);
+        tracker.prepare(depth2, k, volume.meshBuffers(), orbit()[0], &color2);
+        const CameraTracker::Maps maps = tracker.downloadMaps();
+        const gpu::TrackParamsGpu params = gpu::trackParamsFor(options);
+        const auto frame = cpu::referenceTrackingPyramid(depth2, k, params);
+        for (int l = 0; l < int(gpu::TRACK_LEVELS); ++l) {
+            SCOPED_TRACE("colour weight " + std::to_string(colorWeight) + ", level " + std::to_string(l));
+            cpu::TrackingLevel level = frame[l];
+            level.points = levelOf(maps.points, tracker, l);   // the GPU's own maps: this checks the ICP pass alone
+            level.normals = levelOf(maps.normals, tracker, l);
+            const size_t n = level.points.size();
+            const std::vector<float> frameIntensity(maps.intensity.begin() + tracker.pixelOffset(l), maps.intensity.begin() + tracker.pixelOffset(l) + n);
+            const std::vector<float> modelIntensity(maps.modelIntensity.begin() + tracker.pixelOffset(l),
+                                                    maps.modelIntensity.begin() + tracker.pixelOffset(l) + n);
+            cpu::PhotometricLevel photometric{&frameIntensity, &modelIntensity, colorWeight, options.colorHuber};
+            if (colorWeight > 0) {   // the maps hold intensities: the frame's everywhere, the model's where it is coloured
+                EXPECT_GT(std::count_if(frameIntensity.begin(), frameIntensity.end(), [](float i) { return i >= 0; }), long(n * 9 / 10));
+                EXPECT_GT(std::count_if(modelIntensity.begin(), modelIntensity.end(), [](float i) { return i >= 0; }), long(n / 3));
+            }
+            for (const Pose& estimate : {orbit()[0], orbit()[1]}) {
+                const IcpSums gpuSums = tracker.sums(l, estimate);
+                const IcpSums ref = cpu::referenceIcpSums(level, levelOf(maps.modelPositions, tracker, l), levelOf(maps.modelNormals, tracker, l),
+                                                          estimate, orbit()[0], gpu::icpGatesFor(options, l), photometric);
+                ASSERT_GT(ref[gpu::TRACK_SUM_INLIERS], 100);
+                // Counts: the same pixels pass the same gates (computed the same way in float).
+                EXPECT_EQ(gpuSums[gpu::TRACK_SUM_VALID], ref[gpu::TRACK_SUM_VALID]);
+                EXPECT_NEAR(gpuSums[gpu::TRACK_SUM_MODEL_HITS], ref[gpu::TRACK_SUM_MODEL_HITS], 2);
+                EXPECT_NEAR(gpuSums[gpu::TRACK_SUM_INLIERS], ref[gpu::TRACK_SUM_INLIERS], 2 + ref[gpu::TRACK_SUM_INLIERS] * 1e-3);
+                // Float sums of up to 76,800 terms against double ones: 1e-3 of the largest term's scale.
+                double scale = 0;
+                for (uint32_t i = 0; i < gpu::TRACK_SUM_JTR; ++i) scale = std::max(scale, std::abs(ref[i]));
+                for (uint32_t i = 0; i < gpu::TRACK_SUM_WEIGHTED_ERROR; ++i)
+                    EXPECT_NEAR(gpuSums[i], ref[i], 1e-3 * scale + 1e-3 * std::abs(ref[i])) << "sum " << i;
+                EXPECT_NEAR(gpuSums[gpu::TRACK_SUM_SQUARED_ERROR], ref[gpu::TRACK_SUM_SQUARED_ERROR], 1e-3 * ref[gpu::TRACK_SUM_SQUARED_ERROR] + 1e-9);
+                EXPECT_NEAR(gpuSums[gpu::TRACK_SUM_WEIGHTED_ERROR], ref[gpu::TRACK_SUM_WEIGHTED_ERROR], 1e-3 * ref[gpu::TRACK_SUM_WEIGHTED_ERROR] + 1e-9);
+                // And the steps solved from them agree.
+                const IcpStep a = solveIcpStep(icpSystem(gpuSums)), b = solveIcpStep(icpSystem(ref));
+                ASSERT_TRUE(a.solved && b.solved);
+                EXPECT_LT((a.twist - b.twist).norm(), 1e-3 * b.twist.norm() + 1e-6);
+            }
         }
     }
 }
@@ -264,13 +293,23 @@ TEST_F(Tracking, NoiselessSequenceTrackedFromItsFirstPoseWithinTwoMillimetres) {
     EXPECT_LT(worstDegrees, 0.3);
 }
 
+// Every sum is formed in a fixed order (no float atomics), so the same frames give the same poses bit for bit
+// where the device runs a shader the same way every time. lavapipe with more than one worker thread does not
+// quite (docs/TRACKING.md, "Determinism": poses then agree to ~1e-8 m); ctest runs this test a second time with
+// LP_NUM_THREADS=1 (Tracking.BitForBitOneThread), where the check is bit for bit.
 TEST_F(Tracking, SameFramesGiveTheSameTrajectoryBitForBit) {
+    const char* threads = std::getenv("LP_NUM_THREADS");
+    const bool strict = threads && std::atoi(threads) <= 1;
     const TrackedRun a = trackOrbit(context(), 6, /*noise=*/true, 0.03f);
     const TrackedRun b = trackOrbit(context(), 6, /*noise=*/true, 0.03f);
     ASSERT_EQ(a.poses.size(), b.poses.size());
     for (size_t i = 0; i < a.poses.size(); ++i) {
         EXPECT_TRUE(a.reports[i].tracked) << "frame " << i;
-        EXPECT_EQ(std::memcmp(a.poses[i].data(), b.poses[i].data(), sizeof(double) * 16), 0) << "frame " << i;
+        const double difference = (a.poses[i] - b.poses[i]).cwiseAbs().maxCoeff();
+        if (strict)
+            EXPECT_EQ(std::memcmp(a.poses[i].data(), b.poses[i].data(), sizeof(double) * 16), 0) << "frame " << i << ", differs by " << difference;
+        else
+            EXPECT_LT(difference, 1e-6) << "frame " << i;
     }
 }
 

@@ -24,9 +24,12 @@ TrackParamsGpu trackParamsFor(const TrackerOptions& o) {
     if (o.filterRadius > 4) throw Error("tracking: filter radius " + std::to_string(o.filterRadius) + " is above 4 pixels");
     for (int n : o.iterations)
         if (n < 0 || n > 100) throw Error("tracking: " + std::to_string(n) + " iterations per level is outside 0..100");
-    if (!(o.distanceGate > 0) || !(o.huberDelta > 0) || !(o.normalGateDegrees > 0 && o.normalGateDegrees <= 180) ||
-        !(o.filterSpatialSigma > 0) || !(o.filterDepthSigma > 0) || !(o.edgeJumpFraction > 0))
-        throw Error("tracking: gates, Huber delta and filter sigmas must be positive (normal gate at most 180 degrees)");
+    for (uint32_t l = 0; l < TRACK_LEVELS; ++l)
+        if (!(o.distanceGates[l] > 0) || !(o.huberDeltas[l] > 0) || !(o.normalGateDegrees[l] > 0 && o.normalGateDegrees[l] <= 180))
+            throw Error("tracking: level " + std::to_string(l) + "'s distance gate and Huber delta must be positive, its normal gate in "
+                        "(0, 180] degrees");
+    if (!(o.filterSpatialSigma > 0) || !(o.filterDepthSigma > 0) || !(o.edgeJumpFraction > 0) || !(o.modelMergeDistance > 0))
+        throw Error("tracking: filter sigmas, the edge jump fraction and the model merge distance must be positive");
     TrackParamsGpu p{};
     p.filterSpatialSigma = o.filterSpatialSigma;
     p.filterDepthSigma = o.filterDepthSigma;
@@ -34,10 +37,19 @@ TrackParamsGpu trackParamsFor(const TrackerOptions& o) {
     p.minDepth = o.minDepth;
     p.maxDepth = o.maxDepth;
     p.edgeJumpFraction = o.edgeJumpFraction;
-    p.distanceGate = o.distanceGate;
-    p.normalGateCos = float(std::cos(double(o.normalGateDegrees) * std::numbers::pi / 180.0));
-    p.huberDelta = o.huberDelta;
+    p.modelMergeDistance = o.modelMergeDistance;
+    if (!(o.colorWeight >= 0) || !(o.colorHuber > 0)) throw Error("tracking: the colour weight must be >= 0 and its Huber delta > 0");
+    p.colorWeight = o.colorWeight;
+    p.colorHuber = o.colorHuber;
     return p;
+}
+
+IcpGates icpGatesFor(const TrackerOptions& o, int level) {
+    IcpGates g;
+    g.distance = o.distanceGates[level];
+    g.normalCos = float(std::cos(double(o.normalGateDegrees[level]) * std::numbers::pi / 180.0));
+    g.huber = o.huberDeltas[level];
+    return g;
 }
 
 namespace {
@@ -68,6 +80,7 @@ CameraTracker::CameraTracker(const vk::Context& context, int width, int height, 
       table_(context, sizeof(TrackPush)),
       params_(context, sizeof(TrackParamsGpu), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, vk::MemoryUse::Upload, "tracking params"),
       rawDepth_(context, VkDeviceSize(width) * height * sizeof(float), kStorage, vk::MemoryUse::Upload, "tracking depth input"),
+      rawIntensity_(context, VkDeviceSize(width) * height * sizeof(float), kStorage, vk::MemoryUse::Upload, "tracking intensity input"),
       depth_(context, VkDeviceSize(pyramidPixels_) * sizeof(float), kStorage, vk::MemoryUse::Device, "tracking depth pyramid"),
       points_(context, VkDeviceSize(pyramidPixels_) * 16, kStorage, vk::MemoryUse::Device, "tracking point pyramid"),
       normals_(context, VkDeviceSize(pyramidPixels_) * 16, kStorage, vk::MemoryUse::Device, "tracking normal pyramid"),
@@ -76,6 +89,8 @@ CameraTracker::CameraTracker(const vk::Context& context, int width, int height, 
       partials_(context, VkDeviceSize(std::max(1u, reduceGroups(uint32_t(width) * height))) * TRACK_SUM_COUNT * sizeof(float), kStorage,
                 vk::MemoryUse::Device, "tracking partial sums"),
       sums_(context, TRACK_SUM_COUNT * sizeof(float), kStorage, vk::MemoryUse::Readback, "tracking sums"),
+      intensity_(context, VkDeviceSize(pyramidPixels_) * sizeof(float), kStorage, vk::MemoryUse::Device, "tracking intensity pyramid"),
+      modelIntensity_(context, VkDeviceSize(pyramidPixels_) * sizeof(float), kStorage, vk::MemoryUse::Device, "tracking model intensity"),
       filter_(context, table_, "track_filter_depth"),
       downsampleDepth_(context, table_, "track_downsample_depth"),
       vertexNormals_(context, table_, "track_vertex_normals"),
@@ -86,8 +101,8 @@ CameraTracker::CameraTracker(const vk::Context& context, int width, int height, 
       recorder_(context),
       timer_(context, 16) {
     if (reduceGroups(uint32_t(width) * height) > TRACK_MAX_PARTIALS) throw Error("tracking: image too large for the ICP sums");
-    const TrackParamsGpu p = trackParamsFor(options);
-    std::memcpy(params_.mapped(), &p, sizeof(p));
+    paramValues_ = trackParamsFor(options);
+    std::memcpy(params_.mapped(), &paramValues_, sizeof(paramValues_));
     table_.bind(TRACK_BINDING_PARAMS, params_);
     table_.bind(TRACK_BINDING_RAW_DEPTH, rawDepth_);
     table_.bind(TRACK_BINDING_DEPTH, depth_);
@@ -97,6 +112,8 @@ CameraTracker::CameraTracker(const vk::Context& context, int width, int height, 
     table_.bind(TRACK_BINDING_MODEL_NORMALS, modelNormals_);
     table_.bind(TRACK_BINDING_PARTIALS, partials_);
     table_.bind(TRACK_BINDING_SUMS, sums_);
+    table_.bind(TRACK_BINDING_INTENSITY, intensity_);
+    table_.bind(TRACK_BINDING_MODEL_INTENSITY, modelIntensity_);
 }
 
 CameraTracker::~CameraTracker() { recorder_.wait(); }
@@ -104,7 +121,10 @@ CameraTracker::~CameraTracker() { recorder_.wait(); }
 TrackPush CameraTracker::levelPush(int level, const Pose& estimate) const {
     TrackPush push{};
     copyRows(push.cameraToWorld, estimate);
-    copyRows(push.modelWorldToCamera, inverseRigid(modelPose_));
+    const IcpGates gates = icpGatesFor(options_, level);
+    push.distanceGate = gates.distance;
+    push.normalGateCos = gates.normalCos;
+    push.huberDelta = gates.huber;
     const Intrinsics k = levelIntrinsics(intrinsics_, level);
     push.intrinsics[0] = k.fx, push.intrinsics[1] = k.fy, push.intrinsics[2] = k.cx, push.intrinsics[3] = k.cy;
     push.size = levelWidth(width_, level) | levelHeight(height_, level) << 16;
@@ -116,7 +136,8 @@ TrackPush CameraTracker::levelPush(int level, const Pose& estimate) const {
     return push;
 }
 
-void CameraTracker::prepare(const DepthImage& depth, const Intrinsics& intrinsics, const MeshBuffers& mesh, const Pose& modelPose) {
+void CameraTracker::prepare(const DepthImage& depth, const Intrinsics& intrinsics, const MeshBuffers& mesh, const Pose& modelPose,
+                            const ColorImage* color) {
     if (depth.width != width_ || depth.height != height_ || depth.meters.size() != size_t(width_) * size_t(height_))
         throw Error("tracking: a " + std::to_string(depth.width) + "x" + std::to_string(depth.height) + " depth image for a tracker of " +
                     std::to_string(width_) + "x" + std::to_string(height_));
@@ -125,6 +146,19 @@ void CameraTracker::prepare(const DepthImage& depth, const Intrinsics& intrinsic
     modelPose_ = modelPose;
     VkCommandBuffer cmd = recorder_.begin();   // waits for the last submission: the input buffer is free
     std::memcpy(rawDepth_.mapped(), depth.meters.data(), depth.meters.size() * sizeof(float));
+    copyRows(paramValues_.modelWorldToCamera, inverseRigid(modelPose));
+    const bool withColor = options_.colorWeight > 0 && color && !color->empty();
+    if (withColor) {
+        if (color->width != width_ || color->height != height_)
+            throw Error("tracking: a " + std::to_string(color->width) + "x" + std::to_string(color->height) + " colour image for a tracker of " +
+                        std::to_string(width_) + "x" + std::to_string(height_));
+        // Rec. 601 luma in [0, 1], as the model map's (shaders_render/track_model.vert).
+        float* out = static_cast<float*>(rawIntensity_.mapped());
+        for (size_t i = 0; i < size_t(width_) * size_t(height_); ++i)
+            out[i] = (0.299f * color->rgb[3 * i] + 0.587f * color->rgb[3 * i + 1] + 0.114f * color->rgb[3 * i + 2]) / 255.0f;
+    }
+    paramValues_.frameHasColor = withColor ? 1u : 0u;
+    std::memcpy(params_.mapped(), &paramValues_, sizeof(paramValues_));
     timer_.reset(cmd);
     timer_.mark(cmd, "start");
     const Pose none = Pose::Identity();
@@ -134,6 +168,10 @@ void CameraTracker::prepare(const DepthImage& depth, const Intrinsics& intrinsic
                           groupsFor(levelHeight(height_, level), WG_TRACK_PIXELS_Y));
     };
     pixelGroups(filter_, 0);
+    if (withColor) {
+        VkBufferCopy region{0, 0, VkDeviceSize(width_) * height_ * sizeof(float)};
+        vkCmdCopyBuffer(cmd, rawIntensity_.handle(), intensity_.handle(), 1, &region);
+    }
     vk::memoryBarrier(cmd);
     for (int l = 1; l < int(TRACK_LEVELS); ++l) {
         pixelGroups(downsampleDepth_, l);
@@ -144,7 +182,7 @@ void CameraTracker::prepare(const DepthImage& depth, const Intrinsics& intrinsic
     timer_.mark(cmd, "track_pyramid");
     const float nearDepth = std::max(0.01f, options_.minDepth * 0.5f);
     const float farDepth = options_.maxDepth > 0 ? options_.maxDepth * 2.0f : 100.0f;
-    modelMaps_.record(cmd, mesh, modelPose, intrinsics_, nearDepth, farDepth, modelPositions_, modelNormals_);
+    modelMaps_.record(cmd, mesh, modelPose, intrinsics_, nearDepth, farDepth, modelPositions_, modelNormals_, modelIntensity_);
     for (int l = 1; l < int(TRACK_LEVELS); ++l) {
         pixelGroups(downsampleModel_, l);
         vk::memoryBarrier(cmd);
@@ -210,6 +248,10 @@ CameraTracker::Maps CameraTracker::downloadMaps() const {
                                {&modelNormals_, &maps.modelNormals}}) {
         out->resize(pyramidPixels_);
         vk::downloadFromBuffer(context_, *buffer, out->data(), out->size() * sizeof(Eigen::Vector4f));
+    }
+    for (auto [buffer, out] : {std::pair{&intensity_, &maps.intensity}, {&modelIntensity_, &maps.modelIntensity}}) {
+        out->resize(pyramidPixels_);
+        vk::downloadFromBuffer(context_, *buffer, out->data(), out->size() * sizeof(float));
     }
     return maps;
 }

@@ -17,7 +17,11 @@ namespace vkmesh::gpu {
 namespace {
 
 constexpr VkFormat kMapFormat = VK_FORMAT_R32G32B32A32_SFLOAT;
+constexpr VkFormat kIntensityFormat = VK_FORMAT_R32_SFLOAT;
 constexpr VkFormat kDepthFormat = VK_FORMAT_D32_SFLOAT;
+constexpr int kDepthImage = 3;
+// The attachments in order: position, normal, intensity, depth.
+VkFormat imageFormat(int i) { return i == kDepthImage ? kDepthFormat : i == 2 ? kIntensityFormat : kMapFormat; }
 
 VkShaderModule createModule(VkDevice device, const std::string& name) {
     const auto& table = shaders::graphics();
@@ -50,16 +54,17 @@ ModelMapRenderer::ModelMapRenderer(const vk::Context& context, int width, int he
         throw Error("device '" + context.info().name + "': vkmesh's queue does not support graphics, which tracking needs "
                     "(it draws the mesh at the predicted pose)");
     requireFormat(context, kMapFormat, VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BIT, "R32G32B32A32_SFLOAT colour attachment");
+    requireFormat(context, kIntensityFormat, VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BIT, "R32_SFLOAT colour attachment");
     requireFormat(context, kDepthFormat, VK_FORMAT_FEATURE_DEPTH_STENCIL_ATTACHMENT_BIT, "D32_SFLOAT depth attachment");
 
     VkDevice device = context.device();
     VkShaderModule vert = VK_NULL_HANDLE, frag = VK_NULL_HANDLE;
     try {
-        for (int i = 0; i < 3; ++i) {
-            const bool depth = i == 2;
+        for (int i = 0; i < kImages; ++i) {
+            const bool depth = i == kDepthImage;
             VkImageCreateInfo info{VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO};
             info.imageType = VK_IMAGE_TYPE_2D;
-            info.format = depth ? kDepthFormat : kMapFormat;
+            info.format = imageFormat(i);
             info.extent = {uint32_t(width), uint32_t(height), 1};
             info.mipLevels = 1;
             info.arrayLayers = 1;
@@ -85,22 +90,25 @@ ModelMapRenderer::ModelMapRenderer(const vk::Context& context, int width, int he
             VKM_CHECK(vkCreateImageView(device, &viewInfo, nullptr, &views_[i]));
         }
 
-        VkAttachmentDescription attachments[3]{};
-        for (int i = 0; i < 3; ++i) {
-            attachments[i].format = i == 2 ? kDepthFormat : kMapFormat;
+        VkAttachmentDescription attachments[kImages]{};
+        for (int i = 0; i < kImages; ++i) {
+            const bool depth = i == kDepthImage;
+            attachments[i].format = imageFormat(i);
             attachments[i].samples = VK_SAMPLE_COUNT_1_BIT;
             attachments[i].loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
-            attachments[i].storeOp = i == 2 ? VK_ATTACHMENT_STORE_OP_DONT_CARE : VK_ATTACHMENT_STORE_OP_STORE;
+            attachments[i].storeOp = depth ? VK_ATTACHMENT_STORE_OP_DONT_CARE : VK_ATTACHMENT_STORE_OP_STORE;
             attachments[i].stencilLoadOp = VK_ATTACHMENT_LOAD_OP_DONT_CARE;
             attachments[i].stencilStoreOp = VK_ATTACHMENT_STORE_OP_DONT_CARE;
             attachments[i].initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
-            attachments[i].finalLayout = i == 2 ? VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL : VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
+            attachments[i].finalLayout = depth ? VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL : VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
         }
-        VkAttachmentReference colorRefs[2] = {{0, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL}, {1, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL}};
-        VkAttachmentReference depthRef{2, VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL};
+        VkAttachmentReference colorRefs[3] = {{0, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL},
+                                              {1, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL},
+                                              {2, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL}};
+        VkAttachmentReference depthRef{kDepthImage, VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL};
         VkSubpassDescription subpass{};
         subpass.pipelineBindPoint = VK_PIPELINE_BIND_POINT_GRAPHICS;
-        subpass.colorAttachmentCount = 2;
+        subpass.colorAttachmentCount = 3;
         subpass.pColorAttachments = colorRefs;
         subpass.pDepthStencilAttachment = &depthRef;
         VkSubpassDependency deps[2]{};
@@ -122,7 +130,7 @@ ModelMapRenderer::ModelMapRenderer(const vk::Context& context, int width, int he
         deps[1].srcAccessMask = VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT;
         deps[1].dstAccessMask = VK_ACCESS_TRANSFER_READ_BIT;
         VkRenderPassCreateInfo rpInfo{VK_STRUCTURE_TYPE_RENDER_PASS_CREATE_INFO};
-        rpInfo.attachmentCount = 3;
+        rpInfo.attachmentCount = kImages;
         rpInfo.pAttachments = attachments;
         rpInfo.subpassCount = 1;
         rpInfo.pSubpasses = &subpass;
@@ -132,7 +140,7 @@ ModelMapRenderer::ModelMapRenderer(const vk::Context& context, int width, int he
 
         VkFramebufferCreateInfo fbInfo{VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO};
         fbInfo.renderPass = renderPass_;
-        fbInfo.attachmentCount = 3;
+        fbInfo.attachmentCount = kImages;
         fbInfo.pAttachments = views_;
         fbInfo.width = uint32_t(width);
         fbInfo.height = uint32_t(height);
@@ -155,14 +163,15 @@ ModelMapRenderer::ModelMapRenderer(const vk::Context& context, int width, int he
             stages[i].pName = "main";
         }
         VkVertexInputBindingDescription binding{0, MeshBuffers::kStride, VK_VERTEX_INPUT_RATE_VERTEX};
-        VkVertexInputAttributeDescription vertexAttributes[2] = {
+        VkVertexInputAttributeDescription vertexAttributes[3] = {
             {MODEL_LOC_POSITION, 0, VK_FORMAT_R32G32B32_SFLOAT, MeshBuffers::kPositionOffset},
             {MODEL_LOC_NORMAL, 0, VK_FORMAT_R32G32B32_SFLOAT, MeshBuffers::kNormalOffset},
+            {MODEL_LOC_COLOR, 0, VK_FORMAT_R8G8B8A8_UNORM, MeshBuffers::kColorOffset},
         };
         VkPipelineVertexInputStateCreateInfo vertexInput{VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
         vertexInput.vertexBindingDescriptionCount = 1;
         vertexInput.pVertexBindingDescriptions = &binding;
-        vertexInput.vertexAttributeDescriptionCount = 2;
+        vertexInput.vertexAttributeDescriptionCount = 3;
         vertexInput.pVertexAttributeDescriptions = vertexAttributes;
         VkPipelineInputAssemblyStateCreateInfo assembly{VK_STRUCTURE_TYPE_PIPELINE_INPUT_ASSEMBLY_STATE_CREATE_INFO};
         assembly.topology = VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST;
@@ -184,11 +193,11 @@ ModelMapRenderer::ModelMapRenderer(const vk::Context& context, int width, int he
         depthState.depthTestEnable = VK_TRUE;
         depthState.depthWriteEnable = VK_TRUE;
         depthState.depthCompareOp = VK_COMPARE_OP_LESS;
-        VkPipelineColorBlendAttachmentState blendAttachments[2]{};
+        VkPipelineColorBlendAttachmentState blendAttachments[3]{};
         for (auto& b : blendAttachments)
             b.colorWriteMask = VK_COLOR_COMPONENT_R_BIT | VK_COLOR_COMPONENT_G_BIT | VK_COLOR_COMPONENT_B_BIT | VK_COLOR_COMPONENT_A_BIT;
         VkPipelineColorBlendStateCreateInfo blend{VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO};
-        blend.attachmentCount = 2;
+        blend.attachmentCount = 3;
         blend.pAttachments = blendAttachments;
         VkGraphicsPipelineCreateInfo info{VK_STRUCTURE_TYPE_GRAPHICS_PIPELINE_CREATE_INFO};
         info.stageCount = 2;
@@ -222,7 +231,7 @@ void ModelMapRenderer::release() {
     if (pipelineLayout_) vkDestroyPipelineLayout(device, pipelineLayout_, nullptr);
     if (framebuffer_) vkDestroyFramebuffer(device, framebuffer_, nullptr);
     if (renderPass_) vkDestroyRenderPass(device, renderPass_, nullptr);
-    for (int i = 0; i < 3; ++i) {
+    for (int i = 0; i < kImages; ++i) {
         if (views_[i]) vkDestroyImageView(device, views_[i], nullptr);
         if (images_[i]) vkDestroyImage(device, images_[i], nullptr);
         if (memory_[i]) vkFreeMemory(device, memory_[i], nullptr);
@@ -232,7 +241,8 @@ void ModelMapRenderer::release() {
 }
 
 void ModelMapRenderer::record(VkCommandBuffer cmd, const MeshBuffers& mesh, const Pose& cameraToWorld, const Intrinsics& intrinsics,
-                              float nearDepth, float farDepth, const vk::Buffer& positions, const vk::Buffer& normals) const {
+                              float nearDepth, float farDepth, const vk::Buffer& positions, const vk::Buffer& normals,
+                              const vk::Buffer& intensity) const {
     ModelMapPush push{};
     RigidRows rows = rigidRows(inverseRigid(cameraToWorld));
     std::memcpy(push.worldToCamera, rows.r, sizeof(push.worldToCamera));
@@ -243,13 +253,14 @@ void ModelMapRenderer::record(VkCommandBuffer cmd, const MeshBuffers& mesh, cons
 
     const bool hasMesh = mesh.vertices && mesh.indices && mesh.drawIndirect;
     if (hasMesh) recordMeshReadBarrier(cmd);
-    VkClearValue clears[3]{};   // position and normal 0 (w = 0: no model), depth 1 (the far plane)
-    clears[2].depthStencil = {1.0f, 0};
+    VkClearValue clears[kImages]{};   // position and normal 0 (w = 0: no model), intensity -1 (none), depth 1 (far)
+    clears[2].color.float32[0] = -1.0f;
+    clears[kDepthImage].depthStencil = {1.0f, 0};
     VkRenderPassBeginInfo begin{VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO};
     begin.renderPass = renderPass_;
     begin.framebuffer = framebuffer_;
     begin.renderArea = {{0, 0}, {uint32_t(width_), uint32_t(height_)}};
-    begin.clearValueCount = 3;
+    begin.clearValueCount = kImages;
     begin.pClearValues = clears;
     vkCmdBeginRenderPass(cmd, &begin, VK_SUBPASS_CONTENTS_INLINE);
     if (hasMesh) {
@@ -268,6 +279,7 @@ void ModelMapRenderer::record(VkCommandBuffer cmd, const MeshBuffers& mesh, cons
     region.imageExtent = {uint32_t(width_), uint32_t(height_), 1};
     vkCmdCopyImageToBuffer(cmd, images_[0], VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, positions.handle(), 1, &region);
     vkCmdCopyImageToBuffer(cmd, images_[1], VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, normals.handle(), 1, &region);
+    vkCmdCopyImageToBuffer(cmd, images_[2], VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, intensity.handle(), 1, &region);
     vk::memoryBarrier(cmd);
 }
 

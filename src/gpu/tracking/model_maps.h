@@ -1,6 +1,7 @@
 // Tracking's model maps: vkmesh's mesh drawn by the Vulkan rasterizer at a camera pose with the depth camera's
 // own intrinsics, into a world-space position map and a unit-normal map (RGBA32F, w = 1 where the mesh is,
-// 0 elsewhere), then copied into level 0 of the tracker's model pyramid buffers. One draw replaces a raycast
+// 0 elsewhere) and an intensity map of its vertex colours (R32F, -1 where it has none), then copied into
+// level 0 of the tracker's model pyramid buffers. One draw replaces a raycast
 // of the TSDF (shaders_render/track_model.*). The draw reads the mesh buffers as they are (MeshBuffers, an
 // indirect indexed draw), so no mesh goes through the host.
 #pragma once
@@ -22,18 +23,21 @@ public:
     ModelMapRenderer& operator=(const ModelMapRenderer&) = delete;
 
     // Records the draw of `mesh` seen from `cameraToWorld` (depth range [near, far] metres) and the copies of
-    // the two maps to the start of `positions` and `normals` (width x height vec4 each), followed by a barrier
-    // that makes them visible to compute shaders. An empty mesh (no buffers yet) clears the maps to 0.
+    // the maps to the start of `positions` and `normals` (width x height vec4 each) and `intensity` (float),
+    // followed by a barrier that makes them visible to compute shaders. An empty mesh (no buffers yet) clears
+    // the maps (no model anywhere).
     void record(VkCommandBuffer cmd, const MeshBuffers& mesh, const Pose& cameraToWorld, const Intrinsics& intrinsics,
-                float nearDepth, float farDepth, const vk::Buffer& positions, const vk::Buffer& normals) const;
+                float nearDepth, float farDepth, const vk::Buffer& positions, const vk::Buffer& normals,
+                const vk::Buffer& intensity) const;
 
 private:
     void release();
     const vk::Context& context_;
     int width_, height_;
-    VkImage images_[3]{};               // position, normal, depth
-    VkDeviceMemory memory_[3]{};
-    VkImageView views_[3]{};
+    static constexpr int kImages = 4;   // position, normal, intensity, depth
+    VkImage images_[kImages]{};
+    VkDeviceMemory memory_[kImages]{};
+    VkImageView views_[kImages]{};
     VkRenderPass renderPass_ = VK_NULL_HANDLE;
     VkFramebuffer framebuffer_ = VK_NULL_HANDLE;
     VkPipelineLayout pipelineLayout_ = VK_NULL_HANDLE;

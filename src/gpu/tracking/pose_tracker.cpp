@@ -36,15 +36,14 @@ TrackingReport PoseTracker::start(const Pose& cameraToWorld) {
     return report;
 }
 
-TrackingReport PoseTracker::track(const DepthImage& depth, const Intrinsics& intrinsics, const MeshBuffers& mesh) {
+TrackingReport PoseTracker::track(const DepthImage& depth, const Intrinsics& intrinsics, const MeshBuffers& mesh, const ColorImage* color) {
     if (!started_) throw Error("tracking: start() with the first frame's pose before tracking");
     const auto t0 = std::chrono::steady_clock::now();
     if (!tracker_ || tracker_->width() != depth.width || tracker_->height() != depth.height)
         tracker_ = std::make_unique<CameraTracker>(context_, depth.width, depth.height, options_);
     const Pose predicted = prediction();
-    tracker_->prepare(depth, intrinsics, mesh, predicted);
+    tracker_->prepare(depth, intrinsics, mesh, predicted, color);
     IcpResult icp = tracker_->align(predicted);
-
     TrackingReport report;
     report.iterations = icp.iterations;
     report.submissions = icp.submissions;

@@ -42,8 +42,10 @@ public:
     // The first frame's pose (the dataset's, or identity): the frame is not tracked, the caller fuses it.
     TrackingReport start(const Pose& cameraToWorld);
     bool started() const { return started_; }
-    // Tracks a frame against `mesh` (the mesh fused so far: MeshBuffers of a volume with publishMesh).
-    TrackingReport track(const DepthImage& depth, const Intrinsics& intrinsics, const MeshBuffers& mesh);
+    // Tracks a frame against `mesh` (the mesh fused so far: MeshBuffers of a volume with publishMesh). The
+    // colour image (registered to the depth, or null) feeds the photometric term when options.colorWeight > 0.
+    TrackingReport track(const DepthImage& depth, const Intrinsics& intrinsics, const MeshBuffers& mesh,
+                         const ColorImage* color = nullptr);
     // The pose the next frame will be predicted at (constant velocity from the last two tracked frames).
     Pose prediction() const { return lastTracked_ * velocity_; }
     const TrackerOptions& options() const { return options_; }
