@@ -6,6 +6,7 @@ WebSocket data, so the DOM is dumped before the mesh arrives (checked with Chrom
 "connected" with 0 triangles whatever the budget). Over the protocol the test waits in real time for what the
 page shows, with the same rendering flags (SwiftShader WebGL)."""
 import base64
+import fcntl
 import json
 import os
 import shutil
@@ -35,15 +36,18 @@ class Browser:
         if not exe:
             raise RuntimeError("chromium not found (scripts/install_deps.sh installs it)")
         self.profile = tempfile.mkdtemp(prefix="vkmesh-chromium-")
+        # Chromium's own messages, shown when it fails to start.
+        self.log = open(os.path.join(self.profile, "chromium.log"), "w+")
         # fd 3: commands to the browser, fd 4: its replies and events (JSON, each ended by a NUL byte).
         to_browser_r, self.to_browser = os.pipe()
         self.from_browser, from_browser_w = os.pipe()
-        # The shell puts the two pipe ends at fds 3 and 4, where Chromium expects them.
+        # Above 4, so that the shell's redirections below cannot overwrite one before it is read.
+        to_browser_r, from_browser_w = (self._above4(fd) for fd in (to_browser_r, from_browser_w))
+        # bash (dash refuses fds above 9) puts the two pipe ends at fds 3 and 4, where Chromium expects them.
         self.proc = subprocess.Popen(
-            ["/bin/sh", "-c", f'exec "$0" "$@" 3<&{to_browser_r} 4>&{from_browser_w}', exe, *FLAGS,
+            ["/bin/bash", "-c", f'exec "$0" "$@" 3<&{to_browser_r} 4>&{from_browser_w}', exe, *FLAGS,
              f"--window-size={width},{height}", f"--user-data-dir={self.profile}", "--remote-debugging-pipe", "about:blank"],
-            stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-            pass_fds=(to_browser_r, from_browser_w))
+            stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=self.log, pass_fds=(to_browser_r, from_browser_w))
         os.close(to_browser_r)
         os.close(from_browser_w)
         self.next_id = 0
@@ -55,11 +59,18 @@ class Browser:
         self.call("Runtime.enable", session=True)
         self.call("Page.navigate", session=True, url=url)
 
+    @staticmethod
+    def _above4(fd):
+        moved = fcntl.fcntl(fd, fcntl.F_DUPFD, 10)
+        os.close(fd)
+        return moved
+
     def _read_message(self):
         while b"\0" not in self.pending:
             chunk = os.read(self.from_browser, 1 << 20)
             if not chunk:
-                raise RuntimeError("chromium exited")
+                self.log.seek(0)
+                raise RuntimeError("chromium exited:\n" + "".join(l for l in self.log if "dbus" not in l)[-3000:])
             self.pending += chunk
         message, _, self.pending = self.pending.partition(b"\0")
         return json.loads(message)
@@ -117,6 +128,7 @@ class Browser:
                 os.close(fd)
             except OSError:
                 pass
+        self.log.close()
         shutil.rmtree(self.profile, ignore_errors=True)
 
     def __enter__(self):
