@@ -298,6 +298,7 @@
         const fps = benchFrames * 1000 / elapsed;
         send('report fps=' + fps.toFixed(2) + ' load_ms=' + loadMs.toFixed(1) + ' triangles=' + tCount + ' frames=' + benchFrames);
         el('vkmesh-status').textContent = 'bench done: ' + fps.toFixed(2) + ' fps';
+        window.vkmeshBench = { fps: fps, loadMs: loadMs, triangles: tCount, frames: benchFrames, seconds: elapsed / 1000 };
         benchStart = -1;
         controls.autoRotate = false;
       }
