@@ -102,6 +102,11 @@ json statsOf(std::vector<double> values) {
 }
 
 int runFuse(const FuseArgs& args) {
+#ifdef VKMESH_HAVE_VIEWER
+    // With --serve, Ctrl-C stops the run between frames (polled below) instead of killing it: blocked before any
+    // thread starts (the Vulkan driver's included), so that no thread takes it with the default action.
+    if (args.servePort >= 0) viewer::blockStopSignals();
+#endif
     // A map to continue is read and checked before anything else is opened.
     std::optional<map::MapData> loaded;
     if (!args.loadPath.empty()) loaded = map::readFile(args.loadPath);
@@ -170,7 +175,6 @@ int runFuse(const FuseArgs& args) {
     // thread, polled), so that a stopped run still writes its mesh and stats.
     std::optional<viewer::Server> server;
     if (serving) {
-        viewer::blockStopSignals();
         viewer::ServerOptions options;
         options.host = args.serveHost;
         options.port = uint16_t(args.servePort);

@@ -281,6 +281,7 @@ public:
         : stream_(std::make_shared<beast::tcp_stream>(std::move(socket))), server_(server) {}
 
     void run() {
+        std::erase_if(server_.httpStreams, [](const auto& w) { return w.expired(); });
         server_.httpStreams.push_back(stream_);
         read();
     }
@@ -417,7 +418,13 @@ Server::Server(const ServerOptions& options) : impl_(std::make_shared<Impl>()) {
     s.port = s.acceptor.local_endpoint().port();
     s.info.source = kSourceLive;   // until setMesh or setStream: a page joining before the first frame is live too
     s.accept();
+    // The I/O thread takes no signals (Ctrl-C must reach the thread that waits for it: the CLI's, or Python's main
+    // thread), as Mesa's driver threads do.
+    sigset_t all, previous;
+    sigfillset(&all);
+    pthread_sigmask(SIG_BLOCK, &all, &previous);
     s.thread = std::thread([&s] { s.ioc.run(); });
+    pthread_sigmask(SIG_SETMASK, &previous, nullptr);
 }
 
 Server::~Server() { stop(); }

@@ -192,7 +192,11 @@
     el('vkmesh-blocks').textContent = u32[6] ? String(u32[6]) : '-';
     el('vkmesh-triangles').textContent = String(tCount);
     el('vkmesh-vertices').textContent = String(vCount);
-    if (stream) { slider.max = String(u32[4]); if (!dragging) slider.value = String(u32[3]); }
+    if (stream) {
+      slider.max = String(u32[4]);
+      if (!dragging) slider.value = String(u32[3]);
+      if (u32[3] === u32[4] && playing) { playing = false; playButton.textContent = 'play'; }   // the server stops at the end
+    }
     fitCamera();
     if (!firstMeshAt && tCount > 0) firstMeshAt = -1;   // set at the first render that draws it
   }
