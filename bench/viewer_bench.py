@@ -118,6 +118,8 @@ def live(a):
             result["page_last"] = last
 
     runs = [fuse(a.dataset, out, "no_serve", common),
+            # The same GPU work as --serve (the delta passes), written to a file instead: what serving adds on top.
+            fuse(a.dataset, out, "deltas_file", common + ["--deltas", out / "run.deltas"]),
             fuse(a.dataset, out, "serve_no_page", serve),
             fuse(a.dataset, out, "serve_fast_raw_client", serve, fast_client),
             fuse(a.dataset, out, "serve_slow_page", serve, slow_client),

@@ -11,14 +11,24 @@
   const status = (text) => { el('vkmesh-status').textContent = text; };
 
   const canvas = el('vkmesh-canvas');
-  const gl = canvas.getContext('webgl2', { antialias: true });
+  // Multisampling costs a software renderer (SwiftShader, llvmpipe) several times its frame time: off there, and
+  // wherever ?aa=0 asks; on elsewhere (?aa=1 forces it).
+  const software = (() => {
+    const probe = document.createElement('canvas').getContext('webgl2');
+    const info = probe && probe.getExtension('WEBGL_debug_renderer_info');
+    const name = info ? String(probe.getParameter(info.UNMASKED_RENDERER_WEBGL)) : '';
+    if (probe && probe.getExtension('WEBGL_lose_context')) probe.getExtension('WEBGL_lose_context').loseContext();
+    return /swiftshader|llvmpipe|softpipe/i.test(name);
+  })();
+  const antialias = params.has('aa') ? params.get('aa') !== '0' : !software;
+  const gl = canvas.getContext('webgl2', { antialias: antialias });
   if (!gl) { status('WebGL2 is not available in this browser'); return; }
-  const renderer = new THREE.WebGLRenderer({ canvas: canvas, context: gl, antialias: true });
+  const renderer = new THREE.WebGLRenderer({ canvas: canvas, context: gl, antialias: antialias });
   renderer.setPixelRatio(window.devicePixelRatio || 1);
   const scene = new THREE.Scene();
   scene.background = new THREE.Color(0x20242a);
   const camera = new THREE.PerspectiveCamera(50, 1, 0.01, 1000);
-  camera.up.set(0, 0, 1);   // vkmesh's synthetic room and most maps: z up (a live camera's pose refines it)
+  camera.up.set(0, 0, 1);   // vkmesh's synthetic room: z up (a live camera's pose picks the axis, showCamera)
   camera.position.set(3, 3, 2);
   scene.add(camera);
   scene.add(new THREE.AmbientLight(0xffffff, 0.45));
@@ -108,7 +118,11 @@
     frustum.geometry.attributes.position.needsUpdate = true;
     frustum.visible = w > 0 && fx > 0;
     if (!upFromPose && !userMoved) {
-      camera.up.set(-p[1], -p[5], -p[9]).normalize();   // the sensor's up (-y) at the first frame
+      // The world axis closest to the sensor's up (-y) at the first frame: a dataset's world frame has some axis
+      // up, and the sensor's own tilt and roll would turn the whole view.
+      const up = [-p[1], -p[5], -p[9]];
+      const axis = [0, 1, 2].reduce((best, i) => (Math.abs(up[i]) > Math.abs(up[best]) ? i : best), 2);
+      camera.up.set(0, 0, 0).setComponent(axis, Math.sign(up[axis]) || 1);
       upFromPose = true;
     }
   }
@@ -302,7 +316,8 @@
         const fps = benchFrames * 1000 / elapsed;
         send('report fps=' + fps.toFixed(2) + ' load_ms=' + loadMs.toFixed(1) + ' triangles=' + tCount + ' frames=' + benchFrames);
         el('vkmesh-status').textContent = 'bench done: ' + fps.toFixed(2) + ' fps';
-        window.vkmeshBench = { fps: fps, loadMs: loadMs, triangles: tCount, frames: benchFrames, seconds: elapsed / 1000 };
+        window.vkmeshBench = { fps: fps, loadMs: loadMs, triangles: tCount, frames: benchFrames, seconds: elapsed / 1000,
+                               antialias: antialias, software: software };
         benchStart = -1;
         controls.autoRotate = false;
       }
