@@ -68,7 +68,8 @@ def sequence(tmp_path_factory):
 def fused(sequence, tmp_path_factory):
     """The sequence fused at 3 cm: the PLY, the delta stream and the stats."""
     out = tmp_path_factory.mktemp("fused")
-    run("fuse", sequence, "-o", out / "mesh.ply", "--voxel", 0.03, "--deltas", out / "mesh.deltas", "--stats", out / "stats.json", "-q")
+    run("fuse", sequence, "-o", out / "mesh.ply", "--voxel", 0.03, "--deltas", out / "mesh.deltas", "--stats", out / "stats.json",
+        "--save", out / "map.vkmap", "-q")
     return out
 
 
@@ -129,16 +130,30 @@ def test_bad_file_is_an_error_naming_it(tmp_path):
     assert result.returncode == 2 and "notes.txt" in result.stderr, result.stderr
 
 
-def test_static_mesh_message_has_the_mesh(fused):
-    served = Served("view", fused / "mesh.ply", "--port", 0, "-q")
+@pytest.mark.parametrize("name", ["mesh.ply", "map.vkmap"])
+def test_static_mesh_message_has_the_mesh(fused, name):
+    served = Served("view", fused / name, "--port", 0, "-q")
     try:
         client = wsclient.Client(served.port)
         opcode, payload = client.recv()
         replica = wsclient.Replica()
         header = replica.apply(payload)
-        assert opcode == 2 and header["flags"] & 1
+        assert opcode == 2 and header["flags"] & 1 and header["source"] == 0
         assert len(replica.triangles) == triangles_of(fused / "stats.json")
+        # Every triangle's corners are vertices the message carries (the page draws nothing else).
+        assert all(v in replica.vertices for t in replica.triangles.values() for v in t)
         client.close()
+    finally:
+        served.stop()
+
+
+def test_host_must_be_an_address(fused):
+    result = run("view", fused / "mesh.ply", "--host", "example.org", "--port", 0, "--seconds", 1, check=False)
+    assert result.returncode == 2 and "--host 'example.org' is not an IP address" in result.stderr, result.stderr
+    served = Served("view", fused / "mesh.ply", "--host", "0.0.0.0", "--port", 0, "-q")   # asked for: every interface
+    try:
+        assert served.url.startswith("http://0.0.0.0:")
+        assert wsclient.http_get(served.port, "/")[0] == 200
     finally:
         served.stop()
 
