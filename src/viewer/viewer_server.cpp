@@ -136,7 +136,7 @@ private:
     }
 
     void onRead(beast::error_code ec) {
-        if (ec) return finish(ec == websocket::error::message_too_big);
+        if (ec) return finish();   // closed by the page, reset, or a message over read_message_max (Beast closes it)
         ClientCommand command;
         const std::string text = beast::buffers_to_string(buffer_.data());
         buffer_.consume(buffer_.size());
@@ -184,10 +184,10 @@ private:
         } else {
             ws_.async_close(websocket::close_code::policy_error, [self = shared_from_this()](beast::error_code) { self->close(); });
         }
-        finish(false);
+        finish();
     }
 
-    void finish(bool) {
+    void finish() {
         if (!open_) return;
         open_ = false;
         timer_.cancel();
@@ -202,7 +202,7 @@ private:
             self->writing_ = false;
             if (ec) {
                 self->close();
-                return self->finish(false);
+                return self->finish();
             }
             self->server_.countSent(bytes);
             self->afterWrite();
