@@ -10,6 +10,7 @@ import socket
 import struct
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -32,28 +33,48 @@ def run(*args, check=True):
 
 
 class Served:
-    """A `vkmesh` command that serves the viewer: started, its URL read from its output, stopped with SIGINT (Ctrl-C)."""
+    """A `vkmesh` command that serves the viewer: started, its URL read from its output, stopped with SIGINT (Ctrl-C).
+    Its output is drained by threads (a full pipe would stall it), except `fuse`'s stdout, which a test may read
+    line by line (a few summary lines)."""
     def __init__(self, *args):
         self.proc = subprocess.Popen([CLI, *map(str, args)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-        self.lines = []
+        self.fuse = args[0] == "fuse"
+        url_stream = self.proc.stderr if self.fuse else self.proc.stdout
+        self.collected = {"stdout": [], "stderr": []}
         self.url = None
+        lines = []
         end = time.monotonic() + 120
-        stream = self.proc.stderr if args[0] == "fuse" else self.proc.stdout
         while self.url is None and time.monotonic() < end:
-            line = stream.readline()
+            line = url_stream.readline()
             if not line:
                 break
-            self.lines.append(line)
+            lines.append(line)
             m = re.search(r"(http://[0-9.]+:(\d+)/)", line)
             if m:
                 self.url, self.port = m.group(1), int(m.group(2))
-        assert self.url, f"no URL printed by vkmesh {' '.join(map(str, args))}:\n{''.join(self.lines)}"
+        if self.url is None:
+            self.proc.kill()
+            out, err = self.proc.communicate()
+            pytest.fail(f"no URL printed by vkmesh {' '.join(map(str, args))}:\n{''.join(lines)}{out}{err}")
+        self.collected["stderr" if self.fuse else "stdout"] += lines
+        streams = [("stderr", self.proc.stderr)] + ([] if self.fuse else [("stdout", self.proc.stdout)])
+        self.threads = [threading.Thread(target=self._drain, args=(name, stream), daemon=True) for name, stream in streams]
+        for t in self.threads:
+            t.start()
+
+    def _drain(self, name, stream):
+        for line in stream:
+            self.collected[name].append(line)
 
     def stop(self, timeout=120):
         """Ctrl-C; returns (exit code, stdout, stderr)."""
-        self.proc.send_signal(signal.SIGINT)
-        out, err = self.proc.communicate(timeout=timeout)
-        return self.proc.returncode, out, err
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGINT)
+        self.proc.wait(timeout=timeout)
+        for t in self.threads:
+            t.join(timeout=10)
+        out = "".join(self.collected["stdout"]) + (self.proc.stdout.read() if self.fuse else "")
+        return self.proc.returncode, out, "".join(self.collected["stderr"])
 
 
 @pytest.fixture(scope="module")
@@ -215,7 +236,7 @@ def test_stalled_and_killed_pages_do_not_slow_fusion(sequence, tmp_path):
             out = ""
             while "triangles ->" not in out:
                 line = served.proc.stdout.readline()
-                assert line, f"fuse ended early: {served.proc.stderr.read()}"
+                assert line, "fuse ended early: " + "".join(served.collected["stderr"])
                 out += line
             vertices, triangles = map(int, re.search(r"(\d+) vertices \(baseline \d+\), (\d+) triangles ->", out).groups())
             replica, coalesced = wsclient.Replica(), 0
@@ -227,8 +248,8 @@ def test_stalled_and_killed_pages_do_not_slow_fusion(sequence, tmp_path):
             stalled.close()
             code, _, err = served.stop()
         else:
-            _, err = served.proc.communicate(timeout=600)
-            code = served.proc.returncode
+            served.proc.wait(timeout=600)   # --serve-linger 0: it ends by itself
+            code, _, err = served.stop()
         assert code == 0, err
         return json.loads(stats.read_text())
 
@@ -291,7 +312,7 @@ def test_browser_fuse_serve_page_ends_with_the_exported_mesh(sequence, tmp_path)
         out = ""
         while "triangles ->" not in out:
             line = served.proc.stdout.readline()
-            assert line, f"fuse ended early: {served.proc.stderr.read()}"
+            assert line, "fuse ended early: " + "".join(served.collected["stderr"])
             out += line
         expected = re.search(r"(\d+) triangles ->", out).group(1)
         ok = first.wait_for(lambda p: p.text("vkmesh-frame") == "40" and p.text("vkmesh-triangles") == expected, 120)
