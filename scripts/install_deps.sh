@@ -15,8 +15,9 @@ packages=(
   # the browser viewer (docs/VIEWER.md): Boost.Beast (header-only) for its server, three.js r111 embedded in its
   # page, and Chromium for its tests (headless, SwiftShader WebGL; ctest label browser)
   libboost-dev libjs-three chromium
-  # `pip install .` (docs/PYTHON.md): a virtual environment; the build backend is python3-setuptools
-  python3-venv python3-pip python3-setuptools python3-wheel
+  # `pip install .` into a virtual environment (docs/PYTHON.md; scripts/ci/40-pip-venv.sh): venv brings pip along,
+  # and the build backend is in the source tree (python/build_backend), so nothing else
+  python3-venv
 )
 for arg in "$@"; do
   case "$arg" in
