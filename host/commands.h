@@ -25,5 +25,6 @@ Run addDeltasCommand(CLI::App& app);   // vkmesh deltas STREAM -o mesh.ply: repl
 Run addEvalCommand(CLI::App& app);     // vkmesh eval MESH --gt GT.ply: accuracy, completeness, F-score
 Run addRenderCommand(CLI::App& app);   // vkmesh render MESH -o view.png: offscreen picture of a mesh
 Run addSoakCommand(CLI::App& app);     // vkmesh soak -o soak.csv: long synthetic run, occupancy per frame
+Run addViewCommand(CLI::App& app);     // vkmesh view FILE: the browser viewer for a mesh, map or delta stream
 
 }  // namespace vkmesh::cli

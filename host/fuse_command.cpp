@@ -38,6 +38,9 @@
 #include "io/trajectory.h"
 #include "render/mesh_renderer.h"
 #include "vk/context.h"
+#ifdef VKMESH_HAVE_VIEWER
+#include "viewer/viewer_server.h"
+#endif
 
 namespace vkmesh::cli {
 
@@ -59,6 +62,11 @@ struct FuseArgs {
     std::string renderView = "sensor";
     std::string renderColor = "auto";
     std::string deltasPath;
+    // The live browser viewer (docs/VIEWER.md): port (0: not serving), address, how long to keep serving after
+    // the last frame (< 0: until Ctrl-C).
+    int servePort = -1;
+    std::string serveHost = "127.0.0.1";
+    double serveLinger = -1;
     // Maps (docs/MAPFILE.md): continue from one, skip the frames it holds, save the state after the last frame.
     std::string loadPath;
     std::string savePath;
@@ -134,6 +142,11 @@ json statsOf(std::vector<double> values) {
 }
 
 int runFuse(const FuseArgs& args) {
+#ifdef VKMESH_HAVE_VIEWER
+    // With --serve, Ctrl-C stops the run between frames (polled below) instead of killing it: blocked before any
+    // thread starts (the Vulkan driver's included), so that no thread takes it with the default action.
+    if (args.servePort >= 0) viewer::blockStopSignals();
+#endif
     // A map to continue is read and checked before anything else is opened.
     std::optional<map::MapData> loaded;
     if (!args.loadPath.empty()) loaded = map::readFile(args.loadPath);
@@ -167,11 +180,17 @@ int runFuse(const FuseArgs& args) {
     }
     const bool fuseColor = config.params.colorFusion != ColorFusion::Off;
     const bool rendering = args.renderEvery > 0;
-    if ((rendering || !args.deltasPath.empty()) && config.meshMode != gpu::MeshMode::Incremental)
-        throw Error("--render-every and --deltas need --mode incremental (the baseline keeps no mesh between frames)");
+    const bool serving = args.servePort >= 0;
+#ifndef VKMESH_HAVE_VIEWER
+    if (serving)
+        throw Error("--serve: this vkmesh was built without the browser viewer: it needs libboost-dev and libjs-three at build "
+                    "time (scripts/install_deps.sh installs them)");
+#endif
+    if ((rendering || !args.deltasPath.empty() || serving) && config.meshMode != gpu::MeshMode::Incremental)
+        throw Error("--render-every, --deltas and --serve need --mode incremental (the baseline keeps no mesh between frames)");
     if (rendering && args.renderDir.empty()) throw Error("--render-every needs --render-dir");
     config.publishMesh = rendering || args.track;   // tracking draws the mesh fused so far
-    config.trackDeltas = !args.deltasPath.empty();
+    config.trackDeltas = !args.deltasPath.empty() || serving;
     double loadMs = 0;
     std::unique_ptr<gpu::GpuVolume> volumeOwner;
     if (loaded) {
@@ -207,6 +226,21 @@ int runFuse(const FuseArgs& args) {
     std::vector<json> lostList;
     std::optional<DeltaStreamWriter> deltaStream;
     if (!args.deltasPath.empty()) deltaStream.emplace(args.deltasPath);
+#ifdef VKMESH_HAVE_VIEWER
+    // The server runs on a thread of its own; this thread only posts each frame's delta to it (a copy), so a
+    // page that is slow or gone never holds fusion up. Ctrl-C is taken here between frames (blocked in every
+    // thread, polled), so that a stopped run still writes its mesh and stats.
+    std::optional<viewer::Server> server;
+    if (serving) {
+        viewer::ServerOptions options;
+        options.host = args.serveHost;
+        options.port = uint16_t(args.servePort);
+        options.quiet = args.quiet;
+        server.emplace(options);
+        std::cerr << "vkmesh fuse: serving the live viewer at " << server->url() << " (Ctrl-C stops)" << std::endl;
+    }
+#endif
+    bool interrupted = false;
     size_t picturesWritten = 0;
     // Near/far planes of the sensor view: everything the sensor can see lies within maxDepth of a camera.
     Eigen::Vector3f seenMin = Eigen::Vector3f::Constant(std::numeric_limits<float>::max()), seenMax = -seenMin;
@@ -228,6 +262,13 @@ int runFuse(const FuseArgs& args) {
     };
     const auto start = std::chrono::steady_clock::now();
     for (size_t i = args.firstFrame; i < dataset->size(); ++i) {
+#ifdef VKMESH_HAVE_VIEWER
+        if (server && viewer::stopSignalPending()) {
+            interrupted = true;
+            warn("stopped by Ctrl-C before frame " + std::to_string(i) + "; the mesh so far is written");
+            break;
+        }
+#endif
         DepthImage depth;
         try {
             depth = dataset->loadDepth(i);
@@ -330,6 +371,21 @@ int runFuse(const FuseArgs& args) {
                                                 [](const std::string& g) { return g.rfind("mesh heaps", 0) == 0; });
         framesDeferred += report.deferredAttempts;
         if (deltaStream) deltaStream->write(report.delta);
+#ifdef VKMESH_HAVE_VIEWER
+        if (server) {
+            viewer::FrameInfo info;
+            info.frame = uint32_t(i + 1 - args.firstFrame);
+            info.totalFrames = uint32_t(dataset->size() - args.firstFrame);
+            info.msPerFrame = float(frameWallMs.back());
+            info.blocks = report.counters.blocksInUse;
+            info.hasCamera = true;
+            for (int r = 0; r < 3; ++r)
+                for (int c = 0; c < 4; ++c) info.cameraToWorld[4 * r + c] = float(pose(r, c));
+            info.intrinsics = {intrinsics.fx, intrinsics.fy, intrinsics.cx, intrinsics.cy};
+            info.width = uint32_t(intrinsics.width), info.height = uint32_t(intrinsics.height);
+            server->publish(report.delta, info);
+        }
+#endif
         if (rendering) {
             Eigen::Vector3f eye = pose.block<3, 1>(0, 3).cast<float>();
             seenMin = seenMin.cwiseMin(eye - Eigen::Vector3f::Constant(args.data.maxDepth));
@@ -546,6 +602,35 @@ int runFuse(const FuseArgs& args) {
         std::cout << "  map: " << mapBytes << " bytes (" << (k.blocksInUse ? mapBytes / k.blocksInUse : 0) << " per live block) -> "
                   << args.savePath << " (" << saveMs << " ms)\n";
     if (!warnings.empty()) std::cout << "  " << warnings.size() << " warnings (see stderr)\n";
+#ifdef VKMESH_HAVE_VIEWER
+    if (server) {
+        std::cout << std::flush;
+        if (!interrupted && args.serveLinger != 0) {
+            std::cerr << "vkmesh fuse: done; still serving at " << server->url()
+                      << (args.serveLinger < 0 ? " (Ctrl-C stops)" : " for " + std::to_string(args.serveLinger) + " s") << std::endl;
+            viewer::waitForStopSignal(args.serveLinger);
+        }
+        server->stop();
+        const viewer::ServerStats v = server->stats();
+        std::cout << "  viewer: " << v.pagesConnected << " pages, " << v.messagesSent << " messages, " << v.bytesSent
+                  << " bytes sent, " << v.framesCoalesced << " frame updates coalesced for slow pages\n";
+        if (!args.statsPath.empty()) {
+            // Written again with the viewer's counts, known only now that serving has ended.
+            uint32_t maxLag = 0;
+            double sumLag = 0;
+            for (uint32_t l : v.lagAtAck) maxLag = std::max(maxLag, l), sumLag += l;
+            stats["viewer"] = {{"url", server->url()}, {"pages", v.pagesConnected}, {"messages_sent", v.messagesSent},
+                               {"bytes_sent", v.bytesSent}, {"frames_published", v.framesPublished},
+                               {"frames_coalesced", v.framesCoalesced}, {"pages_closed_malformed", v.pagesClosedMalformed},
+                               {"acks", v.lagAtAck.size()}, {"lag_frames_max", maxLag},
+                               {"lag_frames_mean", v.lagAtAck.empty() ? 0.0 : sumLag / v.lagAtAck.size()}};
+            std::ofstream file(args.statsPath);
+            if (!file) throw Error("cannot write " + args.statsPath);
+            file << stats.dump(2) << "\n";
+        }
+    }
+#endif
+    (void)interrupted;
     return 0;
 }
 
@@ -584,6 +669,12 @@ Run addFuseCommand(CLI::App& app) {
     cmd->add_option("--trajectory", args->trajectoryPath,
                     "write the pose used for every frame (tracked or given) in TUM format: timestamp tx ty tz qx qy qz qw");
     cmd->add_option("--track-iterations", args->trackIterations, "ICP iterations per pyramid level, finest first (default 10,5,4)");
+    cmd->add_option("--serve", args->servePort,
+                    "serve the live browser viewer on this port while fusing (docs/VIEWER.md; open the URL it prints)")
+        ->check(CLI::Range(0, 65535));
+    cmd->add_option("--host", args->serveHost, "address --serve listens on (default 127.0.0.1: this machine only; 0.0.0.0: every interface)");
+    cmd->add_option("--serve-linger", args->serveLinger,
+                    "with --serve: keep serving this many seconds after the last frame (default: until Ctrl-C; 0: stop at once)");
     args->cmd = cmd;
     return [args] { return runFuse(*args); };
 }

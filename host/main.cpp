@@ -20,7 +20,7 @@ int main(int argc, char** argv) {
     const std::vector<std::pair<std::string, Run>> commands = {
         {"devices", addDevicesCommand(app)}, {"synth", addSynthCommand(app)},   {"frames", addFramesCommand(app)},
         {"fuse", addFuseCommand(app)},       {"export", addExportCommand(app)},  {"deltas", addDeltasCommand(app)}, {"eval", addEvalCommand(app)},
-        {"render", addRenderCommand(app)},   {"soak", addSoakCommand(app)}};
+        {"render", addRenderCommand(app)},   {"soak", addSoakCommand(app)},      {"view", addViewCommand(app)}};
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {

@@ -39,6 +39,9 @@
 #include "synth/synthetic_scene.h"
 #include "synth/tum_sequence.h"
 #include "vk/context.h"
+#ifdef VKMESH_HAVE_VIEWER
+#include "viewer/viewer_server.h"
+#endif
 
 namespace py = pybind11;
 using namespace pybind11::literals;
@@ -376,6 +379,7 @@ public:
             throw py::value_error("depth_scale " + std::to_string(depthScale) + " must be a positive finite number");
         uint32_t frame = 0;
         std::optional<TrackedFrame> tracked;
+        bool fused = true;   // false: a tracked frame that was lost (nothing fused)
         std::vector<std::string> warnings = locked([&](Reconstructor& rec) {
             if (const gpu::GpuVolume* v = rec.volume(); v && (v->config().imageWidth != depth.width || v->config().imageHeight != depth.height))
                 throw py::value_error("depth image is " + std::to_string(depth.width) + "x" + std::to_string(depth.height) +
@@ -388,12 +392,29 @@ public:
                 lastReport_ = rec.integrate(depth_, color ? &color_ : nullptr, intrinsics, *pose);
             } else {
                 tracked = rec.integrate(depth_, color ? &color_ : nullptr, intrinsics);
-                lastReport_ = tracked->fused ? std::move(*tracked->fused) : gpu::FrameReport{};
+                fused = tracked->fused.has_value();
+                lastReport_ = fused ? std::move(*tracked->fused) : gpu::FrameReport{};
                 tracked->fused.reset();
             }
             lastCppSeconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
             lastReport_.delta = MeshDelta{};   // the Reconstructor keeps it (lastDelta); one copy is enough
             frame = rec.framesIntegrated();
+#ifdef VKMESH_HAVE_VIEWER
+            if (server_ && fused) {
+                // Posted to the server's own thread (a copy of the delta): a slow page never holds integrate() up.
+                const Pose used = tracked ? tracked->cameraToWorld : *pose;
+                viewer::FrameInfo info;
+                info.frame = frame;
+                info.msPerFrame = float(lastCppSeconds_ * 1000);
+                info.blocks = lastReport_.counters.blocksInUse;
+                info.hasCamera = true;
+                for (int r = 0; r < 3; ++r)
+                    for (int c = 0; c < 4; ++c) info.cameraToWorld[4 * r + c] = float(used(r, c));
+                info.intrinsics = {intrinsics.fx, intrinsics.fy, intrinsics.cx, intrinsics.cy};
+                info.width = uint32_t(depth.width), info.height = uint32_t(depth.height);
+                server_->publish(rec.lastDelta(), info);
+            }
+#endif
             return lastReport_.warnings;
         });
         warnCapacity(warnings, frame);
@@ -538,7 +559,56 @@ public:
     void close() {
         py::gil_scoped_release release;
         std::lock_guard<std::mutex> lock(mutex_);
+#ifdef VKMESH_HAVE_VIEWER
+        server_.reset();
+#endif
         rec_.reset();
+    }
+
+    // The live browser viewer (docs/VIEWER.md) on a server thread of its own, fed each frame's delta by integrate().
+    std::string serve(int port, const std::string& host) {
+#ifdef VKMESH_HAVE_VIEWER
+        if (port < 0 || port > 65535) throw py::value_error("port " + std::to_string(port) + " must be in 0..65535 (0: any free port)");
+        return locked([&](Reconstructor& rec) {
+            if (server_) throw Error("this Reconstructor already serves the viewer at " + server_->url() + " (stop_serving() first)");
+            if (!options_.trackDeltas)
+                throw Error("serve() needs the mesh deltas: create the Reconstructor with track_deltas=True");
+            // A page must be able to build the mesh from deltas alone, so it must see every frame from the first.
+            if (rec.framesIntegrated() > 0)
+                throw Error("serve() must be called before the first integrate() (" + std::to_string(rec.framesIntegrated()) +
+                            " frames are already fused, and a page builds the mesh from every frame's changes)");
+            viewer::ServerOptions o;
+            o.host = host;
+            o.port = uint16_t(port);
+            o.quiet = true;
+            server_.emplace(o);
+            return server_->url();
+        });
+#else
+        (void)port, (void)host;
+        throw Error("this vkmesh module was built without the browser viewer (it needs libboost-dev and libjs-three at build time)");
+#endif
+    }
+
+    py::dict stopServing() {
+        py::dict d;
+#ifdef VKMESH_HAVE_VIEWER
+        std::optional<viewer::ServerStats> stats = locked([&](Reconstructor&) -> std::optional<viewer::ServerStats> {
+            if (!server_) return std::nullopt;
+            server_->stop();
+            viewer::ServerStats s = server_->stats();
+            server_.reset();
+            return s;
+        });
+        if (stats) {
+            d["pages"] = stats->pagesConnected;
+            d["messages_sent"] = stats->messagesSent;
+            d["bytes_sent"] = stats->bytesSent;
+            d["frames_published"] = stats->framesPublished;
+            d["frames_coalesced"] = stats->framesCoalesced;
+        }
+#endif
+        return d;
     }
     bool closed() {
         std::lock_guard<std::mutex> lock(mutex_);
@@ -590,6 +660,9 @@ private:
     }
 
     ReconstructorOptions options_;
+#ifdef VKMESH_HAVE_VIEWER
+    std::optional<viewer::Server> server_;   // holds copies of the deltas only: independent of rec_'s lifetime
+#endif
     std::unique_ptr<Reconstructor> rec_;
     std::mutex mutex_;
     // Reused from frame to frame (guarded by mutex_): no allocation per call once the first frame has run.
@@ -890,6 +963,23 @@ gives exactly what an uninterrupted run would have. The map's settings are used 
 depth, colour, ...); the capacities given here where larger than the map's. Raises vkmesh.Error naming the
 file and the problem for a missing, corrupt or truncated map.
 )doc")
+        .def("serve",
+             [](PyReconstructor& self, int port, const std::string& host) {
+                 const std::string url = self.serve(port, host);
+                 py::print("vkmesh: serving the viewer at " + url);
+                 return url;
+             },
+             "port"_a = 8080, "host"_a = "127.0.0.1", R"doc(
+Serves the live browser viewer (docs/VIEWER.md) and returns its URL (also printed): every later integrate()
+sends the frame's mesh changes to the pages open at that URL, and a page that joins late gets the whole mesh
+first. Needs track_deltas=True and must be called before the first integrate(). The server runs on a thread of
+its own: integrate() only hands it a copy of the frame's changes and never waits for a page. host 127.0.0.1
+(default) serves this machine only; "0.0.0.0" every interface. port 0: any free port. Raises vkmesh.Error when
+the port is taken (naming it). stop_serving() or close() stops it.
+)doc")
+        .def("stop_serving", &PyReconstructor::stopServing,
+             "Stops the viewer's server (closing its pages) and returns what it did: pages, messages_sent, bytes_sent, "
+             "frames_published, frames_coalesced (an empty dict when not serving).")
         .def("close", &PyReconstructor::close,
              "Releases the GPU memory and the Vulkan device now (rather than when the object is collected). Any later "
              "call raises vkmesh.Error.")

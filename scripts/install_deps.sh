@@ -12,6 +12,12 @@ packages=(
   libeigen3-dev libopencv-core-dev libopencv-imgcodecs-dev libcli11-dev nlohmann-json3-dev libgtest-dev
   # the Python module (python/, docs/PYTHON.md) and its tests
   python3-dev pybind11-dev python3-pybind11 python3-numpy python3-pytest
+  # the browser viewer (docs/VIEWER.md): Boost.Beast (header-only) for its server, three.js r111 embedded in its
+  # page, and Chromium for its tests (headless, SwiftShader WebGL; ctest label browser)
+  libboost-dev libjs-three chromium
+  # `pip install .` into a virtual environment (docs/PYTHON.md; scripts/ci/40-pip-venv.sh): venv brings pip along,
+  # and the build backend is in the source tree (python/build_backend), so nothing else
+  python3-venv
 )
 for arg in "$@"; do
   case "$arg" in

@@ -22,8 +22,13 @@ from typing import Iterator, List, NamedTuple, Optional, Tuple
 
 import numpy as np
 
-from . import _vkmesh
-from ._vkmesh import CapacityWarning, Error, Reconstructor
+# A wheel (`pip install .`) carries vkmesh's data files (camera presets) in vkmesh/data; the compiled module finds
+# them through VKMESH_DATA_DIR. A build-tree or CMake-installed module has none there and finds them as before.
+if os.path.isdir(os.path.join(os.path.dirname(__file__), "data", "cameras")):
+    os.environ.setdefault("VKMESH_DATA_DIR", os.path.join(os.path.dirname(__file__), "data"))
+
+from . import _vkmesh  # noqa: E402
+from ._vkmesh import CapacityWarning, Error, Reconstructor  # noqa: E402
 
 Reconstructor.__module__ = "vkmesh"   # as help() and tracebacks name it (the class lives in vkmesh._vkmesh)
 
