@@ -75,6 +75,7 @@ struct FuseArgs {
     bool track = false;
     std::string trajectoryPath;        // the pose used for every frame, TUM format
     std::string trackIterations;       // "10,5,4": ICP iterations per level, finest first
+    float trackColorWeight = gpu::TrackerOptions{}.colorWeight;   // the photometric term's weight (0: off)
     const CLI::App* cmd = nullptr;   // which options were given (a loaded map's settings fill the others)
 };
 
@@ -152,7 +153,8 @@ int runFuse(const FuseArgs& args) {
     if (!args.loadPath.empty()) loaded = map::readFile(args.loadPath);
     if (args.growHeaps)
         std::cerr << "note: --grow-heaps is deprecated and has no effect: capacities grow by default (--no-grow keeps them fixed)\n";
-    if (!args.trackIterations.empty() && !args.track) throw Error("--track-iterations needs --track");
+    if ((!args.trackIterations.empty() || args.cmd->get_option("--track-color-weight")->count() > 0) && !args.track)
+        throw Error("--track-iterations and --track-color-weight need --track");
     std::optional<std::array<int, gpu::TRACK_LEVELS>> iterations;
     if (!args.trackIterations.empty()) iterations = parseIterations(args.trackIterations);
     DatasetArgs data = args.data;
@@ -218,6 +220,7 @@ int runFuse(const FuseArgs& args) {
         gpu::TrackerOptions trackerOptions;
         trackerOptions.maxDepth = args.data.maxDepth;
         if (iterations) trackerOptions.iterations = *iterations;
+        trackerOptions.colorWeight = args.trackColorWeight;
         tracker.emplace(context, trackerOptions);
     }
     std::vector<TimedPose> trajectory;   // the pose used for every frame (tracked, predicted or given)
@@ -572,6 +575,7 @@ int runFuse(const FuseArgs& args) {
                              {"submissions_per_frame", statsOf(trackSubmissions)},
                              {"rmse_m", statsOf(trackRmse)},
                              {"inlier_share", statsOf(trackInlierShare)},
+                             {"color_weight", args.trackColorWeight},
                              {"trajectory", args.trajectoryPath}};
     } else {
         stats["tracking"] = {{"enabled", false}, {"trajectory", args.trajectoryPath}};
@@ -669,6 +673,10 @@ Run addFuseCommand(CLI::App& app) {
     cmd->add_option("--trajectory", args->trajectoryPath,
                     "write the pose used for every frame (tracked or given) in TUM format: timestamp tx ty tz qx qy qz qw");
     cmd->add_option("--track-iterations", args->trackIterations, "ICP iterations per pyramid level, finest first (default 10,5,4)");
+    cmd->add_option("--track-color-weight", args->trackColorWeight,
+                    "weight of tracking's photometric term (the frame's intensity against the mesh's fused colours; needs "
+                    "colour images and colour fusion); 0: geometry only")
+        ->check(CLI::Range(0.0, 100.0));
     cmd->add_option("--serve", args->servePort,
                     "serve the live browser viewer on this port while fusing (docs/VIEWER.md; open the URL it prints)")
         ->check(CLI::Range(0, 65535));

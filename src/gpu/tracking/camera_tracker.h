@@ -49,10 +49,10 @@ struct TrackerOptions {
     // Model maps' downsampling: fine pixels further than this from the first are not averaged (metres).
     float modelMergeDistance = 0.05f;
     // The photometric term: the frame's intensity against the mesh's vertex colours drawn at the model pose,
-    // for frames with colour, added to the geometric system with this weight per pixel (0: geometry only).
-    // Intensities are in [0, 1], point-to-plane residuals in metres: 0.01 weighs a 0.05 intensity error as
-    // a 5 mm distance.
-    float colorWeight = 0.0f;
+    // for frames with colour (and a mesh with colours), added to the geometric system with this weight per
+    // pixel (0: geometry only). Intensities are in [0, 1], point-to-plane residuals in metres. On TUM fr1/rpy
+    // (fast rotation) it halves the trajectory error (docs/RESULTS.md, "Issue 22").
+    float colorWeight = 0.1f;
     float colorHuber = 0.1f;
     // Depth samples outside [minDepth, maxDepth] are ignored (maxDepth 0: no limit).
     float minDepth = 0.1f;
