@@ -763,7 +763,8 @@ public:
         py::object c = py::none();
         if (!color.empty()) c = moveToArray<uint8_t>(std::move(color.rgb), 1).reshape({color.height, color.width, 3});
         return py::dict("index"_a = f.index, "timestamp"_a = f.timestamp, "depth"_a = d, "color"_a = c,
-                        "color_warning"_a = colorWarning, "pose"_a = poseToArray(f.cameraToWorld),
+                        "color_warning"_a = colorWarning,
+                        "pose"_a = f.hasPose ? py::object(poseToArray(f.cameraToWorld)) : py::object(py::none()),
                         "depth_path"_a = f.depthPath.string(), "color_path"_a = f.colorPath.string());
     }
 
@@ -992,9 +993,11 @@ the port is taken (naming it). stop_serving() or close() stops it.
                                "Benchmarks: seconds the last integrate() spent in the C++ Reconstructor::integrate.");
 
     py::class_<PyDataset>(m, "_Dataset")
-        .def(py::init([](const fs::path& path, size_t frames, float maxDepth, const py::object& intrinsics, const py::object& depthScale) {
+        .def(py::init([](const fs::path& path, size_t frames, float maxDepth, const py::object& intrinsics, const py::object& depthScale,
+                         bool requirePoses) {
                  DatasetOptions o;
                  o.maxFrames = frames;
+                 o.requirePoses = requirePoses;
                  o.maxDepth = maxDepth;
                  if (!intrinsics.is_none()) o.intrinsics = toIntrinsics(intrinsics, 0, 0);
                  if (!depthScale.is_none()) o.depthScale = depthScale.cast<double>();
@@ -1005,7 +1008,7 @@ the port is taken (naming it). stop_serving() or close() stops it.
                  }
                  return std::make_unique<PyDataset>(std::move(ds));
              }),
-             "path"_a, "frames"_a, "max_depth"_a, "intrinsics"_a, "depth_scale"_a)
+             "path"_a, "frames"_a, "max_depth"_a, "intrinsics"_a, "depth_scale"_a, "require_poses"_a = true)
         .def("__len__", [](const PyDataset& d) { return d.get().size(); })
         .def("load", &PyDataset::load, "index"_a)
         .def_property_readonly("folder", [](const PyDataset& d) { return d.get().folder().string(); })

@@ -148,7 +148,8 @@ class Frame:
     depth        (H, W) float32 metres, 0 = no measurement (the files' raw values / depth_scale, exactly as
                  `vkmesh fuse` computes them)
     color        (H, W, 3) uint8 red, green, blue registered to depth, or None
-    pose         (4, 4) float64 camera-to-world
+    pose         (4, 4) float64 camera-to-world, or None where the dataset has none (open_dataset with
+                 require_poses=False): Reconstructor.integrate(depth, intrinsics, None) tracks the camera
     intrinsics   (fx, fy, cx, cy)
     depth_scale  raw depth units per metre in the files
     depth_path, color_path   the files ("" when there is no colour image)
@@ -226,7 +227,7 @@ class Dataset:
 
 
 def open_dataset(path, frames: int = 0, intrinsics=None, depth_scale: Optional[float] = None,
-                 max_depth: float = 0.0) -> Dataset:
+                 max_depth: float = 0.0, require_poses: bool = True) -> Dataset:
     """Opens a depth sequence: a folder in TUM RGB-D, ICL-NUIM, Redwood or 7-Scenes layout, detected as
     `vkmesh fuse` detects it (README.md lists what each layout needs).
 
@@ -235,6 +236,8 @@ def open_dataset(path, frames: int = 0, intrinsics=None, depth_scale: Optional[f
     depth_scale  raw units per metre overriding the dataset's, like --depth-scale
     max_depth    metres beyond which a frame's depth is set to 0 (0: no limit). The Reconstructor ignores
                  depth beyond its own max_depth anyway, so this is rarely needed.
+    require_poses  False: a sequence without poses opens too (as `vkmesh fuse --track`), and every listed
+                 frame is kept; a frame without a pose has pose None (docs/TRACKING.md)
 
     Raises vkmesh.Error naming the file or value at fault for a folder it cannot use.
     """
@@ -244,7 +247,8 @@ def open_dataset(path, frames: int = 0, intrinsics=None, depth_scale: Optional[f
         raise ValueError(f"depth_scale {depth_scale} must be a positive finite number")
     if not (np.isfinite(max_depth) and max_depth >= 0):
         raise ValueError(f"max_depth {max_depth} must be a finite number >= 0 (0 = no limit)")
-    return Dataset(_vkmesh._Dataset(os.fspath(path), int(frames), float(max_depth), intrinsics, depth_scale))
+    return Dataset(_vkmesh._Dataset(os.fspath(path), int(frames), float(max_depth), intrinsics, depth_scale,
+                                    bool(require_poses)))
 
 
 class Device(NamedTuple):

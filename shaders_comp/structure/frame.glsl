@@ -20,6 +20,7 @@
 #extension GL_KHR_shader_subgroup_ballot : require
 
 #include "shared_layout.h"
+#include "structure/rigid.glsl"
 
 layout(std140, set = 0, binding = BINDING_PARAMS) uniform ParamsBuffer { VolumeParamsGpu params; };
 layout(std430, set = 0, binding = BINDING_COUNTERS) coherent buffer CountersBuffer { Counters counters; };
@@ -31,16 +32,6 @@ layout(push_constant) uniform Push { FramePush frame; };
 layout(constant_id = 1) const uint VOLUME_FEATURES = VOLUME_FEATURES_ALL;
 bool volumeKeepsColor() { return (VOLUME_FEATURES & VOLUME_FEATURE_COLOR) != 0u && params.colorMode != COLOR_MODE_OFF; }
 bool volumeRefines() { return (VOLUME_FEATURES & VOLUME_FEATURE_REFINE) != 0u && params.refine != 0u; }
-
-// x' = R x + t with R, t given as 3 rows of [R | t]; written out so that the order of the operations
-// (and so the rounding) is the one the CPU reference (src/cpu) uses.
-vec3 transformPoint(vec4 rows[3], vec3 p) {
-    precise vec3 q;
-    q.x = rows[0].x * p.x + rows[0].y * p.y + rows[0].z * p.z + rows[0].w;
-    q.y = rows[1].x * p.x + rows[1].y * p.y + rows[1].z * p.z + rows[1].w;
-    q.z = rows[2].x * p.x + rows[2].y * p.y + rows[2].z * p.z + rows[2].w;
-    return q;
-}
 
 uvec2 frameImageSize() { return uvec2(frame.imageSize & 0xFFFFu, (frame.imageSize >> 16) & FRAME_HEIGHT_MASK); }
 

@@ -9,6 +9,7 @@
 #endif
 
 #include "shared_layout.h"
+#include "structure/rigid.glsl"
 
 layout(std140, set = 0, binding = TRACK_BINDING_PARAMS) uniform TrackParamsBuffer { TrackParamsGpu track; };
 layout(std430, set = 0, binding = TRACK_BINDING_RAW_DEPTH) readonly buffer RawDepth { float rawDepth[]; };
@@ -25,32 +26,6 @@ layout(std430, set = 0, binding = TRACK_BINDING_MODEL_INTENSITY) buffer ModelInt
 layout(push_constant) uniform Push { TrackPush pass; };
 
 uvec2 levelSize() { return uvec2(pass.size & 0xFFFFu, pass.size >> 16); }
-
-// x' = R x + t with R, t as 3 rows of [R | t], in the order the CPU reference (src/cpu/reference_tracking.cpp)
-// repeats: every float expression the reference must reproduce is `precise` (no contraction).
-vec3 trackTransform(vec4 rows[3], vec3 p) {
-    precise vec3 q;
-    q.x = rows[0].x * p.x + rows[0].y * p.y + rows[0].z * p.z + rows[0].w;
-    q.y = rows[1].x * p.x + rows[1].y * p.y + rows[1].z * p.z + rows[1].w;
-    q.z = rows[2].x * p.x + rows[2].y * p.y + rows[2].z * p.z + rows[2].w;
-    return q;
-}
-vec3 trackRotate(vec4 rows[3], vec3 v) {
-    precise vec3 q;
-    q.x = rows[0].x * v.x + rows[0].y * v.y + rows[0].z * v.z;
-    q.y = rows[1].x * v.x + rows[1].y * v.y + rows[1].z * v.z;
-    q.z = rows[2].x * v.x + rows[2].y * v.y + rows[2].z * v.z;
-    return q;
-}
-
-// R^T v for R given as the 3 rows of [R | t].
-vec3 trackRotateTransposed(vec4 rows[3], vec3 v) {
-    precise vec3 q;
-    q.x = rows[0].x * v.x + rows[1].x * v.y + rows[2].x * v.z;
-    q.y = rows[0].y * v.x + rows[1].y * v.y + rows[2].y * v.z;
-    q.z = rows[0].z * v.x + rows[1].z * v.y + rows[2].z * v.z;
-    return q;
-}
 
 // A depth sample is a measurement when it lies in [minDepth, maxDepth] (maxDepth 0: no upper limit); NaN and
 // infinities never are.

@@ -10,22 +10,24 @@
 // tree in shared memory: the order of every addition is fixed, so the partials are the same bit for bit on
 // every run (no float atomics). track_icp_sum adds the partials up.
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_control_flow_attributes : require
 #include "track/track_common.glsl"
 
 layout(local_size_x = WG_TRACK_REDUCE) in;
 
 shared float tree[TRACK_SUM_COUNT * WG_TRACK_REDUCE];
 
+// The invocation's sums. A global, and indexed only by constants once the loops below are unrolled, so that
+// the compiler keeps it in registers (llvmpipe put an array passed `inout` in memory, copied at every call).
+float acc[TRACK_SUM_COUNT];
+
 // Adds w J^T J and w J^T r of one residual r with J = [jr, jt] to the invocation's sums.
-void addTerm(inout float acc[TRACK_SUM_COUNT], vec3 jr, vec3 jt, float r, float w) {
+void addTerm(vec3 jr, vec3 jt, float r, float w) {
     float J[6] = float[6](jr.x, jr.y, jr.z, jt.x, jt.y, jt.z);
-    uint slot = TRACK_SUM_JTJ;
-    for (uint a = 0u; a < 6u; ++a) {
+    [[unroll]] for (uint a = 0u; a < 6u; ++a) {
         precise float wa = w * J[a];
-        for (uint b = a; b < 6u; ++b) {
-            acc[slot] += wa * J[b];
-            ++slot;
-        }
+        // Row a of the upper triangle starts at a * 6 - a * (a - 1) / 2.
+        [[unroll]] for (uint b = a; b < 6u; ++b) acc[TRACK_SUM_JTJ + a * 6u - (a * (a - 1u)) / 2u + (b - a)] += wa * J[b];
         acc[TRACK_SUM_JTR + a] += wa * r;
     }
 }
@@ -34,8 +36,7 @@ void main() {
     uvec2 size = levelSize();
     uint pixels = size.x * size.y;
     uint lane = gl_LocalInvocationID.x;
-    float acc[TRACK_SUM_COUNT];
-    for (uint k = 0u; k < TRACK_SUM_COUNT; ++k) acc[k] = 0.0;
+    [[unroll]] for (uint k = 0u; k < TRACK_SUM_COUNT; ++k) acc[k] = 0.0;
 
     for (uint k = 0u; k < TRACK_PIXELS_PER_INVOCATION; ++k) {
         uint i = (gl_WorkGroupID.x * TRACK_PIXELS_PER_INVOCATION + k) * WG_TRACK_REDUCE + lane;
@@ -45,8 +46,8 @@ void main() {
         vec4 normal = normalPyramid[index];
         if (point.w == 0.0 || normal.w == 0.0) continue;
         acc[TRACK_SUM_VALID] += 1.0;
-        precise vec3 world = trackTransform(pass.cameraToWorld, point.xyz);
-        precise vec3 model = trackTransform(track.modelWorldToCamera, world);
+        precise vec3 world = transformPoint(pass.cameraToWorld, point.xyz);
+        precise vec3 model = transformPoint(track.modelWorldToCamera, world);
         if (!(model.z > 0.0)) continue;
         precise float u = pass.intrinsics.x * (model.x / model.z) + pass.intrinsics.z;
         precise float v = pass.intrinsics.y * (model.y / model.z) + pass.intrinsics.w;
@@ -61,13 +62,13 @@ void main() {
         precise vec3 diff = world - q.xyz;
         precise float distance2 = dot(diff, diff);
         if (distance2 > pass.distanceGate * pass.distanceGate) continue;
-        precise vec3 frameNormal = trackRotate(pass.cameraToWorld, normal.xyz);
+        precise vec3 frameNormal = rotateVector(pass.cameraToWorld, normal.xyz);
         if (dot(frameNormal, n) < pass.normalGateCos) continue;
         precise float r = dot(n, diff);
         precise float w = abs(r) <= pass.huberDelta ? 1.0 : pass.huberDelta / abs(r);
         precise vec3 centre = vec3(pass.cameraToWorld[0].w, pass.cameraToWorld[1].w, pass.cameraToWorld[2].w);
         precise vec3 lever = world - centre;
-        addTerm(acc, cross(lever, n), n, r, w);
+        addTerm(cross(lever, n), n, r, w);
         acc[TRACK_SUM_WEIGHTED_ERROR] += w * r * r;
         acc[TRACK_SUM_INLIERS] += 1.0;
         acc[TRACK_SUM_SQUARED_ERROR] += r * r;
@@ -93,13 +94,13 @@ void main() {
         precise float iz = 1.0 / model.z;
         precise vec3 gradCamera = vec3(gx * pass.intrinsics.x * iz, gy * pass.intrinsics.y * iz,
                                        -(gx * pass.intrinsics.x * model.x + gy * pass.intrinsics.y * model.y) * iz * iz);
-        precise vec3 a = trackRotateTransposed(track.modelWorldToCamera, gradCamera);
+        precise vec3 a = rotateVectorTransposed(track.modelWorldToCamera, gradCamera);
         precise float wc = track.colorWeight * (abs(rc) <= track.colorHuber ? 1.0 : track.colorHuber / abs(rc));
-        addTerm(acc, cross(lever, a), a, rc, wc);
+        addTerm(cross(lever, a), a, rc, wc);
         acc[TRACK_SUM_WEIGHTED_ERROR] += wc * rc * rc;
     }
 
-    for (uint k = 0u; k < TRACK_SUM_COUNT; ++k) tree[k * WG_TRACK_REDUCE + lane] = acc[k];
+    [[unroll]] for (uint k = 0u; k < TRACK_SUM_COUNT; ++k) tree[k * WG_TRACK_REDUCE + lane] = acc[k];
     for (uint stride = WG_TRACK_REDUCE / 2u; stride > 0u; stride /= 2u) {
         barrier();
         if (lane < stride)

@@ -10,7 +10,7 @@ namespace vkmesh {
 // The 3 rows of [R | t] in float.
 struct RigidRows {
     float r[3][4];
-    // x' = r.x*x + r.y*y + r.z*z + r.w, left to right (as transformPoint in shaders_comp/structure/frame.glsl).
+    // x' = r.x*x + r.y*y + r.z*z + r.w, left to right (as transformPoint in shaders_comp/structure/rigid.glsl).
     Eigen::Vector3f apply(const Eigen::Vector3f& p) const {
         Eigen::Vector3f q;
         for (int i = 0; i < 3; ++i) q[i] = r[i][0] * p.x() + r[i][1] * p.y() + r[i][2] * p.z() + r[i][3];

@@ -14,13 +14,9 @@
 #include "../../shaders_render/mesh_render.h"
 #include "core/types.h"
 #include "vk/buffer.h"
+#include "render/graphics_shaders.h"
 #include "vk/check.h"
 #include "vk/commands.h"
-
-namespace vkmesh::shaders {
-// Every shaders_render/* file as SPIR-V words, by file name ("mesh.vert"); see cmake/EmbedShaders.cmake.
-const std::map<std::string, std::span<const uint32_t>>& graphics();
-}  // namespace vkmesh::shaders
 
 namespace vkmesh::render {
 namespace {
@@ -36,17 +32,6 @@ std::string trim(const std::string& s) {
     return a == std::string::npos ? std::string() : s.substr(a, b - a + 1);
 }
 
-VkShaderModule createModule(VkDevice device, const std::string& name) {
-    const auto& table = shaders::graphics();
-    auto it = table.find(name);
-    if (it == table.end()) throw Error("graphics shader '" + name + "' is not embedded in this build");
-    VkShaderModuleCreateInfo info{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
-    info.codeSize = it->second.size() * sizeof(uint32_t);
-    info.pCode = it->second.data();
-    VkShaderModule module = VK_NULL_HANDLE;
-    VKM_CHECK(vkCreateShaderModule(device, &info, nullptr, &module));
-    return module;
-}
 
 // Per-render Vulkan objects, destroyed in reverse order whatever happens.
 struct Target {
@@ -362,8 +347,8 @@ MeshRenderer::MeshRenderer(const vk::Context& context) : context_(context) {
         layoutInfo.pPushConstantRanges = &range;
         VKM_CHECK(vkCreatePipelineLayout(device, &layoutInfo, nullptr, &pipelineLayout_));
 
-        vert = createModule(device, "mesh.vert");
-        frag = createModule(device, "mesh.frag");
+        vert = createGraphicsShaderModule(device, "mesh.vert");
+        frag = createGraphicsShaderModule(device, "mesh.frag");
         VkPipelineShaderStageCreateInfo stages[2]{};
         stages[0].sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO;
         stages[0].stage = VK_SHADER_STAGE_VERTEX_BIT;

@@ -1,7 +1,10 @@
 """Camera tracking from Python (docs/TRACKING.md): integrate() without a pose tracks the camera against the mesh,
 returns what tracking did, and trajectory() gives every frame's pose."""
 
+import os
+
 import numpy as np
+import pytest
 
 import vkmesh
 
@@ -40,3 +43,19 @@ def test_integrate_with_a_pose_returns_none_and_is_in_the_trajectory(small_seque
     for f in frames:
         assert r.integrate(f.depth, f.intrinsics, f.pose) is None
     np.testing.assert_allclose(r.trajectory(), np.stack([f.pose for f in frames]))
+
+
+def test_a_sequence_without_poses_opens_for_tracking(tmp_path):
+    folder = vkmesh.synth(tmp_path / "room", frames=240, width=160, height=120)
+    truth = [f.pose for f in vkmesh.open_dataset(folder, frames=6)]
+    os.remove(os.path.join(folder, "groundtruth.txt"))
+    with pytest.raises(vkmesh.Error, match="--track"):
+        vkmesh.open_dataset(folder)
+    frames = list(vkmesh.open_dataset(folder, frames=6, require_poses=False))
+    assert len(frames) == 6 and all(f.pose is None for f in frames)
+    r = vkmesh.Reconstructor(voxel_size=0.03)
+    results = [r.integrate(f.depth, f.intrinsics, f.pose, color=f.color) for f in frames]
+    assert all(res["tracked"] for res in results), [res["lost_reason"] for res in results]
+    first = np.linalg.inv(truth[0])
+    for tracked, true in zip(r.trajectory(), truth):
+        assert np.linalg.norm(tracked[:3, 3] - (first @ true)[:3, 3]) < 0.01

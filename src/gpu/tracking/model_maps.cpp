@@ -7,11 +7,8 @@
 
 #include "../../../shaders_render/track_model.h"
 #include "core/camera.h"
+#include "render/graphics_shaders.h"
 #include "vk/check.h"
-
-namespace vkmesh::shaders {
-const std::map<std::string, std::span<const uint32_t>>& graphics();   // cmake/EmbedShaders.cmake
-}  // namespace vkmesh::shaders
 
 namespace vkmesh::gpu {
 namespace {
@@ -23,17 +20,6 @@ constexpr int kDepthImage = 3;
 // The attachments in order: position, normal, intensity, depth.
 VkFormat imageFormat(int i) { return i == kDepthImage ? kDepthFormat : i == 2 ? kIntensityFormat : kMapFormat; }
 
-VkShaderModule createModule(VkDevice device, const std::string& name) {
-    const auto& table = shaders::graphics();
-    auto it = table.find(name);
-    if (it == table.end()) throw Error("graphics shader '" + name + "' is not embedded in this build");
-    VkShaderModuleCreateInfo info{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
-    info.codeSize = it->second.size() * sizeof(uint32_t);
-    info.pCode = it->second.data();
-    VkShaderModule module = VK_NULL_HANDLE;
-    VKM_CHECK(vkCreateShaderModule(device, &info, nullptr, &module));
-    return module;
-}
 
 void requireFormat(const vk::Context& context, VkFormat format, VkFormatFeatureFlags feature, const char* what) {
     VkFormatProperties props{};
@@ -153,8 +139,8 @@ ModelMapRenderer::ModelMapRenderer(const vk::Context& context, int width, int he
         layoutInfo.pPushConstantRanges = &range;
         VKM_CHECK(vkCreatePipelineLayout(device, &layoutInfo, nullptr, &pipelineLayout_));
 
-        vert = createModule(device, "track_model.vert");
-        frag = createModule(device, "track_model.frag");
+        vert = render::createGraphicsShaderModule(device, "track_model.vert");
+        frag = render::createGraphicsShaderModule(device, "track_model.frag");
         VkPipelineShaderStageCreateInfo stages[2]{};
         for (int i = 0; i < 2; ++i) {
             stages[i].sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO;
