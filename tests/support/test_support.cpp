@@ -33,7 +33,8 @@ std::string lavapipeCannotDraw() {
     if (!width || !*width || std::atoi(width) >= 256) return {};
     return std::string("LP_NATIVE_VECTOR_WIDTH=") + width +
            ": lavapipe (Mesa 22.3) corrupts the heap when a vertex shader reads a VK_FORMAT_R32_UINT attribute, as the "
-           "mesh renderer does; a Mesa bug, reproduced without vkmesh in docs/repro/lavapipe_width128 (docs/PORTABILITY.md)";
+           "mesh renderer does (tracking's model-map draw, with float and UNORM attributes only, aborts the same way); "
+           "a Mesa bug, reproduced without vkmesh in docs/repro/lavapipe_width128 (docs/PORTABILITY.md)";
 }
 
 std::filesystem::path makeTempDir(const std::string& tag) {

@@ -24,6 +24,8 @@ TrackParamsGpu trackParamsFor(const TrackerOptions& o) {
     if (o.filterRadius > 4) throw Error("tracking: filter radius " + std::to_string(o.filterRadius) + " is above 4 pixels");
     for (int n : o.iterations)
         if (n < 0 || n > 100) throw Error("tracking: " + std::to_string(n) + " iterations per level is outside 0..100");
+    // The finest level's last system is what the loss checks read (inliers, conditioning).
+    if (o.iterations[0] < 1) throw Error("tracking: the finest level needs at least 1 iteration (got 0)");
     for (uint32_t l = 0; l < TRACK_LEVELS; ++l)
         if (!(o.distanceGates[l] > 0) || !(o.huberDeltas[l] > 0) || !(o.normalGateDegrees[l] > 0 && o.normalGateDegrees[l] <= 180))
             throw Error("tracking: level " + std::to_string(l) + "'s distance gate and Huber delta must be positive, its normal gate in "

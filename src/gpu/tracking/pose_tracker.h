@@ -49,7 +49,6 @@ public:
     // The pose the next frame will be predicted at (constant velocity from the last two tracked frames).
     Pose prediction() const { return lastTracked_ * velocity_; }
     const TrackerOptions& options() const { return options_; }
-    CameraTracker* gpu() { return tracker_.get(); }
 
 private:
     const vk::Context& context_;
