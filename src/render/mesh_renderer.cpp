@@ -14,7 +14,7 @@
 #include "../../shaders_render/mesh_render.h"
 #include "core/types.h"
 #include "vk/buffer.h"
-#include "render/graphics_shaders.h"
+#include "render/graphics_resources.h"
 #include "vk/check.h"
 #include "vk/commands.h"
 
@@ -53,36 +53,6 @@ struct Target {
         if (colorMemory) vkFreeMemory(device, colorMemory, nullptr);
     }
 };
-
-void createImage(const vk::Context& context, int width, int height, VkFormat format, VkImageUsageFlags usage,
-                 VkImageAspectFlags aspect, VkImage& image, VkDeviceMemory& memory, VkImageView& view) {
-    VkDevice device = context.device();
-    VkImageCreateInfo info{VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO};
-    info.imageType = VK_IMAGE_TYPE_2D;
-    info.format = format;
-    info.extent = {static_cast<uint32_t>(width), static_cast<uint32_t>(height), 1};
-    info.mipLevels = 1;
-    info.arrayLayers = 1;
-    info.samples = VK_SAMPLE_COUNT_1_BIT;
-    info.tiling = VK_IMAGE_TILING_OPTIMAL;
-    info.usage = usage;
-    info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
-    info.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
-    VKM_CHECK(vkCreateImage(device, &info, nullptr, &image));
-    VkMemoryRequirements req{};
-    vkGetImageMemoryRequirements(device, image, &req);
-    VkMemoryAllocateInfo alloc{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
-    alloc.allocationSize = req.size;
-    alloc.memoryTypeIndex = context.findMemoryType(req.memoryTypeBits, 0, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
-    VKM_CHECK(vkAllocateMemory(device, &alloc, nullptr, &memory));
-    VKM_CHECK(vkBindImageMemory(device, image, memory, 0));
-    VkImageViewCreateInfo viewInfo{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
-    viewInfo.image = image;
-    viewInfo.viewType = VK_IMAGE_VIEW_TYPE_2D;
-    viewInfo.format = format;
-    viewInfo.subresourceRange = {aspect, 0, 1, 0, 1};
-    VKM_CHECK(vkCreateImageView(device, &viewInfo, nullptr, &view));
-}
 
 void bounds(const Mesh& mesh, Eigen::Vector3f& lo, Eigen::Vector3f& hi) {
     lo = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());
@@ -504,9 +474,9 @@ Image MeshRenderer::draw(const Geometry& geometry, const RenderPush& push, int w
     vk::Buffer readback(context_, imageBytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT, vk::MemoryUse::Readback, "render image (readback)");
 
     Target target(context_.device());
-    createImage(context_, width, height, kColorFormat, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
+    createAttachmentImage(context_, width, height, kColorFormat, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
                 VK_IMAGE_ASPECT_COLOR_BIT, target.color, target.colorMemory, target.colorView);
-    createImage(context_, width, height, kDepthFormat, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT, VK_IMAGE_ASPECT_DEPTH_BIT,
+    createAttachmentImage(context_, width, height, kDepthFormat, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT, VK_IMAGE_ASPECT_DEPTH_BIT,
                 target.depth, target.depthMemory, target.depthView);
     VkImageView views[2] = {target.colorView, target.depthView};
     VkFramebufferCreateInfo fbInfo{VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO};

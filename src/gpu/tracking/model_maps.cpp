@@ -7,7 +7,7 @@
 
 #include "../../../shaders_render/track_model.h"
 #include "core/camera.h"
-#include "render/graphics_shaders.h"
+#include "render/graphics_resources.h"
 #include "vk/check.h"
 
 namespace vkmesh::gpu {
@@ -48,32 +48,10 @@ ModelMapRenderer::ModelMapRenderer(const vk::Context& context, int width, int he
     try {
         for (int i = 0; i < kImages; ++i) {
             const bool depth = i == kDepthImage;
-            VkImageCreateInfo info{VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO};
-            info.imageType = VK_IMAGE_TYPE_2D;
-            info.format = imageFormat(i);
-            info.extent = {uint32_t(width), uint32_t(height), 1};
-            info.mipLevels = 1;
-            info.arrayLayers = 1;
-            info.samples = VK_SAMPLE_COUNT_1_BIT;
-            info.tiling = VK_IMAGE_TILING_OPTIMAL;
-            info.usage = depth ? VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT
-                               : VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
-            info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
-            info.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
-            VKM_CHECK(vkCreateImage(device, &info, nullptr, &images_[i]));
-            VkMemoryRequirements req{};
-            vkGetImageMemoryRequirements(device, images_[i], &req);
-            VkMemoryAllocateInfo alloc{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
-            alloc.allocationSize = req.size;
-            alloc.memoryTypeIndex = context.findMemoryType(req.memoryTypeBits, 0, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
-            VKM_CHECK(vkAllocateMemory(device, &alloc, nullptr, &memory_[i]));
-            VKM_CHECK(vkBindImageMemory(device, images_[i], memory_[i], 0));
-            VkImageViewCreateInfo viewInfo{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
-            viewInfo.image = images_[i];
-            viewInfo.viewType = VK_IMAGE_VIEW_TYPE_2D;
-            viewInfo.format = info.format;
-            viewInfo.subresourceRange = {VkImageAspectFlags(depth ? VK_IMAGE_ASPECT_DEPTH_BIT : VK_IMAGE_ASPECT_COLOR_BIT), 0, 1, 0, 1};
-            VKM_CHECK(vkCreateImageView(device, &viewInfo, nullptr, &views_[i]));
+            render::createAttachmentImage(context, width, height, imageFormat(i),
+                                          depth ? VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT
+                                                : VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
+                                          depth ? VK_IMAGE_ASPECT_DEPTH_BIT : VK_IMAGE_ASPECT_COLOR_BIT, images_[i], memory_[i], views_[i]);
         }
 
         VkAttachmentDescription attachments[kImages]{};
