@@ -20,14 +20,18 @@ void main() {
     worldPos = inPosition;
     worldNormal = inNormal;
     intensity = inColor.a > 0.0 ? dot(inColor.rgb, vec3(0.299, 0.587, 0.114)) : -4.0;
-    vec3 c;
+    // The depth pass and the colour pass (which keeps only fragments at exactly the depth the first wrote) must
+    // compute the same position bit for bit: `precise` forbids the compiler to contract either differently.
+    // (`invariant gl_Position` says the same, but the validation layer's SPIR-V checker of Debian 12 rejects
+    // the decoration glslang puts on gl_PerVertex.)
+    precise vec3 c;
     c.x = dot(pc.worldToCamera[0].xyz, inPosition) + pc.worldToCamera[0].w;
     c.y = dot(pc.worldToCamera[1].xyz, inPosition) + pc.worldToCamera[1].w;
     c.z = dot(pc.worldToCamera[2].xyz, inPosition) + pc.worldToCamera[2].w;
     float width = pc.viewport.x, height = pc.viewport.y, near = pc.viewport.z, far = pc.viewport.w;
     // clip x / w = 2 (u + 0.5) / width - 1 with u = fx x / z + cx, w = z (so the rasterizer divides).
-    float x = 2.0 * (pc.intrinsics.x * c.x + (pc.intrinsics.z + 0.5) * c.z) / width - c.z;
-    float y = 2.0 * (pc.intrinsics.y * c.y + (pc.intrinsics.w + 0.5) * c.z) / height - c.z;
-    float z = far * (c.z - near) / (far - near);
+    precise float x = 2.0 * (pc.intrinsics.x * c.x + (pc.intrinsics.z + 0.5) * c.z) / width - c.z;
+    precise float y = 2.0 * (pc.intrinsics.y * c.y + (pc.intrinsics.w + 0.5) * c.z) / height - c.z;
+    precise float z = far * (c.z - near) / (far - near);
     gl_Position = vec4(x, y, z, c.z);
 }

@@ -21,6 +21,16 @@ constexpr int kDepthImage = 3;
 VkFormat imageFormat(int i) { return i == kDepthImage ? kDepthFormat : i == 2 ? kIntensityFormat : kMapFormat; }
 
 
+// Where no model was drawn the position and normal maps keep their clear value: xyz this far below any real
+// coordinate (so that the MAX blend of the equal-depth pass always takes a drawn value), w = 0 ("no model").
+constexpr float kNoModel = -3.0e38f;
+
+bool canBlend(const vk::Context& context, VkFormat format) {
+    VkFormatProperties props{};
+    vkGetPhysicalDeviceFormatProperties(context.physicalDevice(), format, &props);
+    return (props.optimalTilingFeatures & VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BLEND_BIT) != 0;
+}
+
 void requireFormat(const vk::Context& context, VkFormat format, VkFormatFeatureFlags feature, const char* what) {
     VkFormatProperties props{};
     vkGetPhysicalDeviceFormatProperties(context.physicalDevice(), format, &props);
@@ -42,6 +52,7 @@ ModelMapRenderer::ModelMapRenderer(const vk::Context& context, int width, int he
     requireFormat(context, kMapFormat, VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BIT, "R32G32B32A32_SFLOAT colour attachment");
     requireFormat(context, kIntensityFormat, VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BIT, "R32_SFLOAT colour attachment");
     requireFormat(context, kDepthFormat, VK_FORMAT_FEATURE_DEPTH_STENCIL_ATTACHMENT_BIT, "D32_SFLOAT depth attachment");
+    tiesIndependentOfOrder_ = drawsTiesIndependentOfOrder(context);
 
     VkDevice device = context.device();
     VkShaderModule vert = VK_NULL_HANDLE, frag = VK_NULL_HANDLE;
@@ -153,13 +164,13 @@ ModelMapRenderer::ModelMapRenderer(const vk::Context& context, int width, int he
         raster.lineWidth = 1.0f;
         VkPipelineMultisampleStateCreateInfo multisample{VK_STRUCTURE_TYPE_PIPELINE_MULTISAMPLE_STATE_CREATE_INFO};
         multisample.rasterizationSamples = VK_SAMPLE_COUNT_1_BIT;
+        // Two pipelines (record(): why). The depth pass writes the nearest depth and no colour; the colour pass
+        // draws where the depth is equal, without writing it, and blends by MAX where the device can.
         VkPipelineDepthStencilStateCreateInfo depthState{VK_STRUCTURE_TYPE_PIPELINE_DEPTH_STENCIL_STATE_CREATE_INFO};
         depthState.depthTestEnable = VK_TRUE;
         depthState.depthWriteEnable = VK_TRUE;
         depthState.depthCompareOp = VK_COMPARE_OP_LESS;
-        VkPipelineColorBlendAttachmentState blendAttachments[3]{};
-        for (auto& b : blendAttachments)
-            b.colorWriteMask = VK_COLOR_COMPONENT_R_BIT | VK_COLOR_COMPONENT_G_BIT | VK_COLOR_COMPONENT_B_BIT | VK_COLOR_COMPONENT_A_BIT;
+        VkPipelineColorBlendAttachmentState blendAttachments[3]{};   // colour writes off
         VkPipelineColorBlendStateCreateInfo blend{VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO};
         blend.attachmentCount = 3;
         blend.pAttachments = blendAttachments;
@@ -176,7 +187,17 @@ ModelMapRenderer::ModelMapRenderer(const vk::Context& context, int width, int he
         info.layout = pipelineLayout_;
         info.renderPass = renderPass_;
         info.subpass = 0;
-        VKM_CHECK(vkCreateGraphicsPipelines(device, VK_NULL_HANDLE, 1, &info, nullptr, &pipeline_));
+        VKM_CHECK(vkCreateGraphicsPipelines(device, VK_NULL_HANDLE, 1, &info, nullptr, &depthPipeline_));
+
+        depthState.depthWriteEnable = VK_FALSE;
+        depthState.depthCompareOp = VK_COMPARE_OP_EQUAL;
+        for (auto& b : blendAttachments) {
+            b.colorWriteMask = VK_COLOR_COMPONENT_R_BIT | VK_COLOR_COMPONENT_G_BIT | VK_COLOR_COMPONENT_B_BIT | VK_COLOR_COMPONENT_A_BIT;
+            b.blendEnable = tiesIndependentOfOrder_ ? VK_TRUE : VK_FALSE;
+            b.colorBlendOp = b.alphaBlendOp = VK_BLEND_OP_MAX;   // MAX ignores the blend factors
+            b.srcColorBlendFactor = b.dstColorBlendFactor = b.srcAlphaBlendFactor = b.dstAlphaBlendFactor = VK_BLEND_FACTOR_ONE;
+        }
+        VKM_CHECK(vkCreateGraphicsPipelines(device, VK_NULL_HANDLE, 1, &info, nullptr, &colorPipeline_));
     } catch (...) {
         if (vert) vkDestroyShaderModule(device, vert, nullptr);
         if (frag) vkDestroyShaderModule(device, frag, nullptr);
@@ -187,11 +208,16 @@ ModelMapRenderer::ModelMapRenderer(const vk::Context& context, int width, int he
     vkDestroyShaderModule(device, frag, nullptr);
 }
 
+bool ModelMapRenderer::drawsTiesIndependentOfOrder(const vk::Context& context) {
+    return canBlend(context, kMapFormat) && canBlend(context, kIntensityFormat);
+}
+
 ModelMapRenderer::~ModelMapRenderer() { release(); }
 
 void ModelMapRenderer::release() {
     VkDevice device = context_.device();
-    if (pipeline_) vkDestroyPipeline(device, pipeline_, nullptr);
+    if (depthPipeline_) vkDestroyPipeline(device, depthPipeline_, nullptr);
+    if (colorPipeline_) vkDestroyPipeline(device, colorPipeline_, nullptr);
     if (pipelineLayout_) vkDestroyPipelineLayout(device, pipelineLayout_, nullptr);
     if (framebuffer_) vkDestroyFramebuffer(device, framebuffer_, nullptr);
     if (renderPass_) vkDestroyRenderPass(device, renderPass_, nullptr);
@@ -201,7 +227,7 @@ void ModelMapRenderer::release() {
         if (memory_[i]) vkFreeMemory(device, memory_[i], nullptr);
         views_[i] = VK_NULL_HANDLE, images_[i] = VK_NULL_HANDLE, memory_[i] = VK_NULL_HANDLE;
     }
-    pipeline_ = VK_NULL_HANDLE, pipelineLayout_ = VK_NULL_HANDLE, framebuffer_ = VK_NULL_HANDLE, renderPass_ = VK_NULL_HANDLE;
+    depthPipeline_ = VK_NULL_HANDLE, colorPipeline_ = VK_NULL_HANDLE, pipelineLayout_ = VK_NULL_HANDLE, framebuffer_ = VK_NULL_HANDLE, renderPass_ = VK_NULL_HANDLE;
 }
 
 void ModelMapRenderer::record(VkCommandBuffer cmd, const MeshBuffers& mesh, const Pose& cameraToWorld, const Intrinsics& intrinsics,
@@ -217,7 +243,9 @@ void ModelMapRenderer::record(VkCommandBuffer cmd, const MeshBuffers& mesh, cons
 
     const bool hasMesh = mesh.vertices && mesh.indices && mesh.drawIndirect;
     if (hasMesh) recordMeshReadBarrier(cmd);
-    VkClearValue clears[kImages]{};   // position and normal 0 (w = 0: no model), intensity -1 (none), depth 1 (far)
+    VkClearValue clears[kImages]{};   // position and normal xyz kNoModel, w = 0 (no model); intensity -1 (none); depth 1 (far)
+    for (int i = 0; i < 2; ++i)
+        for (int c = 0; c < 3; ++c) clears[i].color.float32[c] = kNoModel;
     clears[2].color.float32[0] = -1.0f;
     clears[kDepthImage].depthStencil = {1.0f, 0};
     VkRenderPassBeginInfo begin{VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO};
@@ -228,12 +256,19 @@ void ModelMapRenderer::record(VkCommandBuffer cmd, const MeshBuffers& mesh, cons
     begin.pClearValues = clears;
     vkCmdBeginRenderPass(cmd, &begin, VK_SUBPASS_CONTENTS_INLINE);
     if (hasMesh) {
-        vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline_);
-        vkCmdPushConstants(cmd, pipelineLayout_, VK_SHADER_STAGE_VERTEX_BIT, 0, sizeof(push), &push);
+        // The mesh's triangle order changes from run to run (its heaps are allocated by atomics), and where two
+        // triangles meet a pixel at exactly the same depth (a fold at a silhouette) one draw would keep
+        // whichever came first: the same frames would give poses differing in the 9th digit. So the maps are
+        // drawn twice: the nearest depth first, then every triangle at exactly that depth, combined by MAX per
+        // component, which is the same in any order (tied triangles agree to float rounding).
         VkDeviceSize zero = 0;
         vkCmdBindVertexBuffers(cmd, 0, 1, &mesh.vertices, &zero);
         vkCmdBindIndexBuffer(cmd, mesh.indices, 0, VK_INDEX_TYPE_UINT32);
-        vkCmdDrawIndexedIndirect(cmd, mesh.drawIndirect, mesh.drawIndirectOffset, 1, 0);
+        for (VkPipeline pipeline : {depthPipeline_, colorPipeline_}) {
+            vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline);
+            vkCmdPushConstants(cmd, pipelineLayout_, VK_SHADER_STAGE_VERTEX_BIT, 0, sizeof(push), &push);
+            vkCmdDrawIndexedIndirect(cmd, mesh.drawIndirect, mesh.drawIndirectOffset, 1, 0);
+        }
     }
     vkCmdEndRenderPass(cmd);
 
