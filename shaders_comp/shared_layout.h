@@ -381,7 +381,8 @@ VKM_CONST TRACK_BINDING_PARTIALS = 7u;        // float: TRACK_SUM_COUNT per work
 VKM_CONST TRACK_BINDING_SUMS = 8u;            // float: TRACK_SUM_COUNT, the partials summed in a fixed order
 VKM_CONST TRACK_BINDING_INTENSITY = 9u;       // float per pyramid pixel: the frame's intensity in [0, 1] (< 0: none)
 VKM_CONST TRACK_BINDING_MODEL_INTENSITY = 10u;// float per pyramid pixel: the mesh's vertex colour as intensity (< 0: none)
-VKM_CONST TRACK_BINDING_COUNT = 11u;
+VKM_CONST TRACK_BINDING_STATE = 11u;          // TrackStateGpu: the estimate the GPU-solved mode refines in place
+VKM_CONST TRACK_BINDING_COUNT = 12u;
 // What one ICP iteration sums over the pixels (one float each). J = [(p - c) x n, n] (6) is the residual
 // r = n . (p - q)'s derivative with respect to a step of the camera pose: a rotation about the camera's
 // centre c and a translation, both in world axes (core/icp_solve.h, applyTwist); w the robust weight. The 6x6 system is symmetric: its upper triangle, row by row.
@@ -413,7 +414,10 @@ struct TrackParamsGpu {
     float colorWeight;
     float colorHuber;           // Huber delta of the intensity residual (intensities in [0, 1])
     uint frameHasColor;         // 1 when this frame's intensity pyramid holds an image
-    float pad0, pad1;
+    // The GPU-solved mode (track_icp_solve): a level stops once a step rotates less than stopRotation radians
+    // and moves less than stopTranslation metres (TrackerOptions).
+    float stopRotation;
+    float stopTranslation;
     VKM_ROWS3(modelWorldToCamera); // the inverse of the pose the model maps were drawn at
 };
 
@@ -430,9 +434,25 @@ struct TrackPush {
     float distanceGate;
     float normalGateCos;
     float huberDelta;
-    float pad;
+    uint flags;                   // TRACK_FLAG_*, and the level in bits TRACK_FLAG_LEVEL_SHIFT..
 };
+// TrackPush::flags. With TRACK_FLAG_STATE the ICP passes read the estimate from TrackStateGpu (which
+// track_icp_solve updates) instead of cameraToWorld, and do nothing once their level has stopped.
+VKM_CONST TRACK_FLAG_STATE = 1u;
+VKM_CONST TRACK_FLAG_LEVEL_SHIFT = 8u;
 
+// The GPU-solved mode's state (docs/TRACKING.md, "One submission"): every ICP iteration's solve pass reads the
+// sums, solves the 6x6 system in float and moves the estimate, so the host waits once per frame instead of
+// once per iteration. The host writes the initial estimate and reads the rest back.
+struct TrackStateGpu {
+    VKM_ROWS3(cameraToWorld);     // the estimate so far
+    uint stoppedLevel;            // level + 1 of the level whose last step was tiny (its remaining iterations
+                                  // do nothing); 0: none
+    uint unsolvedLevels;          // bit l: a system of level l could not be solved (the level stopped there)
+    uint iterations;              // iterations solved (all levels)
+    uint pad;
+    float finalSums[TRACK_SUM_COUNT];   // the sums of level 0's last iteration (before its step)
+};
 #ifdef __cplusplus
 }  // namespace vkmesh::gpu
 #endif

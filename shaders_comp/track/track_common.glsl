@@ -19,13 +19,22 @@ layout(std430, set = 0, binding = TRACK_BINDING_NORMALS) buffer NormalPyramid { 
 layout(std430, set = 0, binding = TRACK_BINDING_MODEL_POSITIONS) buffer ModelPositions { vec4 modelPositions[]; };
 layout(std430, set = 0, binding = TRACK_BINDING_MODEL_NORMALS) buffer ModelNormals { vec4 modelNormals[]; };
 layout(std430, set = 0, binding = TRACK_BINDING_PARTIALS) buffer Partials { float partials[]; };
-layout(std430, set = 0, binding = TRACK_BINDING_SUMS) writeonly buffer Sums { float sums[]; };
+layout(std430, set = 0, binding = TRACK_BINDING_SUMS) buffer Sums { float sums[]; };
 layout(std430, set = 0, binding = TRACK_BINDING_INTENSITY) buffer IntensityPyramid { float intensityPyramid[]; };
 layout(std430, set = 0, binding = TRACK_BINDING_MODEL_INTENSITY) buffer ModelIntensity { float modelIntensity[]; };
+
+layout(std430, set = 0, binding = TRACK_BINDING_STATE) buffer State { TrackStateGpu state; };
 
 layout(push_constant) uniform Push { TrackPush pass; };
 
 uvec2 levelSize() { return uvec2(pass.size & 0xFFFFu, pass.size >> 16); }
+
+// The GPU-solved mode (TRACK_FLAG_STATE): the level this ICP pass belongs to, and whether that level has
+// stopped (a tiny or unsolvable step), so that its remaining iterations do nothing. The same value for every
+// invocation of a dispatch (it is read from memory the previous dispatch wrote).
+bool solvedOnGpu() { return (pass.flags & TRACK_FLAG_STATE) != 0u; }
+uint passLevel() { return pass.flags >> TRACK_FLAG_LEVEL_SHIFT; }
+bool levelStopped() { return solvedOnGpu() && state.stoppedLevel == passLevel() + 1u; }
 
 // A depth sample is a measurement when it lies in [minDepth, maxDepth] (maxDepth 0: no upper limit); NaN and
 // infinities never are.

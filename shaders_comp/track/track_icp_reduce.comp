@@ -2,7 +2,7 @@
 // Tracking, one ICP iteration at one level, part 1: projective data association and the point-to-plane terms
 // of every pixel, summed per workgroup.
 // For a frame pixel with a point p and normal m (camera space): p_w = T p with T the pose estimated so far;
-// p_w is projected into the model maps (drawn at the model pose); the model point q and normal n there are
+// (T: TrackPush::cameraToWorld, or TrackStateGpu's in the GPU-solved mode); p_w is projected into the model maps (drawn at the model pose); the model point q and normal n there are
 // associated when |p_w - q| <= distanceGate and (R m) . n >= normalGateCos. Residual r = n . (p_w - q);
 // J = [(p_w - c) x n, n] its derivative for a rotation about the camera's centre c and a translation (both
 // in world axes); Huber weight w. Gates and Huber delta are the level's (TrackPush). Each invocation sums
@@ -33,6 +33,11 @@ void addTerm(vec3 jr, vec3 jt, float r, float w) {
 }
 
 void main() {
+    // Uniform over the dispatch, so the whole workgroup leaves before any barrier.
+    if (levelStopped()) return;
+    // The estimate: the host's (push constants), or the GPU-solved mode's, which the last solve pass moved.
+    vec4 estimate[3] = pass.cameraToWorld;
+    if (solvedOnGpu()) estimate = state.cameraToWorld;
     uvec2 size = levelSize();
     uint pixels = size.x * size.y;
     uint lane = gl_LocalInvocationID.x;
@@ -46,7 +51,7 @@ void main() {
         vec4 normal = normalPyramid[index];
         if (point.w == 0.0 || normal.w == 0.0) continue;
         acc[TRACK_SUM_VALID] += 1.0;
-        precise vec3 world = transformPoint(pass.cameraToWorld, point.xyz);
+        precise vec3 world = transformPoint(estimate, point.xyz);
         precise vec3 model = transformPoint(track.modelWorldToCamera, world);
         if (!(model.z > 0.0)) continue;
         precise float u = pass.intrinsics.x * (model.x / model.z) + pass.intrinsics.z;
@@ -62,11 +67,11 @@ void main() {
         precise vec3 diff = world - q.xyz;
         precise float distance2 = dot(diff, diff);
         if (distance2 > pass.distanceGate * pass.distanceGate) continue;
-        precise vec3 frameNormal = rotateVector(pass.cameraToWorld, normal.xyz);
+        precise vec3 frameNormal = rotateVector(estimate, normal.xyz);
         if (dot(frameNormal, n) < pass.normalGateCos) continue;
         precise float r = dot(n, diff);
         precise float w = abs(r) <= pass.huberDelta ? 1.0 : pass.huberDelta / abs(r);
-        precise vec3 centre = vec3(pass.cameraToWorld[0].w, pass.cameraToWorld[1].w, pass.cameraToWorld[2].w);
+        precise vec3 centre = vec3(estimate[0].w, estimate[1].w, estimate[2].w);
         precise vec3 lever = world - centre;
         addTerm(cross(lever, n), n, r, w);
         acc[TRACK_SUM_WEIGHTED_ERROR] += w * r * r;

@@ -43,6 +43,8 @@ TrackParamsGpu trackParamsFor(const TrackerOptions& o) {
     if (!(o.colorWeight >= 0) || !(o.colorHuber > 0)) throw Error("tracking: the colour weight must be >= 0 and its Huber delta > 0");
     p.colorWeight = o.colorWeight;
     p.colorHuber = o.colorHuber;
+    p.stopRotation = float(o.stopRotation);
+    p.stopTranslation = float(o.stopTranslation);
     return p;
 }
 
@@ -93,12 +95,14 @@ CameraTracker::CameraTracker(const vk::Context& context, int width, int height, 
       sums_(context, TRACK_SUM_COUNT * sizeof(float), kStorage, vk::MemoryUse::Readback, "tracking sums"),
       intensity_(context, VkDeviceSize(pyramidPixels_) * sizeof(float), kStorage, vk::MemoryUse::Device, "tracking intensity pyramid"),
       modelIntensity_(context, VkDeviceSize(pyramidPixels_) * sizeof(float), kStorage, vk::MemoryUse::Device, "tracking model intensity"),
+      state_(context, sizeof(TrackStateGpu), kStorage, vk::MemoryUse::Readback, "tracking state"),
       filter_(context, table_, "track_filter_depth"),
       downsampleDepth_(context, table_, "track_downsample_depth"),
       vertexNormals_(context, table_, "track_vertex_normals"),
       downsampleModel_(context, table_, "track_downsample_model"),
       reduce_(context, table_, "track_icp_reduce"),
       sum_(context, table_, "track_icp_sum"),
+      solve_(context, table_, "track_icp_solve"),
       modelMaps_(context, width, height),
       recorder_(context),
       timer_(context, 16) {
@@ -116,6 +120,7 @@ CameraTracker::CameraTracker(const vk::Context& context, int width, int height, 
     table_.bind(TRACK_BINDING_SUMS, sums_);
     table_.bind(TRACK_BINDING_INTENSITY, intensity_);
     table_.bind(TRACK_BINDING_MODEL_INTENSITY, modelIntensity_);
+    table_.bind(TRACK_BINDING_STATE, state_);
 }
 
 CameraTracker::~CameraTracker() { recorder_.wait(); }
@@ -138,15 +143,27 @@ TrackPush CameraTracker::levelPush(int level, const Pose& estimate) const {
     return push;
 }
 
-void CameraTracker::prepare(const DepthImage& depth, const Intrinsics& intrinsics, const MeshBuffers& mesh, const Pose& modelPose,
-                            const ColorImage* color) {
+void CameraTracker::checkFrameSize(const DepthImage& depth) const {
     if (depth.width != width_ || depth.height != height_ || depth.meters.size() != size_t(width_) * size_t(height_))
         throw Error("tracking: a " + std::to_string(depth.width) + "x" + std::to_string(depth.height) + " depth image for a tracker of " +
                     std::to_string(width_) + "x" + std::to_string(height_));
+}
+
+void CameraTracker::prepare(const DepthImage& depth, const Intrinsics& intrinsics, const MeshBuffers& mesh, const Pose& modelPose,
+                            const ColorImage* color) {
+    checkFrameSize(depth);
+    VkCommandBuffer cmd = recorder_.begin();   // waits for the last submission: the input buffer is free
+    recordPrepare(cmd, depth, intrinsics, mesh, modelPose, color);
+    recorder_.submitAndWait();
+    gpuMs_ = 0;
+    for (const auto& [name, ms] : timer_.read()) gpuMs_ += ms;
+}
+
+void CameraTracker::recordPrepare(VkCommandBuffer cmd, const DepthImage& depth, const Intrinsics& intrinsics, const MeshBuffers& mesh,
+                                  const Pose& modelPose, const ColorImage* color) {
     intrinsics_ = intrinsics;
     intrinsics_.width = width_, intrinsics_.height = height_;
     modelPose_ = modelPose;
-    VkCommandBuffer cmd = recorder_.begin();   // waits for the last submission: the input buffer is free
     std::memcpy(rawDepth_.mapped(), depth.meters.data(), depth.meters.size() * sizeof(float));
     copyRows(paramValues_.modelWorldToCamera, inverseRigid(modelPose));
     const bool withColor = options_.colorWeight > 0 && color && !color->empty();
@@ -190,9 +207,6 @@ void CameraTracker::prepare(const DepthImage& depth, const Intrinsics& intrinsic
         vk::memoryBarrier(cmd);
     }
     timer_.mark(cmd, "track_model");
-    recorder_.submitAndWait();
-    gpuMs_ = 0;
-    for (const auto& [name, ms] : timer_.read()) gpuMs_ += ms;
 }
 
 IcpSums CameraTracker::sums(int level, const Pose& estimate) {
@@ -217,6 +231,59 @@ IcpSums CameraTracker::sums(int level, const Pose& estimate) {
     IcpSums out{};
     for (uint32_t k = 0; k < TRACK_SUM_COUNT; ++k) out[k] = values[k];
     return out;
+}
+
+IcpResult CameraTracker::trackInOneSubmission(const DepthImage& depth, const Intrinsics& intrinsics, const MeshBuffers& mesh,
+                                              const Pose& modelPose, const Pose& initial, const ColorImage* color) {
+    checkFrameSize(depth);
+    VkCommandBuffer cmd = recorder_.begin();
+    recordPrepare(cmd, depth, intrinsics, mesh, modelPose, color);
+    TrackStateGpu start{};
+    copyRows(start.cameraToWorld, initial);
+    vkCmdUpdateBuffer(cmd, state_.handle(), 0, sizeof(start), &start);
+    vk::memoryBarrier(cmd);
+    // Every iteration's passes are recorded; those of a level that has stopped return at once (the state
+    // says so), which is how a level still stops early without the host.
+    for (int level = int(TRACK_LEVELS) - 1; level >= 0; --level) {
+        const uint32_t groups = reduceGroups(levelWidth(width_, level) * levelHeight(height_, level));
+        TrackPush push = levelPush(level, initial);
+        push.flags = TRACK_FLAG_STATE | uint32_t(level) << TRACK_FLAG_LEVEL_SHIFT;
+        TrackPush sumPush{};
+        sumPush.size = groups;
+        sumPush.flags = push.flags;
+        for (int it = 0; it < options_.iterations[level]; ++it) {
+            reduce_.dispatch(cmd, &push, groups);
+            vk::memoryBarrier(cmd);
+            sum_.dispatch(cmd, &sumPush, 1);
+            vk::memoryBarrier(cmd);
+            solve_.dispatch(cmd, &sumPush, 1);
+            vk::memoryBarrier(cmd);
+        }
+    }
+    timer_.mark(cmd, "track_icp");
+    recorder_.submitAndWait();
+    gpuMs_ = 0;
+    for (const auto& [name, ms] : timer_.read()) gpuMs_ += ms;
+
+    state_.invalidate();
+    TrackStateGpu end;
+    std::memcpy(&end, state_.mapped(), sizeof(end));
+    IcpResult result;
+    result.submissions = 1;
+    result.iterations = int(end.iterations);
+    result.solved = end.unsolvedLevels == 0;
+    Pose pose = Pose::Identity();
+    for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 4; ++c) pose(r, c) = end.cameraToWorld[r][c];
+    // The GPU kept the rotation orthonormal in float; make it so in double, as applyTwist does.
+    result.cameraToWorld = applyTwist(Twist::Zero(), pose);
+    IcpSums finalSums{};
+    for (uint32_t k = 0; k < TRACK_SUM_COUNT; ++k) finalSums[k] = end.finalSums[k];
+    result.finalSystem = icpSystem(finalSums);
+    // For the loss checks (conditioning, solvable): the same analysis of level 0's last system as the host mode's.
+    result.finalStep = solveIcpStep(result.finalSystem);
+    if (end.unsolvedLevels & 1u) result.finalStep.solved = false;
+    return result;
 }
 
 IcpResult CameraTracker::align(const Pose& initial) {

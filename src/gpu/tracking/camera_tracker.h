@@ -9,6 +9,9 @@
 //              (core/icp_solve.h).
 //   align()    coarse to fine from an initial pose, TrackerOptions::iterations per level, stopping a level
 //              early when the step is tiny.
+//   trackInOneSubmission()  prepare() and align() in one submission: every iteration's 6x6 system solved on
+//              the GPU in float (track_icp_solve), the estimate kept in GPU memory; one host wait per frame
+//              instead of one per iteration (TrackerOptions::solveOnGpu).
 // The loss policy (too few inliers, a jump, an ill-conditioned system, a rising error) and the prediction are
 // PoseTracker's (pose_tracker.h). CPU reference: src/cpu/reference_tracking.h.
 #pragma once
@@ -66,6 +69,10 @@ struct TrackerOptions {
     double maxJumpDegrees = 30.0;      //  or turned further;
     double maxErrorRise = 3.0;         //  its inlier RMSE exceeds this many times the recent tracked frames'
     double minErrorForRise = 0.005;    //  (and this many metres: a tiny error may triple harmlessly).
+    // Where the 6x6 systems are solved: false, on the host in double after each iteration (one submission per
+    // iteration); true, on the GPU in float, the whole frame's ICP in one submission with prepare()
+    // (CameraTracker::trackInOneSubmission; docs/TRACKING.md, "One submission").
+    bool solveOnGpu = false;
 };
 
 // The options as the shaders read them (TrackParamsGpu, without the model pose); throws Error naming a value
@@ -101,6 +108,10 @@ public:
     IcpSums sums(int level, const Pose& estimate);
     // ICP from `initial`, coarse to fine (after prepare).
     IcpResult align(const Pose& initial);
+    // prepare() and ICP from `initial` in one submission, every system solved on the GPU (float Cholesky of
+    // the equilibrated system; the same steps, stopping rule and level-0 final system as align()).
+    IcpResult trackInOneSubmission(const DepthImage& depth, const Intrinsics& intrinsics, const MeshBuffers& mesh, const Pose& modelPose,
+                                   const Pose& initial, const ColorImage* color = nullptr);
 
     // Milliseconds the GPU spent in the last prepare() and in the ICP passes since (timestamps; 0 without).
     double gpuMilliseconds() const { return gpuMs_; }
@@ -122,6 +133,10 @@ public:
 
 private:
     TrackPush levelPush(int level, const Pose& estimate) const;
+    void checkFrameSize(const DepthImage& depth) const;
+    // prepare()'s passes, recorded into `cmd` (the caller submits).
+    void recordPrepare(VkCommandBuffer cmd, const DepthImage& depth, const Intrinsics& intrinsics, const MeshBuffers& mesh,
+                       const Pose& modelPose, const ColorImage* color);
     const vk::Context& context_;
     int width_, height_;
     TrackerOptions options_;
@@ -132,8 +147,8 @@ private:
     vk::BindingTable table_;
     TrackParamsGpu paramValues_{};   // what params_ holds (the model pose changes every prepare())
     vk::Buffer params_, rawDepth_, rawIntensity_, depth_, points_, normals_, modelPositions_, modelNormals_, partials_, sums_;
-    vk::Buffer intensity_, modelIntensity_;
-    vk::ComputePipeline filter_, downsampleDepth_, vertexNormals_, downsampleModel_, reduce_, sum_;
+    vk::Buffer intensity_, modelIntensity_, state_;
+    vk::ComputePipeline filter_, downsampleDepth_, vertexNormals_, downsampleModel_, reduce_, sum_, solve_;
     ModelMapRenderer modelMaps_;
     vk::CommandRecorder recorder_;
     vk::StageTimer timer_;

@@ -42,8 +42,13 @@ TrackingReport PoseTracker::track(const DepthImage& depth, const Intrinsics& int
     if (!tracker_ || tracker_->width() != depth.width || tracker_->height() != depth.height)
         tracker_ = std::make_unique<CameraTracker>(context_, depth.width, depth.height, options_);
     const Pose predicted = prediction();
-    tracker_->prepare(depth, intrinsics, mesh, predicted, color);
-    IcpResult icp = tracker_->align(predicted);
+    IcpResult icp;
+    if (options_.solveOnGpu) {
+        icp = tracker_->trackInOneSubmission(depth, intrinsics, mesh, predicted, predicted, color);
+    } else {
+        tracker_->prepare(depth, intrinsics, mesh, predicted, color);
+        icp = tracker_->align(predicted);
+    }
     TrackingReport report;
     report.iterations = icp.iterations;
     report.submissions = icp.submissions;
