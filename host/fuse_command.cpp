@@ -76,6 +76,7 @@ struct FuseArgs {
     std::string trajectoryPath;        // the pose used for every frame, TUM format
     std::string trackIterations;       // "10,5,4": ICP iterations per level, finest first
     float trackColorWeight = gpu::TrackerOptions{}.colorWeight;   // the photometric term's weight (0: off)
+    std::string trackSolve = "host";   // where the ICP systems are solved: host (double, a wait per iteration) or gpu
     const CLI::App* cmd = nullptr;   // which options were given (a loaded map's settings fill the others)
 };
 
@@ -153,8 +154,9 @@ int runFuse(const FuseArgs& args) {
     if (!args.loadPath.empty()) loaded = map::readFile(args.loadPath);
     if (args.growHeaps)
         std::cerr << "note: --grow-heaps is deprecated and has no effect: capacities grow by default (--no-grow keeps them fixed)\n";
-    if ((!args.trackIterations.empty() || args.cmd->get_option("--track-color-weight")->count() > 0) && !args.track)
-        throw Error("--track-iterations and --track-color-weight need --track");
+    if ((!args.trackIterations.empty() || args.cmd->get_option("--track-color-weight")->count() > 0 ||
+         args.cmd->get_option("--track-solve")->count() > 0) && !args.track)
+        throw Error("--track-iterations, --track-color-weight and --track-solve need --track");
     std::optional<std::array<int, gpu::TRACK_LEVELS>> iterations;
     if (!args.trackIterations.empty()) iterations = parseIterations(args.trackIterations);
     DatasetArgs data = args.data;
@@ -221,6 +223,7 @@ int runFuse(const FuseArgs& args) {
         trackerOptions.maxDepth = args.data.maxDepth;
         if (iterations) trackerOptions.iterations = *iterations;
         trackerOptions.colorWeight = args.trackColorWeight;
+        trackerOptions.solveOnGpu = args.trackSolve == "gpu";
         tracker.emplace(context, trackerOptions);
     }
     std::vector<TimedPose> trajectory;   // the pose used for every frame (tracked, predicted or given)
@@ -576,6 +579,7 @@ int runFuse(const FuseArgs& args) {
                              {"rmse_m", statsOf(trackRmse)},
                              {"inlier_share", statsOf(trackInlierShare)},
                              {"color_weight", args.trackColorWeight},
+                             {"solve", args.trackSolve},
                              {"trajectory", args.trajectoryPath}};
     } else {
         stats["tracking"] = {{"enabled", false}, {"trajectory", args.trajectoryPath}};
@@ -677,6 +681,10 @@ Run addFuseCommand(CLI::App& app) {
                     "weight of tracking's photometric term (the frame's intensity against the mesh's fused colours; needs "
                     "colour images and colour fusion); 0: geometry only")
         ->check(CLI::Range(0.0, 100.0));
+    cmd->add_option("--track-solve", args->trackSolve,
+                    "where tracking solves its 6x6 systems: host (in double, one GPU submission per ICP iteration) or gpu (in "
+                    "float, the frame's whole tracking in one submission; docs/TRACKING.md)")
+        ->check(CLI::IsMember({"host", "gpu"}));
     cmd->add_option("--serve", args->servePort,
                     "serve the live browser viewer on this port while fusing (docs/VIEWER.md; open the URL it prints)")
         ->check(CLI::Range(0, 65535));
