@@ -5,6 +5,7 @@
 # tracker's time against fusion's and meshing's (the --stats JSON).
 #
 #   bench/track_bench.sh OUT_DIR [DATASETS_DIR] [--frames N] [extra fuse options...]
+#   TRACK_OPTIONS="--track-solve gpu" bench/track_bench.sh OUT_DIR     # options for the tracked runs only
 #
 # DATASETS_DIR: ../shared/datasets by default (or $VKMESH_DATASETS); a sequence that is absent is skipped with
 # a note. Writes OUT_DIR/<name>.{txt,ply,json,ate.json,log} and prints one summary line per run.
@@ -23,7 +24,8 @@ run() {
     local name=$1 folder=$2 voxel=$3 maxdt=$4
     shift 4
     if [[ ! -d $folder ]]; then echo "$name: $folder is absent, skipped"; return; fi
-    "$vkmesh" fuse "$folder" --track --voxel "$voxel" --trajectory "$out/$name.txt" -o "$out/$name.ply" \
+    # shellcheck disable=SC2086  # TRACK_OPTIONS: words on purpose
+    "$vkmesh" fuse "$folder" --track ${TRACK_OPTIONS:-} --voxel "$voxel" --trajectory "$out/$name.txt" -o "$out/$name.ply" \
         --stats "$out/$name.json" -q "$@" > "$out/$name.log" 2>&1 || { echo "$name: fuse failed, see $out/$name.log"; return; }
     $python "$here/bench/ate.py" "$folder/groundtruth.txt" "$out/$name.txt" --max-dt "$maxdt" --json "$out/$name.ate.json" > /dev/null
     $python - "$out/$name.json" "$out/$name.ate.json" "$name" "$voxel" <<'EOF'
@@ -34,7 +36,8 @@ fusion_mesh = sum(g[k]["median"] for k in ("allocate", "fuse", "mesh_total") if 
 print(f"{name}: {a['pairs']} frames, voxel {voxel} m: ATE RMSE {a['ate']['rmse']*100:.2f} cm (max {a['ate']['max']*100:.2f}), "
       f"RPE {a['rpe']['trans_rmse']*100:.2f} cm / {a['rpe']['rot_rmse_deg']:.2f} deg per frame; lost {t['lost_frames']}; "
       f"tracking {t['ms_per_frame']['median']:.1f} ms wall, {t['gpu_ms_per_frame']['median']:.1f} ms GPU (median), "
-      f"{t['iterations']['mean']:.1f} iterations, {t['submissions_per_frame']['mean']:.1f} round trips per frame; "
+      f"{t['iterations']['mean']:.1f} iterations, {t['submissions_per_frame']['mean']:.1f} round trips per frame "
+      f"(solved on the {t.get('solve', 'host')}); "
       f"fusion + meshing {fusion_mesh:.1f} ms GPU, {s['wall_ms_per_frame']['median']:.1f} ms wall (median)")
 EOF
 }

@@ -7,7 +7,7 @@
 // and libvulkan.so.1: scripts/pack_gpubench.sh packs it with the loader for a bare machine (bench/README.md).
 //
 //   vkmesh_gpubench [--voxel 0.03,0.01] [--frames 60] [--repeat 1] [--warmup 10] [--device I] [--json FILE]
-//                   [--publish] [--track] [--quick] [--devices]
+//                   [--publish] [--track [--track-solve host|gpu]] [--quick] [--devices]
 //
 // Prints a table per voxel size (median and p90 GPU ms per stage, the frame's GPU and wall time, the meshing
 // total) and writes the same as JSON. Exit codes: 0 done; 1 validation messages (VKMESH_VALIDATION=1);
@@ -75,6 +75,7 @@ struct Options {
     bool validation = false;
     bool publish = false;
     bool track = false;        // every frame after a run's first tracked against the mesh (docs/TRACKING.md)
+    std::string trackSolve = "host";   // where tracking solves its 6x6 systems: host (a wait per iteration) or gpu
     bool quick = false;
     std::string jsonPath;
 };
@@ -195,13 +196,14 @@ vkmesh::gpu::GpuVolumeConfig volumeConfig(double voxel, bool publish) {
 // With `track`, the first frame is fused at its true pose and every later one at the pose tracked against the
 // mesh (lost frames are not fused), as `vkmesh fuse --track` does.
 void fuseSequence(const vkmesh::vk::Context& context, const std::vector<Frame>& rendered, size_t count, double voxel,
-                  bool publish, bool track, VoxelRun* run) {
+                  bool publish, bool track, bool trackSolveOnGpu, VoxelRun* run) {
     vkmesh::gpu::GpuVolume volume(context, volumeConfig(voxel, publish || track));
     const Intrinsics intrinsics = vkmesh::synth::kinectIntrinsics(kWidth, kHeight);
     std::optional<vkmesh::gpu::PoseTracker> tracker;
     if (track) {
         vkmesh::gpu::TrackerOptions options;
         options.maxDepth = kMaxDepth;
+        options.solveOnGpu = trackSolveOnGpu;
         tracker.emplace(context, options);
     }
     for (size_t i = 0; i < count; ++i) {
@@ -406,7 +408,7 @@ int run(Options o, const CLI::App& cli) {
 
     if (o.warmup > 0) {   // raises the GPU's clocks and fills the driver's caches before anything is timed
         std::fprintf(stderr, "warm-up: %zu untimed frames at %s\n", o.warmup, cm(o.voxels.front()).c_str());
-        fuseSequence(context, rendered, o.warmup, o.voxels.front(), o.publish, o.track, nullptr);
+        fuseSequence(context, rendered, o.warmup, o.voxels.front(), o.publish, o.track, o.trackSolve == "gpu", nullptr);
     }
     std::vector<VoxelRun> runs;
     // Written after every voxel size, so that a run stopped part way (run.sh's --timeout) leaves what it measured.
@@ -431,7 +433,7 @@ int run(Options o, const CLI::App& cli) {
                     {"scene", {{"name", "synthetic room (vkmesh synth defaults)"}, {"path", "orbit"},
                                {"loop_frames", o.loopFrames}, {"width", kWidth}, {"height", kHeight},
                                {"max_depth", kMaxDepth}, {"color", true}, {"render_s", renderSeconds}}},
-                    {"pipeline", {{"mode", "incremental"}, {"color_fusion", "average"}, {"publish_mesh", o.publish}, {"track", o.track}}},
+                    {"pipeline", {{"mode", "incremental"}, {"color_fusion", "average"}, {"publish_mesh", o.publish}, {"track", o.track}, {"track_solve", o.trackSolve}}},
                     {"frames_per_run", o.frames},
                     {"repeat", o.repeat},
                     {"warmup_frames", o.warmup},
@@ -452,7 +454,7 @@ int run(Options o, const CLI::App& cli) {
         const auto t0 = Clock::now();
         for (size_t rep = 0; rep < o.repeat; ++rep) {
             std::fprintf(stderr, "fusing %zu frames at %s (%zu/%zu)...\n", o.frames, cm(voxel).c_str(), rep + 1, o.repeat);
-            fuseSequence(context, rendered, o.frames, voxel, o.publish, o.track, &r);
+            fuseSequence(context, rendered, o.frames, voxel, o.publish, o.track, o.trackSolve == "gpu", &r);
         }
         r.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
         printRun(r, o.repeat);
@@ -506,6 +508,10 @@ int main(int argc, char** argv) {
                  "track the camera: every frame after a run's first is aligned to the mesh (ICP against the mesh drawn at "
                  "the predicted pose) and fused at the tracked pose; reports the tracker's GPU time and its error "
                  "(with it, the orbit has 240 poses unless --loop-frames says)");
+    cli.add_option("--track-solve", o.trackSolve,
+                   "with --track: where the ICP systems are solved: host (double, one submission per iteration) or gpu (float, "
+                   "the frame's tracking in one submission)")
+        ->check(CLI::IsMember({"host", "gpu"}));
     cli.add_option("--json", o.jsonPath, "write the results as JSON to this file");
     cli.add_flag("--quick", o.quick, "smoke run for a CPU device (lavapipe): 3 frames per voxel size, no warm-up, "
                                      "unless --frames / --warmup say otherwise");
