@@ -379,17 +379,8 @@ int runFuse(const FuseArgs& args) {
         if (deltaStream) deltaStream->write(report.delta);
 #ifdef VKMESH_HAVE_VIEWER
         if (server) {
-            viewer::FrameInfo info;
-            info.frame = uint32_t(i + 1 - args.firstFrame);
-            info.totalFrames = uint32_t(dataset->size() - args.firstFrame);
-            info.msPerFrame = float(frameWallMs.back());
-            info.blocks = report.counters.blocksInUse;
-            info.hasCamera = true;
-            for (int r = 0; r < 3; ++r)
-                for (int c = 0; c < 4; ++c) info.cameraToWorld[4 * r + c] = float(pose(r, c));
-            info.intrinsics = {intrinsics.fx, intrinsics.fy, intrinsics.cx, intrinsics.cy};
-            info.width = uint32_t(intrinsics.width), info.height = uint32_t(intrinsics.height);
-            server->publish(report.delta, info);
+            server->publish(report.delta, viewer::fusedFrameInfo(uint32_t(i + 1 - args.firstFrame), uint32_t(dataset->size() - args.firstFrame),
+                                                                  frameWallMs.back(), report.counters.blocksInUse, pose, intrinsics));
         }
 #endif
         if (rendering) {

@@ -403,16 +403,9 @@ public:
             if (server_ && fused) {
                 // Posted to the server's own thread (a copy of the delta): a slow page never holds integrate() up.
                 const Pose used = tracked ? tracked->cameraToWorld : *pose;
-                viewer::FrameInfo info;
-                info.frame = frame;
-                info.msPerFrame = float(lastCppSeconds_ * 1000);
-                info.blocks = lastReport_.counters.blocksInUse;
-                info.hasCamera = true;
-                for (int r = 0; r < 3; ++r)
-                    for (int c = 0; c < 4; ++c) info.cameraToWorld[4 * r + c] = float(used(r, c));
-                info.intrinsics = {intrinsics.fx, intrinsics.fy, intrinsics.cx, intrinsics.cy};
-                info.width = uint32_t(depth.width), info.height = uint32_t(depth.height);
-                server_->publish(rec.lastDelta(), info);
+                Intrinsics camera = intrinsics;
+                camera.width = depth.width, camera.height = depth.height;
+                server_->publish(rec.lastDelta(), viewer::fusedFrameInfo(frame, 0, lastCppSeconds_ * 1000, lastReport_.counters.blocksInUse, used, camera));
             }
 #endif
             return lastReport_.warnings;

@@ -62,6 +62,21 @@ void RecordSet::apply(const MeshDelta& delta) {
         if (deltaKind(r.idKind) != DeltaKind::Removed) triangles_[deltaId(r.idKind)] = r;
 }
 
+FrameInfo fusedFrameInfo(uint32_t frame, uint32_t totalFrames, double msPerFrame, uint32_t blocks, const Pose& cameraToWorld,
+                         const Intrinsics& intrinsics) {
+    FrameInfo info;
+    info.frame = frame;
+    info.totalFrames = totalFrames;
+    info.msPerFrame = float(msPerFrame);
+    info.blocks = blocks;
+    info.hasCamera = true;
+    for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 4; ++c) info.cameraToWorld[4 * r + c] = float(cameraToWorld(r, c));
+    info.intrinsics = {intrinsics.fx, intrinsics.fy, intrinsics.cx, intrinsics.cy};
+    info.width = uint32_t(intrinsics.width), info.height = uint32_t(intrinsics.height);
+    return info;
+}
+
 std::string encodeMessage(uint32_t flags, const FrameInfo& info, uint32_t framesCoalesced,
                           const std::vector<std::array<float, 3>>& trajectory, const gpu::DeltaVertexRecord* vertices,
                           size_t vertexCount, const gpu::DeltaTriangleRecord* triangles, size_t triangleCount) {

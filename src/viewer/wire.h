@@ -33,6 +33,10 @@ struct FrameInfo {
     uint32_t width = 0, height = 0;
     uint32_t source = 0;        // kSourceMesh, kSourceStream or kSourceLive: what the page shows (player, "live")
 };
+// A fused frame's info (what `vkmesh fuse --serve` and Python's serve() publish): the camera at `cameraToWorld`
+// with the depth image's intrinsics.
+FrameInfo fusedFrameInfo(uint32_t frame, uint32_t totalFrames, double msPerFrame, uint32_t blocks, const Pose& cameraToWorld,
+                         const Intrinsics& intrinsics);
 
 // The mesh as the records that would build it: vertex and triangle records by id, every one Added. The server
 // keeps one (what a page joining late receives first) and each slow page one (the changes it has not yet been
