@@ -514,6 +514,8 @@ public:
         d["refine"] = c.refine;
         d["lock_free"] = c.lockFree;
         d["track_deltas"] = options_.trackDeltas;
+        d["tracking"] = py::dict("color_weight"_a = shortest(options_.tracker.colorWeight),
+                                 "solve"_a = options_.tracker.solveOnGpu ? "gpu" : "host");
         d["color"] = py::dict("fused"_a = c.params.colorFusion != ColorFusion::Off, "mode"_a = colorModeName(c.params.colorFusion),
                               "recency"_a = shortest(c.params.colorRecency));
         d["recycling"] = py::dict("keep_radius"_a = shortest(c.keepRadius), "recycle"_a = c.recycle,
@@ -669,7 +671,8 @@ std::unique_ptr<PyReconstructor> makeReconstructor(float voxelSize, float trunca
                                                    const std::string& colorMode, float colorRecency, bool trackDeltas, float maxWeight,
                                                    float minWeight, int allocationStride, bool refine, float refineEpsilonVoxels,
                                                    bool lockFree, const Capacities& capacities, bool growCapacities, float keepRadius,
-                                                   bool recycle, long long recycleAfterFrames, float starveWeight, bool validation) {
+                                                   bool recycle, long long recycleAfterFrames, float starveWeight, bool validation,
+                                                   float trackColorWeight, const std::string& trackSolve) {
     ReconstructorOptions o;
     gpu::GpuVolumeConfig& c = o.volume;
     c.params.voxelSize = voxelSize;
@@ -693,6 +696,11 @@ std::unique_ptr<PyReconstructor> makeReconstructor(float voxelSize, float trunca
     if (!(minWeight >= 1.0f && minWeight <= 255.0f)) throw py::value_error("min_weight " + std::to_string(minWeight) + " must be in [1, 255]");
     if (c.blockCapacity == 0) throw py::value_error("block_capacity must be at least 1");
     checkConfig(c);
+    if (!(trackColorWeight >= 0.0f && trackColorWeight <= 100.0f))
+        throw py::value_error("track_color_weight " + std::to_string(trackColorWeight) + " must be in [0, 100]");
+    if (trackSolve != "host" && trackSolve != "gpu") throw py::value_error("track_solve '" + trackSolve + "' must be 'host' or 'gpu'");
+    o.tracker.colorWeight = trackColorWeight;
+    o.tracker.solveOnGpu = trackSolve == "gpu";
     o.trackDeltas = trackDeltas;
     o.device = deviceOptions(device, validation);
     std::unique_ptr<Reconstructor> rec;
@@ -869,6 +877,9 @@ Keyword arguments (all optional):
                         reported as a vkmesh.CapacityWarning (--no-grow)
   keep_radius, recycle, recycle_after_frames, starve_weight   bounded maps (--keep-radius, --recycle, ...)
   validation            the Khronos validation layer (also on with VKMESH_VALIDATION=1)
+  track_color_weight    tracking (integrate without a pose): the photometric term's weight (--track-color-weight; 0.1)
+  track_solve           tracking: 'host' (systems solved in double, a GPU submission per ICP iteration) or 'gpu'
+                        (in float, the frame's tracking in one submission) (--track-solve; 'host')
 
 Bad settings raise ValueError; no usable device or a capacity that does not fit it raises vkmesh.Error.
 )doc")
@@ -878,12 +889,14 @@ Bad settings raise ValueError; no usable device or a capacity that does not fit 
                          double refineEpsilonVoxels, bool lockFree, long long blockCapacity, long long hashCapacity,
                          long long touchedCapacity, long long vertexCapacity, long long chunkCapacity, long long retypeCapacity,
                          long long deltaRecordCapacity, bool growCapacities, double keepRadius, bool recycle,
-                         long long recycleAfterFrames, double starveWeight, bool validation) {
+                         long long recycleAfterFrames, double starveWeight, bool validation, double trackColorWeight,
+                         const std::string& trackSolve) {
                  return makeReconstructor(voxelSize, truncationVoxels, maxDepth, device, colorMode, colorRecency, trackDeltas,
                                           maxWeight, minWeight, allocationStride, refine, refineEpsilonVoxels, lockFree,
                                           {blockCapacity, hashCapacity, touchedCapacity, vertexCapacity, chunkCapacity,
                                            retypeCapacity, deltaRecordCapacity},
-                                          growCapacities, keepRadius, recycle, recycleAfterFrames, starveWeight, validation);
+                                          growCapacities, keepRadius, recycle, recycleAfterFrames, starveWeight, validation,
+                                          float(trackColorWeight), trackSolve);
              }),
              py::kw_only(), "voxel_size"_a = shortest(dp.voxelSize), "truncation_voxels"_a = shortest(dp.truncVoxels),
              // `vkmesh fuse --max-depth` defaults to 4 m (host/cli_options.h, DatasetArgs), not VolumeParams' 5 m.
@@ -895,7 +908,8 @@ Bad settings raise ValueError; no usable device or a capacity that does not fit 
              "touched_capacity"_a = dc.touchedCapacity, "vertex_capacity"_a = dc.vertexCapacity, "chunk_capacity"_a = dc.chunkCapacity,
              "retype_capacity"_a = dc.retypeCapacity, "delta_record_capacity"_a = dc.deltaRecordCapacity,
              "grow_capacities"_a = dc.growCapacities, "keep_radius"_a = shortest(dc.keepRadius), "recycle"_a = dc.recycle,
-             "recycle_after_frames"_a = dc.recycleAfterFrames, "starve_weight"_a = shortest(dc.starveWeight), "validation"_a = false)
+             "recycle_after_frames"_a = dc.recycleAfterFrames, "starve_weight"_a = shortest(dc.starveWeight), "validation"_a = false,
+             "track_color_weight"_a = shortest(gpu::TrackerOptions{}.colorWeight), "track_solve"_a = "host")
         .def("integrate", &PyReconstructor::integrate, "depth"_a, "intrinsics"_a, "pose"_a = py::none(), "depth_scale"_a = 5000.0,
              "color"_a = py::none(), R"doc(
 Fuses one frame and updates the mesh; returns when the GPU has finished it.

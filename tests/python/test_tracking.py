@@ -37,6 +37,22 @@ def test_integrate_without_a_pose_tracks_the_camera(tmp_path):
     assert again["tracked"], again["lost_reason"]
 
 
+def test_tracking_with_the_systems_solved_on_the_gpu(tmp_path):
+    folder = vkmesh.synth(tmp_path / "room", frames=240, width=160, height=120)
+    frames = list(vkmesh.open_dataset(folder, frames=6))
+    r = vkmesh.Reconstructor(voxel_size=0.03, track_solve="gpu", track_color_weight=0)
+    assert r.stats()["tracking"] == {"color_weight": 0.0, "solve": "gpu"}
+    results = [r.integrate(f.depth, f.intrinsics) for f in frames]
+    assert all(res["tracked"] for res in results[1:]), [res["lost_reason"] for res in results]
+    first = np.linalg.inv(frames[0].pose)
+    for i, f in enumerate(frames):
+        assert np.linalg.norm(r.trajectory()[i][:3, 3] - (first @ f.pose)[:3, 3]) < 0.01, i
+    with pytest.raises(ValueError, match="track_solve"):
+        vkmesh.Reconstructor(track_solve="cpu")
+    with pytest.raises(ValueError, match="track_color_weight"):
+        vkmesh.Reconstructor(track_color_weight=-1)
+
+
 def test_integrate_with_a_pose_returns_none_and_is_in_the_trajectory(small_sequence):
     frames = list(vkmesh.open_dataset(small_sequence, frames=2))
     r = vkmesh.Reconstructor(voxel_size=0.04)
