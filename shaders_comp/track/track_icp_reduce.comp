@@ -1,11 +1,12 @@
 #version 450
 // Tracking, one ICP iteration at one level, part 1: projective data association and the point-to-plane terms
 // of every pixel, summed per workgroup.
-// For a frame pixel with a point p and normal m (camera space): p_w = T p with T the pose estimated so far;
-// (T: TrackPush::cameraToWorld, or TrackStateGpu's in the GPU-solved mode); p_w is projected into the model maps (drawn at the model pose); the model point q and normal n there are
-// associated when |p_w - q| <= distanceGate and (R m) . n >= normalGateCos. Residual r = n . (p_w - q);
-// J = [(p_w - c) x n, n] its derivative for a rotation about the camera's centre c and a translation (both
-// in world axes); Huber weight w. Gates and Huber delta are the level's (TrackPush). Each invocation sums
+// For a frame pixel with a point p and normal m (camera space): p_w = T p with T the pose estimated so far
+// (TrackPush::cameraToWorld, or TrackStateGpu's in the GPU-solved mode); p_w is projected into the model
+// maps (drawn at the model pose); the model point q and normal n there are associated when
+// |p_w - q| <= distanceGate and (R m) . n >= normalGateCos. Residual r = n . (p_w - q); J = [(p_w - c) x n, n]
+// its derivative for a rotation about the camera's centre c and a translation (both in world axes); Huber
+// weight w. Gates and Huber delta are the level's (TrackPush). Each invocation sums
 // TRACK_PIXELS_PER_INVOCATION pixels in order, then the workgroup adds its invocations' sums by a fixed binary
 // tree in shared memory: the order of every addition is fixed, so the partials are the same bit for bit on
 // every run (no float atomics). track_icp_sum adds the partials up.
