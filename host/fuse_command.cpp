@@ -228,6 +228,7 @@ int runFuse(const FuseArgs& args) {
     }
     std::vector<TimedPose> trajectory;   // the pose used for every frame (tracked, predicted or given)
     std::vector<double> trackMs, trackGpuMs, trackIterations, trackSubmissions, trackRmse, trackInlierShare;
+    std::map<std::string, std::vector<double>> trackStageMs;   // per tracking stage (timestamps)
     size_t lostFrames = 0;
     std::vector<json> lostList;
     std::optional<DeltaStreamWriter> deltaStream;
@@ -308,6 +309,7 @@ int runFuse(const FuseArgs& args) {
                 tr = tracker->track(depth, intrinsics, volume.meshBuffers(), &color);
                 trackMs.push_back(tr.milliseconds);
                 trackGpuMs.push_back(tr.gpuMilliseconds);
+                for (const auto& [name, ms] : tr.gpuStageMilliseconds) trackStageMs[name].push_back(ms);
                 trackIterations.push_back(tr.iterations);
                 trackSubmissions.push_back(tr.submissions);
                 if (tr.tracked) {
@@ -557,6 +559,8 @@ int runFuse(const FuseArgs& args) {
         ms["p90"] = percentile(trackMs, 0.9);
         json gpuTrackMs = statsOf(trackGpuMs);
         gpuTrackMs["p90"] = percentile(trackGpuMs, 0.9);
+        json stages = json::object();
+        for (const auto& [name, values] : trackStageMs) stages[name] = statsOf(values);
         json its = statsOf(trackIterations);
         its["total"] = std::accumulate(trackIterations.begin(), trackIterations.end(), 0.0);
         stats["tracking"] = {{"enabled", true},
@@ -565,6 +569,7 @@ int runFuse(const FuseArgs& args) {
                              {"lost", lostList},
                              {"ms_per_frame", ms},
                              {"gpu_ms_per_frame", gpuTrackMs},
+                             {"gpu_ms_stages", stages},
                              {"iterations", its},
                              {"submissions_per_frame", statsOf(trackSubmissions)},
                              {"rmse_m", statsOf(trackRmse)},

@@ -155,8 +155,24 @@ void CameraTracker::prepare(const DepthImage& depth, const Intrinsics& intrinsic
     VkCommandBuffer cmd = recorder_.begin();   // waits for the last submission: the input buffer is free
     recordPrepare(cmd, depth, intrinsics, mesh, modelPose, color);
     recorder_.submitAndWait();
-    gpuMs_ = 0;
-    for (const auto& [name, ms] : timer_.read()) gpuMs_ += ms;
+    stageMs_.clear();
+    addStageTimes();
+}
+
+void CameraTracker::addStageTimes() {
+    for (const auto& [name, ms] : timer_.read()) {
+        auto same = std::find_if(stageMs_.begin(), stageMs_.end(), [&](const auto& s) { return s.first == name; });
+        if (same == stageMs_.end())
+            stageMs_.emplace_back(name, ms);
+        else
+            same->second += ms;
+    }
+}
+
+double CameraTracker::gpuMilliseconds() const {
+    double total = 0;
+    for (const auto& [name, ms] : stageMs_) total += ms;
+    return total;
 }
 
 void CameraTracker::recordPrepare(VkCommandBuffer cmd, const DepthImage& depth, const Intrinsics& intrinsics, const MeshBuffers& mesh,
@@ -224,7 +240,7 @@ IcpSums CameraTracker::sums(int level, const Pose& estimate) {
     vk::memoryBarrier(cmd);
     timer_.mark(cmd, "track_icp");
     recorder_.submitAndWait();
-    for (const auto& [name, ms] : timer_.read()) gpuMs_ += ms;
+    addStageTimes();
     sums_.invalidate();
     float values[TRACK_SUM_COUNT];
     std::memcpy(values, sums_.mapped(), sizeof(values));
@@ -262,8 +278,8 @@ IcpResult CameraTracker::trackInOneSubmission(const DepthImage& depth, const Int
     }
     timer_.mark(cmd, "track_icp");
     recorder_.submitAndWait();
-    gpuMs_ = 0;
-    for (const auto& [name, ms] : timer_.read()) gpuMs_ += ms;
+    stageMs_.clear();
+    addStageTimes();
 
     state_.invalidate();
     TrackStateGpu end;

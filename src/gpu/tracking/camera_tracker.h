@@ -18,6 +18,8 @@
 
 #include <array>
 #include <memory>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "core/icp_solve.h"
@@ -113,8 +115,10 @@ public:
     IcpResult trackInOneSubmission(const DepthImage& depth, const Intrinsics& intrinsics, const MeshBuffers& mesh, const Pose& modelPose,
                                    const Pose& initial, const ColorImage* color = nullptr);
 
-    // Milliseconds the GPU spent in the last prepare() and in the ICP passes since (timestamps; 0 without).
-    double gpuMilliseconds() const { return gpuMs_; }
+    // Milliseconds the GPU spent in the last prepare() and in the ICP passes since (timestamps; 0 without), in
+    // all and per stage: track_pyramid (filter, pyramids), track_model (the mesh drawn, its maps), track_icp.
+    double gpuMilliseconds() const;
+    const std::vector<std::pair<std::string, double>>& gpuStageMilliseconds() const { return stageMs_; }
     int width() const { return width_; }
     int height() const { return height_; }
     const TrackerOptions& options() const { return options_; }
@@ -134,6 +138,7 @@ public:
 private:
     TrackPush levelPush(int level, const Pose& estimate) const;
     void checkFrameSize(const DepthImage& depth) const;
+    void addStageTimes();   // the timer's stages of the last submission, added to stageMs_
     // prepare()'s passes, recorded into `cmd` (the caller submits).
     void recordPrepare(VkCommandBuffer cmd, const DepthImage& depth, const Intrinsics& intrinsics, const MeshBuffers& mesh,
                        const Pose& modelPose, const ColorImage* color);
@@ -152,7 +157,7 @@ private:
     ModelMapRenderer modelMaps_;
     vk::CommandRecorder recorder_;
     vk::StageTimer timer_;
-    double gpuMs_ = 0;
+    std::vector<std::pair<std::string, double>> stageMs_;
 };
 
 }  // namespace vkmesh::gpu

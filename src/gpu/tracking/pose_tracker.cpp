@@ -57,6 +57,7 @@ TrackingReport PoseTracker::track(const DepthImage& depth, const Intrinsics& int
     report.rmse = icp.finalSystem.rmse();
     report.conditioning = icp.finalStep.conditioning;
     report.gpuMilliseconds = tracker_->gpuMilliseconds();
+    report.gpuStageMilliseconds = tracker_->gpuStageMilliseconds();
 
     const Pose motion = inverseRigid(lastTracked_) * icp.cameraToWorld;
     const double recent = recentRmse_.empty() ? 0.0

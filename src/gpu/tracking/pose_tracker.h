@@ -32,6 +32,7 @@ struct TrackingReport {
     double conditioning = 0;
     double milliseconds = 0;                // wall time of track()
     double gpuMilliseconds = 0;             // GPU time of the tracking passes (timestamps)
+    std::vector<std::pair<std::string, double>> gpuStageMilliseconds;   // ... per stage (CameraTracker)
 };
 
 class PoseTracker {
