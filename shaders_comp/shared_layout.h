@@ -397,7 +397,8 @@ VKM_CONST TRACK_SUM_COUNT = 32u;
 VKM_CONST WG_TRACK_PIXELS_X = 16u;            // the per-pixel passes: 16 x 16 pixels per workgroup
 VKM_CONST WG_TRACK_PIXELS_Y = 16u;
 VKM_CONST WG_TRACK_REDUCE = 64u;              // track_icp_reduce: invocations per workgroup, and
-VKM_CONST TRACK_PIXELS_PER_INVOCATION = 16u;  //  ... pixels each one sums before the workgroup's tree
+VKM_CONST TRACK_MAX_PIXELS_PER_INVOCATION = 64u;  //  ... at most this many pixels each one sums before the
+                                              //  workgroup's tree (TrackParamsGpu::pixelsPerInvocation)
 VKM_CONST TRACK_MAX_PARTIALS = 16384u;        // workgroups track_icp_sum adds up (16 Mpx per level; below lavapipe's loop cut)
 
 // Settings of the tracker's passes (TrackerOptions), and the pose the model maps were drawn at (per frame).
@@ -419,6 +420,11 @@ struct TrackParamsGpu {
     float stopRotation;
     float stopTranslation;
     VKM_ROWS3(modelWorldToCamera); // the inverse of the pose the model maps were drawn at
+    // Pixels each invocation of track_icp_reduce sums in order (at most TRACK_MAX_PIXELS_PER_INVOCATION): few
+    // on a GPU, which wants many workgroups; many on a CPU device, where each workgroup costs (lavapipe:
+    // 64 instead of 16 is 0.65x the ICP time at 640 x 480, docs/RESULTS.md).
+    uint pixelsPerInvocation;
+    uint pad0, pad1, pad2;
 };
 
 // Push constants of the tracker's compute passes.

@@ -7,7 +7,7 @@
 // |p_w - q| <= distanceGate and (R m) . n >= normalGateCos. Residual r = n . (p_w - q); J = [(p_w - c) x n, n]
 // its derivative for a rotation about the camera's centre c and a translation (both in world axes); Huber
 // weight w. Gates and Huber delta are the level's (TrackPush). Each invocation sums
-// TRACK_PIXELS_PER_INVOCATION pixels in order, then the workgroup adds its invocations' sums by a fixed binary
+// TrackParamsGpu::pixelsPerInvocation pixels in order, then the workgroup adds its invocations' sums by a fixed binary
 // tree in shared memory: the order of every addition is fixed, so the partials are the same bit for bit on
 // every run (no float atomics). track_icp_sum adds the partials up.
 #extension GL_GOOGLE_include_directive : require
@@ -44,8 +44,10 @@ void main() {
     uint lane = gl_LocalInvocationID.x;
     [[unroll]] for (uint k = 0u; k < TRACK_SUM_COUNT; ++k) acc[k] = 0.0;
 
-    for (uint k = 0u; k < TRACK_PIXELS_PER_INVOCATION; ++k) {
-        uint i = (gl_WorkGroupID.x * TRACK_PIXELS_PER_INVOCATION + k) * WG_TRACK_REDUCE + lane;
+    uint perInvocation = min(track.pixelsPerInvocation, TRACK_MAX_PIXELS_PER_INVOCATION);
+    for (uint k = 0u; k < TRACK_MAX_PIXELS_PER_INVOCATION; ++k) {
+        if (k >= perInvocation) break;
+        uint i = (gl_WorkGroupID.x * perInvocation + k) * WG_TRACK_REDUCE + lane;
         if (i >= pixels) continue;
         uint index = pass.offset + i;
         vec4 point = vertexPyramid[index];

@@ -208,16 +208,19 @@ TEST_F(Tracking, IcpSumsMatchCpuReference) {
     ColorImage color0, color2;
     const DepthImage depth0 = roomFrame(0, &color0), depth2 = roomFrame(2, &color2);
     volume.integrate(depth0, &color0, k, orbit()[0]);
-    for (float colorWeight : {0.0f, 0.05f}) {
+    // Both ways of splitting the pixels among invocations (a GPU's 16, a CPU device's 64) and both weights.
+    for (auto [colorWeight, perInvocation] : {std::pair{0.0f, 16u}, {0.05f, 64u}, {0.05f, 16u}}) {
         TrackerOptions options;
         options.colorWeight = colorWeight;
+        options.pixelsPerInvocation = perInvocation;
         CameraTracker tracker(context(), kWidth, kHeight, options);
         tracker.prepare(depth2, k, volume.meshBuffers(), orbit()[0], &color2);
         const CameraTracker::Maps maps = tracker.downloadMaps();
         const gpu::TrackParamsGpu params = gpu::trackParamsFor(options);
         const auto frame = cpu::referenceTrackingPyramid(depth2, k, params);
         for (int l = 0; l < int(gpu::TRACK_LEVELS); ++l) {
-            SCOPED_TRACE("colour weight " + std::to_string(colorWeight) + ", level " + std::to_string(l));
+            SCOPED_TRACE("colour weight " + std::to_string(colorWeight) + ", " + std::to_string(perInvocation) +
+                         " pixels per invocation, level " + std::to_string(l));
             cpu::TrackingLevel level = frame[l];
             level.points = levelOf(maps.points, tracker, l);   // the GPU's own maps: this checks the ICP pass alone
             level.normals = levelOf(maps.normals, tracker, l);

@@ -16,7 +16,15 @@ constexpr VkBufferUsageFlags kStorage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_
 uint32_t levelWidth(int width, int level) { return uint32_t(width) >> level; }
 uint32_t levelHeight(int height, int level) { return uint32_t(height) >> level; }
 uint32_t groupsFor(uint32_t n, uint32_t size) { return (n + size - 1) / size; }
-uint32_t reduceGroups(uint32_t pixels) { return groupsFor(pixels, WG_TRACK_REDUCE * TRACK_PIXELS_PER_INVOCATION); }
+// Pixels per invocation of track_icp_reduce (TrackParamsGpu::pixelsPerInvocation): a CPU device pays per
+// workgroup, a GPU wants many of them.
+uint32_t pixelsPerInvocationFor(const vk::Context& context, const TrackerOptions& options) {
+    if (options.pixelsPerInvocation > TRACK_MAX_PIXELS_PER_INVOCATION)
+        throw Error("tracking: " + std::to_string(options.pixelsPerInvocation) + " pixels per invocation is above " +
+                    std::to_string(TRACK_MAX_PIXELS_PER_INVOCATION));
+    if (options.pixelsPerInvocation > 0) return options.pixelsPerInvocation;
+    return context.info().type == "CPU" ? TRACK_MAX_PIXELS_PER_INVOCATION : 16u;
+}
 
 }  // namespace
 
@@ -65,6 +73,8 @@ void copyRows(float (&dst)[3][4], const Pose& pose) {
 
 }  // namespace
 
+uint32_t CameraTracker::reduceGroups(uint32_t pixels) const { return groupsFor(pixels, WG_TRACK_REDUCE * pixelsPerInvocation_); }
+
 Intrinsics CameraTracker::levelIntrinsics(const Intrinsics& k, int level) { return pyramidLevelIntrinsics(k, level); }
 
 static uint32_t pyramidSize(int width, int height, std::array<uint32_t, TRACK_LEVELS>& offsets) {
@@ -81,6 +91,7 @@ static uint32_t pyramidSize(int width, int height, std::array<uint32_t, TRACK_LE
 CameraTracker::CameraTracker(const vk::Context& context, int width, int height, const TrackerOptions& options)
     : context_(context), width_(width), height_(height), options_(options),
       pyramidPixels_(pyramidSize(width, height, offsets_)),
+      pixelsPerInvocation_(pixelsPerInvocationFor(context, options)),
       table_(context, sizeof(TrackPush)),
       params_(context, sizeof(TrackParamsGpu), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, vk::MemoryUse::Upload, "tracking params"),
       rawDepth_(context, VkDeviceSize(width) * height * sizeof(float), kStorage, vk::MemoryUse::Upload, "tracking depth input"),
@@ -108,6 +119,7 @@ CameraTracker::CameraTracker(const vk::Context& context, int width, int height, 
       timer_(context, 16) {
     if (reduceGroups(uint32_t(width) * height) > TRACK_MAX_PARTIALS) throw Error("tracking: image too large for the ICP sums");
     paramValues_ = trackParamsFor(options);
+    paramValues_.pixelsPerInvocation = pixelsPerInvocation_;
     std::memcpy(params_.mapped(), &paramValues_, sizeof(paramValues_));
     table_.bind(TRACK_BINDING_PARAMS, params_);
     table_.bind(TRACK_BINDING_RAW_DEPTH, rawDepth_);

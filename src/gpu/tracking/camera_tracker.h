@@ -75,6 +75,9 @@ struct TrackerOptions {
     // iteration); true, on the GPU in float, the whole frame's ICP in one submission with prepare()
     // (CameraTracker::trackInOneSubmission; docs/TRACKING.md, "One submission").
     bool solveOnGpu = false;
+    // Pixels each invocation of the ICP reduction sums (1..TRACK_MAX_PIXELS_PER_INVOCATION); 0: by device, 64
+    // on a CPU device (lavapipe: each workgroup costs) and 16 on a GPU (which wants many workgroups).
+    uint32_t pixelsPerInvocation = 0;
 };
 
 // The options as the shaders read them (TrackParamsGpu, without the model pose); throws Error naming a value
@@ -138,6 +141,7 @@ public:
 private:
     TrackPush levelPush(int level, const Pose& estimate) const;
     void checkFrameSize(const DepthImage& depth) const;
+    uint32_t reduceGroups(uint32_t pixels) const;   // track_icp_reduce's workgroups over `pixels` pixels
     void addStageTimes();   // the timer's stages of the last submission, added to stageMs_
     // prepare()'s passes, recorded into `cmd` (the caller submits).
     void recordPrepare(VkCommandBuffer cmd, const DepthImage& depth, const Intrinsics& intrinsics, const MeshBuffers& mesh,
@@ -147,6 +151,7 @@ private:
     TrackerOptions options_;
     std::array<uint32_t, TRACK_LEVELS> offsets_{};
     uint32_t pyramidPixels_ = 0;
+    uint32_t pixelsPerInvocation_ = 16;   // TrackParamsGpu::pixelsPerInvocation for this device
     Intrinsics intrinsics_;
     Pose modelPose_ = Pose::Identity();
     vk::BindingTable table_;
