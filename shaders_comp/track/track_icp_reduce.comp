@@ -7,9 +7,9 @@
 // |p_w - q| <= distanceGate and (R m) . n >= normalGateCos. Residual r = n . (p_w - q); J = [(p_w - c) x n, n]
 // its derivative for a rotation about the camera's centre c and a translation (both in world axes); Huber
 // weight w. Gates and Huber delta are the level's (TrackPush). Each invocation sums
-// TrackParamsGpu::pixelsPerInvocation pixels in order, then the workgroup adds its invocations' sums by a fixed binary
-// tree in shared memory: the order of every addition is fixed, so the partials are the same bit for bit on
-// every run (no float atomics). track_icp_sum adds the partials up.
+// TrackParamsGpu::pixelsPerInvocation pixels in order, then the workgroup adds its invocations' sums by a
+// fixed binary tree in shared memory: the order of every addition is fixed, so the partials are the same bit
+// for bit on every run (no float atomics). track_icp_sum adds the partials up.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_control_flow_attributes : require
 #include "track/track_common.glsl"

@@ -172,12 +172,12 @@ void CameraTracker::prepare(const DepthImage& depth, const Intrinsics& intrinsic
 }
 
 void CameraTracker::addStageTimes() {
-    for (const auto& [name, ms] : timer_.read()) {
-        auto same = std::find_if(stageMs_.begin(), stageMs_.end(), [&](const auto& s) { return s.first == name; });
+    for (const auto& stage : timer_.read()) {   // (not a structured binding: clang 14 cannot capture one)
+        auto same = std::find_if(stageMs_.begin(), stageMs_.end(), [&](const auto& s) { return s.first == stage.first; });
         if (same == stageMs_.end())
-            stageMs_.emplace_back(name, ms);
+            stageMs_.push_back(stage);
         else
-            same->second += ms;
+            same->second += stage.second;
     }
 }
 
