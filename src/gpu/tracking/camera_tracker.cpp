@@ -237,19 +237,28 @@ void CameraTracker::recordPrepare(VkCommandBuffer cmd, const DepthImage& depth, 
     timer_.mark(cmd, "track_model");
 }
 
-IcpSums CameraTracker::sums(int level, const Pose& estimate) {
-    if (level < 0 || level >= int(TRACK_LEVELS)) throw Error("tracking: no pyramid level " + std::to_string(level));
+void CameraTracker::recordIcpIteration(VkCommandBuffer cmd, int level, const Pose& estimate, bool solveOnGpu) {
     const uint32_t groups = reduceGroups(levelWidth(width_, level) * levelHeight(height_, level));
-    VkCommandBuffer cmd = recorder_.begin();
-    timer_.reset(cmd);
-    timer_.mark(cmd, "start");
     TrackPush push = levelPush(level, estimate);
+    if (solveOnGpu) push.flags = TRACK_FLAG_STATE | uint32_t(level) << TRACK_FLAG_LEVEL_SHIFT;
     reduce_.dispatch(cmd, &push, groups);
     vk::memoryBarrier(cmd);
     TrackPush sumPush{};
     sumPush.size = groups;
+    sumPush.flags = push.flags;
     sum_.dispatch(cmd, &sumPush, 1);
     vk::memoryBarrier(cmd);
+    if (!solveOnGpu) return;
+    solve_.dispatch(cmd, &sumPush, 1);
+    vk::memoryBarrier(cmd);
+}
+
+IcpSums CameraTracker::sums(int level, const Pose& estimate) {
+    if (level < 0 || level >= int(TRACK_LEVELS)) throw Error("tracking: no pyramid level " + std::to_string(level));
+    VkCommandBuffer cmd = recorder_.begin();
+    timer_.reset(cmd);
+    timer_.mark(cmd, "start");
+    recordIcpIteration(cmd, level, estimate, /*solveOnGpu=*/false);
     timer_.mark(cmd, "track_icp");
     recorder_.submitAndWait();
     addStageTimes();
@@ -272,22 +281,8 @@ IcpResult CameraTracker::trackInOneSubmission(const DepthImage& depth, const Int
     vk::memoryBarrier(cmd);
     // Every iteration's passes are recorded; those of a level that has stopped return at once (the state
     // says so), which is how a level still stops early without the host.
-    for (int level = int(TRACK_LEVELS) - 1; level >= 0; --level) {
-        const uint32_t groups = reduceGroups(levelWidth(width_, level) * levelHeight(height_, level));
-        TrackPush push = levelPush(level, initial);
-        push.flags = TRACK_FLAG_STATE | uint32_t(level) << TRACK_FLAG_LEVEL_SHIFT;
-        TrackPush sumPush{};
-        sumPush.size = groups;
-        sumPush.flags = push.flags;
-        for (int it = 0; it < options_.iterations[level]; ++it) {
-            reduce_.dispatch(cmd, &push, groups);
-            vk::memoryBarrier(cmd);
-            sum_.dispatch(cmd, &sumPush, 1);
-            vk::memoryBarrier(cmd);
-            solve_.dispatch(cmd, &sumPush, 1);
-            vk::memoryBarrier(cmd);
-        }
-    }
+    for (int level = int(TRACK_LEVELS) - 1; level >= 0; --level)
+        for (int it = 0; it < options_.iterations[level]; ++it) recordIcpIteration(cmd, level, initial, /*solveOnGpu=*/true);
     timer_.mark(cmd, "track_icp");
     recorder_.submitAndWait();
     stageMs_.clear();

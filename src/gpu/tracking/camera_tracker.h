@@ -142,6 +142,9 @@ private:
     TrackPush levelPush(int level, const Pose& estimate) const;
     void checkFrameSize(const DepthImage& depth) const;
     uint32_t reduceGroups(uint32_t pixels) const;   // track_icp_reduce's workgroups over `pixels` pixels
+    // One ICP iteration at `level`: the reduction and the fixed-order sum, and with `solveOnGpu` the solve that
+    // moves the state's estimate (the passes then read the estimate from the state, not from `estimate`).
+    void recordIcpIteration(VkCommandBuffer cmd, int level, const Pose& estimate, bool solveOnGpu);
     void addStageTimes();   // the timer's stages of the last submission, added to stageMs_
     // prepare()'s passes, recorded into `cmd` (the caller submits).
     void recordPrepare(VkCommandBuffer cmd, const DepthImage& depth, const Intrinsics& intrinsics, const MeshBuffers& mesh,
