@@ -296,6 +296,7 @@ int runFuse(const FuseArgs& args) {
         // The pose to fuse at: the dataset's, or with --track the first frame's (the dataset's or identity) and
         // then the tracked one. A lost frame is not fused (the map stays as it was) and gets the predicted pose.
         Pose pose = dataset->frame(i).cameraToWorld;
+        std::optional<gpu::TrackedFusion> trackedFusion;   // a tracked frame: already fused when tracked
         if (tracker) {
             gpu::TrackingReport tr;
             if (!tracker->started()) {
@@ -306,7 +307,8 @@ int runFuse(const FuseArgs& args) {
                 }
                 tr = tracker->start(dataset->frame(i).hasPose ? dataset->frame(i).cameraToWorld : Pose::Identity());
             } else {
-                tr = tracker->track(depth, intrinsics, volume.meshBuffers(), &color);
+                trackedFusion = tracker->trackAndFuse(volume, depth, intrinsics, &color, fuseColor ? &color : nullptr);
+                tr = trackedFusion->tracking;
                 trackMs.push_back(tr.milliseconds);
                 trackGpuMs.push_back(tr.gpuMilliseconds);
                 for (const auto& [name, ms] : tr.gpuStageMilliseconds) trackStageMs[name].push_back(ms);
@@ -333,9 +335,17 @@ int runFuse(const FuseArgs& args) {
             ++skipped;
             continue;
         }
-        auto t0 = std::chrono::steady_clock::now();
-        gpu::FrameReport report = volume.integrate(depth, fuseColor ? &color : nullptr, intrinsics, pose);
-        frameWallMs.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+        gpu::FrameReport report;
+        if (trackedFusion) {
+            // Fused by trackAndFuse (with --track-solve gpu in tracking's own submission: the wall time is the
+            // whole frame's).
+            report = std::move(*trackedFusion->fused);
+            frameWallMs.push_back(trackedFusion->fuseMilliseconds);
+        } else {
+            auto t0 = std::chrono::steady_clock::now();
+            report = volume.integrate(depth, fuseColor ? &color : nullptr, intrinsics, pose);
+            frameWallMs.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+        }
         ++integrated;
         double meshMs = 0;
         for (const auto& [name, ms] : report.stageMs) {
@@ -576,6 +586,9 @@ int runFuse(const FuseArgs& args) {
                              {"inlier_share", statsOf(trackInlierShare)},
                              {"color_weight", args.trackColorWeight},
                              {"solve", args.trackSolve},
+                             // --track-solve gpu: tracking, fusion and meshing are one submission per frame, so
+                             // ms_per_frame (wall) holds the fusion and meshing too
+                             {"fused_in_tracking_submission", args.trackSolve == "gpu"},
                              {"trajectory", args.trajectoryPath}};
     } else {
         stats["tracking"] = {{"enabled", false}, {"trajectory", args.trajectoryPath}};
@@ -679,7 +692,7 @@ Run addFuseCommand(CLI::App& app) {
         ->check(CLI::Range(0.0, 100.0));
     cmd->add_option("--track-solve", args->trackSolve,
                     "where tracking solves its 6x6 systems: host (in double, one GPU submission per ICP iteration) or gpu (in "
-                    "float, the frame's whole tracking in one submission; docs/TRACKING.md)")
+                    "float; the frame's tracking, fusion and meshing in one submission; docs/TRACKING.md)")
         ->check(CLI::IsMember({"host", "gpu"}));
     cmd->add_option("--serve", args->servePort,
                     "serve the live browser viewer on this port while fusing (docs/VIEWER.md; open the URL it prints)")

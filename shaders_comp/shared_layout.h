@@ -109,7 +109,8 @@ VKM_CONST BINDING_MESH_SIGNS = 34u;     // MESH_SIGN_WORDS uint per block: with 
 // Per block OWNED_SLOT_WORDS uint: bit (axis * VOXELS_PER_BLOCK + cube) set iff the cube's edge slot along that
 // axis holds a vertex (claim sets it, GC clears it; cube_mesh.glsl). The vertex update visits only these bits.
 VKM_CONST BINDING_OWNED_SLOTS = 35u;
-VKM_CONST BINDING_COUNT = 36u;
+VKM_CONST BINDING_FRAME_POSE = 36u;    // FramePoseGpu: the frame's camera pose as the passes read it
+VKM_CONST BINDING_COUNT = 37u;
 VKM_CONST MASK_WORDS = 16u;            // VOXELS_PER_BLOCK / 32
 VKM_CONST MASK_ALL_CUBES = 0xFFFFFFFFu; // a retype-mask word with each of its 32 cubes listed
 // Per block, MESH_SIGN_WORDS uint at BINDING_MESH_SIGNS (with refinement; frame_lists.glsl), MASK_WORDS each, one bit
@@ -352,7 +353,9 @@ struct DeltaTriangleRecord {
 
 // Push constants of every compute stage: the current frame's camera. Rigid transforms are stored as
 // the 3 rows of [R | t] (x' = row.x*x + row.y*y + row.z*z + row.w), the order the CPU reference uses too.
-// 128 bytes: the most lavapipe (and the Vulkan minimum) guarantees.
+// 128 bytes: the most lavapipe (and the Vulkan minimum) guarantees. The passes read the pose from
+// FramePoseGpu, not from here: the host copies these rows there, unless camera tracking computes the pose in
+// the frame's own submission.
 struct FramePush {
     VKM_ROWS3(worldToCamera);
     VKM_ROWS3(cameraToWorld);
@@ -361,6 +364,17 @@ struct FramePush {
     uint frameNumber;           // starts at 1; hash stamps start at 0
     float minDepth;             // depth samples outside [minDepth, maxDepth] are ignored
     float maxDepth;
+};
+
+// The frame's camera pose where the volume's passes read it (BINDING_FRAME_POSE; structure/frame.glsl). Written
+// at the start of every frame's submission: by the host (vkCmdUpdateBuffer, the FramePush rows), or, when a
+// tracked frame is fused in the submission that tracks it (docs/TRACKING.md, "One submission"), by the
+// tracker's last pass (track_decide), which also decides whether the frame is fused at all.
+struct FramePoseGpu {
+    VKM_ROWS3(worldToCamera);
+    VKM_ROWS3(cameraToWorld);
+    uint skip;                  // 1: the frame is not fused (tracking lost it): no pass changes the map
+    uint pad0, pad1, pad2;
 };
 
 // ---- camera tracking (docs/TRACKING.md; src/gpu/tracking, shaders_comp/track) ---------------------------
@@ -382,7 +396,8 @@ VKM_CONST TRACK_BINDING_SUMS = 8u;            // float: TRACK_SUM_COUNT, the par
 VKM_CONST TRACK_BINDING_INTENSITY = 9u;       // float per pyramid pixel: the frame's intensity in [0, 1] (< 0: none)
 VKM_CONST TRACK_BINDING_MODEL_INTENSITY = 10u;// float per pyramid pixel: the mesh's vertex colour as intensity (< 0: none)
 VKM_CONST TRACK_BINDING_STATE = 11u;          // TrackStateGpu: the estimate the GPU-solved mode refines in place
-VKM_CONST TRACK_BINDING_COUNT = 12u;
+VKM_CONST TRACK_BINDING_FRAME_POSE = 12u;     // the volume's FramePoseGpu (BINDING_FRAME_POSE), written by track_decide
+VKM_CONST TRACK_BINDING_COUNT = 13u;
 // What one ICP iteration sums over the pixels (one float each). J = [(p - c) x n, n] (6) is the residual
 // r = n . (p - q)'s derivative with respect to a step of the camera pose: a rotation about the camera's
 // centre c and a translation, both in world axes (core/icp_solve.h, applyTwist); w the robust weight. The 6x6 system is symmetric: its upper triangle, row by row.
@@ -425,6 +440,17 @@ struct TrackParamsGpu {
     // 64 instead of 16 is 0.65x the ICP time at 640 x 480, docs/RESULTS.md).
     uint pixelsPerInvocation;
     uint pad0, pad1, pad2;
+    // The loss policy (TrackerOptions; PoseTracker), for track_decide: the last tracked pose, the recent
+    // frames' mean inlier RMSE (0: none yet) and the bounds.
+    VKM_ROWS3(lastTrackedCameraToWorld);
+    float minInliers;
+    float minInlierFraction;
+    float minConditioning;
+    float maxJumpMetres;
+    float maxJumpDegrees;
+    float maxErrorRise;
+    float minErrorForRise;
+    float recentRmse;
 };
 
 // Push constants of the tracker's compute passes.
@@ -458,7 +484,19 @@ struct TrackStateGpu {
     uint iterations;              // iterations solved (all levels)
     uint pad;
     float finalSums[TRACK_SUM_COUNT];   // the sums of level 0's last iteration (before its step)
+    uint lostReason;              // track_decide: TRACK_LOST_* (TRACK_TRACKED: the frame is fused)
+    float conditioning;           // track_decide: smallest / largest eigenvalue of level 0's last system
+    uint pad1, pad2;
 };
+// Why a frame is lost (PoseTracker's checks, in the order it makes them; track_decide, trackingLoss()).
+VKM_CONST TRACK_TRACKED = 0u;
+VKM_CONST TRACK_LOST_NO_DEPTH = 1u;
+VKM_CONST TRACK_LOST_NO_MODEL = 2u;
+VKM_CONST TRACK_LOST_FEW_INLIERS = 3u;
+VKM_CONST TRACK_LOST_ILL_CONDITIONED = 4u;
+VKM_CONST TRACK_LOST_JUMP = 5u;
+VKM_CONST TRACK_LOST_TURN = 6u;
+VKM_CONST TRACK_LOST_ERROR_ROSE = 7u;
 #ifdef __cplusplus
 }  // namespace vkmesh::gpu
 #endif

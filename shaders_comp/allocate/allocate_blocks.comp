@@ -45,7 +45,7 @@ void main() {
     uvec2 size = frameImageSize();
     uvec2 pixel = gl_GlobalInvocationID.xy * params.allocationStride;
     uint valid = 0u, truncated = 0u;
-    if (all(lessThan(pixel, size))) {
+    if (all(lessThan(pixel, size)) && !frameSkipped()) {
         float d = depthAt(pixel.y * size.x + pixel.x);
         if (d >= frame.minDepth && d <= frame.maxDepth) {
             valid = 1u;
@@ -55,8 +55,8 @@ void main() {
             float nearZ = max(d - params.truncation, frame.minDepth * 0.5);
             float farZ = d + params.truncation;
             float blockSize = params.voxelSize * float(BLOCK_SIDE);
-            precise vec3 a = transformPoint(frame.cameraToWorld, ray * nearZ) / blockSize;
-            precise vec3 b = transformPoint(frame.cameraToWorld, ray * farZ) / blockSize;
+            precise vec3 a = transformPoint(framePose.cameraToWorld, ray * nearZ) / blockSize;
+            precise vec3 b = transformPoint(framePose.cameraToWorld, ray * farZ) / blockSize;
 
             // Amanatides & Woo traversal from a to b, parameter t in [0, 1]. Written without dynamic
             // component indexing (v[axis]), which llvmpipe turns into slow scratch memory.

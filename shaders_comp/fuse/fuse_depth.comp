@@ -27,6 +27,7 @@ void main() {
         uvec2 size = frameImageSize();
         float trunc = params.truncation;
         bool withColor = volumeKeepsColor() && frameHasColor();
+        vec4 worldToCamera[3] = framePose.worldToCamera;   // read once, not per corner
         uint flipped = 0u;   // which of this invocation's corners flipped (marked after the loop, which stays lean)
         uint maskChange = 0u;    // with refinement: bits 3k..3k+2, how corner k's TSDF masks change (tsdfMaskBits)
         for (uint k = 0u; k < VOXELS_PER_INVOCATION; ++k) {
@@ -40,7 +41,7 @@ void main() {
             float newWeight = oldWeight;
 
             precise vec3 world = vec3(origin + ivec3(l)) * params.voxelSize;
-            precise vec3 cam = transformPoint(frame.worldToCamera, world);
+            precise vec3 cam = transformPoint(worldToCamera, world);
             if (cam.z > 0.0) {
                 precise float u = (cam.x * frame.intrinsics.x) / cam.z + frame.intrinsics.z;
                 precise float w = (cam.y * frame.intrinsics.y) / cam.z + frame.intrinsics.w;

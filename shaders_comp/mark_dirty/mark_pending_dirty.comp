@@ -11,7 +11,7 @@ layout(local_size_x = WG_LIST) in;
 
 void main() {
     uint i = gl_GlobalInvocationID.x;
-    if (i >= counters.liveBlockCount) return;
+    if (i >= counters.liveBlockCount || frameSkipped()) return;
     uint b = blockList[i];
     uint pending = 0u;
     for (uint w = 0u; w < MASK_WORDS; ++w) pending |= retypeMask[b * MASK_WORDS + w];

@@ -26,6 +26,13 @@ layout(std140, set = 0, binding = BINDING_PARAMS) uniform ParamsBuffer { VolumeP
 layout(std430, set = 0, binding = BINDING_COUNTERS) coherent buffer CountersBuffer { Counters counters; };
 
 layout(push_constant) uniform Push { FramePush frame; };
+// The frame's camera pose (shared_layout.h, FramePoseGpu): the host's, or the one camera tracking computed
+// earlier in the same submission, which may also have decided not to fuse the frame (frameSkipped).
+layout(std430, set = 0, binding = BINDING_FRAME_POSE) readonly buffer FramePoseBuffer { FramePoseGpu framePose; };
+
+// A frame tracking lost in its own submission: nothing is allocated, fused, recycled or re-meshed, so the map
+// stays bit-identical (the passes that start from the frame's depth or from the live-block list check it).
+bool frameSkipped() { return framePose.skip != 0u; }
 
 // The optional code this pipeline is built with (VOLUME_FEATURE_*, shared_layout.h): a specialisation
 // constant, so what a volume does not use is compiled out. The uniform still decides within it.
@@ -42,7 +49,7 @@ bool blockOutsideKeepRadius(ivec3 c) {
     if (params.keepRadius <= 0.0) return false;
     float blockSize = params.voxelSize * float(BLOCK_SIDE);
     precise vec3 centre = (vec3(c) + 0.5) * blockSize;
-    precise vec3 d = centre - vec3(frame.cameraToWorld[0].w, frame.cameraToWorld[1].w, frame.cameraToWorld[2].w);
+    precise vec3 d = centre - vec3(framePose.cameraToWorld[0].w, framePose.cameraToWorld[1].w, framePose.cameraToWorld[2].w);
     precise float distance2 = d.x * d.x + d.y * d.y + d.z * d.z;
     return distance2 > params.keepRadius * params.keepRadius;
 }

@@ -74,17 +74,18 @@ TrackedFrame Reconstructor::integrate(const DepthImage& depth, const ColorImage*
         tracker_->start(trajectory_.empty() ? Pose::Identity() : trajectory_.back());
     }
     TrackedFrame out;
-    // Nothing fused yet (a new reconstruction): the frame starts the map where the tracker stands.
-    out.tracking = volume_->framesIntegrated() == 0 ? tracker_->start(tracker_->prediction())
-                                                    : tracker_->track(depth, intrinsics, volume_->meshBuffers(), color);
+    if (volume_->framesIntegrated() == 0) {
+        // Nothing fused yet (a new reconstruction): the frame starts the map where the tracker stands.
+        out.tracking = tracker_->start(tracker_->prediction());
+        out.fused = volume_->integrate(depth, color, intrinsics, out.tracking.cameraToWorld, sync);
+    } else {
+        gpu::TrackedFusion f = tracker_->trackAndFuse(*volume_, depth, intrinsics, color, color, sync);
+        out.tracking = std::move(f.tracking);
+        out.fused = std::move(f.fused);
+    }
     out.cameraToWorld = out.tracking.cameraToWorld;
     trajectory_.push_back(out.cameraToWorld);
-    if (out.tracking.tracked) {
-        out.fused = volume_->integrate(depth, color, intrinsics, out.cameraToWorld, sync);
-        lastDelta_ = out.fused->delta;
-    } else {
-        lastDelta_ = MeshDelta{};
-    }
+    lastDelta_ = out.fused ? out.fused->delta : MeshDelta{};
     return out;
 }
 

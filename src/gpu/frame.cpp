@@ -53,6 +53,7 @@ void GpuVolume::recordFrame(VkCommandBuffer cmd, const FramePush& push, bool reb
     const bool recycling = this->recycling();
     // Pass                          reads                                     writes
     // (host)   depth upload         staging                                   depth image; per-frame counters cleared
+    // pose     (host) or recordPose  [camera tracking: depth, mesh]             frame pose (skip: every pass below idles)
     // rehash   (tombstones > 1/8)   block list, hash                          hash (no tombstones), block coords.w
     // allocate allocate_blocks      depth, hash                               hash keys, stamps, touched list
     //          plan_frame           touchedCount                              assign/block dispatch
@@ -81,6 +82,7 @@ void GpuVolume::recordFrame(VkCommandBuffer cmd, const FramePush& push, bool reb
     params_.recordUpload(cmd);   // what grew since the last submission
     if (copyInput) recordInputCopy(cmd, (push.imageSize & FRAME_HAS_COLOR) != 0);
     counters_.recordClearFrame(cmd);
+    recordFramePose(cmd, push, copyInput);
     timer_.mark(cmd, "start");
     if (rebuildHash) {
         recordRebuildHash(cmd, push);
@@ -116,6 +118,25 @@ void GpuVolume::recordFrame(VkCommandBuffer cmd, const FramePush& push, bool reb
         deltas_->record(cmd);
         timer_.mark(cmd, "deltas");
     }
+}
+
+void GpuVolume::recordFramePose(VkCommandBuffer cmd, const FramePush& push, bool firstAttempt) {
+    if (inFlight_->input.recordPose) {
+        // A deferred frame's re-run finds the pose the first attempt computed (and never a skip: a skipped
+        // frame allocates nothing, so it cannot overflow).
+        if (!firstAttempt) return;
+        inFlight_->input.recordPose(cmd, framePose_);
+        // Whatever the pose's passes did (draws included) comes before this frame's passes.
+        vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_ALL_COMMANDS_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT | VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+                             0, 0, nullptr, 0, nullptr, 0, nullptr);
+        vk::memoryBarrier(cmd);
+        return;
+    }
+    FramePoseGpu pose{};
+    std::memcpy(pose.worldToCamera, push.worldToCamera, sizeof(pose.worldToCamera));
+    std::memcpy(pose.cameraToWorld, push.cameraToWorld, sizeof(pose.cameraToWorld));
+    vkCmdUpdateBuffer(cmd, framePose_.handle(), 0, sizeof(pose), &pose);
+    vk::memoryBarrier(cmd);
 }
 
 void GpuVolume::recordInputCopy(VkCommandBuffer cmd, bool withColor) {
@@ -259,6 +280,17 @@ void GpuVolume::submitFrame(const FrameInput& input, uint64_t timelineValue) {
     frame.rebuildHash = recycling() && double(counters_.read().hashTombstones) >
                                            double(config_.hashRebuildTombstoneFraction) * config_.hashCapacity;
     frame.retryPending = config_.meshMode == MeshMode::Incremental && retryPending_;
+    if (frame.rebuildHash && input.recordPose) {
+        // The frame may yet be skipped on the GPU, and a skipped frame must leave the map bit-identical: the
+        // rebuild (which reorders the table) gets a submission of its own before it.
+        VkCommandBuffer cmd = beginSubmission();
+        recordRebuildHash(cmd, lastPush_);
+        counters_.recordReadback(cmd);
+        recorder_.submitAndWait();
+        frame.rebuildHash = false;
+    }
+    frame.previousPush = lastPush_;
+    if (input.recordPose) frame.previousCounters = counters_.read();
     inFlight_ = std::move(frame);
     submitAttempt();
 }
@@ -279,6 +311,11 @@ void GpuVolume::submitAttempt() {
     timer_.reset(cmd);
     recordFrame(cmd, push, f.rebuildHash && f.attempt == 0, f.retryPending, f.attempt == 0);
     counters_.recordReadback(cmd);
+    if (f.input.recordPose) {
+        VkBufferCopy region{0, 0, sizeof(FramePoseGpu)};
+        vkCmdCopyBuffer(cmd, framePose_.handle(), framePoseReadback_.handle(), 1, &region);
+        vk::memoryBarrier(cmd);
+    }
     vk::SubmitSync attemptSync;
     if (f.attempt == 0) {
         attemptSync.wait = f.input.sync.wait;
@@ -315,6 +352,11 @@ FrameReport GpuVolume::finishFrame() {
         ++inFlight_->attempt;
         submitAttempt();
     }
+    FramePoseGpu pose{};
+    if (inFlight_->input.recordPose) {
+        framePoseReadback_.invalidate();
+        std::memcpy(&pose, framePoseReadback_.mapped(), sizeof(pose));
+    }
     InFlight f = std::move(*inFlight_);
     inFlight_.reset();
     FrameReport& report = f.report;
@@ -324,6 +366,28 @@ FrameReport GpuVolume::finishFrame() {
         signalOnly.signalValues = f.input.sync.signalValues;
         recorder_.begin();
         recorder_.submitAndWait(signalOnly);
+    }
+    if (pose.skip) {
+        // Tracking lost the frame in its own submission: nothing ran that changes the map (no allocation, so
+        // no deferral either). It is not counted: the next frame gets this frame's number, as if it had never
+        // been submitted, which keeps the map bit-identical to skipping the frame on the host.
+        --frameNumber_;
+        lastPush_ = f.previousPush;
+        // The frame cleared the per-frame counters (before the GPU decided); a map keeps the last frame's.
+        counters_.update([&](Counters& c) { c = f.previousCounters; });
+        // And the skip flag must not outlive the frame: passes between frames (re-meshing pending cubes before an
+        // export) read it too.
+        VkCommandBuffer cmd = recorder_.begin();
+        vkCmdFillBuffer(cmd, framePose_.handle(), offsetof(FramePoseGpu, skip), sizeof(uint32_t), 0);
+        recorder_.submitAndWait();
+        report.skipped = true;
+        report.counters = k;
+        report.stageMs = timer_.read();
+        if (deltas_) {
+            report.delta = deltas_->collect(recorder_);
+            report.delta.frame = frameNumber_;
+        }
+        return report;
     }
     ++framesIntegrated_;
     report.stageMs = timer_.read();

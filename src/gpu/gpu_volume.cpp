@@ -151,6 +151,12 @@ GpuVolume::GpuVolume(const vk::Context& context, const GpuVolumeConfig& config)
     depthStaging_ = vk::Buffer(context, depth_.size(), VK_BUFFER_USAGE_TRANSFER_SRC_BIT, vk::MemoryUse::Upload, "depth staging");
     mcTables_ = vk::Buffer(context, MC_TABLE_WORDS * 4, VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, vk::MemoryUse::Device, "marching cubes tables");
     table_.bind(BINDING_MC_TABLES, mcTables_);
+    framePose_ = vk::Buffer(context, sizeof(FramePoseGpu),
+                            VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
+                            vk::MemoryUse::Device, "frame pose");
+    table_.bind(BINDING_FRAME_POSE, framePose_);
+    framePoseReadback_ = vk::Buffer(context, sizeof(FramePoseGpu), VK_BUFFER_USAGE_TRANSFER_DST_BIT, vk::MemoryUse::Readback,
+                                    "frame pose readback");
     const auto tables = packMarchingCubesTables();
     vk::uploadToBuffer(context, mcTables_, tables.data(), tables.size() * 4);
     exportMesh_.emplace(context, table_, params_);

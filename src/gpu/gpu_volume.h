@@ -10,6 +10,7 @@
 
 #include <array>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -107,6 +108,9 @@ struct FrameReport {
     std::vector<std::string> growth;
     uint32_t deferredAttempts = 0;
     MeshDelta delta;   // this frame's mesh changes when GpuVolumeConfig::trackDeltas (else empty)
+    // The frame's pose was recorded on the GPU (FrameInput::recordPose) with "skip": nothing was fused, the map
+    // is as it was, and the frame does not count (framesIntegrated(), frameNumber() unchanged).
+    bool skipped = false;
 };
 
 // The compacted mesh in GPU buffers, for a renderer to draw without a copy through the host
@@ -175,6 +179,11 @@ struct FrameInput {
     Intrinsics intrinsics;
     Pose cameraToWorld = Pose::Identity();
     vk::SubmitSync sync;
+    // Optional: passes that compute the frame's pose on the GPU, recorded at the start of the frame's submission
+    // instead of the host's cameraToWorld: they write a FramePoseGpu into `framePose` (shared_layout.h), skip = 1
+    // to fuse nothing. Camera tracking fuses a frame in the submission that tracks it this way
+    // (PoseTracker::trackAndFuse). Called once, from submitFrame(); a deferred frame's re-run reuses the pose.
+    std::function<void(VkCommandBuffer cmd, const vk::Buffer& framePose)> recordPose;
 };
 
 // The configuration with its defaults filled in (hashCapacity 0 -> twice the block capacity, a power of two;
@@ -288,6 +297,8 @@ private:
     // `copyInput`: the frame's first attempt copies its input into depth_; a deferred frame's re-run finds it
     // there (the application's GPU input need not outlive the first submission).
     void recordFrame(VkCommandBuffer cmd, const FramePush& push, bool rebuildHash, bool retryPending, bool copyInput);
+    // The frame's pose into framePose_: the host's (push) or, on the first attempt, FrameInput::recordPose's passes.
+    void recordFramePose(VkCommandBuffer cmd, const FramePush& push, bool firstAttempt);
     void recordInputCopy(VkCommandBuffer cmd, bool withColor);
     // Submits one attempt of the frame in flight (the first, or a re-run after a deferral).
     void submitAttempt();
@@ -328,6 +339,9 @@ private:
     CubeMesh mesh_;
     FrameLists lists_;
     vk::Buffer depth_, depthStaging_, mcTables_;
+    // FramePoseGpu (BINDING_FRAME_POSE), written at the start of every frame; a frame whose pose the GPU computed
+    // copies it back (did the GPU skip the frame?).
+    vk::Buffer framePose_, framePoseReadback_;
     AllocateBlocksStage allocate_;
     vk::ComputePipeline deferFrame_;
     FuseDepthStage fuse_;
@@ -357,6 +371,8 @@ private:
         FrameInput input;          // its images' pointers are not used after submitFrame()
         bool withColor = false, fromGpu = false;
         bool rebuildHash = false, retryPending = false;
+        FramePush previousPush{};  // lastPush_ and the counters before the frame (restored when the GPU skipped it)
+        Counters previousCounters{};
         int attempt = 0;
         bool mayDefer = false, signalled = false;
         uint64_t timelineValue = 0;

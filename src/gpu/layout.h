@@ -31,10 +31,13 @@ static_assert(uint32_t(ColorFusion::Off) == COLOR_MODE_OFF && uint32_t(ColorFusi
 static_assert(VOXELS_PER_BLOCK == BLOCK_SIDE * BLOCK_SIDE * BLOCK_SIDE);
 static_assert(VOXELS_PER_INVOCATION * WG_BLOCK == VOXELS_PER_BLOCK);
 static_assert(sizeof(TrackPush) == 96, "tracking push constants: at most 128 bytes, all lavapipe guarantees");
-static_assert(sizeof(TrackParamsGpu) == 112 && offsetof(TrackParamsGpu, modelWorldToCamera) == 48 &&
-                  offsetof(TrackParamsGpu, pixelsPerInvocation) == 96,
+static_assert(sizeof(TrackParamsGpu) == 192 && offsetof(TrackParamsGpu, modelWorldToCamera) == 48 &&
+                  offsetof(TrackParamsGpu, pixelsPerInvocation) == 96 && offsetof(TrackParamsGpu, lastTrackedCameraToWorld) == 112 &&
+                  offsetof(TrackParamsGpu, recentRmse) == 188,
               "TrackParamsGpu: std140 layout");
-static_assert(sizeof(TrackStateGpu) == 192 && offsetof(TrackStateGpu, finalSums) == 64, "TrackStateGpu: std430 layout");
+static_assert(sizeof(TrackStateGpu) == 208 && offsetof(TrackStateGpu, finalSums) == 64 && offsetof(TrackStateGpu, lostReason) == 192,
+              "TrackStateGpu: std430 layout");
+static_assert(sizeof(FramePoseGpu) == 112 && offsetof(FramePoseGpu, skip) == 96, "FramePoseGpu: std430 layout");
 static_assert(TRACK_SUM_MODEL_HITS + 1 == TRACK_SUM_COUNT && TRACK_SUM_JTR == 21 && WG_TRACK_REDUCE >= TRACK_SUM_COUNT);
 
 }  // namespace vkmesh::gpu

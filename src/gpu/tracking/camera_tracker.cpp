@@ -53,6 +53,13 @@ TrackParamsGpu trackParamsFor(const TrackerOptions& o) {
     p.colorHuber = o.colorHuber;
     p.stopRotation = float(o.stopRotation);
     p.stopTranslation = float(o.stopTranslation);
+    p.minInliers = float(o.minInliers);
+    p.minInlierFraction = float(o.minInlierFraction);
+    p.minConditioning = float(o.minConditioning);
+    p.maxJumpMetres = float(o.maxJumpMetres);
+    p.maxJumpDegrees = float(o.maxJumpDegrees);
+    p.maxErrorRise = float(o.maxErrorRise);
+    p.minErrorForRise = float(o.minErrorForRise);
     return p;
 }
 
@@ -114,6 +121,7 @@ CameraTracker::CameraTracker(const vk::Context& context, int width, int height, 
       reduce_(context, table_, "track_icp_reduce"),
       sum_(context, table_, "track_icp_sum"),
       solve_(context, table_, "track_icp_solve"),
+      decide_(context, table_, "track_decide"),
       modelMaps_(context, width, height),
       recorder_(context),
       timer_(context, 16) {
@@ -270,10 +278,9 @@ IcpSums CameraTracker::sums(int level, const Pose& estimate) {
     return out;
 }
 
-IcpResult CameraTracker::trackInOneSubmission(const DepthImage& depth, const Intrinsics& intrinsics, const MeshBuffers& mesh,
-                                              const Pose& modelPose, const Pose& initial, const ColorImage* color) {
+void CameraTracker::recordGpuSolvedTracking(VkCommandBuffer cmd, const DepthImage& depth, const Intrinsics& intrinsics,
+                                            const MeshBuffers& mesh, const Pose& modelPose, const Pose& initial, const ColorImage* color) {
     checkFrameSize(depth);
-    VkCommandBuffer cmd = recorder_.begin();
     recordPrepare(cmd, depth, intrinsics, mesh, modelPose, color);
     TrackStateGpu start{};
     copyRows(start.cameraToWorld, initial);
@@ -283,11 +290,39 @@ IcpResult CameraTracker::trackInOneSubmission(const DepthImage& depth, const Int
     // says so), which is how a level still stops early without the host.
     for (int level = int(TRACK_LEVELS) - 1; level >= 0; --level)
         for (int it = 0; it < options_.iterations[level]; ++it) recordIcpIteration(cmd, level, initial, /*solveOnGpu=*/true);
+}
+
+IcpResult CameraTracker::trackInOneSubmission(const DepthImage& depth, const Intrinsics& intrinsics, const MeshBuffers& mesh,
+                                              const Pose& modelPose, const Pose& initial, const ColorImage* color) {
+    checkFrameSize(depth);
+    VkCommandBuffer cmd = recorder_.begin();
+    recordGpuSolvedTracking(cmd, depth, intrinsics, mesh, modelPose, initial, color);
     timer_.mark(cmd, "track_icp");
     recorder_.submitAndWait();
+    return gpuSolvedResult();
+}
+
+void CameraTracker::recordTrackAndDecide(VkCommandBuffer cmd, const DepthImage& depth, const Intrinsics& intrinsics, const MeshBuffers& mesh,
+                                         const Pose& modelPose, const Pose& initial, const ColorImage* color, const Pose& lastTracked,
+                                         double recentRmse, const vk::Buffer& framePose) {
+    checkFrameSize(depth);
+    // Bound before anything is recorded (a binding changes decide_'s descriptor set at once).
+    if (boundFramePose_ != framePose.handle()) {
+        table_.bind(TRACK_BINDING_FRAME_POSE, framePose);
+        boundFramePose_ = framePose.handle();
+    }
+    copyRows(paramValues_.lastTrackedCameraToWorld, lastTracked);
+    paramValues_.recentRmse = float(recentRmse);   // recordPrepare uploads the parameters
+    recordGpuSolvedTracking(cmd, depth, intrinsics, mesh, modelPose, initial, color);
+    TrackPush push{};
+    decide_.dispatch(cmd, &push, 1);
+    vk::memoryBarrier(cmd);
+    timer_.mark(cmd, "track_icp");
+}
+
+IcpResult CameraTracker::gpuSolvedResult() {
     stageMs_.clear();
     addStageTimes();
-
     state_.invalidate();
     TrackStateGpu end;
     std::memcpy(&end, state_.mapped(), sizeof(end));
@@ -298,6 +333,9 @@ IcpResult CameraTracker::trackInOneSubmission(const DepthImage& depth, const Int
     Pose pose = Pose::Identity();
     for (int r = 0; r < 3; ++r)
         for (int c = 0; c < 4; ++c) pose(r, c) = end.cameraToWorld[r][c];
+    result.gpuEstimate = pose;
+    result.gpuLostReason = end.lostReason;
+    result.gpuConditioning = end.conditioning;
     // The GPU kept the rotation orthonormal in float; make it so in double, as applyTwist does.
     result.cameraToWorld = applyTwist(Twist::Zero(), pose);
     IcpSums finalSums{};

@@ -94,6 +94,11 @@ struct IcpResult {
     int iterations = 0;             // over all levels
     uint32_t submissions = 0;       // GPU submissions waited for (one per iteration, plus prepare)
     bool solved = false;            // every level's last system could be solved
+    // GPU-solved: the estimate exactly as the GPU holds it (float; cameraToWorld is it re-orthonormalised in
+    // double), and, after track_decide, its verdict (TRACK_LOST_*, TRACK_TRACKED) and float conditioning.
+    Pose gpuEstimate = Pose::Identity();
+    uint32_t gpuLostReason = TRACK_TRACKED;
+    double gpuConditioning = 0;
 };
 
 class CameraTracker {
@@ -117,6 +122,15 @@ public:
     // the equilibrated system; the same steps, stopping rule and level-0 final system as align()).
     IcpResult trackInOneSubmission(const DepthImage& depth, const Intrinsics& intrinsics, const MeshBuffers& mesh, const Pose& modelPose,
                                    const Pose& initial, const ColorImage* color = nullptr);
+    // trackInOneSubmission()'s passes recorded into `cmd`, the start of a volume's frame (FrameInput::recordPose),
+    // followed by track_decide: the loss policy (trackingLoss, pose_tracker.h) decided on the GPU against
+    // `lastTracked` and `recentRmse` (the recent tracked frames' mean RMSE, 0: none), and the frame's pose written
+    // into the volume's `framePose` (FramePoseGpu; skip when lost). After the submission: gpuSolvedResult().
+    void recordTrackAndDecide(VkCommandBuffer cmd, const DepthImage& depth, const Intrinsics& intrinsics, const MeshBuffers& mesh,
+                              const Pose& modelPose, const Pose& initial, const ColorImage* color, const Pose& lastTracked,
+                              double recentRmse, const vk::Buffer& framePose);
+    // What the last GPU-solved tracking found (trackInOneSubmission, or after recordTrackAndDecide's submission).
+    IcpResult gpuSolvedResult();
 
     // Milliseconds the GPU spent in the last prepare() and in the ICP passes since (timestamps; 0 without), in
     // all and per stage: track_pyramid (filter, pyramids), track_model (the mesh drawn, its maps), track_icp.
@@ -149,6 +163,9 @@ private:
     // prepare()'s passes, recorded into `cmd` (the caller submits).
     void recordPrepare(VkCommandBuffer cmd, const DepthImage& depth, const Intrinsics& intrinsics, const MeshBuffers& mesh,
                        const Pose& modelPose, const ColorImage* color);
+    // recordPrepare() and every ICP iteration solved on the GPU, recorded into `cmd`.
+    void recordGpuSolvedTracking(VkCommandBuffer cmd, const DepthImage& depth, const Intrinsics& intrinsics, const MeshBuffers& mesh,
+                                 const Pose& modelPose, const Pose& initial, const ColorImage* color);
     const vk::Context& context_;
     int width_, height_;
     TrackerOptions options_;
@@ -161,7 +178,8 @@ private:
     TrackParamsGpu paramValues_{};   // what params_ holds (the model pose changes every prepare())
     vk::Buffer params_, rawDepth_, rawIntensity_, depth_, points_, normals_, modelPositions_, modelNormals_, partials_, sums_;
     vk::Buffer intensity_, modelIntensity_, state_;
-    vk::ComputePipeline filter_, downsampleDepth_, vertexNormals_, downsampleModel_, reduce_, sum_, solve_;
+    vk::ComputePipeline filter_, downsampleDepth_, vertexNormals_, downsampleModel_, reduce_, sum_, solve_, decide_;
+    VkBuffer boundFramePose_ = VK_NULL_HANDLE;   // the volume pose buffer decide_ writes (bound on first use)
     ModelMapRenderer modelMaps_;
     vk::CommandRecorder recorder_;
     vk::StageTimer timer_;

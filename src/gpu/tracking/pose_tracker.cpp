@@ -36,63 +36,133 @@ TrackingReport PoseTracker::start(const Pose& cameraToWorld) {
     return report;
 }
 
-TrackingReport PoseTracker::track(const DepthImage& depth, const Intrinsics& intrinsics, const MeshBuffers& mesh, const ColorImage* color) {
+uint32_t trackingLoss(const IcpSystem& system, bool solved, double conditioning, const Pose& motion, double recentRmse,
+                      const TrackerOptions& o) {
+    // Written as track_decide.comp makes them (a NaN motion is a jump there too).
+    if (system.validPixels == 0) return TRACK_LOST_NO_DEPTH;
+    if (system.modelHits == 0) return TRACK_LOST_NO_MODEL;
+    if (system.inliers < o.minInliers || system.inliers < o.minInlierFraction * system.validPixels) return TRACK_LOST_FEW_INLIERS;
+    if (!solved || !(conditioning >= o.minConditioning)) return TRACK_LOST_ILL_CONDITIONED;
+    if (!(translationMetres(motion) <= o.maxJumpMetres)) return TRACK_LOST_JUMP;
+    if (!(rotationDegrees(motion) <= o.maxJumpDegrees)) return TRACK_LOST_TURN;
+    const double rmse = system.rmse();
+    if (recentRmse > 0 && rmse > o.minErrorForRise && rmse > o.maxErrorRise * recentRmse) return TRACK_LOST_ERROR_ROSE;
+    return TRACK_TRACKED;
+}
+
+std::string lossText(uint32_t reason, const IcpSystem& system, double conditioning, const Pose& motion, double recentRmse,
+                     const TrackerOptions& o) {
+    switch (reason) {
+        case TRACK_TRACKED: return "";
+        case TRACK_LOST_NO_DEPTH: return "no valid depth";
+        case TRACK_LOST_NO_MODEL: return "no model in view";
+        case TRACK_LOST_FEW_INLIERS: return format("too few inliers (%.0f of %.0f pixels)", system.inliers, system.validPixels);
+        case TRACK_LOST_ILL_CONDITIONED:
+            return format("ill-conditioned system (conditioning %.3g, limit %.3g)", conditioning, o.minConditioning);
+        case TRACK_LOST_JUMP: return format("a jump of %.3f m (limit %.3f m)", translationMetres(motion), o.maxJumpMetres);
+        case TRACK_LOST_TURN: return format("a turn of %.1f degrees (limit %.1f)", rotationDegrees(motion), o.maxJumpDegrees);
+        case TRACK_LOST_ERROR_ROSE: return format("the error rose to %.4f m (recent frames: %.4f m)", system.rmse(), recentRmse);
+        default: return "lost (reason " + std::to_string(reason) + ")";
+    }
+}
+
+CameraTracker& PoseTracker::trackerFor(const DepthImage& depth) {
     if (!started_) throw Error("tracking: start() with the first frame's pose before tracking");
-    const auto t0 = std::chrono::steady_clock::now();
     if (!tracker_ || tracker_->width() != depth.width || tracker_->height() != depth.height)
         tracker_ = std::make_unique<CameraTracker>(context_, depth.width, depth.height, options_);
-    const Pose predicted = prediction();
-    IcpResult icp;
-    if (options_.solveOnGpu) {
-        icp = tracker_->trackInOneSubmission(depth, intrinsics, mesh, predicted, predicted, color);
-    } else {
-        tracker_->prepare(depth, intrinsics, mesh, predicted, color);
-        icp = tracker_->align(predicted);
-    }
+    return *tracker_;
+}
+
+double PoseTracker::recentRmse() const {
+    return recentRmse_.empty() ? 0.0 : std::accumulate(recentRmse_.begin(), recentRmse_.end(), 0.0) / double(recentRmse_.size());
+}
+
+TrackingReport PoseTracker::conclude(const IcpResult& icp, uint32_t reason, double conditioning, const Pose& estimate, const Pose& predicted) {
     TrackingReport report;
     report.iterations = icp.iterations;
     report.submissions = icp.submissions;
     report.inliers = icp.finalSystem.inliers;
     report.validPixels = icp.finalSystem.validPixels;
     report.rmse = icp.finalSystem.rmse();
-    report.conditioning = icp.finalStep.conditioning;
+    report.conditioning = conditioning;
     report.gpuMilliseconds = tracker_->gpuMilliseconds();
     report.gpuStageMilliseconds = tracker_->gpuStageMilliseconds();
-
-    const Pose motion = inverseRigid(lastTracked_) * icp.cameraToWorld;
-    const double recent = recentRmse_.empty() ? 0.0
-                                              : std::accumulate(recentRmse_.begin(), recentRmse_.end(), 0.0) / double(recentRmse_.size());
-    std::string lost;
-    if (report.validPixels == 0)
-        lost = "no valid depth";
-    else if (icp.finalSystem.modelHits == 0)
-        lost = "no model in view";
-    else if (report.inliers < options_.minInliers || report.inliers < options_.minInlierFraction * report.validPixels)
-        lost = format("too few inliers (%.0f of %.0f pixels)", report.inliers, report.validPixels);
-    else if (!icp.finalStep.solved || report.conditioning < options_.minConditioning)
-        lost = format("ill-conditioned system (conditioning %.3g, limit %.3g)", report.conditioning, options_.minConditioning);
-    else if (translationMetres(motion) > options_.maxJumpMetres)
-        lost = format("a jump of %.3f m (limit %.3f m)", translationMetres(motion), options_.maxJumpMetres);
-    else if (rotationDegrees(motion) > options_.maxJumpDegrees)
-        lost = format("a turn of %.1f degrees (limit %.1f)", rotationDegrees(motion), options_.maxJumpDegrees);
-    else if (recent > 0 && report.rmse > options_.minErrorForRise && report.rmse > options_.maxErrorRise * recent)
-        lost = format("the error rose to %.4f m (recent frames: %.4f m)", report.rmse, recent);
-
-    if (lost.empty()) {
+    const Pose motion = inverseRigid(lastTracked_) * estimate;
+    if (reason == TRACK_TRACKED) {
         report.tracked = true;
-        report.cameraToWorld = icp.cameraToWorld;
+        report.cameraToWorld = estimate;
         velocity_ = motion;
-        lastTracked_ = icp.cameraToWorld;
+        lastTracked_ = estimate;
         recentRmse_.push_back(report.rmse);
         if (recentRmse_.size() > kRecentFrames) recentRmse_.pop_front();
     } else {
         report.tracked = false;
-        report.lostReason = lost;
+        report.lostReason = lossText(reason, icp.finalSystem, conditioning, motion, recentRmse(), options_);
         report.cameraToWorld = predicted;
         velocity_ = Pose::Identity();   // the motion is unknown now: predict the last tracked pose
     }
+    return report;
+}
+
+TrackingReport PoseTracker::track(const DepthImage& depth, const Intrinsics& intrinsics, const MeshBuffers& mesh, const ColorImage* color) {
+    const auto t0 = std::chrono::steady_clock::now();
+    CameraTracker& tracker = trackerFor(depth);
+    const Pose predicted = prediction();
+    IcpResult icp;
+    if (options_.solveOnGpu) {
+        icp = tracker.trackInOneSubmission(depth, intrinsics, mesh, predicted, predicted, color);
+    } else {
+        tracker.prepare(depth, intrinsics, mesh, predicted, color);
+        icp = tracker.align(predicted);
+    }
+    const Pose motion = inverseRigid(lastTracked_) * icp.cameraToWorld;
+    const uint32_t reason = trackingLoss(icp.finalSystem, icp.finalStep.solved, icp.finalStep.conditioning, motion, recentRmse(), options_);
+    TrackingReport report = conclude(icp, reason, icp.finalStep.conditioning, icp.cameraToWorld, predicted);
     report.milliseconds = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     return report;
+}
+
+TrackedFusion PoseTracker::trackAndFuse(GpuVolume& volume, const DepthImage& depth, const Intrinsics& intrinsics,
+                                        const ColorImage* trackingColor, const ColorImage* fusedColor, const vk::SubmitSync& sync) {
+    TrackedFusion out;
+    if (!options_.solveOnGpu) {
+        out.tracking = track(depth, intrinsics, volume.meshBuffers(), trackingColor);
+        if (!out.tracking.tracked) return out;
+        const auto t0 = std::chrono::steady_clock::now();
+        out.fused = volume.integrate(depth, fusedColor, intrinsics, out.tracking.cameraToWorld, sync);
+        out.fuseMilliseconds = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+        return out;
+    }
+    // One submission: the tracker's passes start the volume's frame and write its pose; the volume fuses
+    // nothing if track_decide lost the frame.
+    const auto t0 = std::chrono::steady_clock::now();
+    CameraTracker& tracker = trackerFor(depth);
+    const Pose predicted = prediction();
+    const MeshBuffers mesh = volume.meshBuffers();   // last frame's mesh: the frame's own export replaces it later
+    const Pose lastTracked = lastTracked_;
+    const double recent = recentRmse();
+    FrameInput input;
+    input.depth = &depth;
+    input.color = fusedColor;
+    input.intrinsics = intrinsics;
+    input.cameraToWorld = predicted;   // not read: the pose comes from the tracker
+    input.sync = sync;
+    input.recordPose = [&](VkCommandBuffer cmd, const vk::Buffer& framePose) {
+        tracker.recordTrackAndDecide(cmd, depth, intrinsics, mesh, predicted, predicted, trackingColor, lastTracked, recent, framePose);
+    };
+    volume.submitFrame(input);
+    FrameReport frame = volume.finishFrame();
+    const IcpResult icp = tracker.gpuSolvedResult();
+    // The GPU's verdict is what happened (the frame was fused or not); the pose is the GPU's own estimate, the one
+    // the volume fused at.
+    out.tracking = conclude(icp, icp.gpuLostReason, icp.gpuConditioning, icp.gpuEstimate, predicted);
+    out.oneSubmission = true;
+    out.tracking.milliseconds = out.fuseMilliseconds = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    if (frame.skipped != !out.tracking.tracked)
+        throw Error("tracking: the volume " + std::string(frame.skipped ? "skipped" : "fused") + " a frame that tracking " +
+                    (out.tracking.tracked ? "kept" : "lost"));
+    if (out.tracking.tracked) out.fused = std::move(frame);
+    return out;
 }
 
 }  // namespace vkmesh::gpu

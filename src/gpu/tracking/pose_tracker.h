@@ -1,11 +1,13 @@
 // Camera tracking over a sequence (docs/TRACKING.md): the prediction, the ICP against the mesh (CameraTracker)
 // and the decision whether a frame is tracked or lost. Used the same way by the CLI (`vkmesh fuse --track`),
-// Reconstructor::integrate without a pose and the Python module:
+// Reconstructor::integrate without a pose, gpubench and the Python module:
 //   PoseTracker tracker(context, options);
 //   tracker.start(firstPose);                            // the first frame is fused at this pose
 //   for every later frame:
-//       TrackingReport r = tracker.track(depth, intrinsics, volume.meshBuffers());
-//       if (r.tracked) volume.integrate(depth, intrinsics, r.cameraToWorld);   // else: not fused
+//       TrackedFusion f = tracker.trackAndFuse(volume, depth, intrinsics, color, color);
+//       // f.tracking.tracked: fused at f.tracking.cameraToWorld (f.fused is its FrameReport); else not fused
+// trackAndFuse is track() followed by volume.integrate() at the tracked pose, or with options.solveOnGpu all of
+// it in one submission: the loss policy decided on the GPU, which fuses the frame only when it is tracked.
 // A lost frame (too few inliers, an ill-conditioned system, a jump past a bound, an error that rises, or no
 // valid depth) gets the predicted pose and is not fused: the map stays bit-identical. The next frame is
 // predicted from the last tracked pose and tracks again as soon as it matches.
@@ -13,6 +15,7 @@
 
 #include <deque>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "gpu/tracking/camera_tracker.h"
@@ -35,6 +38,25 @@ struct TrackingReport {
     std::vector<std::pair<std::string, double>> gpuStageMilliseconds;   // ... per stage (CameraTracker)
 };
 
+// A tracked frame and, when it was fused, what fusing it did.
+struct TrackedFusion {
+    TrackingReport tracking;
+    std::optional<FrameReport> fused;   // empty: the frame was lost (not fused)
+    bool oneSubmission = false;         // tracked and fused in one submission (options.solveOnGpu): then
+                                        // tracking.milliseconds is the whole frame's wall time, fusion included
+    double fuseMilliseconds = 0;        // wall time of the fusion (one submission: the same as tracking's)
+};
+
+// The loss policy (TrackerOptions' bounds), and the CPU reference of the GPU's (track_decide.comp): why a frame
+// whose ICP ended with `system` (level 0's last, before its step) at `motion` from the last tracked pose is lost,
+// TRACK_TRACKED if it is not. `solved`: that system could be solved; `conditioning`: its smallest over largest
+// eigenvalue; `recentRmse`: the recent tracked frames' mean inlier RMSE (0: none yet).
+uint32_t trackingLoss(const IcpSystem& system, bool solved, double conditioning, const Pose& motion, double recentRmse,
+                      const TrackerOptions& options);
+// The reason in words, with the numbers behind it.
+std::string lossText(uint32_t reason, const IcpSystem& system, double conditioning, const Pose& motion, double recentRmse,
+                     const TrackerOptions& options);
+
 class PoseTracker {
 public:
     PoseTracker(const vk::Context& context, const TrackerOptions& options = {});
@@ -47,11 +69,21 @@ public:
     // colour image (registered to the depth, or null) feeds the photometric term when options.colorWeight > 0.
     TrackingReport track(const DepthImage& depth, const Intrinsics& intrinsics, const MeshBuffers& mesh,
                          const ColorImage* color = nullptr);
+    // Tracks a frame against `volume`'s mesh (a volume with publishMesh) and fuses it there when it is tracked.
+    // `trackingColor` feeds the photometric term, `fusedColor` is fused (either may be null). With
+    // options.solveOnGpu one submission does both (one host wait per frame; docs/TRACKING.md, "One submission"),
+    // else track() and then volume.integrate().
+    TrackedFusion trackAndFuse(GpuVolume& volume, const DepthImage& depth, const Intrinsics& intrinsics, const ColorImage* trackingColor,
+                               const ColorImage* fusedColor, const vk::SubmitSync& sync = {});
     // The pose the next frame will be predicted at (constant velocity from the last two tracked frames).
     Pose prediction() const { return lastTracked_ * velocity_; }
     const TrackerOptions& options() const { return options_; }
 
 private:
+    CameraTracker& trackerFor(const DepthImage& depth);
+    double recentRmse() const;
+    // The report of a frame whose ICP found `icp` (its verdict `reason`), and the prediction state moved on.
+    TrackingReport conclude(const IcpResult& icp, uint32_t reason, double conditioning, const Pose& estimate, const Pose& predicted);
     const vk::Context& context_;
     TrackerOptions options_;
     std::unique_ptr<CameraTracker> tracker_;   // created at the first tracked frame's image size
