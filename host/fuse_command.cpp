@@ -77,6 +77,7 @@ struct FuseArgs {
     std::string trackIterations;       // "10,5,4": ICP iterations per level, finest first
     float trackColorWeight = gpu::TrackerOptions{}.colorWeight;   // the photometric term's weight (0: off)
     std::string trackSolve = "host";   // where the ICP systems are solved: host (double, a wait per iteration) or gpu
+    int trackDownsample = 1;            // track on frames downsampled by 1, 2 or 4
     const CLI::App* cmd = nullptr;   // which options were given (a loaded map's settings fill the others)
 };
 
@@ -155,8 +156,9 @@ int runFuse(const FuseArgs& args) {
     if (args.growHeaps)
         std::cerr << "note: --grow-heaps is deprecated and has no effect: capacities grow by default (--no-grow keeps them fixed)\n";
     if ((!args.trackIterations.empty() || args.cmd->get_option("--track-color-weight")->count() > 0 ||
-         args.cmd->get_option("--track-solve")->count() > 0) && !args.track)
-        throw Error("--track-iterations, --track-color-weight and --track-solve need --track");
+         args.cmd->get_option("--track-solve")->count() > 0 || args.cmd->get_option("--track-downsample")->count() > 0) &&
+        !args.track)
+        throw Error("--track-iterations, --track-color-weight, --track-solve and --track-downsample need --track");
     std::optional<std::array<int, gpu::TRACK_LEVELS>> iterations;
     if (!args.trackIterations.empty()) iterations = parseIterations(args.trackIterations);
     DatasetArgs data = args.data;
@@ -224,6 +226,7 @@ int runFuse(const FuseArgs& args) {
         if (iterations) trackerOptions.iterations = *iterations;
         trackerOptions.colorWeight = args.trackColorWeight;
         trackerOptions.solveOnGpu = args.trackSolve == "gpu";
+        trackerOptions.downsample = args.trackDownsample;
         tracker.emplace(context, trackerOptions);
     }
     std::vector<TimedPose> trajectory;   // the pose used for every frame (tracked, predicted or given)
@@ -589,6 +592,7 @@ int runFuse(const FuseArgs& args) {
                              // --track-solve gpu: tracking, fusion and meshing are one submission per frame, so
                              // ms_per_frame (wall) holds the fusion and meshing too
                              {"fused_in_tracking_submission", args.trackSolve == "gpu"},
+                             {"downsample", args.trackDownsample},
                              {"trajectory", args.trajectoryPath}};
     } else {
         stats["tracking"] = {{"enabled", false}, {"trajectory", args.trajectoryPath}};
@@ -694,6 +698,10 @@ Run addFuseCommand(CLI::App& app) {
                     "where tracking solves its 6x6 systems: host (in double, one GPU submission per ICP iteration) or gpu (in "
                     "float; the frame's tracking, fusion and meshing in one submission; docs/TRACKING.md)")
         ->check(CLI::IsMember({"host", "gpu"}));
+    cmd->add_option("--track-downsample", args->trackDownsample,
+                    "track on the frames downsampled by 1, 2 or 4 (fusion keeps the full frames): 2 on 640x480 is a quarter of "
+                    "the finest level's work (docs/TRACKING.md)")
+        ->check(CLI::IsMember({1, 2, 4}));
     cmd->add_option("--serve", args->servePort,
                     "serve the live browser viewer on this port while fusing (docs/VIEWER.md; open the URL it prints)")
         ->check(CLI::Range(0, 65535));

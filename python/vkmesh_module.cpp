@@ -515,7 +515,7 @@ public:
         d["lock_free"] = c.lockFree;
         d["track_deltas"] = options_.trackDeltas;
         d["tracking"] = py::dict("color_weight"_a = shortest(options_.tracker.colorWeight),
-                                 "solve"_a = options_.tracker.solveOnGpu ? "gpu" : "host");
+                                 "solve"_a = options_.tracker.solveOnGpu ? "gpu" : "host", "downsample"_a = options_.tracker.downsample);
         d["color"] = py::dict("fused"_a = c.params.colorFusion != ColorFusion::Off, "mode"_a = colorModeName(c.params.colorFusion),
                               "recency"_a = shortest(c.params.colorRecency));
         d["recycling"] = py::dict("keep_radius"_a = shortest(c.keepRadius), "recycle"_a = c.recycle,
@@ -672,7 +672,7 @@ std::unique_ptr<PyReconstructor> makeReconstructor(float voxelSize, float trunca
                                                    float minWeight, int allocationStride, bool refine, float refineEpsilonVoxels,
                                                    bool lockFree, const Capacities& capacities, bool growCapacities, float keepRadius,
                                                    bool recycle, long long recycleAfterFrames, float starveWeight, bool validation,
-                                                   float trackColorWeight, const std::string& trackSolve) {
+                                                   float trackColorWeight, const std::string& trackSolve, int trackDownsample) {
     ReconstructorOptions o;
     gpu::GpuVolumeConfig& c = o.volume;
     c.params.voxelSize = voxelSize;
@@ -701,6 +701,9 @@ std::unique_ptr<PyReconstructor> makeReconstructor(float voxelSize, float trunca
     if (trackSolve != "host" && trackSolve != "gpu") throw py::value_error("track_solve '" + trackSolve + "' must be 'host' or 'gpu'");
     o.tracker.colorWeight = trackColorWeight;
     o.tracker.solveOnGpu = trackSolve == "gpu";
+    if (trackDownsample != 1 && trackDownsample != 2 && trackDownsample != 4)
+        throw py::value_error("track_downsample " + std::to_string(trackDownsample) + " must be 1, 2 or 4");
+    o.tracker.downsample = trackDownsample;
     o.trackDeltas = trackDeltas;
     o.device = deviceOptions(device, validation);
     std::unique_ptr<Reconstructor> rec;
@@ -879,7 +882,8 @@ Keyword arguments (all optional):
   validation            the Khronos validation layer (also on with VKMESH_VALIDATION=1)
   track_color_weight    tracking (integrate without a pose): the photometric term's weight (--track-color-weight; 0.1)
   track_solve           tracking: 'host' (systems solved in double, a GPU submission per ICP iteration) or 'gpu'
-                        (in float, the frame's tracking in one submission) (--track-solve; 'host')
+                        (in float; the frame's tracking, fusion and meshing in one submission) (--track-solve; 'host')
+  track_downsample      tracking on the frames downsampled by 1, 2 or 4 (--track-downsample; 1)
 
 Bad settings raise ValueError; no usable device or a capacity that does not fit it raises vkmesh.Error.
 )doc")
@@ -890,13 +894,13 @@ Bad settings raise ValueError; no usable device or a capacity that does not fit 
                          long long touchedCapacity, long long vertexCapacity, long long chunkCapacity, long long retypeCapacity,
                          long long deltaRecordCapacity, bool growCapacities, double keepRadius, bool recycle,
                          long long recycleAfterFrames, double starveWeight, bool validation, double trackColorWeight,
-                         const std::string& trackSolve) {
+                         const std::string& trackSolve, int trackDownsample) {
                  return makeReconstructor(voxelSize, truncationVoxels, maxDepth, device, colorMode, colorRecency, trackDeltas,
                                           maxWeight, minWeight, allocationStride, refine, refineEpsilonVoxels, lockFree,
                                           {blockCapacity, hashCapacity, touchedCapacity, vertexCapacity, chunkCapacity,
                                            retypeCapacity, deltaRecordCapacity},
                                           growCapacities, keepRadius, recycle, recycleAfterFrames, starveWeight, validation,
-                                          float(trackColorWeight), trackSolve);
+                                          float(trackColorWeight), trackSolve, trackDownsample);
              }),
              py::kw_only(), "voxel_size"_a = shortest(dp.voxelSize), "truncation_voxels"_a = shortest(dp.truncVoxels),
              // `vkmesh fuse --max-depth` defaults to 4 m (host/cli_options.h, DatasetArgs), not VolumeParams' 5 m.
@@ -909,7 +913,8 @@ Bad settings raise ValueError; no usable device or a capacity that does not fit 
              "retype_capacity"_a = dc.retypeCapacity, "delta_record_capacity"_a = dc.deltaRecordCapacity,
              "grow_capacities"_a = dc.growCapacities, "keep_radius"_a = shortest(dc.keepRadius), "recycle"_a = dc.recycle,
              "recycle_after_frames"_a = dc.recycleAfterFrames, "starve_weight"_a = shortest(dc.starveWeight), "validation"_a = false,
-             "track_color_weight"_a = shortest(gpu::TrackerOptions{}.colorWeight), "track_solve"_a = "host")
+             "track_color_weight"_a = shortest(gpu::TrackerOptions{}.colorWeight), "track_solve"_a = "host",
+             "track_downsample"_a = gpu::TrackerOptions{}.downsample)
         .def("integrate", &PyReconstructor::integrate, "depth"_a, "intrinsics"_a, "pose"_a = py::none(), "depth_scale"_a = 5000.0,
              "color"_a = py::none(), R"doc(
 Fuses one frame and updates the mesh; returns when the GPU has finished it.

@@ -458,9 +458,17 @@ TEST(Cli, TrackStartsFromTheDatasetsFirstPose) {
     const auto gpuStats = nlohmann::json::parse(test::readText(d / "g.json"));
     EXPECT_EQ(gpuStats["tracking"]["solve"], "gpu");
     EXPECT_EQ(gpuStats["tracking"]["submissions_per_frame"]["max"], 1);
+    EXPECT_EQ(gpuStats["tracking"]["fused_in_tracking_submission"], true);   // fusion and meshing in that submission
+    EXPECT_EQ(gpuStats["frames"]["integrated"], 8) << gpuStats["frames"].dump();
     r = test::runCli("fuse " + trackingSequence().string() + " --track --track-solve cpu -o " + (d / "m.ply").string());
     EXPECT_NE(r.exitCode, 0);
     EXPECT_NE(r.err.find("--track-solve"), std::string::npos) << r.err;
+    r = test::runCli("fuse " + trackingSequence().string() + " --track --track-downsample 3 -o " + (d / "m.ply").string());
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_NE(r.err.find("--track-downsample"), std::string::npos) << r.err;
+    r = test::runCli("fuse " + trackingSequence().string() + " --track-downsample 2 -o " + (d / "m.ply").string());
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_NE(r.err.find("need --track"), std::string::npos) << r.err;
 
     r = test::runCli("fuse " + trackingSequence().string() + " --frames 3 --voxel 0.05 --trajectory " + (d / "given.txt").string() +
                      " -o " + (d / "m.ply").string());

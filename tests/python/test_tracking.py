@@ -41,16 +41,25 @@ def test_tracking_with_the_systems_solved_on_the_gpu(tmp_path):
     folder = vkmesh.synth(tmp_path / "room", frames=240, width=160, height=120)
     frames = list(vkmesh.open_dataset(folder, frames=6))
     r = vkmesh.Reconstructor(voxel_size=0.03, track_solve="gpu", track_color_weight=0)
-    assert r.stats()["tracking"] == {"color_weight": 0.0, "solve": "gpu"}
+    assert r.stats()["tracking"] == {"color_weight": 0.0, "solve": "gpu", "downsample": 1}
     results = [r.integrate(f.depth, f.intrinsics) for f in frames]
     assert all(res["tracked"] for res in results[1:]), [res["lost_reason"] for res in results]
     first = np.linalg.inv(frames[0].pose)
     for i, f in enumerate(frames):
         assert np.linalg.norm(r.trajectory()[i][:3, 3] - (first @ f.pose)[:3, 3]) < 0.01, i
+    # Tracked and fused in one submission: a frame without depth is lost on the GPU and not fused.
+    integrated = r.frames_integrated
+    lost = r.integrate(np.zeros_like(frames[0].depth), frames[0].intrinsics)
+    assert not lost["tracked"] and "depth" in lost["lost_reason"]
+    assert r.frames_integrated == integrated
+    assert r.integrate(frames[-1].depth, frames[-1].intrinsics)["tracked"]
+    assert r.frames_integrated == integrated + 1
     with pytest.raises(ValueError, match="track_solve"):
         vkmesh.Reconstructor(track_solve="cpu")
     with pytest.raises(ValueError, match="track_color_weight"):
         vkmesh.Reconstructor(track_color_weight=-1)
+    with pytest.raises(ValueError, match="track_downsample"):
+        vkmesh.Reconstructor(track_downsample=3)
 
 
 def test_integrate_with_a_pose_returns_none_and_is_in_the_trajectory(small_sequence):

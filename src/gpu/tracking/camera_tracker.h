@@ -78,6 +78,10 @@ struct TrackerOptions {
     // Pixels each invocation of the ICP reduction sums (1..TRACK_MAX_PIXELS_PER_INVOCATION); 0: by device, 64
     // on a CPU device (lavapipe: each workgroup costs) and 16 on a GPU (which wants many workgroups).
     uint32_t pixelsPerInvocation = 0;
+    // Track on the frames downsampled by this factor (1, 2 or 4; PoseTracker): the pyramid's finest level is
+    // width / downsample by height / downsample, with intrinsics to match; fusion still takes the full frame.
+    // 2 on 640 x 480 frames is a quarter of the finest level's work (docs/TRACKING.md, docs/RESULTS.md).
+    int downsample = 1;
 };
 
 // The options as the shaders read them (TrackParamsGpu, without the model pose); throws Error naming a value

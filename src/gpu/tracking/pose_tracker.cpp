@@ -1,6 +1,7 @@
 #include "gpu/tracking/pose_tracker.h"
 
 #include <algorithm>
+#include <cmath>
 #include <chrono>
 #include <cstdio>
 #include <numeric>
@@ -13,6 +14,46 @@ namespace {
 
 constexpr size_t kRecentFrames = 10;
 
+// Halves a depth image: each pixel averages the 2 x 2 measured samples within `band` metres of the first
+// (track_downsample_depth's rule: no averaging across a depth edge); 0 where none is measured.
+DepthImage halveDepth(const DepthImage& in, float band) {
+    DepthImage out;
+    out.width = in.width / 2;
+    out.height = in.height / 2;
+    out.meters.assign(size_t(out.width) * out.height, 0.0f);
+    for (int y = 0; y < out.height; ++y) {
+        for (int x = 0; x < out.width; ++x) {
+            float samples[4], reference = 0, sum = 0;
+            int count = 0;
+            for (int k = 0; k < 4; ++k) {
+                const float d = in.meters[size_t(2 * y + (k >> 1)) * in.width + size_t(2 * x + (k & 1))];
+                samples[k] = std::isfinite(d) && d > 0 ? d : 0.0f;
+                if (reference == 0 && samples[k] > 0) reference = samples[k];
+            }
+            for (float d : samples)
+                if (d > 0 && std::abs(d - reference) <= band) sum += d, ++count;
+            out.meters[size_t(y) * out.width + x] = count > 0 ? sum / float(count) : 0.0f;
+        }
+    }
+    return out;
+}
+
+// Halves a colour image: each pixel the mean of the 2 x 2 (rounded).
+ColorImage halveColor(const ColorImage& in) {
+    ColorImage out;
+    out.width = in.width / 2;
+    out.height = in.height / 2;
+    out.rgb.resize(size_t(out.width) * out.height * 3);
+    for (int y = 0; y < out.height; ++y)
+        for (int x = 0; x < out.width; ++x)
+            for (int c = 0; c < 3; ++c) {
+                int sum = 0;
+                for (int k = 0; k < 4; ++k) sum += in.rgb[(size_t(2 * y + (k >> 1)) * in.width + size_t(2 * x + (k & 1))) * 3 + c];
+                out.rgb[(size_t(y) * out.width + x) * 3 + c] = uint8_t((sum + 2) / 4);
+            }
+    return out;
+}
+
 std::string format(const char* pattern, double a, double b) {
     char text[200];
     std::snprintf(text, sizeof(text), pattern, a, b);
@@ -21,7 +62,26 @@ std::string format(const char* pattern, double a, double b) {
 
 }  // namespace
 
-PoseTracker::PoseTracker(const vk::Context& context, const TrackerOptions& options) : context_(context), options_(options) {}
+PoseTracker::PoseTracker(const vk::Context& context, const TrackerOptions& options) : context_(context), options_(options) {
+    if (options.downsample != 1 && options.downsample != 2 && options.downsample != 4)
+        throw Error("tracking: downsample " + std::to_string(options.downsample) + " is not 1, 2 or 4");
+    trackParamsFor(options);   // every other setting checked before the first frame
+}
+
+PoseTracker::TrackingInput PoseTracker::trackingInput(const DepthImage& depth, const ColorImage* color, const Intrinsics& intrinsics) {
+    if (options_.downsample == 1) return {&depth, color, intrinsics};
+    const float band = 3.0f * options_.filterDepthSigma;
+    smallDepth_ = halveDepth(depth, band);
+    const bool withColor = color && !color->empty() && options_.colorWeight > 0;
+    if (withColor) smallColor_ = halveColor(*color);
+    int levels = 1;
+    if (options_.downsample == 4) {
+        smallDepth_ = halveDepth(smallDepth_, band);
+        if (withColor) smallColor_ = halveColor(smallColor_);
+        levels = 2;
+    }
+    return {&smallDepth_, withColor ? &smallColor_ : nullptr, pyramidLevelIntrinsics(intrinsics, levels)};
+}
 PoseTracker::~PoseTracker() = default;
 
 TrackingReport PoseTracker::start(const Pose& cameraToWorld) {
@@ -106,13 +166,14 @@ TrackingReport PoseTracker::conclude(const IcpResult& icp, uint32_t reason, doub
 
 TrackingReport PoseTracker::track(const DepthImage& depth, const Intrinsics& intrinsics, const MeshBuffers& mesh, const ColorImage* color) {
     const auto t0 = std::chrono::steady_clock::now();
-    CameraTracker& tracker = trackerFor(depth);
+    const TrackingInput in = trackingInput(depth, color, intrinsics);
+    CameraTracker& tracker = trackerFor(*in.depth);
     const Pose predicted = prediction();
     IcpResult icp;
     if (options_.solveOnGpu) {
-        icp = tracker.trackInOneSubmission(depth, intrinsics, mesh, predicted, predicted, color);
+        icp = tracker.trackInOneSubmission(*in.depth, in.intrinsics, mesh, predicted, predicted, in.color);
     } else {
-        tracker.prepare(depth, intrinsics, mesh, predicted, color);
+        tracker.prepare(*in.depth, in.intrinsics, mesh, predicted, in.color);
         icp = tracker.align(predicted);
     }
     const Pose motion = inverseRigid(lastTracked_) * icp.cameraToWorld;
@@ -136,7 +197,8 @@ TrackedFusion PoseTracker::trackAndFuse(GpuVolume& volume, const DepthImage& dep
     // One submission: the tracker's passes start the volume's frame and write its pose; the volume fuses
     // nothing if track_decide lost the frame.
     const auto t0 = std::chrono::steady_clock::now();
-    CameraTracker& tracker = trackerFor(depth);
+    const TrackingInput in = trackingInput(depth, trackingColor, intrinsics);
+    CameraTracker& tracker = trackerFor(*in.depth);
     const Pose predicted = prediction();
     const MeshBuffers mesh = volume.meshBuffers();   // last frame's mesh: the frame's own export replaces it later
     const Pose lastTracked = lastTracked_;
@@ -148,7 +210,7 @@ TrackedFusion PoseTracker::trackAndFuse(GpuVolume& volume, const DepthImage& dep
     input.cameraToWorld = predicted;   // not read: the pose comes from the tracker
     input.sync = sync;
     input.recordPose = [&](VkCommandBuffer cmd, const vk::Buffer& framePose) {
-        tracker.recordTrackAndDecide(cmd, depth, intrinsics, mesh, predicted, predicted, trackingColor, lastTracked, recent, framePose);
+        tracker.recordTrackAndDecide(cmd, *in.depth, in.intrinsics, mesh, predicted, predicted, in.color, lastTracked, recent, framePose);
     };
     volume.submitFrame(input);
     FrameReport frame = volume.finishFrame();

@@ -80,6 +80,13 @@ public:
     const TrackerOptions& options() const { return options_; }
 
 private:
+    // The frame as the tracker sees it: downsampled by options.downsample (as given when 1).
+    struct TrackingInput {
+        const DepthImage* depth;
+        const ColorImage* color;
+        Intrinsics intrinsics;
+    };
+    TrackingInput trackingInput(const DepthImage& depth, const ColorImage* color, const Intrinsics& intrinsics);
     CameraTracker& trackerFor(const DepthImage& depth);
     double recentRmse() const;
     // The report of a frame whose ICP found `icp` (its verdict `reason`), and the prediction state moved on.
@@ -91,6 +98,8 @@ private:
     Pose lastTracked_ = Pose::Identity();
     Pose velocity_ = Pose::Identity();         // last tracked motion, in the camera's frame
     std::deque<double> recentRmse_;            // of the last tracked frames (the "error rises" check)
+    DepthImage smallDepth_;                    // the frame downsampled (options.downsample > 1)
+    ColorImage smallColor_;
 };
 
 }  // namespace vkmesh::gpu
