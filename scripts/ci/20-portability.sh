@@ -64,7 +64,7 @@ if [[ $parts == all || $parts == gpu-av ]]; then
     BothAtomicPaths/PathTest.HashUnderContentionInsertLookupRemoveRebuildGrow/Atomics32     # ... and its 32-bit build
     Tracking.IcpSumsMatchCpuReference                          # tracking: filter, pyramids, model maps, ICP sums (track_*)
     Tracking.GpuSolvedStepMatchesTheHostSolve                  # tracking's GPU-solved mode (track_icp_solve)
-    Tracking.GpuLossDecisionMatchesTheHostPolicy               # loss on the GPU (track_decide), fused in tracking's submission
+    SolvedOn/TrackingModes.JumpPastTheBoundIsRejectedAndTrackingPicksUpAgain/Gpu  # loss on the GPU (track_decide), fusion in tracking's submission, a skipped frame
   )
   # Parameterized tests are named "Suite/Test.Name/Param  # GetParam() = ..." by gtest_discover_tests: a name
   # ends at the end of the string or at a space.
