@@ -292,7 +292,17 @@ void GpuVolume::submitFrame(const FrameInput& input, uint64_t timelineValue) {
     frame.previousPush = lastPush_;
     if (input.recordPose) frame.previousCounters = counters_.read();
     inFlight_ = std::move(frame);
-    submitAttempt();
+    const uint32_t frameNumberBefore = frameNumber_;
+    try {
+        submitAttempt();
+    } catch (...) {
+        // Nothing was submitted (a pose or recordPose's passes were refused while recording): the volume is as
+        // before the call; the next submission resets the half-recorded command buffer.
+        lastPush_ = inFlight_->previousPush;
+        frameNumber_ = frameNumberBefore;
+        inFlight_.reset();
+        throw;
+    }
 }
 
 void GpuVolume::submitAttempt() {

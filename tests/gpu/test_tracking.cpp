@@ -334,6 +334,35 @@ TEST_F(Tracking, DownsampledFramesStillTrackTheNoiselessSequence) {
     EXPECT_THROW(PoseTracker(context(), bad), Error);
 }
 
+// A colour image of the wrong size is refused before anything is recorded, also when the frame would be fused in
+// tracking's submission, and the volume takes the next frame as if nothing had happened.
+TEST_P(TrackingModes, BadColourIsRefusedAndTheNextFrameTracks) {
+    if (const std::string why = test::lavapipeCannotDraw(); !why.empty()) GTEST_SKIP() << why;   // these tests draw the mesh
+    gpu::GpuVolume volume(context(), volumeConfig(0.03f));
+    const Intrinsics k = synth::kinectIntrinsics(kWidth, kHeight);
+    TrackerOptions options;
+    options.solveOnGpu = GetParam();
+    PoseTracker tracker(context(), options);
+    tracker.start(orbit()[0]);
+    volume.integrate(roomDepth(0, false), k, orbit()[0]);
+    ColorImage small;
+    small.width = kWidth / 2;
+    small.height = kHeight / 2;
+    small.rgb.assign(size_t(small.width) * small.height * 3, 128);
+    try {
+        tracker.trackAndFuse(volume, roomDepth(1, false), k, &small, nullptr);
+        ADD_FAILURE() << "a " << small.width << "x" << small.height << " colour image was accepted";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("colour image"), std::string::npos) << e.what();
+    }
+    EXPECT_FALSE(volume.framePending());
+    EXPECT_EQ(volume.frameNumber(), 1u);
+    const gpu::TrackedFusion next = tracker.trackAndFuse(volume, roomDepth(1, false), k, nullptr, nullptr);
+    EXPECT_TRUE(next.tracking.tracked) << next.tracking.lostReason;
+    EXPECT_EQ(volume.framesIntegrated(), 2u);
+    EXPECT_EQ(volume.frameNumber(), 2u);
+}
+
 INSTANTIATE_TEST_SUITE_P(SolvedOn, TrackingModes, ::testing::Values(false, true),
                          [](const ::testing::TestParamInfo<bool>& info) { return info.param ? "Gpu" : "Host"; });
 

@@ -68,7 +68,18 @@ PoseTracker::PoseTracker(const vk::Context& context, const TrackerOptions& optio
     trackParamsFor(options);   // every other setting checked before the first frame
 }
 
+PoseTracker::~PoseTracker() = default;
+
 PoseTracker::TrackingInput PoseTracker::trackingInput(const DepthImage& depth, const ColorImage* color, const Intrinsics& intrinsics) {
+    // Checked before anything reads them (or records a pass that would: with the fusion in the same submission,
+    // an error while recording would leave the volume's frame half recorded).
+    if (depth.width < 0 || depth.height < 0 || depth.meters.size() != size_t(depth.width) * size_t(depth.height))
+        throw Error("tracking: a depth image of " + std::to_string(depth.meters.size()) + " samples is not " + std::to_string(depth.width) +
+                    "x" + std::to_string(depth.height));
+    if (color && !color->empty() && options_.colorWeight > 0 && (color->width != depth.width || color->height != depth.height ||
+                                     color->rgb.size() != size_t(color->width) * size_t(color->height) * 3))
+        throw Error("tracking: a " + std::to_string(color->width) + "x" + std::to_string(color->height) + " colour image for a " +
+                    std::to_string(depth.width) + "x" + std::to_string(depth.height) + " depth image");
     if (options_.downsample == 1) return {&depth, color, intrinsics};
     const float band = 3.0f * options_.filterDepthSigma;
     smallDepth_ = halveDepth(depth, band);
@@ -82,7 +93,6 @@ PoseTracker::TrackingInput PoseTracker::trackingInput(const DepthImage& depth, c
     }
     return {&smallDepth_, withColor ? &smallColor_ : nullptr, pyramidLevelIntrinsics(intrinsics, levels)};
 }
-PoseTracker::~PoseTracker() = default;
 
 TrackingReport PoseTracker::start(const Pose& cameraToWorld) {
     started_ = true;
