@@ -292,17 +292,7 @@ void GpuVolume::submitFrame(const FrameInput& input, uint64_t timelineValue) {
     frame.previousPush = lastPush_;
     if (input.recordPose) frame.previousCounters = counters_.read();
     inFlight_ = std::move(frame);
-    const uint32_t frameNumberBefore = frameNumber_;
-    try {
-        submitAttempt();
-    } catch (...) {
-        // Nothing was submitted (a pose or recordPose's passes were refused while recording): the volume is as
-        // before the call; the next submission resets the half-recorded command buffer.
-        lastPush_ = inFlight_->previousPush;
-        frameNumber_ = frameNumberBefore;
-        inFlight_.reset();
-        throw;
-    }
+    submitAttempt();
 }
 
 void GpuVolume::submitAttempt() {
@@ -322,8 +312,12 @@ void GpuVolume::submitAttempt() {
     recordFrame(cmd, push, f.rebuildHash && f.attempt == 0, f.retryPending, f.attempt == 0);
     counters_.recordReadback(cmd);
     if (f.input.recordPose) {
+        // Whether the GPU skipped the frame, for finishFrame(); then the flag is cleared, so that passes between
+        // frames (re-meshing pending cubes before an export) do not read it. The pose stays for a re-run.
         VkBufferCopy region{0, 0, sizeof(FramePoseGpu)};
         vkCmdCopyBuffer(cmd, framePose_.handle(), framePoseReadback_.handle(), 1, &region);
+        vk::memoryBarrier(cmd);
+        vkCmdFillBuffer(cmd, framePose_.handle(), offsetof(FramePoseGpu, skip), sizeof(uint32_t), 0);
         vk::memoryBarrier(cmd);
     }
     vk::SubmitSync attemptSync;
@@ -384,12 +378,7 @@ FrameReport GpuVolume::finishFrame() {
         --frameNumber_;
         lastPush_ = f.previousPush;
         // The frame cleared the per-frame counters (before the GPU decided); a map keeps the last frame's.
-        counters_.update([&](Counters& c) { c = f.previousCounters; });
-        // And the skip flag must not outlive the frame: passes between frames (re-meshing pending cubes before an
-        // export) read it too.
-        VkCommandBuffer cmd = recorder_.begin();
-        vkCmdFillBuffer(cmd, framePose_.handle(), offsetof(FramePoseGpu, skip), sizeof(uint32_t), 0);
-        recorder_.submitAndWait();
+        counters_.replace(f.previousCounters);
         report.skipped = true;
         report.counters = k;
         report.stageMs = timer_.read();

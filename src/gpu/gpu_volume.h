@@ -183,6 +183,7 @@ struct FrameInput {
     // instead of the host's cameraToWorld: they write a FramePoseGpu into `framePose` (shared_layout.h), skip = 1
     // to fuse nothing. Camera tracking fuses a frame in the submission that tracks it this way
     // (PoseTracker::trackAndFuse). Called once, from submitFrame(); a deferred frame's re-run reuses the pose.
+    // It must not throw (check its inputs before submitFrame): the frame is half recorded by then.
     std::function<void(VkCommandBuffer cmd, const vk::Buffer& framePose)> recordPose;
 };
 

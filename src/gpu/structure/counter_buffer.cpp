@@ -41,8 +41,12 @@ void CounterBuffer::update(const std::function<void(Counters&)>& change) {
     Counters k{};
     vk::downloadFromBuffer(context_, buffer_, &k, sizeof(k));
     change(k);
-    vk::uploadToBuffer(context_, buffer_, &k, sizeof(k));
-    uploaded_ = k;
+    replace(k);
+}
+
+void CounterBuffer::replace(const Counters& counters) {
+    vk::uploadToBuffer(context_, buffer_, &counters, sizeof(counters));
+    uploaded_ = counters;
     uploadedIsCurrent_ = true;
 }
 

@@ -25,6 +25,8 @@ public:
     // Between submissions: downloads the counters, lets `change` edit them, uploads them and refreshes the
     // host copy. For the host's bookkeeping when a component grows or is reset.
     void update(const std::function<void(Counters&)>& change);
+    // Between submissions: uploads `counters` as they are (the host knows them all) and refreshes the host copy.
+    void replace(const Counters& counters);
     void pools(std::vector<PoolInfo>& out) const { listPools(out, {&buffer_, &readback_}); }
 
 private:

@@ -163,15 +163,19 @@ TrackPush CameraTracker::levelPush(int level, const Pose& estimate) const {
     return push;
 }
 
-void CameraTracker::checkFrameSize(const DepthImage& depth) const {
+void CameraTracker::checkFrame(const DepthImage& depth, const ColorImage* color) const {
     if (depth.width != width_ || depth.height != height_ || depth.meters.size() != size_t(width_) * size_t(height_))
         throw Error("tracking: a " + std::to_string(depth.width) + "x" + std::to_string(depth.height) + " depth image for a tracker of " +
+                    std::to_string(width_) + "x" + std::to_string(height_));
+    if (options_.colorWeight > 0 && color && !color->empty() &&
+        (color->width != width_ || color->height != height_ || color->rgb.size() != size_t(width_) * size_t(height_) * 3))
+        throw Error("tracking: a " + std::to_string(color->width) + "x" + std::to_string(color->height) + " colour image for a tracker of " +
                     std::to_string(width_) + "x" + std::to_string(height_));
 }
 
 void CameraTracker::prepare(const DepthImage& depth, const Intrinsics& intrinsics, const MeshBuffers& mesh, const Pose& modelPose,
                             const ColorImage* color) {
-    checkFrameSize(depth);
+    checkFrame(depth, color);
     VkCommandBuffer cmd = recorder_.begin();   // waits for the last submission: the input buffer is free
     recordPrepare(cmd, depth, intrinsics, mesh, modelPose, color);
     recorder_.submitAndWait();
@@ -197,6 +201,7 @@ double CameraTracker::gpuMilliseconds() const {
 
 void CameraTracker::recordPrepare(VkCommandBuffer cmd, const DepthImage& depth, const Intrinsics& intrinsics, const MeshBuffers& mesh,
                                   const Pose& modelPose, const ColorImage* color) {
+    checkFrame(depth, color);
     intrinsics_ = intrinsics;
     intrinsics_.width = width_, intrinsics_.height = height_;
     modelPose_ = modelPose;
@@ -204,9 +209,6 @@ void CameraTracker::recordPrepare(VkCommandBuffer cmd, const DepthImage& depth, 
     copyRows(paramValues_.modelWorldToCamera, inverseRigid(modelPose));
     const bool withColor = options_.colorWeight > 0 && color && !color->empty();
     if (withColor) {
-        if (color->width != width_ || color->height != height_)
-            throw Error("tracking: a " + std::to_string(color->width) + "x" + std::to_string(color->height) + " colour image for a tracker of " +
-                        std::to_string(width_) + "x" + std::to_string(height_));
         // Rec. 601 luma in [0, 1], as the model map's (shaders_render/track_model.vert).
         float* out = static_cast<float*>(rawIntensity_.mapped());
         for (size_t i = 0; i < size_t(width_) * size_t(height_); ++i)
@@ -280,7 +282,6 @@ IcpSums CameraTracker::sums(int level, const Pose& estimate) {
 
 void CameraTracker::recordGpuSolvedTracking(VkCommandBuffer cmd, const DepthImage& depth, const Intrinsics& intrinsics,
                                             const MeshBuffers& mesh, const Pose& modelPose, const Pose& initial, const ColorImage* color) {
-    checkFrameSize(depth);
     recordPrepare(cmd, depth, intrinsics, mesh, modelPose, color);
     TrackStateGpu start{};
     copyRows(start.cameraToWorld, initial);
@@ -294,7 +295,6 @@ void CameraTracker::recordGpuSolvedTracking(VkCommandBuffer cmd, const DepthImag
 
 IcpResult CameraTracker::trackInOneSubmission(const DepthImage& depth, const Intrinsics& intrinsics, const MeshBuffers& mesh,
                                               const Pose& modelPose, const Pose& initial, const ColorImage* color) {
-    checkFrameSize(depth);
     VkCommandBuffer cmd = recorder_.begin();
     recordGpuSolvedTracking(cmd, depth, intrinsics, mesh, modelPose, initial, color);
     timer_.mark(cmd, "track_icp");
@@ -305,7 +305,6 @@ IcpResult CameraTracker::trackInOneSubmission(const DepthImage& depth, const Int
 void CameraTracker::recordTrackAndDecide(VkCommandBuffer cmd, const DepthImage& depth, const Intrinsics& intrinsics, const MeshBuffers& mesh,
                                          const Pose& modelPose, const Pose& initial, const ColorImage* color, const Pose& lastTracked,
                                          double recentRmse, const vk::Buffer& framePose) {
-    checkFrameSize(depth);
     // Bound before anything is recorded (a binding changes decide_'s descriptor set at once).
     if (boundFramePose_ != framePose.handle()) {
         table_.bind(TRACK_BINDING_FRAME_POSE, framePose);

@@ -133,6 +133,9 @@ public:
     void recordTrackAndDecide(VkCommandBuffer cmd, const DepthImage& depth, const Intrinsics& intrinsics, const MeshBuffers& mesh,
                               const Pose& modelPose, const Pose& initial, const ColorImage* color, const Pose& lastTracked,
                               double recentRmse, const vk::Buffer& framePose);
+    // Throws Error unless the frame's depth is width x height and its colour (used when options.colorWeight > 0) is
+    // registered to it; what recordTrackAndDecide's caller checks before it records anything.
+    void checkFrame(const DepthImage& depth, const ColorImage* color) const;
     // What the last GPU-solved tracking found (trackInOneSubmission, or after recordTrackAndDecide's submission).
     IcpResult gpuSolvedResult();
 
@@ -158,7 +161,6 @@ public:
 
 private:
     TrackPush levelPush(int level, const Pose& estimate) const;
-    void checkFrameSize(const DepthImage& depth) const;
     uint32_t reduceGroups(uint32_t pixels) const;   // track_icp_reduce's workgroups over `pixels` pixels
     // One ICP iteration at `level`: the reduction and the fixed-order sum, and with `solveOnGpu` the solve that
     // moves the state's estimate (the passes then read the estimate from the state, not from `estimate`).

@@ -71,8 +71,8 @@ PoseTracker::PoseTracker(const vk::Context& context, const TrackerOptions& optio
 PoseTracker::~PoseTracker() = default;
 
 PoseTracker::TrackingInput PoseTracker::trackingInput(const DepthImage& depth, const ColorImage* color, const Intrinsics& intrinsics) {
-    // Checked before anything reads them (or records a pass that would: with the fusion in the same submission,
-    // an error while recording would leave the volume's frame half recorded).
+    if (options_.downsample == 1) return {&depth, color, intrinsics};   // CameraTracker checks the sizes
+    // Checked before they are read here.
     if (depth.width < 0 || depth.height < 0 || depth.meters.size() != size_t(depth.width) * size_t(depth.height))
         throw Error("tracking: a depth image of " + std::to_string(depth.meters.size()) + " samples is not " + std::to_string(depth.width) +
                     "x" + std::to_string(depth.height));
@@ -80,7 +80,6 @@ PoseTracker::TrackingInput PoseTracker::trackingInput(const DepthImage& depth, c
                                      color->rgb.size() != size_t(color->width) * size_t(color->height) * 3))
         throw Error("tracking: a " + std::to_string(color->width) + "x" + std::to_string(color->height) + " colour image for a " +
                     std::to_string(depth.width) + "x" + std::to_string(depth.height) + " depth image");
-    if (options_.downsample == 1) return {&depth, color, intrinsics};
     const float band = 3.0f * options_.filterDepthSigma;
     smallDepth_ = halveDepth(depth, band);
     const bool withColor = color && !color->empty() && options_.colorWeight > 0;
@@ -209,6 +208,7 @@ TrackedFusion PoseTracker::trackAndFuse(GpuVolume& volume, const DepthImage& dep
     const auto t0 = std::chrono::steady_clock::now();
     const TrackingInput in = trackingInput(depth, trackingColor, intrinsics);
     CameraTracker& tracker = trackerFor(*in.depth);
+    tracker.checkFrame(*in.depth, in.color);   // recordPose must not throw: the frame would be half recorded
     const Pose predicted = prediction();
     const MeshBuffers mesh = volume.meshBuffers();   // last frame's mesh: the frame's own export replaces it later
     const Pose lastTracked = lastTracked_;
