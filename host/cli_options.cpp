@@ -2,6 +2,8 @@
 
 #include <CLI/CLI.hpp>
 
+#include <iostream>
+
 namespace vkmesh::cli {
 
 void DatasetArgs::add(CLI::App* cmd) {
@@ -55,7 +57,12 @@ void VolumeOptions::addTuning(CLI::App* cmd) {
     cmd->add_option("--chunks", chunks, "initial triangle chunk heap capacity (5 triangles each; grows when nearly full)")->check(CLI::PositiveNumber);
     cmd->add_option("--hash-slots", hashSlots, "initial spatial hash capacity, a power of two (0 = 2x --blocks; grows when half full)");
     cmd->add_option("--trunc", truncVoxels, "truncation distance in voxels");
-    cmd->add_option("--max-weight", maxWeight, "cap of the TSDF weight");
+    // Deprecated (map version 2): fusion keeps exact integer sums, which a cap would make impossible to undo.
+    cmd->add_option("--max-weight", maxWeight, "deprecated, no effect: fusion keeps exact sums (docs/CORRECTION.md)")
+        ->each([](const std::string&) {
+            std::cerr << "vkmesh: --max-weight is deprecated and has no effect: the TSDF keeps exact sums of every "
+                         "observation so that frames can be taken out again (docs/CORRECTION.md)\n";
+        });
     cmd->add_option("--min-weight", minWeight, "a cube is meshed when its 8 corners have at least this weight")
         ->check(CLI::Range(1.0f, 255.0f));
     cmd->add_option("--alloc-stride", allocStride,

@@ -29,7 +29,9 @@
 #include "core/map_format.h"
 #include "core/mesh_analysis.h"
 #include "core/refinement.h"
+#include "core/frame_store.h"
 #include "gpu/gpu_volume.h"
+#include "gpu/map_corrector.h"
 #include "gpu/tracking/pose_tracker.h"
 #include "io/dataset.h"
 #include "io/delta_stream.h"
@@ -71,6 +73,10 @@ struct FuseArgs {
     std::string loadPath;
     std::string savePath;
     size_t firstFrame = 0;
+    // The frame store (docs/CORRECTION.md): kept with a saved map so that `vkmesh correct` can re-fuse frames.
+    bool keepFrames = false, noKeepFrames = false;
+    double framesBudgetMb = 1024;
+    std::string framesSpill;
     // Camera tracking (docs/TRACKING.md): estimate every pose after the first against the mesh.
     bool track = false;
     std::string trajectoryPath;        // the pose used for every frame, TUM format
@@ -199,6 +205,7 @@ int runFuse(const FuseArgs& args) {
     config.trackDeltas = !args.deltasPath.empty() || serving;
     double loadMs = 0;
     std::unique_ptr<gpu::GpuVolume> volumeOwner;
+    const uint64_t loadedSaveId = loaded ? loaded->saveId : 0;
     if (loaded) {
         const auto t0 = std::chrono::steady_clock::now();
         volumeOwner = gpu::GpuVolume::load(context, *loaded, config, args.loadPath);
@@ -208,6 +215,20 @@ int runFuse(const FuseArgs& args) {
         volumeOwner = std::make_unique<gpu::GpuVolume>(context, config);
     }
     gpu::GpuVolume& volume = *volumeOwner;
+    // The frames as fused, for `vkmesh correct` (docs/CORRECTION.md): kept with a saved map. A loaded map's
+    // store is continued (and must be the one saved with it).
+    if (args.keepFrames && args.savePath.empty()) throw Error("--keep-frames keeps the frames with the map: give --save too");
+    std::optional<gpu::MapCorrector> corrector;
+    if (!args.savePath.empty() && !args.noKeepFrames) {
+        FrameStoreOptions storeOptions;
+        storeOptions.memoryBudgetBytes = size_t(args.framesBudgetMb * 1024 * 1024);
+        storeOptions.spillFolder = args.framesSpill;
+        const std::filesystem::path loadedStore = args.loadPath.empty() ? std::filesystem::path() : gpu::frameStorePathOf(args.loadPath);
+        if (!loadedStore.empty() && std::filesystem::exists(loadedStore))
+            corrector.emplace(FrameStore::load(loadedStore.string(), loadedSaveId, storeOptions));
+        else
+            corrector.emplace(FrameStore(storeOptions));
+    }
     std::optional<render::MeshRenderer> renderer;
     render::RenderOptions renderOptions;
     if (rendering) {
@@ -350,6 +371,7 @@ int runFuse(const FuseArgs& args) {
             frameWallMs.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
         }
         ++integrated;
+        if (corrector) corrector->keep(uint32_t(i), dataset->frame(i).timestamp, intrinsics, pose, depth, fuseColor ? &color : nullptr);
         double meshMs = 0;
         for (const auto& [name, ms] : report.stageMs) {
             stageMs[name].push_back(ms);
@@ -435,7 +457,8 @@ int runFuse(const FuseArgs& args) {
     uintmax_t mapBytes = 0;
     if (!args.savePath.empty()) {
         const auto t0 = std::chrono::steady_clock::now();
-        volume.save(args.savePath);
+        const uint64_t saveId = volume.save(args.savePath);
+        if (corrector) corrector->store().save(gpu::frameStorePathOf(args.savePath).string(), saveId);
         saveMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
         mapBytes = std::filesystem::file_size(args.savePath);
     }
@@ -567,6 +590,15 @@ int runFuse(const FuseArgs& args) {
     stats["map"] = {{"loaded", args.loadPath}, {"load_ms", loadMs}, {"first_frame", args.firstFrame}, {"saved", args.savePath},
                     {"save_ms", saveMs}, {"bytes", mapBytes}, {"live_blocks", k.blocksInUse},
                     {"bytes_per_live_block", k.blocksInUse ? double(mapBytes) / k.blocksInUse : 0.0}};
+    if (corrector) {
+        const FrameStoreStats fs = corrector->store().stats();
+        const std::filesystem::path storePath = gpu::frameStorePathOf(args.savePath);
+        stats["frame_store"] = {{"path", storePath.string()}, {"frames", fs.frames}, {"frames_spilled", fs.framesSpilled},
+                                {"raw_bytes", fs.rawBytes}, {"compressed_bytes", fs.compressedBytes},
+                                {"bytes_in_memory", fs.bytesInMemory}, {"bytes_on_disk", fs.bytesOnDisk},
+                                {"file_bytes", std::filesystem::exists(storePath) ? std::filesystem::file_size(storePath) : 0},
+                                {"bytes_per_frame", fs.frames ? double(fs.compressedBytes) / fs.frames : 0.0}};
+    }
     if (tracker) {
         json ms = statsOf(trackMs);
         ms["p90"] = percentile(trackMs, 0.9);
@@ -680,6 +712,13 @@ Run addFuseCommand(CLI::App& app) {
         ->check(CLI::IsMember({"shade", "normal", "age", "rgb", "auto"}));
     cmd->add_option("--deltas", args->deltasPath, "write every frame's mesh changes to this stream file (docs/DELTAS.md)");
     cmd->add_option("--save", args->savePath, "write the whole state after the last frame to this map file (.vkmap, docs/MAPFILE.md)");
+    cmd->add_flag("--keep-frames", args->keepFrames,
+                  "keep every frame as fused (compressed) in a frame store saved beside the --save map (MAP.vkframes), so "
+                  "that vkmesh correct can re-fuse frames whose poses change (the default with --save)");
+    cmd->add_flag("--no-keep-frames", args->noKeepFrames, "with --save: do not keep the frames (the map cannot be corrected later)");
+    cmd->add_option("--frames-budget", args->framesBudgetMb, "the frame store's memory budget in MiB (compressed frames)")
+        ->check(CLI::PositiveNumber);
+    cmd->add_option("--frames-spill", args->framesSpill, "folder for the frames beyond --frames-budget (else the run stops there)");
     cmd->add_option("--load", args->loadPath,
                     "continue the map in this file (its settings unless given; with --first-frame, the frames it does not hold yet)");
     cmd->add_option("--first-frame", args->firstFrame, "start at this frame of the dataset (0-based; frames before it are skipped)");

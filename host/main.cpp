@@ -19,7 +19,8 @@ int main(int argc, char** argv) {
     // In the order `vkmesh --help` lists them.
     const std::vector<std::pair<std::string, Run>> commands = {
         {"devices", addDevicesCommand(app)}, {"synth", addSynthCommand(app)},   {"frames", addFramesCommand(app)},
-        {"fuse", addFuseCommand(app)},       {"export", addExportCommand(app)},  {"deltas", addDeltasCommand(app)}, {"eval", addEvalCommand(app)},
+        {"fuse", addFuseCommand(app)},       {"export", addExportCommand(app)},  {"correct", addCorrectCommand(app)},
+        {"deltas", addDeltasCommand(app)}, {"eval", addEvalCommand(app)},
         {"render", addRenderCommand(app)},   {"soak", addSoakCommand(app)},      {"view", addViewCommand(app)}};
     try {
         app.parse(argc, argv);

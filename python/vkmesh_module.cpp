@@ -418,6 +418,45 @@ public:
                         "ms"_a = t.milliseconds);
     }
 
+    // New poses for fused frames (Reconstructor::correct): indices (N,) and poses (N, 4, 4), all checked first.
+    void correct(const py::object& framesObject, const py::object& posesObject) {
+        py::array framesArray = asArray(framesObject), posesArray = asArray(posesObject);
+        if (framesArray.ndim() != 1) throw py::value_error("correct(): frames must be a 1-D array of frame indices, got shape " + shapeOf(framesArray));
+        if (posesArray.ndim() != 3 || posesArray.shape(1) != 4 || posesArray.shape(2) != 4 || posesArray.shape(0) != framesArray.shape(0))
+            throw py::value_error("correct(): poses must be an N x 4 x 4 array, one per frame index (" + std::to_string(framesArray.shape(0)) +
+                                  "), got shape " + shapeOf(posesArray));
+        auto indices = py::array_t<long long, py::array::forcecast>::ensure(framesArray);
+        if (!indices) throw py::value_error("correct(): frames must be integers, got dtype " + dtypeOf(framesArray));
+        std::vector<uint32_t> frames;
+        std::vector<Pose> poses;
+        for (py::ssize_t i = 0; i < framesArray.shape(0); ++i) {
+            const long long f = indices.at(i);
+            if (f < 0 || f > 0xFFFFFFFFll) throw py::value_error("correct(): frame index " + std::to_string(f) + " is out of range");
+            frames.push_back(uint32_t(f));
+            poses.push_back(toPose(posesArray[py::int_(i)], "correct(): pose " + std::to_string(i) + " (frame " + std::to_string(f) + ")"));
+        }
+        locked([&](Reconstructor& rec) { rec.correct(frames, poses); });
+    }
+
+    size_t pendingCorrections() {
+        return locked([](Reconstructor& rec) { return rec.pendingCorrections(); });
+    }
+
+    py::dict finishCorrections() {
+        gpu::CorrectionReport r = locked([](Reconstructor& rec) { return rec.finishCorrections(); });
+        return correctionDict(r);
+    }
+
+    py::dict lastCorrections() {
+        gpu::CorrectionReport r = locked([](Reconstructor& rec) { return rec.lastCorrections(); });
+        return correctionDict(r);
+    }
+
+    static py::dict correctionDict(const gpu::CorrectionReport& r) {
+        return py::dict("frames_refused"_a = r.framesRefused, "frames"_a = r.frames, "blocks_freed"_a = r.blocksFreed,
+                        "observations_dropped"_a = r.observationsDropped, "ms"_a = r.milliseconds, "warnings"_a = r.warnings);
+    }
+
     // Every frame's camera-to-world pose so far (given, tracked, or predicted for a lost frame): N x 4 x 4.
     py::array trajectory() {
         std::vector<Pose> poses = locked([](Reconstructor& rec) { return rec.trajectory(); });
@@ -667,18 +706,39 @@ private:
     double lastCppSeconds_ = 0;
 };
 
+// keep_frames, corrections_per_frame, frames_budget_mb, frames_spill (ReconstructorOptions, docs/CORRECTION.md).
+struct CorrectionSettings {
+    bool keepFrames = false;
+    long long correctionsPerFrame = ReconstructorOptions{}.correctionsPerFrame;
+    double framesBudgetMb = 1024;
+    std::string framesSpill;
+    void applyTo(ReconstructorOptions& o) const {
+        if (correctionsPerFrame < 0 || correctionsPerFrame > 1000000)
+            throw py::value_error("corrections_per_frame " + std::to_string(correctionsPerFrame) + " must be in [0, 1000000]");
+        if (!(framesBudgetMb > 0)) throw py::value_error("frames_budget_mb " + std::to_string(framesBudgetMb) + " must be positive");
+        o.keepFrames = keepFrames;
+        o.correctionsPerFrame = uint32_t(correctionsPerFrame);
+        o.frameStore.memoryBudgetBytes = size_t(framesBudgetMb * 1024 * 1024);
+        o.frameStore.spillFolder = framesSpill;
+    }
+};
+
 std::unique_ptr<PyReconstructor> makeReconstructor(float voxelSize, float truncationVoxels, float maxDepth, const py::object& device,
                                                    const std::string& colorMode, float colorRecency, bool trackDeltas, float maxWeight,
                                                    float minWeight, int allocationStride, bool refine, float refineEpsilonVoxels,
                                                    bool lockFree, const Capacities& capacities, bool growCapacities, float keepRadius,
                                                    bool recycle, long long recycleAfterFrames, float starveWeight, bool validation,
-                                                   float trackColorWeight, const std::string& trackSolve, int trackDownsample) {
+                                                   float trackColorWeight, const std::string& trackSolve, int trackDownsample,
+                                                   const CorrectionSettings& correction) {
     ReconstructorOptions o;
+    correction.applyTo(o);
     gpu::GpuVolumeConfig& c = o.volume;
     c.params.voxelSize = voxelSize;
     c.params.truncVoxels = truncationVoxels;
     c.params.maxDepth = maxDepth;
     c.params.maxWeight = maxWeight;
+    if (maxWeight != VolumeParams{}.maxWeight)
+        PyErr_WarnEx(PyExc_DeprecationWarning, "max_weight is deprecated and has no effect: the TSDF keeps exact sums so that frames can be taken out again", 1);
     c.params.allocationStride = allocationStride;
     c.params.colorFusion = parseColorMode(colorMode);
     c.params.colorRecency = colorRecency;
@@ -718,8 +778,9 @@ std::unique_ptr<PyReconstructor> makeReconstructor(float voxelSize, float trunca
 }
 
 std::unique_ptr<PyReconstructor> loadReconstructor(const fs::path& path, const py::object& device, bool trackDeltas,
-                                                   const Capacities& capacities, bool validation) {
+                                                   const Capacities& capacities, bool validation, const CorrectionSettings& correction) {
     ReconstructorOptions o;
+    correction.applyTo(o);
     capacities.applyTo(o.volume);
     o.trackDeltas = trackDeltas;
     o.device = deviceOptions(device, validation);
@@ -869,7 +930,7 @@ Keyword arguments (all optional):
                         lighting changes, see color_recency) or 'off' (depth only, 4 bytes per cube less)
   color_recency         'recent': share of the newest colour, in (0, 1] (--color-recency; 0.2)
   track_deltas          keep each frame's mesh changes for deltas() (--deltas)
-  max_weight            cap of the TSDF weight (--max-weight; 255)
+  max_weight            deprecated, no effect (a DeprecationWarning): the TSDF keeps exact sums (--max-weight)
   min_weight            a cube is meshed when its 8 corners have this weight (--min-weight; 1)
   allocation_stride     allocate blocks from every Nth pixel (--alloc-stride; 2)
   refine, refine_epsilon_voxels   Hamming-distance refinement of cube types (--refine, --refine-eps)
@@ -884,6 +945,11 @@ Keyword arguments (all optional):
   track_solve           tracking: 'host' (systems solved in double, a GPU submission per ICP iteration) or 'gpu'
                         (in float; the frame's tracking, fusion and meshing in one submission) (--track-solve; 'host')
   track_downsample      tracking on the frames downsampled by 1, 2 or 4 (--track-downsample; 1)
+  keep_frames           keep every fused frame (compressed) so that correct() can re-fuse frames whose poses
+                        change; save() writes them beside the map (docs/CORRECTION.md; False)
+  corrections_per_frame corrected frames re-fused by each later integrate() (2)
+  frames_budget_mb, frames_spill   the kept frames' memory budget in MiB (1024) and a folder for those beyond it
+                        ('' : none, and a frame beyond the budget raises vkmesh.Error) (--frames-budget, --frames-spill)
 
 Bad settings raise ValueError; no usable device or a capacity that does not fit it raises vkmesh.Error.
 )doc")
@@ -894,13 +960,15 @@ Bad settings raise ValueError; no usable device or a capacity that does not fit 
                          long long touchedCapacity, long long vertexCapacity, long long chunkCapacity, long long retypeCapacity,
                          long long deltaRecordCapacity, bool growCapacities, double keepRadius, bool recycle,
                          long long recycleAfterFrames, double starveWeight, bool validation, double trackColorWeight,
-                         const std::string& trackSolve, int trackDownsample) {
+                         const std::string& trackSolve, int trackDownsample, bool keepFrames, long long correctionsPerFrame,
+                         double framesBudgetMb, const std::string& framesSpill) {
                  return makeReconstructor(voxelSize, truncationVoxels, maxDepth, device, colorMode, colorRecency, trackDeltas,
                                           maxWeight, minWeight, allocationStride, refine, refineEpsilonVoxels, lockFree,
                                           {blockCapacity, hashCapacity, touchedCapacity, vertexCapacity, chunkCapacity,
                                            retypeCapacity, deltaRecordCapacity},
                                           growCapacities, keepRadius, recycle, recycleAfterFrames, starveWeight, validation,
-                                          float(trackColorWeight), trackSolve, trackDownsample);
+                                          float(trackColorWeight), trackSolve, trackDownsample,
+                                          {keepFrames, correctionsPerFrame, framesBudgetMb, framesSpill});
              }),
              py::kw_only(), "voxel_size"_a = shortest(dp.voxelSize), "truncation_voxels"_a = shortest(dp.truncVoxels),
              // `vkmesh fuse --max-depth` defaults to 4 m (host/cli_options.h, DatasetArgs), not VolumeParams' 5 m.
@@ -914,7 +982,8 @@ Bad settings raise ValueError; no usable device or a capacity that does not fit 
              "grow_capacities"_a = dc.growCapacities, "keep_radius"_a = shortest(dc.keepRadius), "recycle"_a = dc.recycle,
              "recycle_after_frames"_a = dc.recycleAfterFrames, "starve_weight"_a = shortest(dc.starveWeight), "validation"_a = false,
              "track_color_weight"_a = shortest(gpu::TrackerOptions{}.colorWeight), "track_solve"_a = "host",
-             "track_downsample"_a = gpu::TrackerOptions{}.downsample)
+             "track_downsample"_a = gpu::TrackerOptions{}.downsample, "keep_frames"_a = false,
+             "corrections_per_frame"_a = ReconstructorOptions{}.correctionsPerFrame, "frames_budget_mb"_a = 1024.0, "frames_spill"_a = "")
         .def("integrate", &PyReconstructor::integrate, "depth"_a, "intrinsics"_a, "pose"_a = py::none(), "depth_scale"_a = 5000.0,
              "color"_a = py::none(), R"doc(
 Fuses one frame and updates the mesh; returns when the GPU has finished it.
@@ -934,6 +1003,23 @@ color        None or an H x W x 3 uint8 array (red, green, blue) registered to t
 Raises ValueError (wrong dtype, shape or value; a pose that is not rigid) before anything reaches the GPU,
 vkmesh.Error for Vulkan problems. Capacity problems are vkmesh.CapacityWarning warnings.
 )doc")
+        .def("correct", &PyReconstructor::correct, "frames"_a, "poses"_a, R"doc(
+New camera-to-world poses for frames already fused (docs/CORRECTION.md; needs keep_frames=True): frames is a
+1-D array of frame indices (frame i: the i-th frame integrated, trajectory()[i]), poses an N x 4 x 4 array.
+Every index and pose is checked first (ValueError for a bad array or pose, vkmesh.Error for a frame that was
+not kept, e.g. lost by tracking), and then nothing is queued. Each frame is de-integrated at the pose it was
+fused at and integrated at the new one, exactly: the map then equals one fused at the new poses from the start.
+The largest pose changes go first, corrections_per_frame of them in each later integrate(); finish_corrections()
+does the rest at once. The mesh follows; deltas() reports every change.
+)doc")
+        .def("pending_corrections", &PyReconstructor::pendingCorrections, "How many corrected frames wait to be re-fused.")
+        .def("finish_corrections", &PyReconstructor::finishCorrections, R"doc(
+Re-fuses every queued frame now and publishes the mesh. Returns a dict: frames_refused, frames (their indices in
+the order re-fused), blocks_freed (blocks left with no observation), observations_dropped (0 for a consistent
+map), ms, warnings.
+)doc")
+        .def("last_corrections", &PyReconstructor::lastCorrections,
+             "What the last integrate() or finish_corrections() re-fused (the dict finish_corrections() returns).")
         .def("trajectory", &PyReconstructor::trajectory, R"doc(
 Every frame's camera-to-world pose so far (given, tracked, or predicted for a lost frame), as an N x 4 x 4 array.
 )doc")
@@ -961,18 +1047,23 @@ Raises vkmesh.Error before the first frame or when the file cannot be written.
 )doc")
         .def_static("load", [](const fs::path& path, const py::object& device, bool trackDeltas, long long blockCapacity,
                                long long hashCapacity, long long touchedCapacity, long long vertexCapacity, long long chunkCapacity,
-                               long long retypeCapacity, long long deltaRecordCapacity, bool validation) {
+                               long long retypeCapacity, long long deltaRecordCapacity, bool validation, bool keepFrames,
+                               long long correctionsPerFrame, double framesBudgetMb, const std::string& framesSpill) {
                         return loadReconstructor(path, device, trackDeltas,
                                                  {blockCapacity, hashCapacity, touchedCapacity, vertexCapacity, chunkCapacity,
                                                   retypeCapacity, deltaRecordCapacity},
-                                                 validation);
+                                                 validation, {keepFrames, correctionsPerFrame, framesBudgetMb, framesSpill});
                     },
                     "path"_a, py::kw_only(), "device"_a = py::none(), "track_deltas"_a = false, "block_capacity"_a = dc.blockCapacity,
                     "hash_capacity"_a = dc.hashCapacity, "touched_capacity"_a = dc.touchedCapacity,
                     "vertex_capacity"_a = dc.vertexCapacity, "chunk_capacity"_a = dc.chunkCapacity, "retype_capacity"_a = dc.retypeCapacity,
-                    "delta_record_capacity"_a = dc.deltaRecordCapacity, "validation"_a = false, R"doc(
+                    "delta_record_capacity"_a = dc.deltaRecordCapacity, "validation"_a = false, "keep_frames"_a = false,
+                    "corrections_per_frame"_a = ReconstructorOptions{}.correctionsPerFrame, "frames_budget_mb"_a = 1024.0,
+                    "frames_spill"_a = "", R"doc(
 A Reconstructor continuing the map in `path` (written by save() or `vkmesh fuse --save`): the next integrate()
-gives exactly what an uninterrupted run would have. The map's settings are used (voxel size, truncation, max
+gives exactly what an uninterrupted run would have. keep_frames=True also loads the frame store saved beside it
+(path with the extension .vkframes), so that correct() works on the map's frames (vkmesh.Error when there is
+none, or when it was saved with another map). The map's settings are used (voxel size, truncation, max
 depth, colour, ...); the capacities given here where larger than the map's. Raises vkmesh.Error naming the
 file and the problem for a missing, corrupt or truncated map.
 )doc")

@@ -72,8 +72,8 @@ VKM_CONST BINDING_HASH_KEYS = 2u;      // uint64 key per slot (32-bit path: HASH
 VKM_CONST BINDING_HASH_VALUES = 3u;    // uint block index per slot
 VKM_CONST BINDING_HASH_STAMPS = 4u;    // uint: frame number that last touched the slot
 VKM_CONST BINDING_BLOCK_COORDS = 5u;   // ivec4 per block: block coordinate, w = hash slot
-VKM_CONST BINDING_VOXEL_SDF = 6u;      // float per TSDF corner, block-major
-VKM_CONST BINDING_VOXEL_WEIGHT = 7u;   // float per TSDF corner
+VKM_CONST BINDING_VOXEL_SDF = 6u;      // int per TSDF corner, block-major: the sum of its fused distances in fixed point
+VKM_CONST BINDING_VOXEL_WEIGHT = 7u;   // float per TSDF corner: how many observations the sum holds (a whole number)
 VKM_CONST BINDING_FREE_LIST = 8u;      // uint stack of free block indices
 VKM_CONST BINDING_TOUCHED = 9u;        // uint list of the frame's blocks (hash slot, then block index)
 VKM_CONST BINDING_DEPTH = 10u;         // the frame's images: depth (float metres) per pixel, then colour (RGBA8 uint) per pixel
@@ -146,7 +146,7 @@ VKM_CONST MC_TABLE_WORDS = 1280u;
 struct VolumeParamsGpu {
     float voxelSize;        // metres
     float truncation;       // metres
-    float maxWeight;
+    float sdfStepsPerMetre; // fixed-point distances: SDF_STEPS_PER_TRUNCATION / truncation (core/tsdf_corner.h)
     float minMeshWeight;    // a cube is meshed only if all 8 corners have at least this weight
     uint hashCapacity;      // slots, a power of two
     uint blockCapacity;     // blocks in the pool
@@ -171,7 +171,18 @@ struct VolumeParamsGpu {
     uint deferOnOverflow;
     uint colorMode;         // COLOR_MODE_*: how fusion folds a pixel's colour into a corner's
     float colorRecency;     // COLOR_MODE_RECENT: the new colour's share, in (0, 1]
+    float sdfMetresPerStep; // truncation / SDF_STEPS_PER_TRUNCATION (exact: a power-of-two division)
+    uint pad0, pad1, pad2;
 };
+// A TSDF corner (docs/ARCHITECTURE.md, "Exact fusion"): the sum of its observations' truncated distances, each
+// rounded to a step of truncation / SDF_STEPS_PER_TRUNCATION (an int), and their count (a float holding a
+// whole number). Integer sums make fusion order-independent and exactly undoable: de-integrating a frame at
+// the pose it was fused at subtracts the very steps it added. A corner's distance is sum / count steps.
+// |step| <= SDF_STEPS_PER_TRUNCATION, so with at most SDF_MAX_COUNT observations the sum cannot overflow an
+// int (4096 x 524,287 < 2^31); an observation past that count is not fused and is counted
+// (Counters::observationsDropped), as is a de-integration that finds no observation to take out.
+VKM_CONST SDF_STEPS_PER_TRUNCATION = 4096u;
+VKM_CONST SDF_MAX_COUNT = 524287u;     // 2^19 - 1
 // Which optional code a volume's pipelines are compiled with (specialisation constant VOLUME_FEATURES,
 // constant_id 1, frame.glsl; vk::BindingTable::specialization()). A volume's colour mode and refinement are
 // fixed when it is created, and llvmpipe runs both sides of a branch under a mask, so code switched off only
@@ -179,7 +190,7 @@ struct VolumeParamsGpu {
 VKM_CONST VOLUME_FEATURE_COLOR = 1u;    // params.colorMode may be other than COLOR_MODE_OFF
 VKM_CONST VOLUME_FEATURE_REFINE = 2u;   // params.refine may be 1
 VKM_CONST VOLUME_FEATURES_ALL = 3u;
-// A refined mesh keeps every vertex off its edge's ends (edgeCrossing in structure/cube_access.glsl;
+// A mesh (refined or not) keeps every vertex off its edge's ends (edgeCrossing in structure/cube_access.glsl;
 // docs/REFINEMENT.md, "Vertices"), so that no two vertices share a position: one next to a corner that
 // refinement flipped stops 1/FLIPPED_EDGE_MARGIN_INVERSE of the edge before it, any other at least
 // 1/REFINED_EDGE_MARGIN_INVERSE from either end (exact in float for grid coordinates below 2^13).
@@ -268,6 +279,10 @@ struct Counters {
     uint rehashLost;            // live blocks the rebuild could not re-insert within HASH_MAX_PROBES (must be 0)
     uint frameDeferred;         // 1 when defer_frame found an overflowed capacity (deferOnOverflow): the frame fused nothing
     uint meshPending;           // 1 when the mesh passes left cubes for a follow-up pass (commit_free, deferOnOverflow)
+    // Corner updates fusion could not apply exactly: an observation of a corner already holding SDF_MAX_COUNT,
+    // or a de-integration of a corner holding none (a map that does not hold the frame). Must stay 0.
+    uint observationsDropped;
+    uint perFramePad0, perFramePad1, perFramePad2;
     // --- persistent across frames ---
     uint freeTop;               // blocks on the free list
     uint blocksInUse;           // blocks handed out of the pool
@@ -300,7 +315,7 @@ struct Counters {
     uint signCornerCount;
 };
 VKM_CONST COUNTERS_PER_FRAME_OFFSET = 144u;  // byte offset of validPixels
-VKM_CONST COUNTERS_PER_FRAME_SIZE = 144u;    // 36 per-frame uints
+VKM_CONST COUNTERS_PER_FRAME_SIZE = 160u;    // 40 per-frame uints
 
 // ---- mesh deltas (docs/DELTAS.md) ---------------------------------------------------------------
 // The delta passes have their own descriptor set: the shared one is full (lavapipe allows 32 storage
@@ -374,7 +389,10 @@ struct FramePoseGpu {
     VKM_ROWS3(worldToCamera);
     VKM_ROWS3(cameraToWorld);
     uint skip;                  // 1: the frame is not fused (tracking lost it): no pass changes the map
-    uint pad0, pad1, pad2;
+    // 1: the frame is taken out of the map (de-integrated at this pose): allocation only finds blocks, fusion
+    // subtracts what fusing it added (Reconstructor::correct; docs/CORRECTION.md).
+    uint deintegrate;
+    uint pad1, pad2;
 };
 
 // ---- camera tracking (docs/TRACKING.md; src/gpu/tracking, shaders_comp/track) ---------------------------

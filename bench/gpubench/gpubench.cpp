@@ -7,7 +7,7 @@
 // and libvulkan.so.1: scripts/pack_gpubench.sh packs it with the loader for a bare machine (bench/README.md).
 //
 //   vkmesh_gpubench [--voxel 0.03,0.01] [--frames 60] [--repeat 1] [--warmup 10] [--device I] [--json FILE]
-//                   [--publish] [--track [--track-solve host|gpu]] [--quick] [--devices]
+//                   [--publish] [--track [--track-solve host|gpu]] [--correct] [--quick] [--devices]
 //
 // Prints a table per voxel size (median and p90 GPU ms per stage, the frame's GPU and wall time, the meshing
 // total) and writes the same as JSON. Exit codes: 0 done; 1 validation messages (VKMESH_VALIDATION=1);
@@ -39,6 +39,8 @@
 #include <string>
 #include <thread>
 #include <vector>
+
+#include <Eigen/Geometry>
 
 #include "core/types.h"
 #include "gpu/gpu_volume.h"
@@ -76,6 +78,7 @@ struct Options {
     bool publish = false;
     bool track = false;        // every frame after a run's first tracked against the mesh (docs/TRACKING.md)
     std::string trackSolve = "host";   // where tracking solves its 6x6 systems: host (a wait per iteration) or gpu
+    bool correct = false;      // after each run, every frame re-fused at a moved pose (docs/CORRECTION.md)
     bool quick = false;
     std::string jsonPath;
 };
@@ -178,6 +181,10 @@ struct VoxelRun {
     std::vector<double> trackGpuMs, trackWallMs, trackSubmissions, trackErrorMm;
     bool oneSubmission = false;   // --track-solve gpu: tracked frames fused in tracking's submission
     size_t lostFrames = 0;
+    // --correct: per re-fused frame, the de-integration's and the re-integration's GPU and wall time (each an
+    // intermediate frame: no export, no deltas) and the observations that could not be taken out (must be 0).
+    std::vector<double> deintegrateGpuMs, deintegrateWallMs, reintegrateGpuMs, reintegrateWallMs, refuseWallMs;
+    size_t observationsDropped = 0;
 };
 
 vkmesh::gpu::GpuVolumeConfig volumeConfig(double voxel, bool publish) {
@@ -196,8 +203,10 @@ vkmesh::gpu::GpuVolumeConfig volumeConfig(double voxel, bool publish) {
 // `run` is null for the untimed warm-up.
 // With `track`, the first frame is fused at its true pose and every later one at the pose tracked against the
 // mesh (lost frames are not fused), as `vkmesh fuse --track` does.
+// With `correct`, after the sequence every fused frame is re-fused as Reconstructor::correct does it: taken out at
+// the pose it was fused at and fused again at that pose moved by 1 cm and 0.5 degrees.
 void fuseSequence(const vkmesh::vk::Context& context, const std::vector<Frame>& rendered, size_t count, double voxel,
-                  bool publish, bool track, bool trackSolveOnGpu, VoxelRun* run) {
+                  bool publish, bool track, bool trackSolveOnGpu, bool correct, VoxelRun* run) {
     vkmesh::gpu::GpuVolume volume(context, volumeConfig(voxel, publish || track));
     const Intrinsics intrinsics = vkmesh::synth::kinectIntrinsics(kWidth, kHeight);
     std::optional<vkmesh::gpu::PoseTracker> tracker;
@@ -207,6 +216,7 @@ void fuseSequence(const vkmesh::vk::Context& context, const std::vector<Frame>& 
         options.solveOnGpu = trackSolveOnGpu;
         tracker.emplace(context, options);
     }
+    std::vector<std::pair<size_t, Pose>> fusedAt;   // --correct: each frame fused and its pose
     for (size_t i = 0; i < count; ++i) {
         const Frame& frame = rendered[i % rendered.size()];
         Pose pose = frame.pose;
@@ -251,11 +261,44 @@ void fuseSequence(const vkmesh::vk::Context& context, const std::vector<Frame>& 
             run->meshMs.push_back(mesh);
         }
         run->wallMs.push_back(wallMs);
+        if (correct) fusedAt.emplace_back(i, tracked ? tracked->tracking.cameraToWorld : pose);
         run->last = report.counters;
         run->growths += report.growth.size();
         run->deferredAttempts += report.deferredAttempts;
         run->warnings += report.warnings.size();
         ++run->frames;
+    }
+    if (run && correct) {
+        Pose moved = Pose::Identity();
+        moved.topLeftCorner<3, 3>() = Eigen::AngleAxisd(0.5 * M_PI / 180.0, Eigen::Vector3d::UnitY()).toRotationMatrix();
+        moved.topRightCorner<3, 1>() = Eigen::Vector3d(0.01, 0.0, 0.0);
+        auto gpuMs = [](const vkmesh::gpu::FrameReport& r) {
+            double total = 0;
+            for (const auto& [name, ms] : r.stageMs) total += ms;
+            return total;
+        };
+        for (const auto& [i, pose] : fusedAt) {
+            const Frame& frame = rendered[i % rendered.size()];
+            vkmesh::gpu::FrameInput input;
+            input.depth = &frame.depth;
+            input.color = &frame.color;
+            input.intrinsics = intrinsics;
+            input.intermediate = true;
+            double wall[2] = {0, 0};
+            for (bool out : {true, false}) {
+                input.deintegrate = out;
+                input.cameraToWorld = out ? pose : Pose(moved * pose);
+                const auto t0 = Clock::now();
+                volume.submitFrame(input);
+                const vkmesh::gpu::FrameReport r = volume.finishFrame();
+                wall[out ? 0 : 1] = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+                (out ? run->deintegrateGpuMs : run->reintegrateGpuMs).push_back(gpuMs(r));
+                run->observationsDropped += r.counters.observationsDropped;
+            }
+            run->deintegrateWallMs.push_back(wall[0]);
+            run->reintegrateWallMs.push_back(wall[1]);
+            run->refuseWallMs.push_back(wall[0] + wall[1]);
+        }
     }
     if (run) {
         run->gpuBytes = 0;
@@ -339,6 +382,16 @@ void printRun(const VoxelRun& r, size_t repeat) {
         if (r.oneSubmission)
             std::printf("  (--track-solve gpu: tracking, fusion and meshing are one submission; both wall rows are the whole frame's)\n");
     }
+    if (!r.refuseWallMs.empty()) {
+        row("correction: take out, GPU", summarize(r.deintegrateGpuMs));
+        row("correction: fuse again, GPU", summarize(r.reintegrateGpuMs));
+        row("correction: take out, wall", summarize(r.deintegrateWallMs));
+        row("correction: fuse again, wall", summarize(r.reintegrateWallMs));
+        row("correction: re-fuse, wall", summarize(r.refuseWallMs));
+        const double frame = summarize(r.wallMs).median;
+        std::printf("  re-fusing a frame costs %.2fx fusing one (wall medians); observations not taken out: %zu (must be 0)\n",
+                    frame > 0 ? summarize(r.refuseWallMs).median / frame : 0.0, r.observationsDropped);
+    }
 }
 
 json runJson(const VoxelRun& r) {
@@ -367,7 +420,14 @@ json runJson(const VoxelRun& r) {
                                                           {"lost_frames", r.lostFrames},
                                                           // tracking, fusion and meshing in one submission:
                                                           // both wall times are the whole frame's
-                                                          {"fused_in_tracking_submission", r.oneSubmission}}}};
+                                                          {"fused_in_tracking_submission", r.oneSubmission}}},
+                {"correction", r.refuseWallMs.empty() ? json(nullptr)
+                                                      : json{{"deintegrate_gpu_ms", toJson(summarize(r.deintegrateGpuMs))},
+                                                             {"reintegrate_gpu_ms", toJson(summarize(r.reintegrateGpuMs))},
+                                                             {"deintegrate_wall_ms", toJson(summarize(r.deintegrateWallMs))},
+                                                             {"reintegrate_wall_ms", toJson(summarize(r.reintegrateWallMs))},
+                                                             {"refuse_wall_ms", toJson(summarize(r.refuseWallMs))},
+                                                             {"observations_dropped", r.observationsDropped}}}};
 }
 
 std::string utcNow() {
@@ -418,7 +478,7 @@ int run(Options o, const CLI::App& cli) {
 
     if (o.warmup > 0) {   // raises the GPU's clocks and fills the driver's caches before anything is timed
         std::fprintf(stderr, "warm-up: %zu untimed frames at %s\n", o.warmup, cm(o.voxels.front()).c_str());
-        fuseSequence(context, rendered, o.warmup, o.voxels.front(), o.publish, o.track, o.trackSolve == "gpu", nullptr);
+        fuseSequence(context, rendered, o.warmup, o.voxels.front(), o.publish, o.track, o.trackSolve == "gpu", false, nullptr);
     }
     std::vector<VoxelRun> runs;
     // Written after every voxel size, so that a run stopped part way (run.sh's --timeout) leaves what it measured.
@@ -443,7 +503,7 @@ int run(Options o, const CLI::App& cli) {
                     {"scene", {{"name", "synthetic room (vkmesh synth defaults)"}, {"path", "orbit"},
                                {"loop_frames", o.loopFrames}, {"width", kWidth}, {"height", kHeight},
                                {"max_depth", kMaxDepth}, {"color", true}, {"render_s", renderSeconds}}},
-                    {"pipeline", {{"mode", "incremental"}, {"color_fusion", "average"}, {"publish_mesh", o.publish}, {"track", o.track}, {"track_solve", o.trackSolve}}},
+                    {"pipeline", {{"mode", "incremental"}, {"color_fusion", "average"}, {"publish_mesh", o.publish}, {"track", o.track}, {"track_solve", o.trackSolve}, {"correct", o.correct}}},
                     {"frames_per_run", o.frames},
                     {"repeat", o.repeat},
                     {"warmup_frames", o.warmup},
@@ -464,7 +524,7 @@ int run(Options o, const CLI::App& cli) {
         const auto t0 = Clock::now();
         for (size_t rep = 0; rep < o.repeat; ++rep) {
             std::fprintf(stderr, "fusing %zu frames at %s (%zu/%zu)...\n", o.frames, cm(voxel).c_str(), rep + 1, o.repeat);
-            fuseSequence(context, rendered, o.frames, voxel, o.publish, o.track, o.trackSolve == "gpu", &r);
+            fuseSequence(context, rendered, o.frames, voxel, o.publish, o.track, o.trackSolve == "gpu", o.correct, &r);
         }
         r.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
         printRun(r, o.repeat);
@@ -522,6 +582,9 @@ int main(int argc, char** argv) {
                    "with --track: where the ICP systems are solved: host (double, one submission per iteration) or gpu (float, "
                    "the frame's tracking in one submission)")
         ->check(CLI::IsMember({"host", "gpu"}));
+    cli.add_flag("--correct", o.correct,
+                 "after each run, re-fuse every frame as a pose correction does (de-integrated at its pose, fused again 1 cm "
+                 "and 0.5 degrees away; docs/CORRECTION.md) and report the cost against fusing a frame");
     cli.add_option("--json", o.jsonPath, "write the results as JSON to this file");
     cli.add_flag("--quick", o.quick, "smoke run for a CPU device (lavapipe): 3 frames per voxel size, no warm-up, "
                                      "unless --frames / --warmup say otherwise");

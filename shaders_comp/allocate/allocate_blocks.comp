@@ -2,7 +2,10 @@
 // Stage 1 of a frame (paper §V.A): every valid pixel walks the blocks that its truncation band crosses
 // (a 3D DDA in block units from depth d - trunc to d + trunc along the pixel's ray), inserts their keys
 // into the spatial hash, and appends each block touched for the first time this frame to the touched
-// list. Blocks get pool memory in the next stage (assign_blocks): here a key is only claimed.
+// list. Blocks get pool memory in the next stage (assign_blocks): here a key is only claimed. A frame being
+// de-integrated (framePose.deintegrate) claims nothing: its band walk finds the blocks it was fused into that
+// still hold observations (a block whose last observation another de-integration took out was freed; the band
+// may also cross blocks where the frame updated no corner).
 #extension GL_GOOGLE_include_directive : require
 #include "structure/frame.glsl"
 #include "structure/block_hash.glsl"
@@ -16,6 +19,11 @@ uint requests = 0u, found = 0u, inserted = 0u, full = 0u, outOfRange = 0u, outsi
 // Claims `cell`'s key without waiting on anyone (structure/block_hash.glsl). Returns the slot, or
 // NO_BLOCK if none was free within the probe bound.
 uint insertKey(ivec3 cell) {
+    if (framePose.deintegrate != 0u) {
+        uint slot = findSlot(cell);
+        if (slot != NO_BLOCK) ++found;
+        return slot;
+    }
     bool isNew;
     uint slot = hashInsertKey(cell, isNew);
     if (slot == NO_BLOCK) ++full;

@@ -1,8 +1,10 @@
 #version 460
 // Stage 3 (paper §V.A): one workgroup per touched block updates the TSDF at the block's 512 corners:
 // project the corner into the depth image (nearest pixel), take the projective distance
-// d(pixel) - z, truncate it, and fold it into the weighted running average (weight capped). With colour,
-// the pixel's colour is folded into the corner's in the same step with the same weight (voxel_color.glsl).
+// d(pixel) - z, truncate it, round it to a whole number of steps and add it to the corner's sum, counting the
+// observation (shared_layout.h, "A TSDF corner"). A de-integrated frame (framePose.deintegrate) subtracts the
+// same steps at the same corners instead, which restores every bit. With colour, the pixel's colour is folded
+// into the corner's running average in the same step with the same weight (voxel_color.glsl), or out of it.
 #extension GL_GOOGLE_include_directive : require
 #include "structure/frame.glsl"
 #include "structure/block_store.glsl"
@@ -17,8 +19,11 @@ layout(local_size_x = WG_BLOCK) in;
 
 void main() {
     uint entry = touched[gl_WorkGroupID.x];   // the same for the whole workgroup
-    uint updated = 0u;
+    uint updated = 0u, dropped = 0u;
     uint fused = 0u;
+    // De-integration: allocation listed only blocks already in the map (a fresh one, a key that had no block,
+    // holds nothing to take out: its corners count as dropped and it is cleared like any fresh block).
+    bool removing = framePose.deintegrate != 0u;
     if (entry != NO_BLOCK) {
         fused = gl_LocalInvocationIndex == 0u ? 1u : 0u;
         bool fresh = (entry & FRESH_BLOCK) != 0u;
@@ -35,10 +40,12 @@ void main() {
             uvec3 l = uvec3(local % BLOCK_SIDE, (local / BLOCK_SIDE) % BLOCK_SIDE, local / (BLOCK_SIDE * BLOCK_SIDE));
             uint v = block * VOXELS_PER_BLOCK + local;
             // A block handed out this frame may hold a previous owner's values: start from nothing.
-            float oldSdf = fresh ? 0.0 : voxelSdf[v];
+            int oldSum = fresh ? 0 : voxelSdfSum[v];
             float oldWeight = fresh ? 0.0 : voxelWeight[v];
-            precise float newSdf = oldSdf;
+            float oldSdf = tsdfMean(oldSum, oldWeight);
+            int newSum = oldSum;
             float newWeight = oldWeight;
+            float newSdf = oldSdf;
 
             precise vec3 world = vec3(origin + ivec3(l)) * params.voxelSize;
             precise vec3 cam = transformPoint(worldToCamera, world);
@@ -51,17 +58,28 @@ void main() {
                     float d = depthAt(pixel);
                     precise float sdf = d - cam.z;
                     if (d >= frame.minDepth && d <= frame.maxDepth && sdf >= -trunc) {
-                        precise float tsdf = min(sdf, trunc);
-                        newSdf = (oldSdf * oldWeight + tsdf) / (oldWeight + 1.0);
-                        newWeight = min(oldWeight + 1.0, params.maxWeight);
-                        ++updated;
+                        int steps = tsdfSteps(min(sdf, trunc));
+                        // Past the count that keeps the sum in range, or nothing left to take out: counted, not applied.
+                        bool applies = removing ? oldWeight >= 1.0 : oldWeight < float(SDF_MAX_COUNT);
+                        if (applies) {
+                            newSum = removing ? oldSum - steps : oldSum + steps;
+                            newWeight = removing ? oldWeight - 1.0 : oldWeight + 1.0;
+                            if (newWeight == 0.0) newSum = 0;   // (already 0 when the map holds the frame)
+                            newSdf = tsdfMean(newSum, newWeight);
+                            ++updated;
+                        } else {
+                            ++dropped;
+                        }
                         uint rgba = withColor ? colorAt(pixel, size.x * size.y) : 0u;
-                        if ((rgba >> 24) != 0u) {
+                        if (applies && (rgba >> 24) != 0u) {
                             uint oldColor = fresh ? 0u : voxelColor[v];
                             uvec3 rgb = uvec3(rgba, rgba >> 8, rgba >> 16) & 0xFFu;
-                            voxelColor[v] = foldVoxelColor(oldColor, oldWeight, newSdf, rgb, origin + ivec3(l));
+                            voxelColor[v] = !removing ? foldVoxelColor(oldColor, oldWeight, newSdf, rgb, origin + ivec3(l))
+                                          : newWeight == 0.0 ? 0u : unfoldVoxelColor(oldColor, oldWeight, newSdf, rgb, origin + ivec3(l));
                         } else if (fresh && volumeKeepsColor()) {
                             voxelColor[v] = 0u;
+                        } else if (applies && removing && newWeight == 0.0 && volumeKeepsColor()) {
+                            voxelColor[v] = 0u;   // no observation left: no colour either
                         }
                     }
                 }
@@ -71,8 +89,8 @@ void main() {
             // With refinement the masks of the TSDF that decide_mesh_signs reads (a fresh block's are zero, as are
             // the old values it starts from).
             if (volumeRefines()) maskChange |= (tsdfMaskBits(oldSdf, oldWeight) ^ tsdfMaskBits(newSdf, newWeight)) << (3u * k);
-            if (fresh || newWeight != oldWeight || newSdf != oldSdf) {
-                voxelSdf[v] = newSdf;
+            if (fresh || newWeight != oldWeight || newSum != oldSum) {
+                voxelSdfSum[v] = newSum;
                 voxelWeight[v] = newWeight;
             }
             // A fresh block's corners that this frame did not update still hold a previous owner's colour.
@@ -87,5 +105,6 @@ void main() {
         if (volumeRefines() && subgroupOr(maskChange) != 0u) toggleTsdfMasks(block, maskChange);
     }
     ADD_COUNTER(updatedVoxels, updated);
+    ADD_COUNTER(observationsDropped, dropped);
     ADD_COUNTER(fusedBlocks, fused);
 }

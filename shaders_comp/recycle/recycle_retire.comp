@@ -1,7 +1,7 @@
 #version 460
 // Recycling, phase 1 (after fusion and mark_dirty, before the mesh passes): one workgroup per live block
 // (collect_blocks). A block beyond the keep radius has every weight set to 0; a block idle for
-// starveAfterFrames frames loses starveWeight per corner (not below 0). A corner that stops being
+// starveAfterFrames frames loses starveWeight per corner (not below 0; its distance stays: starvedSum). A corner that stops being
 // observed (weight drops below minMeshWeight) marks the cubes around it for retyping, exactly as fusion
 // does, and the block and its -x/-y/-z neighbours (whose cubes read its corners; with refinement all 26) become dirty: the mesh
 // passes of this same frame then release every triangle that read those corners, and GC frees their
@@ -29,13 +29,14 @@ void main() {
         float oldWeight = voxelWeight[v];
         precise float newWeight = retire ? 0.0 : max(oldWeight - params.starveWeight, 0.0);
         if (newWeight == oldWeight) continue;
+        int oldSum = voxelSdfSum[v];
+        int newSum = starvedSum(oldSum, oldWeight, newWeight);   // the distance stays (its sign too)
         voxelWeight[v] = newWeight;
-        if ((oldWeight >= params.minMeshWeight) != (newWeight >= params.minMeshWeight)) {
-            flipped |= 1u << k;
-            if (volumeRefines()) {
-                float sdf = voxelSdf[v];
-                maskChange |= (tsdfMaskBits(sdf, oldWeight) ^ tsdfMaskBits(sdf, newWeight)) << (3u * k);
-            }
+        voxelSdfSum[v] = newSum;
+        if ((oldWeight >= params.minMeshWeight) != (newWeight >= params.minMeshWeight)) flipped |= 1u << k;
+        if (volumeRefines()) {
+            uint before = tsdfMaskBits(tsdfMean(oldSum, oldWeight), oldWeight);
+            maskChange |= (before ^ tsdfMaskBits(tsdfMean(newSum, newWeight), newWeight)) << (3u * k);
         }
     }
     if (volumeRefines() && subgroupOr(maskChange) != 0u) toggleTsdfMasks(block, maskChange);   // uniform over the subgroup

@@ -17,7 +17,7 @@ void main() {
     uint raw = 0u, near = 0u, seen = 0u;
     for (uint b = 0u; b < 32u; ++b) {
         uint v = block * VOXELS_PER_BLOCK + word * 32u + b;
-        uint bits = tsdfMaskBits(voxelSdf[v], voxelWeight[v]);
+        uint bits = tsdfMaskBits(cornerSdf(v), voxelWeight[v]);
         raw |= (bits & 1u) << b;
         near |= ((bits >> 1) & 1u) << b;
         seen |= ((bits >> 2) & 1u) << b;

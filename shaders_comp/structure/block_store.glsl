@@ -1,16 +1,42 @@
-// Component: the block store (src/gpu/block_store.h). A pool of blocks, each the TSDF (distance and weight)
-// (and colour) at its 512 cube corners, block-major, x fastest; the block's coordinate and hash slot; the free list of
+// Component: the block store (src/gpu/block_store.h). A pool of blocks, each the TSDF (the fixed-point sum of
+// the fused distances and their count, shared_layout.h "A TSDF corner") (and colour) at its 512 cube corners, block-major, x fastest; the block's coordinate and hash slot; the free list of
 // unused blocks (a stack popped from its top).
 #ifndef VKMESH_BLOCK_STORE_GLSL
 #define VKMESH_BLOCK_STORE_GLSL
 #include "structure/frame.glsl"
 
 layout(std430, set = 0, binding = BINDING_BLOCK_COORDS) buffer BlockCoords { ivec4 blockCoords[]; };   // xyz, w = hash slot
-layout(std430, set = 0, binding = BINDING_VOXEL_SDF) buffer VoxelSdf { float voxelSdf[]; };
+layout(std430, set = 0, binding = BINDING_VOXEL_SDF) buffer VoxelSdfSum { int voxelSdfSum[]; };
 layout(std430, set = 0, binding = BINDING_VOXEL_WEIGHT) buffer VoxelWeight { float voxelWeight[]; };
 // Colour per corner (voxel_color.glsl's encoding); a 16-byte placeholder when colour is off (colorMode).
 layout(std430, set = 0, binding = BINDING_VOXEL_COLOR) buffer VoxelColor { uint voxelColor[]; };
 layout(std430, set = 0, binding = BINDING_FREE_LIST) buffer FreeList { uint freeList[]; };
+
+// A corner's distance in metres from its sum (steps) and count: 0 without observations. The CPU twin is
+// tsdfMean in src/core/tsdf_corner.h (same operations, same order).
+float tsdfMean(int sum, float weight) {
+    if (weight <= 0.0) return 0.0;
+    precise float steps = float(sum) / weight;
+    precise float metres = steps * params.sdfMetresPerStep;
+    return metres;
+}
+float cornerSdf(uint v) { return tsdfMean(voxelSdfSum[v], voxelWeight[v]); }
+
+// One observation's truncated distance (metres, in [-truncation, truncation]) as a whole number of steps.
+int tsdfSteps(float tsdf) {
+    precise float scaled = tsdf * params.sdfStepsPerMetre + 0.5;
+    float limit = float(SDF_STEPS_PER_TRUNCATION);
+    return int(clamp(floor(scaled), -limit, limit));
+}
+
+// Recycling's starvation: the sum after the weight drops from oldWeight to newWeight, keeping the distance
+// (rounded, never across zero). CPU twin: starvedSum in src/core/tsdf_corner.h.
+int starvedSum(int sum, float oldWeight, float newWeight) {
+    if (newWeight <= 0.0) return 0;
+    precise float scaled = float(sum) / oldWeight * newWeight + 0.5;
+    int s = int(floor(scaled));
+    return sum < 0 ? min(s, -1) : (sum > 0 ? max(s, 1) : 0);
+}
 
 // Index of corner (x, y, z) of a block in the voxel arrays: x fastest.
 uint voxelIndex(uint block, uvec3 local) {

@@ -75,7 +75,7 @@ uint loadCube(CubeRef r, out float d[8], out bool present[8], out bool observed)
         if (nb == NO_BLOCK) { observed = false; continue; }
         uint v = voxelIndex(nb, local);
         if (voxelWeight[v] < params.minMeshWeight) observed = false;
-        d[c] = voxelSdf[v];
+        d[c] = cornerSdf(v);
         if (d[c] < 0.0) type |= 1u << c;
     }
     return observed ? type : 0u;
@@ -98,9 +98,10 @@ uint edgeSlot(CubeRef r, uint e) {
 }
 
 // Where the vertex of an edge sits along it, s from the low corner: the zero crossing interpolated from the
-// corners' values, in [0, 1] (the unrefined mesh and the baseline: exactly the crossing). In a refined mesh
-// (`refined`) no vertex may sit on a corner, so that no two vertices coincide (docs/REFINEMENT.md, "Vertices"):
-// - an edge whose corners share a raw sign carries a vertex only because refinement flipped one of its corners
+// corners' values. No vertex may sit on a corner, so that no two vertices coincide (docs/REFINEMENT.md,
+// "Vertices"); a corner's distance is exactly 0 whenever its integer step sum is (shared_layout.h, "A TSDF
+// corner"), which is common enough that the unrefined mesh and the baseline need this too:
+// - in a refined mesh (`refined`), an edge whose corners share a raw sign carries a vertex only because refinement flipped one of its corners
 //   for meshing; the crossing extrapolated from its values lies beyond the flipped corner, and the vertex stops
 //   1/FLIPPED_EDGE_MARGIN_INVERSE of the edge before that corner. Up to two such edges meet at a flipped
 //   corner: clamped onto the corner itself their vertices would share its position;
@@ -112,8 +113,8 @@ uint edgeSlot(CubeRef r, uint e) {
 // reproduces it bit for bit.
 float edgeCrossing(float dLo, float dHi, bool refined) {
     if (dLo == dHi) return 0.5;
-    uint inverse = !refined ? 0u : ((dLo < 0.0) == (dHi < 0.0) ? FLIPPED_EDGE_MARGIN_INVERSE : REFINED_EDGE_MARGIN_INVERSE);
-    float margin = inverse == 0u ? 0.0 : 1.0 / float(inverse);
+    uint inverse = refined && (dLo < 0.0) == (dHi < 0.0) ? FLIPPED_EDGE_MARGIN_INVERSE : REFINED_EDGE_MARGIN_INVERSE;
+    float margin = 1.0 / float(inverse);
     precise float s = clamp(dLo / (dLo - dHi), margin, 1.0 - margin);
     return s;
 }

@@ -48,6 +48,20 @@ uint foldVoxelColor(uint old, float oldWeight, float newSdf, uvec3 rgb, ivec3 co
     return packVoxelColor(uvec3(min(floor(dithered), vec3(float(255u * VOXEL_COLOR_SCALE)))));
 }
 
+// The corner's colour word after the observation `rgb` is taken out again (de-integration), `oldWeight` being
+// the weight before (>= 2: the corner keeps an observation) and `newSdf` the distance after: the running
+// average without it, rounded with the same dither. Not exact (each fold and unfold rounds to a quarter of an
+// 8-bit level; docs/CORRECTION.md gives the bound), and the exponential mode cannot be undone at all: its
+// colour is left as it is, and the frame's re-integration folds the colour in again.
+uint unfoldVoxelColor(uint old, float oldWeight, float newSdf, uvec3 rgb, ivec3 corner) {
+    if ((old & VOXEL_COLOR_SET) == 0u || params.colorMode == COLOR_MODE_RECENT) return old;
+    vec3 target = vec3(rgb * VOXEL_COLOR_SCALE);
+    vec3 prev = unpackVoxelColor(old);
+    precise vec3 unmixed = (prev * oldWeight - target) / (oldWeight - 1.0);
+    precise vec3 dithered = unmixed + colorDither(corner, floatBitsToUint(newSdf) + floatBitsToUint(oldWeight) * 0x2545F491u);
+    return packVoxelColor(uvec3(clamp(floor(dithered), vec3(0.0), vec3(float(255u * VOXEL_COLOR_SCALE)))));
+}
+
 // A vertex's colour (Vertex::color, RGBA8, alpha 255) from the colours of its edge's corners, interpolated
 // at its position's s along the edge (edgeCrossing in cube_access.glsl); 0 (alpha 0) when neither corner has a colour.
 uint vertexColorOnEdge(uint lo, uint hi, float t) {

@@ -97,7 +97,7 @@ void main() {
         framePose.worldToCamera[r] = vec4(estimate[r], back[r]);   // column r of R = row r of R^T
     }
     framePose.skip = reason == TRACK_TRACKED ? 0u : 1u;
-    framePose.pad0 = 0u;
+    framePose.deintegrate = 0u;   // a tracked frame is fused
     framePose.pad1 = 0u;
     framePose.pad2 = 0u;
 }

@@ -1,5 +1,7 @@
 #include "api/reconstructor.h"
 
+#include <algorithm>
+
 namespace vkmesh {
 
 namespace {
@@ -24,10 +26,14 @@ gpu::FrameInput gpuFrameInput(const gpu::GpuImageInput& depth, const gpu::GpuIma
 }  // namespace
 
 Reconstructor::Reconstructor(const ReconstructorOptions& options)
-    : context_(std::make_unique<vk::Context>(options.device)), options_(checked(options)) {}
+    : context_(std::make_unique<vk::Context>(options.device)), options_(checked(options)) {
+    if (options_.keepFrames) corrector_.emplace(FrameStore(options_.frameStore));
+}
 
 Reconstructor::Reconstructor(const vk::ExternalDevice& device, const ReconstructorOptions& options)
-    : context_(std::make_unique<vk::Context>(device)), options_(checked(options)) {}
+    : context_(std::make_unique<vk::Context>(device)), options_(checked(options)) {
+    if (options_.keepFrames) corrector_.emplace(FrameStore(options_.frameStore));
+}
 
 // The volume (its buffers) goes before the context (its command pool, and the device when owned); a frame
 // still in flight is waited for by the volume's command recorder.
@@ -59,11 +65,51 @@ gpu::FrameReport Reconstructor::integrate(const DepthImage& depth, const ColorIm
                                           const Pose& cameraToWorld, const vk::SubmitSync& sync) {
     finish();   // an asynchronous frame before this one
     createVolume(depth.width, depth.height);
+    applyCorrections(options_.correctionsPerFrame);
     gpu::FrameReport report = volume_->integrate(depth, color, intrinsics, cameraToWorld, sync);
     lastDelta_ = report.delta;
+    keepFrame(depth, color, intrinsics, cameraToWorld);
     given(cameraToWorld);
     return report;
 }
+
+void Reconstructor::keepFrame(const DepthImage& depth, const ColorImage* color, const Intrinsics& intrinsics, const Pose& cameraToWorld) {
+    if (!corrector_) return;
+    const uint32_t index = firstFrameIndex_ + uint32_t(trajectory_.size());
+    // What fusion used: colour only when the volume fuses it.
+    corrector_->keep(index, double(index), intrinsics, cameraToWorld, depth, volume_->fusesColor() ? color : nullptr);
+}
+
+void Reconstructor::applyCorrections(size_t budget) {
+    lastCorrections_ = {};
+    if (!corrector_ || corrector_->pending() == 0) return;
+    lastCorrections_ = corrector_->apply(*volume_, budget);
+    for (uint32_t index : lastCorrections_.frames)
+        if (index >= firstFrameIndex_ && index - firstFrameIndex_ < trajectory_.size())
+            trajectory_[index - firstFrameIndex_] = corrector_->store().pose(index);
+}
+
+void Reconstructor::correct(const std::vector<uint32_t>& frames, const std::vector<Pose>& poses) {
+    if (!corrector_)
+        throw Error("correct: this Reconstructor keeps no frames (ReconstructorOptions::keepFrames, Python keep_frames=True), "
+                    "so it cannot take a fused frame out again");
+    corrector_->correct(frames, poses);
+}
+
+size_t Reconstructor::pendingCorrections() const { return corrector_ ? corrector_->pending() : 0; }
+
+gpu::CorrectionReport Reconstructor::finishCorrections() {
+    finish();
+    if (!volume_ || pendingCorrections() == 0) {
+        lastCorrections_ = {};
+        return lastCorrections_;
+    }
+    applyCorrections(corrector_->pending());
+    lastDelta_ = volume_->publishMesh().delta;
+    return lastCorrections_;
+}
+
+std::filesystem::path Reconstructor::frameStorePath(const std::filesystem::path& mapPath) { return gpu::frameStorePathOf(mapPath); }
 
 TrackedFrame Reconstructor::integrate(const DepthImage& depth, const ColorImage* color, const Intrinsics& intrinsics,
                                       const vk::SubmitSync& sync) {
@@ -79,11 +125,13 @@ TrackedFrame Reconstructor::integrate(const DepthImage& depth, const ColorImage*
         out.tracking = tracker_->start(tracker_->prediction());
         out.fused = volume_->integrate(depth, color, intrinsics, out.tracking.cameraToWorld, sync);
     } else {
+        applyCorrections(options_.correctionsPerFrame);
         gpu::TrackedFusion f = tracker_->trackAndFuse(*volume_, depth, intrinsics, color, color, sync);
         out.tracking = std::move(f.tracking);
         out.fused = std::move(f.fused);
     }
     out.cameraToWorld = out.tracking.cameraToWorld;
+    if (out.fused) keepFrame(depth, color, intrinsics, out.cameraToWorld);
     trajectory_.push_back(out.cameraToWorld);
     lastDelta_ = out.fused ? out.fused->delta : MeshDelta{};
     return out;
@@ -93,6 +141,8 @@ gpu::FrameReport Reconstructor::integrate(const gpu::GpuImageInput& depth, const
                                           const Intrinsics& intrinsics, const Pose& cameraToWorld, const vk::SubmitSync& sync) {
     finish();
     createVolume(intrinsics.width, intrinsics.height);   // a GPU image's size is the intrinsics'
+    if (corrector_)
+        throw Error("a Reconstructor that keeps frames (keepFrames) takes host images: a GPU image cannot be kept for correct()");
     volume_->submitFrame(gpuFrameInput(depth, color, intrinsics, cameraToWorld, sync));
     gpu::FrameReport report = volume_->finishFrame();
     lastDelta_ = report.delta;
@@ -127,14 +177,17 @@ Reconstructor::AsyncFrame Reconstructor::integrateAsync(const DepthImage& depth,
     input.intrinsics = intrinsics;
     input.cameraToWorld = cameraToWorld;
     input.sync = sync;
+    AsyncFrame out = submitAsync(input);   // checks the input first
+    keepFrame(depth, color, intrinsics, cameraToWorld);
     given(cameraToWorld);
-    return submitAsync(input);
+    return out;
 }
 
 Reconstructor::AsyncFrame Reconstructor::integrateAsync(const gpu::GpuImageInput& depth, const gpu::GpuImageInput& color,
                                                         const Intrinsics& intrinsics, const Pose& cameraToWorld,
                                                         const vk::SubmitSync& sync) {
     createVolume(intrinsics.width, intrinsics.height);
+    if (corrector_) throw Error("a Reconstructor that keeps frames (keepFrames) takes host images: a GPU image cannot be kept for correct()");
     given(cameraToWorld);
     return submitAsync(gpuFrameInput(depth, color, intrinsics, cameraToWorld, sync));
 }
@@ -149,7 +202,9 @@ gpu::ExportedMesh Reconstructor::downloadMesh() {
 void Reconstructor::save(const std::filesystem::path& path) {
     finish();
     if (!volume_) throw Error("cannot save " + path.string() + ": no frame has been integrated yet");
-    volume_->save(path);
+    const uint64_t saveId = volume_->save(path);
+    // Queued corrections are not saved: the store holds the poses the map was fused at.
+    if (corrector_) corrector_->store().save(frameStorePath(path).string(), saveId);
 }
 
 void Reconstructor::loadMap(const map::MapData& m, const std::filesystem::path& path) {
@@ -163,6 +218,15 @@ void Reconstructor::loadMap(const map::MapData& m, const std::filesystem::path& 
     config.publishMesh = true;
     config.trackDeltas = options_.trackDeltas;
     volume_ = gpu::GpuVolume::load(*context_, m, config, path.string());
+    firstFrameIndex_ = m.framesIntegrated;
+    if (!corrector_) return;
+    const std::filesystem::path storePath = frameStorePath(path);
+    if (!std::filesystem::exists(storePath))
+        throw Error("keepFrames: the map " + path.string() + " has no frame store beside it (" + storePath.string() +
+                    "); it was saved without kept frames, so its frames cannot be corrected");
+    corrector_.emplace(FrameStore::load(storePath.string(), m.saveId, options_.frameStore));
+    const std::vector<uint32_t> kept = corrector_->store().indices();
+    if (!kept.empty()) firstFrameIndex_ = std::max(firstFrameIndex_, kept.back() + 1);
 }
 
 std::unique_ptr<Reconstructor> Reconstructor::load(const std::filesystem::path& path, const ReconstructorOptions& options) {

@@ -32,7 +32,9 @@
 
 #include "core/mesh_delta.h"
 #include "core/types.h"
+#include "core/frame_store.h"
 #include "gpu/gpu_volume.h"
+#include "gpu/map_corrector.h"
 #include "gpu/tracking/pose_tracker.h"
 #include "vk/commands.h"
 #include "vk/context.h"
@@ -49,6 +51,14 @@ struct ReconstructorOptions {
     vk::ContextOptions device;
     // Camera tracking for frames integrated without a pose (docs/TRACKING.md).
     gpu::TrackerOptions tracker;
+    // A map that can be corrected (docs/CORRECTION.md): keep what every fused frame fused (depth, colour, pose)
+    // in a FrameStore, so that correct() can re-fuse frames whose poses changed. Costs host memory (compressed;
+    // docs/RESULTS.md gives the bytes per frame), within frameStore's budget and spill folder.
+    bool keepFrames = false;
+    FrameStoreOptions frameStore;
+    // Queued corrections re-fused by each integrate() before its frame (a de-integration and an integration
+    // each); finishCorrections() does all that are left at once.
+    uint32_t correctionsPerFrame = 2;
 };
 
 // A frame integrated without a pose: the pose tracking found (or predicted, when the frame was lost) and
@@ -86,8 +96,26 @@ public:
     // again when a later frame matches. Frames given with a pose restart tracking from that pose.
     TrackedFrame integrate(const DepthImage& depth, const ColorImage* color, const Intrinsics& intrinsics,
                            const vk::SubmitSync& sync = {});
-    // The camera-to-world pose used for every frame so far (given, tracked, or predicted for a lost frame).
+    // The camera-to-world pose used for every frame so far (given, tracked, or predicted for a lost frame; a
+    // corrected frame's once it has been re-fused).
     const std::vector<Pose>& trajectory() const { return trajectory_; }
+
+    // ---- correcting the map (docs/CORRECTION.md; needs options.keepFrames) ----
+    // New camera-to-world poses for frames already fused: frame i is the i-th frame integrated (trajectory()[i];
+    // after load(), numbering goes on from the map's). Every index and pose is checked first (an unknown or
+    // lost frame, a non-finite or non-rigid pose: Error naming it, and nothing is queued). Each queued frame is
+    // de-integrated at the pose it was fused at and integrated at the new one, exactly: the map then equals one
+    // fused at the new poses from the start. The largest pose changes go first, correctionsPerFrame of them in
+    // each later integrate() (with a host image; an asynchronous frame applies none), the rest by
+    // finishCorrections(). The mesh follows through its incremental passes; lastDelta() reports every change.
+    void correct(const std::vector<uint32_t>& frames, const std::vector<Pose>& poses);
+    size_t pendingCorrections() const;
+    // Re-fuses every queued frame now and publishes the mesh (and its delta).
+    gpu::CorrectionReport finishCorrections();
+    // What the last integrate() or finishCorrections() re-fused.
+    const gpu::CorrectionReport& lastCorrections() const { return lastCorrections_; }
+    // The kept frames (nullptr unless options.keepFrames).
+    const FrameStore* frameStore() const { return corrector_ ? &corrector_->store() : nullptr; }
 
     // ---- asynchronous frames: the application's frame never waits for vkmesh's GPU work ----
     // integrateAsync() checks and copies the input, records the frame and submits it, and returns at once.
@@ -129,7 +157,8 @@ public:
     uint32_t framesIntegrated() const;
 
     // Maps that outlive the process (docs/MAPFILE.md). save() writes everything the reconstruction holds after
-    // the last frame; load() continues it: the next integrate() gives exactly what an uninterrupted run would
+    // the last frame (with options.keepFrames also the frame store, beside it: frameStorePath(path)); load()
+    // continues it (and loads that store when options.keepFrames: a store saved with another map is refused): the next integrate() gives exactly what an uninterrupted run would
     // have. The map's settings are used (voxel size, truncation, ...); options.volume's capacities where larger
     // than the map's; the image size is the map's. Errors (bad file, a map that does not fit the device) name
     // the file and the problem, and nothing is created.
@@ -138,6 +167,8 @@ public:
     static std::unique_ptr<Reconstructor> load(const std::filesystem::path& path, const vk::ExternalDevice& device,
                                                const ReconstructorOptions& options = {});
 
+    // Where save() puts the frame store of a map: the map's path with the extension .vkframes.
+    static std::filesystem::path frameStorePath(const std::filesystem::path& mapPath);
     const vk::Context& context() const { return *context_; }
     vk::Context& context() { return *context_; }   // e.g. to take its validation messages
     // The data structure itself, for what the facade does not cover; nullptr before the first frame.
@@ -145,6 +176,10 @@ public:
 
 private:
     void loadMap(const map::MapData& map, const std::filesystem::path& path);
+    // Before a frame: up to `budget` queued corrections re-fused as intermediate frames.
+    void applyCorrections(size_t budget);
+    // After a frame was fused at `cameraToWorld`: kept for later corrections (options.keepFrames).
+    void keepFrame(const DepthImage& depth, const ColorImage* color, const Intrinsics& intrinsics, const Pose& cameraToWorld);
     void createVolume(int width, int height);
     AsyncFrame submitAsync(const gpu::FrameInput& input);
     uint64_t nextReadyValue_ = 0;
@@ -154,6 +189,9 @@ private:
     MeshDelta lastDelta_;
     std::unique_ptr<gpu::PoseTracker> tracker_;   // created by the first frame integrated without a pose
     std::vector<Pose> trajectory_;
+    uint32_t firstFrameIndex_ = 0;                 // the index of trajectory_[0] (a loaded map's frames come first)
+    std::optional<gpu::MapCorrector> corrector_;   // options.keepFrames
+    gpu::CorrectionReport lastCorrections_;
     // A frame given with a pose: the trajectory records it and tracking restarts from it.
     void given(const Pose& cameraToWorld);
 };

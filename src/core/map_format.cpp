@@ -20,6 +20,7 @@ namespace {
 static_assert(std::endian::native == std::endian::little, "the map format is little-endian; a big-endian host needs byte swaps here");
 static_assert(sizeof(Counters) % 4 == 0 && sizeof(FramePush) % 4 == 0 && sizeof(Vertex) % 4 == 0);
 
+constexpr uint32_t kStateBytes = 24;   // version 2: + the save id
 constexpr uint32_t kSettings = tag("SETT"), kState = tag("STAT"), kCounters = tag("CNTR"), kPush = tag("PUSH"),
                    kBlocks = tag("BLKS"), kBlockFree = tag("BFRE"), kVertices = tag("VERT"), kOwners = tag("VOWN"),
                    kVertexFree = tag("VFRE"), kChunks = tag("CHNK"), kChunkFree = tag("CFRE");
@@ -148,8 +149,8 @@ std::string serialize(const MapData& map) {
     Writer w;
     w.section(kSettings, SectionKind::Single, 4 * kSettingsWords, 1);
     writeSettings(w, map.settings);
-    w.section(kState, SectionKind::Single, 16, 1);
-    w.u32(map.frameNumber), w.u32(map.framesIntegrated), w.u32(map.retryPending), w.u32(0);
+    w.section(kState, SectionKind::Single, kStateBytes, 1);
+    w.u32(map.frameNumber), w.u32(map.framesIntegrated), w.u32(map.retryPending), w.u32(0), w.u64(map.saveId);
     w.section(kCounters, SectionKind::Single, sizeof(Counters), 1);
     w.bytes(&map.counters, sizeof(Counters));
     w.section(kPush, SectionKind::Single, sizeof(FramePush), 1);
@@ -198,6 +199,10 @@ MapData parse(std::string_view bytes, const std::string& name) {
         r.fail("map format version " + std::to_string(map.version) + " is newer than this build of vkmesh reads (version " +
                std::to_string(kVersion) + "); use a newer vkmesh");
     if (map.version == 0) r.fail("map format version 0 is not a valid version");
+    if (map.version == 1)
+        r.fail("map format version 1 holds float running-average TSDF values, written by a vkmesh before exact fusion; this "
+               "vkmesh reads version " + std::to_string(kVersion) + " (integer sums that can be de-integrated, docs/MAPFILE.md): "
+               "fuse the dataset again with this vkmesh (vkmesh fuse DATASET --save map.vkmap)");
     if (r.u32(12) != kHeaderBytes) r.fail("header size " + std::to_string(r.u32(12)) + " is not " + std::to_string(kHeaderBytes));
     // A fuzzer cannot forge checksums: in fuzzing builds (only) they are not checked, so that it reaches the
     // checks behind them (CMakeLists.txt, VKMESH_BUILD_FUZZERS).
@@ -295,10 +300,11 @@ MapData parse(std::string_view bytes, const std::string& name) {
         r.fail("the mesh mode in the settings disagrees with the header's feature flags");
     if ((map.settings.colorMode != 0) != ((map.features & FEATURE_COLOR) != 0))
         r.fail("the colour mode in the settings disagrees with the header's feature flags");
-    const Section& state = need(kState, SectionKind::Single, 16);
+    const Section& state = need(kState, SectionKind::Single, kStateBytes);
     {
         Reader sr(state.data, name);
         map.frameNumber = sr.u32(0), map.framesIntegrated = sr.u32(4), map.retryPending = sr.u32(8);
+        map.saveId = sr.u64(16);
         if (map.framesIntegrated > map.frameNumber) r.fail("more frames integrated than frame numbers used");
     }
     std::memcpy(&map.counters, need(kCounters, SectionKind::Single, sizeof(Counters)).data.data(), sizeof(Counters));

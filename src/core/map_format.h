@@ -21,7 +21,10 @@
 namespace vkmesh::map {
 
 constexpr std::array<char, 8> kMagic = {'V', 'K', 'M', 'A', 'P', '\r', '\n', '\x1a'};
-constexpr uint32_t kVersion = 1;
+// Version 2: a TSDF corner is an integer step sum and a count (exact fusion; shared_layout.h "A TSDF corner"),
+// and Counters grew a per-frame group. Version 1 maps held float running averages, which cannot be taken
+// apart again: they are refused with what to do (re-fuse the dataset).
+constexpr uint32_t kVersion = 2;
 constexpr uint32_t kHeaderBytes = 80;
 constexpr uint32_t kSectionHeaderBytes = 24;
 
@@ -103,6 +106,9 @@ struct MapData {
     Settings settings;
     Capacities capacities;
     uint32_t frameNumber = 0, framesIntegrated = 0, retryPending = 0;
+    // A number drawn anew at every save, written into the frame store saved beside the map too (docs/CORRECTION.md):
+    // a store is only used with the very map it was saved with.
+    uint64_t saveId = 0;
     gpu::Counters counters{};   // as after the last frame (free-stack tops recomputed on load)
     gpu::FramePush lastPush{};  // the last frame's push constants (whole-volume passes reuse its frame number)
     std::vector<Block> blocks;

@@ -22,14 +22,15 @@ inline float defaultRefineEpsilon(float voxelSize) { return 0.5f * voxelSize; }
 
 // Where the vertex of an edge sits along it, s from the low corner: the zero crossing d_lo / (d_lo - d_hi) in
 // [0, 1] (the midpoint when the values are equal, which only an edge meshed across a flipped corner has).
-// Unrefined (and the baseline): exactly that. In a refined mesh no vertex sits on a corner, so that no two
-// vertices coincide: s stops 1/FLIPPED_EDGE_MARGIN_INVERSE before a flipped corner on an edge whose corners
-// share a raw sign, and stays 1/REFINED_EDGE_MARGIN_INVERSE off the ends on any other (docs/REFINEMENT.md,
-// "Vertices"). The float operations of edgeCrossing in shaders_comp/structure/cube_access.glsl.
+// No vertex sits on a corner, so that no two vertices coincide: s stays 1/REFINED_EDGE_MARGIN_INVERSE off the
+// ends (a corner's distance is exactly 0 whenever its integer step sum is, shared_layout.h "A TSDF corner",
+// and the crossing would then be the corner itself, shared by every edge leaving it), and in a refined mesh it
+// stops 1/FLIPPED_EDGE_MARGIN_INVERSE before a flipped corner on an edge whose corners share a raw sign
+// (docs/REFINEMENT.md, "Vertices"). The float operations of edgeCrossing in shaders_comp/structure/cube_access.glsl.
 inline float edgeCrossing(float dLo, float dHi, bool refined) {
     if (dLo == dHi) return 0.5f;
-    const uint32_t inverse = !refined ? 0u : ((dLo < 0.0f) == (dHi < 0.0f) ? gpu::FLIPPED_EDGE_MARGIN_INVERSE : gpu::REFINED_EDGE_MARGIN_INVERSE);
-    const float margin = inverse == 0u ? 0.0f : 1.0f / float(inverse);
+    const uint32_t inverse = refined && (dLo < 0.0f) == (dHi < 0.0f) ? gpu::FLIPPED_EDGE_MARGIN_INVERSE : gpu::REFINED_EDGE_MARGIN_INVERSE;
+    const float margin = 1.0f / float(inverse);
     const float s = dLo / (dLo - dHi);
     return s < margin ? margin : (s > 1.0f - margin ? 1.0f - margin : s);
 }

@@ -52,7 +52,9 @@ enum class ColorFusion : uint32_t {
 struct VolumeParams {
     float voxelSize = 0.03f;       // metres between two TSDF samples (cube side)
     float truncVoxels = 4.0f;      // truncation distance in voxels: trunc = truncVoxels * voxelSize
-    float maxWeight = 255.0f;      // cap of the running-average weight
+    // Deprecated, no effect: the cap of the running-average weight before fusion kept exact sums (map version 2;
+    // shared_layout.h "A TSDF corner"). Kept so that code and map files that set it still build and load.
+    float maxWeight = 255.0f;
     float minDepth = 0.1f;         // depth samples outside [minDepth, maxDepth] are ignored
     float maxDepth = 5.0f;
     // Block allocation walks the truncation bands of every Nth pixel in x and y; fusion always uses

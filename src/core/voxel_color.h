@@ -66,6 +66,24 @@ inline uint32_t foldVoxelColor(uint32_t old, float oldWeight, float newSdf, cons
     return packVoxelColor(q[0], q[1], q[2]);
 }
 
+// The corner's colour word after the observation `rgb` is taken out again (de-integration): oldWeight >= 2 is
+// the weight before, newSdf the distance after. The exponential mode cannot be undone: its word stays.
+inline uint32_t unfoldVoxelColor(uint32_t old, float oldWeight, float newSdf, const uint8_t rgb[3], const std::array<int, 3>& corner,
+                                 uint32_t colorMode) {
+    const uint32_t scale = gpu::VOXEL_COLOR_SCALE;
+    if (!hasVoxelColor(old) || colorMode == gpu::COLOR_MODE_RECENT) return old;
+    const ColorChannels prev = unpackVoxelColor(old);
+    const float dither = colorDither(corner, std::bit_cast<uint32_t>(newSdf) + std::bit_cast<uint32_t>(oldWeight) * 0x2545F491u);
+    uint32_t q[3];
+    for (int i = 0; i < 3; ++i) {
+        const float target = float(rgb[i] * scale);
+        const float unmixed = (prev[i] * oldWeight - target) / (oldWeight - 1.0f);
+        const float dithered = unmixed + dither;
+        q[i] = uint32_t(std::clamp(std::floor(dithered), 0.0f, float(255 * scale)));
+    }
+    return packVoxelColor(q[0], q[1], q[2]);
+}
+
 // A vertex's colour (Vertex::color, RGBA8, alpha 255) from its edge's corner colours, interpolated at its
 // position's t along the edge (edgeCrossing in core/refinement.h); 0 (alpha 0) when neither has a colour.
 inline uint32_t vertexColorOnEdge(uint32_t lo, uint32_t hi, float t) {

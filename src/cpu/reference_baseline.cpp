@@ -1,6 +1,7 @@
 #include "cpu/reference_baseline.h"
 
 #include "core/marching_cubes.h"
+#include "core/refinement.h"
 
 namespace vkmesh::cpu {
 
@@ -45,7 +46,7 @@ std::vector<Eigen::Vector3f> baselineMesh(const std::map<BlockCoord, ReferenceBl
                 int e = tables.triangleEdges[type][t];
                 auto [lo, hi] = edgeCorners(e);
                 int axis = edgeAxis(e);
-                float s = d[lo] / (d[lo] - d[hi]);
+                const float s = edgeCrossing(d[lo], d[hi], false);   // the shader's, kept off the edge's ends
                 const auto o = cornerOffset(lo);
                 float p[3] = {float(coord[0] * side + cube[0] + o[0]), float(coord[1] * side + cube[1] + o[1]),
                               float(coord[2] * side + cube[2] + o[2])};

@@ -13,8 +13,12 @@ namespace vkmesh::cpu {
 using BlockCoord = std::array<int, 3>;
 
 // The TSDF corners of one block, index x + BLOCK_SIDE (y + BLOCK_SIDE z) (the GPU's voxel order), with their
-// colour words (structure/voxel_color.glsl; 0 = no colour).
+// colour words (structure/voxel_color.glsl; 0 = no colour). A corner is its step sum and weight (the GPU's
+// two arrays, core/tsdf_corner.h); `sdf` is its distance in metres, tsdfMean(sum, weight), kept beside them
+// for the stages that read distances (fusion and recycling update all three; a test of the mesher alone may
+// set sdf and weight directly).
 struct ReferenceBlock {
+    std::array<int32_t, gpu::VOXELS_PER_BLOCK> sdfSum{};
     std::array<float, gpu::VOXELS_PER_BLOCK> sdf{};
     std::array<float, gpu::VOXELS_PER_BLOCK> weight{};
     std::array<uint32_t, gpu::VOXELS_PER_BLOCK> color{};

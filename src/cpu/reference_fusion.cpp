@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "core/marching_cubes.h"
+#include "core/tsdf_corner.h"
 #include "core/voxel_color.h"
 
 namespace vkmesh::cpu {
@@ -18,13 +19,14 @@ bool cornerFlipped(float oldSdf, float oldWeight, float newSdf, float newWeight,
     return wasObserved != isObserved || (isObserved && (oldSdf < 0.0f) != (newSdf < 0.0f));
 }
 
-uint32_t fuseBlock(ReferenceBlock& block, const BlockCoord& c, const DepthImage& depth, const gpu::FramePush& push,
-                   const FusionRule& rule, std::vector<std::array<int, 3>>* flipped, const ColorImage* color) {
+FusionCount fuseBlock(ReferenceBlock& block, const BlockCoord& c, const DepthImage& depth, const gpu::FramePush& push,
+                      const FusionRule& rule, std::vector<std::array<int, 3>>* flipped, const ColorImage* color, bool deintegrate) {
     const bool withColor = rule.colorFusion != ColorFusion::Off && color && !color->empty();
     const float fx = push.intrinsics[0], fy = push.intrinsics[1], cx = push.intrinsics[2], cy = push.intrinsics[3];
     const float truncation = rule.truncation;
+    const TsdfFixedPoint fixed = tsdfFixedPoint(truncation);
     const int side = int(BLOCK_SIDE);
-    uint32_t updated = 0;
+    FusionCount count;
     for (uint32_t v = 0; v < VOXELS_PER_BLOCK; ++v) {
         const auto [lx, ly, lz] = localCoords(v);
         Eigen::Vector3f world(float(c[0] * side + lx) * rule.voxelSize, float(c[1] * side + ly) * rule.voxelSize,
@@ -38,22 +40,34 @@ uint32_t fuseBlock(ReferenceBlock& block, const BlockCoord& c, const DepthImage&
         float d = depth.at(int(pu), int(pv));
         float sdf = d - cam.z();
         if (!(d >= push.minDepth && d <= push.maxDepth && sdf >= -truncation)) continue;
-        float tsdf = std::min(sdf, truncation);
-        float oldSdf = block.sdf[v], oldWeight = block.weight[v];
-        const float newSdf = (oldSdf * oldWeight + tsdf) / (oldWeight + 1.0f);
-        const float newWeight = std::min(oldWeight + 1.0f, rule.maxWeight);
+        const int32_t steps = tsdfSteps(std::min(sdf, truncation), fixed.stepsPerMetre);
+        const int32_t oldSum = block.sdfSum[v];
+        const float oldSdf = block.sdf[v], oldWeight = block.weight[v];
+        const bool applies = deintegrate ? oldWeight >= 1.0f : oldWeight < float(gpu::SDF_MAX_COUNT);
+        if (!applies) {
+            ++count.dropped;
+            continue;
+        }
+        const float newWeight = deintegrate ? oldWeight - 1.0f : oldWeight + 1.0f;
+        const int32_t newSum = newWeight == 0.0f ? 0 : (deintegrate ? oldSum - steps : oldSum + steps);
+        const float newSdf = tsdfMean(newSum, newWeight, fixed.metresPerStep);
+        block.sdfSum[v] = newSum;
         block.sdf[v] = newSdf;
         block.weight[v] = newWeight;
-        ++updated;
-        if (withColor)
-            block.color[v] = foldVoxelColor(block.color[v], oldWeight, newSdf, color->at(int(pu), int(pv)),
-                                            {c[0] * side + lx, c[1] * side + ly, c[2] * side + lz}, uint32_t(rule.colorFusion),
-                                            rule.colorRecency);
+        ++count.updated;
+        const std::array<int, 3> corner{c[0] * side + lx, c[1] * side + ly, c[2] * side + lz};
+        if (withColor) {
+            const uint8_t* rgb = color->at(int(pu), int(pv));
+            const auto mode = uint32_t(rule.colorFusion);
+            block.color[v] = !deintegrate ? foldVoxelColor(block.color[v], oldWeight, newSdf, rgb, corner, mode, rule.colorRecency)
+                             : newWeight == 0.0f ? 0u : unfoldVoxelColor(block.color[v], oldWeight, newSdf, rgb, corner, mode);
+        } else if (deintegrate && newWeight == 0.0f) {
+            block.color[v] = 0;
+        }
         // Corners not updated keep their values and never flip.
-        if (flipped && cornerFlipped(oldSdf, oldWeight, newSdf, newWeight, rule))
-            flipped->push_back({c[0] * side + lx, c[1] * side + ly, c[2] * side + lz});
+        if (flipped && cornerFlipped(oldSdf, oldWeight, newSdf, newWeight, rule)) flipped->push_back(corner);
     }
-    return updated;
+    return count;
 }
 
 std::map<BlockCoord, CubeMask> cubesAroundCorners(const std::vector<std::array<int, 3>>& flipped,

@@ -15,7 +15,7 @@ namespace vkmesh::cpu {
 
 // What fusion needs besides the image: the volume's parameters and the mesh's notion of an observed corner.
 struct FusionRule {
-    float voxelSize = 0.0f, truncation = 0.0f, maxWeight = 0.0f;
+    float voxelSize = 0.0f, truncation = 0.0f;
     float minMeshWeight = 1.0f;   // a corner is observed (meshable) from this weight on
     ColorFusion colorFusion = ColorFusion::Average;
     float colorRecency = 0.2f;
@@ -26,14 +26,22 @@ struct FusionRule {
 // finds the corners whose meshing sign changed itself: docs/REFINEMENT.md.)
 bool cornerFlipped(float oldSdf, float oldWeight, float newSdf, float newWeight, const FusionRule& rule);
 
+// What fuseBlock did to a block's corners.
+struct FusionCount {
+    uint32_t updated = 0;   // corners updated
+    uint32_t dropped = 0;   // observations not applied (gpu::Counters::observationsDropped)
+};
+
 // Fuses the frame (push: its camera and depth range) into one block at `coord`: every corner that projects
-// into the image onto a valid depth d with sdf = d - z >= -truncation gets sdf' = (sdf w + min(sdf, trunc)) /
-// (w + 1), w' = min(w + 1, maxWeight), and, when `color` is given and colour fusion is on, its colour at the
-// same pixel folded into the corner's (foldVoxelColor, core/voxel_color.h).
-// Appends the corners that flipped (global voxel coordinates) to `flipped` in corner order; returns the
-// number of corners updated.
-uint32_t fuseBlock(ReferenceBlock& block, const BlockCoord& coord, const DepthImage& depth, const gpu::FramePush& push,
-                   const FusionRule& rule, std::vector<std::array<int, 3>>* flipped, const ColorImage* color = nullptr);
+// into the image onto a valid depth d with sdf = d - z >= -truncation gets s = tsdfSteps(min(sdf, trunc))
+// added to its sum and 1 to its weight (below SDF_MAX_COUNT; past it the observation is dropped), and, when
+// `color` is given and colour fusion is on, its colour at the same pixel folded into the corner's
+// (foldVoxelColor, core/voxel_color.h). With `deintegrate` the same s is subtracted and 1 taken from the
+// weight (a corner of weight 0 drops it), the colour folded out (unfoldVoxelColor).
+// Appends the corners that flipped (global voxel coordinates) to `flipped` in corner order.
+FusionCount fuseBlock(ReferenceBlock& block, const BlockCoord& coord, const DepthImage& depth, const gpu::FramePush& push,
+                      const FusionRule& rule, std::vector<std::array<int, 3>>* flipped, const ColorImage* color = nullptr,
+                      bool deintegrate = false);
 
 // For every flipped corner (global voxel coordinates), the 8 cubes around it (corner - o, o in {0,1}^3) in
 // whatever block they lie, for the blocks in `blocks`: the cubes whose MC type may have changed.

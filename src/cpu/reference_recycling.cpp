@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "core/tsdf_corner.h"
+
 namespace vkmesh::cpu {
 
 bool blockOutsideKeepRadius(const BlockCoord& c, float voxelSize, float keepRadius, const float cameraToWorld[3][4]) {
@@ -17,7 +19,8 @@ bool blockOutsideKeepRadius(const BlockCoord& c, float voxelSize, float keepRadi
 }
 
 RecyclingStats recycleBlocks(std::map<BlockCoord, ReferenceBlock>& blocks, std::map<BlockCoord, uint32_t>& lastTouchedFrame,
-                             uint32_t frame, const RecyclingRule& rule, float voxelSize, const float cameraToWorld[3][4]) {
+                             uint32_t frame, const RecyclingRule& rule, float voxelSize, float metresPerStep,
+                             const float cameraToWorld[3][4]) {
     RecyclingStats stats;
     if (!rule.enabled()) return stats;
     for (auto it = blocks.begin(); it != blocks.end();) {
@@ -29,9 +32,16 @@ RecyclingStats recycleBlocks(std::map<BlockCoord, ReferenceBlock>& blocks, std::
         }
         ++(retire ? stats.blocksRetired : stats.blocksStarved);
         bool empty = true;
-        for (float& w : it->second.weight) {
-            w = retire ? 0.0f : std::max(w - rule.starveWeight, 0.0f);
-            empty = empty && w == 0.0f;
+        ReferenceBlock& b = it->second;
+        for (uint32_t v = 0; v < gpu::VOXELS_PER_BLOCK; ++v) {
+            const float oldWeight = b.weight[v];
+            const float newWeight = retire ? 0.0f : std::max(oldWeight - rule.starveWeight, 0.0f);
+            if (newWeight != oldWeight) {
+                b.sdfSum[v] = starvedSum(b.sdfSum[v], oldWeight, newWeight);
+                b.weight[v] = newWeight;
+                b.sdf[v] = tsdfMean(b.sdfSum[v], newWeight, metresPerStep);
+            }
+            empty = empty && newWeight == 0.0f;
         }
         if (!empty) {
             ++it;

@@ -32,7 +32,9 @@ struct RecyclingStats {
 // GPU's hash stamp per block (the caller records the frame's touched blocks first; a block without one counts
 // as last touched in frame 0), `frame` the current frame number. Freed blocks leave both maps. Unlike the GPU,
 // which defers freeing a block that still owns mesh state, a block is freed as soon as its weights are 0.
+// A starved corner keeps its distance (starvedSum, core/tsdf_corner.h; metresPerStep: tsdfFixedPoint's).
 RecyclingStats recycleBlocks(std::map<BlockCoord, ReferenceBlock>& blocks, std::map<BlockCoord, uint32_t>& lastTouchedFrame,
-                             uint32_t frame, const RecyclingRule& rule, float voxelSize, const float cameraToWorld[3][4]);
+                             uint32_t frame, const RecyclingRule& rule, float voxelSize, float metresPerStep,
+                             const float cameraToWorld[3][4]);
 
 }  // namespace vkmesh::cpu

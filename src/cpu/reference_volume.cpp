@@ -1,6 +1,9 @@
 #include "cpu/reference_volume.h"
 
+#include <algorithm>
+
 #include "core/camera.h"
+#include "core/tsdf_corner.h"
 #include "cpu/reference_allocation.h"
 #include "cpu/reference_baseline.h"
 #include "cpu/reference_fusion.h"
@@ -43,13 +46,13 @@ ReferenceFrameStats ReferenceVolume::integrate(const DepthImage& depth, const In
 
     // 2. Fusion of every touched block; a new block starts at sdf 0, weight 0.
     const gpu::FramePush push = makeFramePush(intrinsics, cameraToWorld, params_, 1);
-    const FusionRule rule{params_.voxelSize, params_.truncation(), params_.maxWeight, minMeshWeight_,
-                          params_.colorFusion, params_.colorRecency};
     lastFlipped_.clear();
     for (const BlockCoord& c : touched) {
         auto [it, inserted] = blocks_.try_emplace(c);
         if (inserted) ++stats.blocksInserted;
-        stats.updatedVoxels += fuseBlock(it->second, c, depth, push, rule, &lastFlipped_, color);
+        const FusionCount count = fuseBlock(it->second, c, depth, push, fusionRule(), &lastFlipped_, color);
+        stats.updatedVoxels += count.updated;
+        stats.observationsDropped += count.dropped;
     }
     lastTouched_ = std::move(touched);
 
@@ -57,7 +60,8 @@ ReferenceFrameStats ReferenceVolume::integrate(const DepthImage& depth, const In
     ++frame_;
     if (recycling_.enabled()) {
         for (const BlockCoord& c : lastTouched_) lastTouchedFrame_[c] = frame_;
-        const RecyclingStats recycled = recycleBlocks(blocks_, lastTouchedFrame_, frame_, recycling_, params_.voxelSize, push.cameraToWorld);
+        const RecyclingStats recycled = recycleBlocks(blocks_, lastTouchedFrame_, frame_, recycling_, params_.voxelSize,
+                                                      tsdfFixedPoint(params_.truncation()).metresPerStep, push.cameraToWorld);
         stats.blocksStarved = recycled.blocksStarved;
         stats.blocksRetired = recycled.blocksRetired;
         stats.blocksFreed = recycled.blocksFreed;
@@ -65,6 +69,44 @@ ReferenceFrameStats ReferenceVolume::integrate(const DepthImage& depth, const In
 
     // 4. The cubes around every flipped corner, in the blocks that exist now.
     retypeCubes_ = cubesAroundCorners(lastFlipped_, blocks_);
+    return stats;
+}
+
+FusionRule ReferenceVolume::fusionRule() const {
+    return FusionRule{params_.voxelSize, params_.truncation(), minMeshWeight_, params_.colorFusion, params_.colorRecency};
+}
+
+ReferenceFrameStats ReferenceVolume::deintegrate(const DepthImage& depth, const Intrinsics& intrinsics, const Pose& cameraToWorld,
+                                                 const ColorImage* color) {
+    ReferenceFrameStats stats;
+    std::vector<BlockCoord> touched = blocksTouchedBy(depth, intrinsics, cameraToWorld, &stats);
+    const gpu::FramePush push = makeFramePush(intrinsics, cameraToWorld, params_, 1);
+    lastFlipped_.clear();
+    std::vector<BlockCoord> found;
+    for (const BlockCoord& c : touched) {
+        auto it = blocks_.find(c);
+        if (it == blocks_.end()) {
+            ++stats.blocksMissing;
+            continue;
+        }
+        const FusionCount count = fuseBlock(it->second, c, depth, push, fusionRule(), &lastFlipped_, color, true);
+        stats.updatedVoxels += count.updated;
+        stats.observationsDropped += count.dropped;
+        found.push_back(c);
+    }
+    ++frame_;
+    // The cubes around every flipped corner are marked while the emptied blocks still exist (the GPU marks them
+    // in fusion, and frees the blocks after the mesh passes).
+    retypeCubes_ = cubesAroundCorners(lastFlipped_, blocks_);
+    for (const BlockCoord& c : found) {
+        const ReferenceBlock& b = blocks_.at(c);
+        if (std::all_of(b.weight.begin(), b.weight.end(), [](float w) { return w == 0.0f; })) {
+            blocks_.erase(c);
+            lastTouchedFrame_.erase(c);
+            ++stats.blocksFreed;
+        }
+    }
+    lastTouched_ = std::move(found);
     return stats;
 }
 

@@ -14,6 +14,7 @@
 
 #include "core/types.h"
 #include "cpu/reference_block.h"
+#include "cpu/reference_fusion.h"
 #include "cpu/reference_recycling.h"
 #include "shared_layout.h"
 
@@ -32,6 +33,8 @@ struct ReferenceFrameStats {
     uint32_t blocksStarved = 0;
     uint32_t blocksRetired = 0;
     uint32_t blocksFreed = 0;
+    uint32_t observationsDropped = 0;  // corner updates not applied (fuseBlock's FusionCount::dropped)
+    uint32_t blocksMissing = 0;        // deintegrate(): blocks of the frame's bands the volume does not hold (no longer)
 };
 
 class ReferenceVolume {
@@ -53,6 +56,12 @@ public:
     // color: the frame's colour registered to depth (or nullptr), folded in as params.colorFusion says.
     ReferenceFrameStats integrate(const DepthImage& depth, const Intrinsics& intrinsics, const Pose& cameraToWorld,
                                   const ColorImage* color = nullptr);
+
+    // Takes a frame fused at `cameraToWorld` out again (the GPU's frame with FramePoseGpu::deintegrate): the same
+    // blocks, the same steps subtracted; blocks left with weight 0 at every corner are removed. Fusing a frame
+    // and de-integrating it at the same pose restores every corner's sum and weight, whatever came between.
+    ReferenceFrameStats deintegrate(const DepthImage& depth, const Intrinsics& intrinsics, const Pose& cameraToWorld,
+                                    const ColorImage* color = nullptr);
 
     // Blocks in coordinate order.
     const std::map<BlockCoord, ReferenceBlock>& blocks() const { return blocks_; }
@@ -85,6 +94,8 @@ public:
     size_t retypeCubeCount() const;
 
 private:
+    FusionRule fusionRule() const;
+
     VolumeParams params_;
     float minMeshWeight_;
     std::map<BlockCoord, ReferenceBlock> blocks_;

@@ -71,6 +71,7 @@ void GpuVolume::recordFrame(VkCommandBuffer cmd, const FramePush& push, bool reb
     //          triangulate stage    retype list, TSDF, edge slots, neighbours cube state, chunks, garbage lists
     //          mesh GC stage        garbage lists                             free stacks, edge slots
     // recycle  recycle_free         block list, TSDF, cube state, edge slots  hash (tombstones), free list
+    //                               (de-integration: the touched list instead of the block list)
     // export   export stage         vertex heap, chunks                       export buffers, draw command
     // deltas   delta stage          vertex heap, chunks, shadows              records, shadows
     // Every pass reads what the one before wrote (at least the counters its dispatch size comes from), so
@@ -109,7 +110,12 @@ void GpuVolume::recordFrame(VkCommandBuffer cmd, const FramePush& push, bool reb
         // The live block list is still the one collected above: the mesh passes do not touch the hash.
         recycle_.recordFree(cmd, push, counters_);
         timer_.mark(cmd, "recycle_free");
+    } else if (inFlight_->input.deintegrate) {
+        // The blocks the de-integration left with no observation, freed with the mesh state the passes released.
+        recycle_.recordFree(cmd, push, counters_, true);
+        timer_.mark(cmd, "recycle_free");
     }
+    if (inFlight_->input.intermediate) return;
     if (config_.publishMesh) {
         recordExport(cmd);
         timer_.mark(cmd, "export");
@@ -135,6 +141,7 @@ void GpuVolume::recordFramePose(VkCommandBuffer cmd, const FramePush& push, bool
     FramePoseGpu pose{};
     std::memcpy(pose.worldToCamera, push.worldToCamera, sizeof(pose.worldToCamera));
     std::memcpy(pose.cameraToWorld, push.cameraToWorld, sizeof(pose.cameraToWorld));
+    pose.deintegrate = inFlight_->input.deintegrate ? 1u : 0u;
     vkCmdUpdateBuffer(cmd, framePose_.handle(), 0, sizeof(pose), &pose);
     vk::memoryBarrier(cmd);
 }
@@ -195,6 +202,18 @@ FrameReport GpuVolume::integrate(const DepthImage& depth, const ColorImage* colo
     return finishFrame();
 }
 
+FrameReport GpuVolume::deintegrate(const DepthImage& depth, const ColorImage* color, const Intrinsics& intrinsics,
+                                   const Pose& cameraToWorld) {
+    FrameInput input;
+    input.depth = &depth;
+    input.color = color;
+    input.intrinsics = intrinsics;
+    input.cameraToWorld = cameraToWorld;
+    input.deintegrate = true;
+    submitFrame(input);
+    return finishFrame();
+}
+
 namespace {
 
 std::string sizeText(int width, int height) { return std::to_string(width) + "x" + std::to_string(height); }
@@ -222,6 +241,10 @@ void GpuVolume::submitFrame(const FrameInput& input, uint64_t timelineValue) {
     frame.fromGpu = !input.gpuDepth.empty();
     if (frame.fromGpu == (input.depth != nullptr))
         throw Error("a frame needs exactly one depth image: a host DepthImage or a GPU input");
+    if (input.deintegrate && recycling())
+        throw Error("a bounded map (keep radius or recycling) forgets what it fused, so a frame cannot be taken out of it exactly; "
+                    "correct maps built without --keep-radius and --recycle");
+    if (input.deintegrate && input.recordPose) throw Error("a frame to de-integrate comes with the pose it was fused at, not a tracker's");
     if (frame.fromGpu) {
         checkGpuInput(input.gpuDepth, false);
         checkGpuInput(input.gpuColor, true);
@@ -258,7 +281,7 @@ void GpuVolume::submitFrame(const FrameInput& input, uint64_t timelineValue) {
     frame.timelineValue = timelineValue;
 
     if (config_.growCapacities && framesIntegrated_ > 0) growBeforeFrame(frame.report);
-    if (config_.publishMesh) {
+    if (config_.publishMesh && !input.intermediate) {
         if (timelineValue) {
             // An asynchronous frame writes the other set (the application may be drawing the last one), sized
             // for the whole heaps: it cannot overflow, so the set holds the whole mesh at the ready value and
@@ -277,7 +300,8 @@ void GpuVolume::submitFrame(const FrameInput& input, uint64_t timelineValue) {
     }
     // Tombstones of freed keys make probes longer and are never reused by insertions: past the threshold
     // (read from the previous frame's counters) the table is rebuilt before this frame allocates.
-    frame.rebuildHash = recycling() && double(counters_.read().hashTombstones) >
+    // (Recycling and de-integration free blocks.)
+    frame.rebuildHash = double(counters_.read().hashTombstones) >
                                            double(config_.hashRebuildTombstoneFraction) * config_.hashCapacity;
     frame.retryPending = config_.meshMode == MeshMode::Incremental && retryPending_;
     if (frame.rebuildHash && input.recordPose) {
@@ -388,7 +412,7 @@ FrameReport GpuVolume::finishFrame() {
         }
         return report;
     }
-    ++framesIntegrated_;
+    if (!f.input.deintegrate) ++framesIntegrated_;
     report.stageMs = timer_.read();
     // Cubes deferred by a full retype list are left for the next frame's retry; INCOMPLETE cubes are retried
     // once after a growth (while the heap stays full they wait for their block to be dirty again).
@@ -404,7 +428,7 @@ FrameReport GpuVolume::finishFrame() {
         // completed here reach the next frame's set.
         for (int pass = 0; pass < kMaxMeshCompletions && last.meshPending; ++pass) {
             growMeshAfterFrame(last, report);
-            completion.push_back(runMeshCompletion(f.timelineValue == 0, true));
+            completion.push_back(runMeshCompletion(f.timelineValue == 0 && !f.input.intermediate, !f.input.intermediate));
             last = completion.back();
         }
         if (f.timelineValue && !completion.empty())
@@ -413,6 +437,10 @@ FrameReport GpuVolume::finishFrame() {
         if (!last.meshPending) growMeshAfterFrame(last, report);   // a retype list that overflowed without pending work
     }
     report.counters = mergedCounters(k, completion);
+    if (f.input.intermediate) {
+        warnAboutCapacities(report.counters, report);
+        return report;
+    }
     if (config_.publishMesh) {
         meshPublished_ = true;
         // (An asynchronous frame's set fits by construction.)
@@ -424,6 +452,29 @@ FrameReport GpuVolume::finishFrame() {
         report.delta.frame = frameNumber_;
     }
     warnAboutCapacities(report.counters, report);
+    return report;
+}
+
+FrameReport GpuVolume::publishMesh() {
+    if (inFlight_) throw Error("publishMesh: a frame is in flight (finishFrame first)");
+    FrameReport report;
+    VkCommandBuffer cmd = beginSubmission();
+    if (config_.publishMesh) {
+        exportMesh_->ensureCapacity(counters_.read().verticesInUse, counters_.read().liveTriangles, params_);
+        recordExport(cmd);
+    }
+    if (deltas_) deltas_->record(cmd);
+    counters_.recordReadback(cmd);
+    recorder_.submitAndWait();
+    report.counters = counters_.read();
+    if (config_.publishMesh) {
+        meshPublished_ = true;
+        if (!exportMesh_->fits(report.counters)) report.counters = runExport(nullptr);
+    }
+    if (deltas_) {
+        report.delta = deltas_->collect(recorder_);
+        report.delta.frame = frameNumber_;
+    }
     return report;
 }
 

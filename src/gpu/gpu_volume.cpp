@@ -8,6 +8,7 @@
 #include <algorithm>
 
 #include "core/marching_cubes.h"
+#include "core/tsdf_corner.h"
 #include "vk/check.h"
 
 namespace vkmesh::gpu {
@@ -91,7 +92,9 @@ VolumeParamsGpu initialParams(const GpuVolumeConfig& c) {
     VolumeParamsGpu gp{};
     gp.voxelSize = c.params.voxelSize;
     gp.truncation = c.params.truncation();
-    gp.maxWeight = c.params.maxWeight;
+    const TsdfFixedPoint fixed = tsdfFixedPoint(c.params.truncation());
+    gp.sdfStepsPerMetre = fixed.stepsPerMetre;
+    gp.sdfMetresPerStep = fixed.metresPerStep;
     gp.minMeshWeight = c.minMeshWeight;
     gp.hashCapacity = c.hashCapacity;
     gp.blockCapacity = c.blockCapacity;
@@ -352,7 +355,7 @@ std::vector<BlockSnapshot> GpuVolume::downloadBlocks() const {
     std::vector<uint32_t> blocks;
     for (const BlockHash::Entry& e : hash_.downloadEntries())
         if (e.block != NO_BLOCK) blocks.push_back(e.block);
-    return store_.download(blocks);
+    return store_.download(blocks, tsdfFixedPoint(config_.params.truncation()).metresPerStep);
 }
 
 std::vector<PoolInfo> GpuVolume::pools() const {

@@ -185,6 +185,14 @@ struct FrameInput {
     // (PoseTracker::trackAndFuse). Called once, from submitFrame(); a deferred frame's re-run reuses the pose.
     // It must not throw (check its inputs before submitFrame): the frame is half recorded by then.
     std::function<void(VkCommandBuffer cmd, const vk::Buffer& framePose)> recordPose;
+    // Take this frame out of the map instead of fusing it (GpuVolume::deintegrate): it must have been fused at
+    // cameraToWorld with these very images; the frame subtracts exactly what fusing it added.
+    bool deintegrate = false;
+    // One of several frames that make one step (a correction's de-integration and re-integration before the
+    // frame that follows them, Reconstructor::correct): the mesh is neither exported nor diffed for deltas
+    // (the step's last frame does both, and its deltas hold every change since the last ones taken, or
+    // publishMesh() after the last intermediate frame).
+    bool intermediate = false;
 };
 
 // The configuration with its defaults filled in (hashCapacity 0 -> twice the block capacity, a power of two;
@@ -218,6 +226,17 @@ public:
     // nullptr or an empty image: this frame fuses depth only. Ignored when colour fusion is off.
     FrameReport integrate(const DepthImage& depth, const ColorImage* color, const Intrinsics& intrinsics,
                           const Pose& cameraToWorld, const vk::SubmitSync& sync = {});
+    // Takes a frame out of the map again: `depth` and `color` must be the images it was fused with and
+    // cameraToWorld the pose it was fused at (a FrameStore keeps them). Every corner it updated gets back the
+    // exact sum and weight it would have without the frame; blocks left with no observation are freed with
+    // their mesh; the mesh is re-meshed where corners changed, as after any frame (deltas included). Throws
+    // for a bounded map (keep radius, recycling), which has forgotten what it fused. The report's
+    // counters.observationsDropped is 0 when the map held the frame.
+    FrameReport deintegrate(const DepthImage& depth, const ColorImage* color, const Intrinsics& intrinsics, const Pose& cameraToWorld);
+    // After intermediate frames (FrameInput::intermediate) with no ordinary frame to follow: exports the mesh
+    // (publishMesh) and takes the deltas of everything since the last ones, in one submission.
+    FrameReport publishMesh();
+
     // The same, in two halves, for callers that do not wait for the GPU (Reconstructor::integrateAsync):
     // submitFrame() checks the input, records the frame and submits it, and returns without waiting;
     // finishFrame() waits for it and does what needs its counters (a deferred frame's re-run after growing,
@@ -276,7 +295,8 @@ public:
     // the counters, the frame numbers and the settings. Read back from the GPU; changes nothing. Call
     // between frames (before exportMesh(), which may re-mesh cubes left pending, to resume bit-exactly).
     map::MapData saveMap() const;
-    void save(const std::filesystem::path& path) const;
+    // Returns the map's save id (MapData::saveId), drawn anew for this save.
+    uint64_t save(const std::filesystem::path& path) const;
     // The configuration a map was saved with (its settings and capacities; the image size it was fused at).
     static GpuVolumeConfig mapConfig(const map::MapData& map);
     // A volume holding the map, ready for the next frame. `config` must agree with the map's settings (voxel

@@ -8,7 +8,7 @@
 
 namespace vkmesh::gpu {
 
-static_assert(sizeof(VolumeParamsGpu) == 96, "VolumeParamsGpu: std140 layout of 24 scalars");
+static_assert(sizeof(VolumeParamsGpu) == 112, "VolumeParamsGpu: std140 layout of 28 scalars");
 static_assert(sizeof(Counters) % 16 == 0);
 static_assert(offsetof(Counters, touchedListDispatch) == 0 && offsetof(Counters, blockDispatch) == 16 &&
               offsetof(Counters, listDispatch) == 32 && offsetof(Counters, collectDispatch) == 48 &&
@@ -23,7 +23,7 @@ static_assert(offsetof(Counters, exportUnreferenced) == offsetof(Counters, expor
 static_assert(offsetof(Counters, validPixels) == COUNTERS_PER_FRAME_OFFSET);
 static_assert(offsetof(Counters, freeTop) == COUNTERS_PER_FRAME_OFFSET + COUNTERS_PER_FRAME_SIZE,
               "per-frame counters are one contiguous range, cleared with one fill");
-static_assert(offsetof(Counters, drawIndexed) % 4 == 0 && sizeof(Counters) == 416);
+static_assert(offsetof(Counters, drawIndexed) % 4 == 0 && sizeof(Counters) == 432);
 static_assert(sizeof(DeltaState) == 64 && sizeof(DeltaVertexRecord) == 36 && sizeof(DeltaTriangleRecord) == 16);
 static_assert(sizeof(FramePush) == 128, "push constants: 128 bytes is all lavapipe guarantees");
 static_assert(uint32_t(ColorFusion::Off) == COLOR_MODE_OFF && uint32_t(ColorFusion::Average) == COLOR_MODE_AVERAGE &&
@@ -37,7 +37,7 @@ static_assert(sizeof(TrackParamsGpu) == 192 && offsetof(TrackParamsGpu, modelWor
               "TrackParamsGpu: std140 layout");
 static_assert(sizeof(TrackStateGpu) == 208 && offsetof(TrackStateGpu, finalSums) == 64 && offsetof(TrackStateGpu, lostReason) == 192,
               "TrackStateGpu: std430 layout");
-static_assert(sizeof(FramePoseGpu) == 112 && offsetof(FramePoseGpu, skip) == 96, "FramePoseGpu: std430 layout");
+static_assert(sizeof(FramePoseGpu) == 112 && offsetof(FramePoseGpu, skip) == 96 && offsetof(FramePoseGpu, deintegrate) == 100, "FramePoseGpu: std430 layout");
 static_assert(TRACK_SUM_MODEL_HITS + 1 == TRACK_SUM_COUNT && TRACK_SUM_JTR == 21 && WG_TRACK_REDUCE >= TRACK_SUM_COUNT);
 
 }  // namespace vkmesh::gpu

@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstring>
+#include <random>
 #include <set>
 
 #include "gpu/capacities.h"
@@ -50,7 +51,13 @@ map::MapData GpuVolume::saveMap() const {
     return m;
 }
 
-void GpuVolume::save(const std::filesystem::path& path) const { map::writeFile(path, saveMap()); }
+uint64_t GpuVolume::save(const std::filesystem::path& path) const {
+    map::MapData m = saveMap();
+    std::random_device random;
+    m.saveId = uint64_t(random()) << 32 | random();
+    map::writeFile(path, m);
+    return m.saveId;
+}
 
 GpuVolumeConfig GpuVolume::mapConfig(const map::MapData& m) {
     const map::Settings& s = m.settings;

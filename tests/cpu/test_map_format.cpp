@@ -139,7 +139,17 @@ TEST(MapFormat, NewerVersionIsRefused) {
     map::MapData m = smallMap();
     m.version = map::kVersion + 1;
     const std::string e = errorOf(map::serialize(m));
-    EXPECT_NE(e.find("version 2 is newer"), std::string::npos) << e;
+    EXPECT_NE(e.find("version " + std::to_string(map::kVersion + 1) + " is newer"), std::string::npos) << e;
+}
+
+// Version 1 held float running averages (before exact fusion): refused with what it is and what to do.
+TEST(MapFormat, VersionOneIsRefusedWithWhatToDo) {
+    map::MapData m = smallMap();
+    m.version = 1;
+    const std::string e = errorOf(map::serialize(m));
+    EXPECT_NE(e.find("bad.vkmap"), std::string::npos) << e;
+    EXPECT_NE(e.find("version 1"), std::string::npos) << e;
+    EXPECT_NE(e.find("vkmesh fuse DATASET --save"), std::string::npos) << e;
 }
 
 TEST(MapFormat, ChecksumMismatchIsRefused) {

@@ -9,6 +9,7 @@
 #include <set>
 
 #include "core/camera.h"
+#include "core/tsdf_corner.h"
 #include "cpu/reference_allocation.h"
 #include "cpu/reference_baseline.h"
 #include "cpu/reference_fusion.h"
@@ -149,24 +150,29 @@ TEST(ReferenceFusion, CornerFlipRule) {
 
 TEST(ReferenceFusion, FusingAWallAveragesTruncatedDistances) {
     const VolumeParams params = smallVoxels();
-    const cpu::FusionRule rule{params.voxelSize, params.truncation(), params.maxWeight, 1.0f};
+    const cpu::FusionRule rule{params.voxelSize, params.truncation(), 1.0f};
+    const TsdfFixedPoint fixed = tsdfFixedPoint(params.truncation());
     const WallView view(1.0f);
     const gpu::FramePush push = makeFramePush(view.intrinsics, view.pose, params, 1);
     cpu::ReferenceBlock block;
     const BlockCoord coord{0, 0, 2};   // corners at z = 0.80 .. 1.15 m: all within the band
     std::vector<std::array<int, 3>> flipped;
-    EXPECT_EQ(cpu::fuseBlock(block, coord, view.depth, push, rule, &flipped), gpu::VOXELS_PER_BLOCK);
+    EXPECT_EQ(cpu::fuseBlock(block, coord, view.depth, push, rule, &flipped).updated, gpu::VOXELS_PER_BLOCK);
     EXPECT_EQ(flipped.size(), gpu::VOXELS_PER_BLOCK) << "every corner becomes observed";
     EXPECT_EQ(flipped.front(), (std::array<int, 3>{0, 0, 16}));
     for (uint32_t v = 0; v < gpu::VOXELS_PER_BLOCK; ++v) {
         const float z = float(16 + cpu::localCoords(v)[2]) * params.voxelSize;
         EXPECT_EQ(block.weight[v], 1.0f);
-        EXPECT_EQ(block.sdf[v], std::min(1.0f - z, params.truncation())) << v;
+        // The distance rounded to a whole step (truncation / 4096), and the metres kept beside the sum.
+        const float exact = std::min(1.0f - z, params.truncation());
+        EXPECT_EQ(block.sdfSum[v], tsdfSteps(exact, fixed.stepsPerMetre)) << v;
+        EXPECT_NEAR(block.sdf[v], exact, 0.5001f * fixed.metresPerStep) << v;
+        EXPECT_EQ(block.sdf[v], tsdfMean(block.sdfSum[v], 1.0f, fixed.metresPerStep)) << v;
     }
     // The same frame again: the average stays, the weights grow, nothing flips.
     const cpu::ReferenceBlock once = block;
     flipped.clear();
-    EXPECT_EQ(cpu::fuseBlock(block, coord, view.depth, push, rule, &flipped), gpu::VOXELS_PER_BLOCK);
+    EXPECT_EQ(cpu::fuseBlock(block, coord, view.depth, push, rule, &flipped).updated, gpu::VOXELS_PER_BLOCK);
     EXPECT_TRUE(flipped.empty());
     for (uint32_t v = 0; v < gpu::VOXELS_PER_BLOCK; ++v) {
         EXPECT_EQ(block.weight[v], 2.0f);
@@ -174,12 +180,40 @@ TEST(ReferenceFusion, FusingAWallAveragesTruncatedDistances) {
     }
     // A nearer wall: the corners more than a truncation behind it (z = 1.10 and 1.15 m) keep their values.
     const WallView nearer(0.88f);
-    EXPECT_EQ(cpu::fuseBlock(block, coord, nearer.depth, push, rule, nullptr), gpu::VOXELS_PER_BLOCK - 128);
+    EXPECT_EQ(cpu::fuseBlock(block, coord, nearer.depth, push, rule, nullptr).updated, gpu::VOXELS_PER_BLOCK - 128);
     for (uint32_t v = 0; v < gpu::VOXELS_PER_BLOCK; ++v)
         EXPECT_EQ(block.weight[v], cpu::localCoords(v)[2] >= 6 ? 2.0f : 3.0f) << v;
     // Behind the camera nothing is updated.
     cpu::ReferenceBlock behind;
-    EXPECT_EQ(cpu::fuseBlock(behind, {0, 0, -1}, view.depth, push, rule, nullptr), 0u);
+    EXPECT_EQ(cpu::fuseBlock(behind, {0, 0, -1}, view.depth, push, rule, nullptr).updated, 0u);
+}
+
+TEST(ReferenceFusion, DeintegratingAFrameRestoresEveryBitInAnyOrder) {
+    const VolumeParams params = smallVoxels();
+    const cpu::FusionRule rule{params.voxelSize, params.truncation(), 1.0f};
+    const WallView a(1.0f), b(0.93f), c(1.04f);
+    const gpu::FramePush push = makeFramePush(a.intrinsics, a.pose, params, 1);
+    const BlockCoord coord{0, 0, 2};
+    cpu::ReferenceBlock ac;   // a and c only
+    cpu::fuseBlock(ac, coord, a.depth, push, rule, nullptr);
+    cpu::fuseBlock(ac, coord, c.depth, push, rule, nullptr);
+    cpu::ReferenceBlock block;   // a, b, c, then b taken out again
+    for (const WallView* view : {&a, &b, &c}) cpu::fuseBlock(block, coord, view->depth, push, rule, nullptr);
+    std::vector<std::array<int, 3>> flipped;
+    const cpu::FusionCount out = cpu::fuseBlock(block, coord, b.depth, push, rule, &flipped, nullptr, true);
+    EXPECT_GT(out.updated, 0u);
+    EXPECT_EQ(out.dropped, 0u);
+    EXPECT_EQ(block.sdfSum, ac.sdfSum);
+    EXPECT_EQ(block.weight, ac.weight);
+    EXPECT_EQ(block.sdf, ac.sdf) << "bit for bit, though b was fused between a and c";
+    // Taking out the rest, in another order, leaves nothing; one more de-integration finds nothing to take.
+    cpu::fuseBlock(block, coord, a.depth, push, rule, nullptr, nullptr, true);
+    flipped.clear();
+    cpu::fuseBlock(block, coord, c.depth, push, rule, &flipped, nullptr, true);
+    EXPECT_EQ(flipped.size(), gpu::VOXELS_PER_BLOCK) << "every corner becomes unobserved";
+    EXPECT_EQ(block.sdfSum, cpu::ReferenceBlock{}.sdfSum);
+    EXPECT_EQ(block.weight, cpu::ReferenceBlock{}.weight);
+    EXPECT_EQ(cpu::fuseBlock(block, coord, c.depth, push, rule, nullptr, nullptr, true).dropped, gpu::VOXELS_PER_BLOCK);
 }
 
 TEST(ReferenceFusion, CubesAroundAFlippedCornerInTheBlocksThatExist) {
@@ -224,17 +258,17 @@ TEST(ReferenceRecycling, StarvingBlocksLoseWeightUntilFreed) {
     blocks[{1, 0, 0}].weight[5] = 0.5f;
     lastTouched[{0, 0, 0}] = 1;
     lastTouched[{1, 0, 0}] = 1;
-    auto s = cpu::recycleBlocks(blocks, lastTouched, 2, rule, 0.1f, camera);
+    auto s = cpu::recycleBlocks(blocks, lastTouched, 2, rule, 0.1f, 0.0001f, camera);
     EXPECT_EQ(s.blocksStarved, 0u) << "idle for 1 frame < 2";
-    s = cpu::recycleBlocks(blocks, lastTouched, 3, rule, 0.1f, camera);
+    s = cpu::recycleBlocks(blocks, lastTouched, 3, rule, 0.1f, 0.0001f, camera);
     EXPECT_EQ(s.blocksStarved, 2u);
     EXPECT_EQ(blocks.at({0, 0, 0}).weight[0], 2.0f);
     EXPECT_EQ(blocks.at({1, 0, 0}).weight[5], 0.0f) << "clamped at 0";
     lastTouched[{1, 0, 0}] = 4;   // touched again: it stops starving
-    s = cpu::recycleBlocks(blocks, lastTouched, 4, rule, 0.1f, camera);
+    s = cpu::recycleBlocks(blocks, lastTouched, 4, rule, 0.1f, 0.0001f, camera);
     EXPECT_EQ(s.blocksStarved, 1u);
     EXPECT_EQ(s.blocksFreed, 0u);
-    s = cpu::recycleBlocks(blocks, lastTouched, 5, rule, 0.1f, camera);
+    s = cpu::recycleBlocks(blocks, lastTouched, 5, rule, 0.1f, 0.0001f, camera);
     EXPECT_EQ(s.blocksStarved, 1u);
     EXPECT_EQ(s.blocksFreed, 1u);
     EXPECT_EQ(blocks.count({0, 0, 0}), 0u);
@@ -249,9 +283,9 @@ TEST(ReferenceRecycling, RetiredBlocksAreZeroedAndFreed) {
     blocks[{0, 0, 0}].weight.fill(5.0f);
     blocks[{20, 0, 0}].weight.fill(5.0f);
     lastTouched[{0, 0, 0}] = lastTouched[{20, 0, 0}] = 1;
-    EXPECT_EQ(cpu::recycleBlocks(blocks, lastTouched, 2, {}, 0.1f, camera).blocksRetired, 0u) << "recycling off";
+    EXPECT_EQ(cpu::recycleBlocks(blocks, lastTouched, 2, {}, 0.1f, 0.0001f, camera).blocksRetired, 0u) << "recycling off";
     EXPECT_EQ(blocks.size(), 2u);
-    const auto s = cpu::recycleBlocks(blocks, lastTouched, 2, {3.0f, 0, 0.0f}, 0.1f, camera);
+    const auto s = cpu::recycleBlocks(blocks, lastTouched, 2, {3.0f, 0, 0.0f}, 0.1f, 0.0001f, camera);
     EXPECT_EQ(s.blocksRetired, 1u);
     EXPECT_EQ(s.blocksFreed, 1u);
     EXPECT_EQ(blocks.count({20, 0, 0}), 0u);

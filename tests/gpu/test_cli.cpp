@@ -9,6 +9,8 @@
 #include <fstream>
 #include <sstream>
 
+#include <Eigen/Geometry>
+
 #include "core/camera.h"
 #include "core/mesh_analysis.h"
 #include "io/ply.h"
@@ -481,6 +483,81 @@ TEST(Cli, TrackStartsFromTheDatasetsFirstPose) {
     EXPECT_NE(r.exitCode, 0);
     EXPECT_NE(r.err.find("--track-iterations"), std::string::npos) << r.err;
     fs::remove_all(d);
+}
+
+}  // namespace
+}  // namespace vkmesh
+
+namespace vkmesh {
+namespace {
+
+// `vkmesh correct` (docs/CORRECTION.md): a map fused at drifted poses and saved with its frame store, corrected
+// with the true trajectory, gives the mesh of a run fused at the true poses; a store that is not the map's,
+// or a trajectory pose that is not rigid, is an error naming it.
+TEST(Cli, CorrectRefusesDriftedFramesIntoTheTrueMap) {
+    const fs::path out = test::makeTempDir("cli_correct");
+    // The poses fuse uses, as --trajectory writes them (9 decimals): the truth both runs start from.
+    const fs::path truthSeq = copyOfSmallSequence("cli_correct_truth"), driftSeq = copyOfSmallSequence("cli_correct_drift");
+    CliRun poses = runCli("fuse " + truthSeq.string() + " -o " + (out / "x.ply").string() + " --voxel 0.05 -q --trajectory " +
+                          (out / "truth.txt").string());
+    ASSERT_EQ(poses.exitCode, 0) << poses.err;
+    const std::vector<TimedPose> truth = readTumTrajectory(out / "truth.txt");
+    ASSERT_EQ(truth.size(), 6u);
+    std::vector<TimedPose> drifted = truth;
+    for (size_t i = 0; i < drifted.size(); ++i) {
+        Pose drift = Pose::Identity();
+        drift.topLeftCorner<3, 3>() = Eigen::AngleAxisd(double(i) * 0.01, Eigen::Vector3d::UnitY()).toRotationMatrix();
+        drift.topRightCorner<3, 1>() = double(i) * Eigen::Vector3d(0.01, 0.0, -0.005);
+        drifted[i].cameraToWorld = drift * truth[i].cameraToWorld;
+    }
+    writeTumTrajectory(truthSeq / "groundtruth.txt", truth);
+    writeTumTrajectory(driftSeq / "groundtruth.txt", drifted);
+    const std::string common = " --voxel 0.05 -q --validation";
+    ASSERT_EQ(runCli("fuse " + truthSeq.string() + " -o " + (out / "truth.ply").string() + common).exitCode, 0);
+    CliRun fused = runCli("fuse " + driftSeq.string() + " -o " + (out / "drift.ply").string() + " --save " + (out / "drift.vkmap").string() +
+                          " --stats " + (out / "fuse.json").string() + common);
+    ASSERT_EQ(fused.exitCode, 0) << fused.err;
+    ASSERT_TRUE(fs::exists(out / "drift.vkframes")) << "--save keeps the frames beside the map";
+    const nlohmann::json fuseStats = nlohmann::json::parse(readText(out / "fuse.json"));
+    EXPECT_EQ(fuseStats["frame_store"]["frames"], 6);
+    EXPECT_GT(fuseStats["frame_store"]["bytes_per_frame"].get<double>(), 1000.0);
+    EXPECT_GT(countTriangleMismatches(canonicalTriangles(readPly(out / "truth.ply")), canonicalTriangles(readPly(out / "drift.ply")), 0), 100u);
+
+    CliRun corrected = runCli("correct " + (out / "drift.vkmap").string() + " --trajectory " + (out / "truth.txt").string() + " -o " +
+                              (out / "corrected.ply").string() + " --save " + (out / "corrected.vkmap").string() + " --stats " +
+                              (out / "correct.json").string() + " --validation");
+    ASSERT_EQ(corrected.exitCode, 0) << corrected.err;
+    EXPECT_EQ(corrected.err.find("[validation"), std::string::npos) << corrected.err;
+    const nlohmann::json stats = nlohmann::json::parse(readText(out / "correct.json"));
+    EXPECT_EQ(stats["correction"]["frames_refused"], 5) << "frame 0 did not drift";
+    EXPECT_EQ(stats["correction"]["frames_unchanged"], 1);
+    EXPECT_EQ(stats["correction"]["observations_dropped"], 0);
+    const Mesh a = readPly(out / "truth.ply"), b = readPly(out / "corrected.ply");
+    EXPECT_GT(a.triangles.size(), 1000u);
+    EXPECT_EQ(countTriangleMismatches(canonicalTriangles(a), canonicalTriangles(b), 0), 0u);
+    EXPECT_EQ(a.positions.size(), b.positions.size());
+    // The corrected map was saved with its store: correcting it again with the same poses re-fuses nothing.
+    CliRun again = runCli("correct " + (out / "corrected.vkmap").string() + " --trajectory " + (out / "truth.txt").string() + " -o " +
+                          (out / "again.ply").string() + " --stats " + (out / "again.json").string());
+    ASSERT_EQ(again.exitCode, 0) << again.err;
+    EXPECT_EQ(nlohmann::json::parse(readText(out / "again.json"))["correction"]["frames_refused"], 0);
+
+    // Bad input: the store of another map, a missing store, a pose that is not rigid.
+    fs::copy_file(out / "corrected.vkframes", out / "drift.vkframes", fs::copy_options::overwrite_existing);
+    CliRun wrongStore = runCli("correct " + (out / "drift.vkmap").string() + " --trajectory " + (out / "truth.txt").string() + " -o " +
+                               (out / "x.ply").string());
+    EXPECT_EQ(wrongStore.exitCode, 2);
+    EXPECT_NE(wrongStore.err.find("another map"), std::string::npos) << wrongStore.err;
+    fs::remove(out / "drift.vkframes");
+    CliRun noStore = runCli("correct " + (out / "drift.vkmap").string() + " --trajectory " + (out / "truth.txt").string() + " -o " +
+                            (out / "x.ply").string());
+    EXPECT_EQ(noStore.exitCode, 2);
+    EXPECT_NE(noStore.err.find("drift.vkframes"), std::string::npos) << noStore.err;
+    test::writeBytes(out / "bad.txt", "# timestamp tx ty tz qx qy qz qw\n0 0 0 0 0 0 0 7\n");   // a quaternion far from unit norm
+    CliRun badPose = runCli("correct " + (out / "corrected.vkmap").string() + " --trajectory " + (out / "bad.txt").string() + " -o " +
+                            (out / "x.ply").string());
+    EXPECT_EQ(badPose.exitCode, 2);
+    EXPECT_NE(badPose.err.find("bad.txt"), std::string::npos) << badPose.err;
 }
 
 }  // namespace

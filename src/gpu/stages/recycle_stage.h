@@ -16,10 +16,12 @@ class RecycleStage {
 public:
     RecycleStage(const vk::Context& context, const vk::BindingTable& table);
     void recordRetire(VkCommandBuffer cmd, const FramePush& push, const CounterBuffer& counters) const;
-    void recordFree(VkCommandBuffer cmd, const FramePush& push, const CounterBuffer& counters) const;
+    // overTouched: free_emptied over the frame's touched blocks (a de-integrating frame frees those it emptied)
+    // instead of recycle_free over the live-block list.
+    void recordFree(VkCommandBuffer cmd, const FramePush& push, const CounterBuffer& counters, bool overTouched = false) const;
 
 private:
-    vk::ComputePipeline retire_, free_, commit_;
+    vk::ComputePipeline retire_, free_, freeEmptied_, commit_;
 };
 
 }  // namespace vkmesh::gpu

@@ -1,5 +1,7 @@
 #include "gpu/structure/block_store.h"
 
+#include "core/tsdf_corner.h"
+
 namespace vkmesh::gpu {
 
 const std::vector<BlockStore::CornerArray> BlockStore::kCornerArrays = {
@@ -49,8 +51,9 @@ void BlockStore::grow(uint32_t newCapacity, CounterBuffer& counters) {
     capacity_ = newCapacity;
 }
 
-std::vector<BlockSnapshot> BlockStore::download(const std::vector<uint32_t>& blocks) const {
-    std::vector<float> sdf(size_t(capacity_) * VOXELS_PER_BLOCK), weight(sdf.size());
+std::vector<BlockSnapshot> BlockStore::download(const std::vector<uint32_t>& blocks, float metresPerStep) const {
+    std::vector<int32_t> sdf(size_t(capacity_) * VOXELS_PER_BLOCK);
+    std::vector<float> weight(sdf.size());
     vk::downloadFromBuffer(context_, sdf_, sdf.data(), sdf.size() * 4);
     vk::downloadFromBuffer(context_, weight_, weight.data(), weight.size() * 4);
     std::vector<uint32_t> color(withColor_ ? sdf.size() : 0);
@@ -63,8 +66,10 @@ std::vector<BlockSnapshot> BlockStore::download(const std::vector<uint32_t>& blo
         BlockSnapshot snap;
         snap.coord = Eigen::Vector3i(coords[4 * size_t(b)], coords[4 * size_t(b) + 1], coords[4 * size_t(b) + 2]);
         snap.index = b;
-        snap.sdf.assign(sdf.begin() + size_t(b) * VOXELS_PER_BLOCK, sdf.begin() + size_t(b + 1) * VOXELS_PER_BLOCK);
+        snap.sdfSum.assign(sdf.begin() + size_t(b) * VOXELS_PER_BLOCK, sdf.begin() + size_t(b + 1) * VOXELS_PER_BLOCK);
         snap.weight.assign(weight.begin() + size_t(b) * VOXELS_PER_BLOCK, weight.begin() + size_t(b + 1) * VOXELS_PER_BLOCK);
+        snap.sdf.resize(VOXELS_PER_BLOCK);
+        for (uint32_t v = 0; v < VOXELS_PER_BLOCK; ++v) snap.sdf[v] = tsdfMean(snap.sdfSum[v], snap.weight[v], metresPerStep);
         if (withColor_)
             snap.color.assign(color.begin() + size_t(b) * VOXELS_PER_BLOCK, color.begin() + size_t(b + 1) * VOXELS_PER_BLOCK);
         out.push_back(std::move(snap));

@@ -18,7 +18,9 @@ namespace vkmesh::gpu {
 struct BlockSnapshot {
     Eigen::Vector3i coord;
     uint32_t index = 0;               // its block in the pool
-    std::vector<float> sdf, weight;   // VOXELS_PER_BLOCK each, x fastest
+    std::vector<int32_t> sdfSum;      // VOXELS_PER_BLOCK each, x fastest: the corners as stored (step sums) ...
+    std::vector<float> weight;        //  ... and observation counts
+    std::vector<float> sdf;           // their distances in metres (tsdfMean, core/tsdf_corner.h)
     std::vector<uint32_t> color;      // VOXELS_PER_BLOCK colour words (voxel_color.glsl), empty without colour
 };
 
@@ -33,8 +35,9 @@ public:
     // Grows the pool between frames; blocks keep their index and TSDF, the new ones go on the free list
     // (under the old entries, so freed blocks are reused first).
     void grow(uint32_t newCapacity, CounterBuffer& counters);
-    // The TSDF of the given blocks with their coordinates (index = block index).
-    std::vector<BlockSnapshot> download(const std::vector<uint32_t>& blocks) const;
+    // The TSDF of the given blocks with their coordinates (index = block index); metresPerStep converts the
+    // sums to distances (tsdfFixedPoint of the volume's truncation).
+    std::vector<BlockSnapshot> download(const std::vector<uint32_t>& blocks, float metresPerStep) const;
     void pools(std::vector<PoolInfo>& out) const { listPools(out, {&coords_, &sdf_, &weight_, &color_, &freeList_}); }
     bool hasColor() const { return withColor_; }
 

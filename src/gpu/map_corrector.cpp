@@ -1,0 +1,91 @@
+#include "gpu/map_corrector.h"
+
+#include <Eigen/Core>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "io/trajectory.h"
+
+namespace vkmesh::gpu {
+
+std::filesystem::path frameStorePathOf(const std::filesystem::path& mapPath) {
+    std::filesystem::path p = mapPath;
+    return p.replace_extension(".vkframes");
+}
+
+double poseChange(const Pose& from, const Pose& to) {
+    const Eigen::Matrix3d relative = from.topLeftCorner<3, 3>().transpose() * to.topLeftCorner<3, 3>();
+    const double cosine = std::clamp((relative.trace() - 1.0) / 2.0, -1.0, 1.0);
+    return (to.topRightCorner<3, 1>() - from.topRightCorner<3, 1>()).norm() + std::acos(cosine);
+}
+
+void MapCorrector::keep(uint32_t index, double timestamp, const Intrinsics& intrinsics, const Pose& cameraToWorld,
+                        const DepthImage& depth, const ColorImage* color) {
+    StoredFrame frame;
+    frame.index = index;
+    frame.timestamp = timestamp;
+    frame.intrinsics = intrinsics;
+    frame.pose = cameraToWorld;
+    frame.depth = depth;
+    if (color) frame.color = *color;
+    store_.add(frame);
+}
+
+
+void MapCorrector::correct(const std::vector<uint32_t>& frames, const std::vector<Pose>& poses) {
+    if (frames.size() != poses.size())
+        throw Error("correct: " + std::to_string(frames.size()) + " frame indices but " + std::to_string(poses.size()) + " poses");
+    for (size_t i = 0; i < frames.size(); ++i) {
+        if (!store_.contains(frames[i]))
+            throw Error("correct: frame " + std::to_string(frames[i]) + " is not in the frame store (" + std::to_string(store_.size()) +
+                        " frames kept; a frame tracking lost was never fused)");
+        validatePose(poses[i], "correct: the new pose of frame " + std::to_string(frames[i]));
+    }
+    for (size_t i = 0; i < frames.size(); ++i) {
+        if (poseChange(store_.pose(frames[i]), poses[i]) < 1e-9) pending_.erase(frames[i]);
+        else pending_[frames[i]] = poses[i];
+    }
+}
+
+CorrectionReport MapCorrector::apply(GpuVolume& volume, size_t budget) {
+    CorrectionReport report;
+    if (pending_.empty() || budget == 0) return report;
+    const auto start = std::chrono::steady_clock::now();
+    // Largest pose change first: those frames put the most surface in the wrong place.
+    std::vector<std::pair<double, uint32_t>> order;
+    for (const auto& [index, pose] : pending_) order.emplace_back(-poseChange(store_.pose(index), pose), index);
+    std::sort(order.begin(), order.end());
+    order.resize(std::min(order.size(), budget));
+    for (const auto& [negativeChange, index] : order) {
+        const Pose newPose = pending_.at(index);
+        const StoredFrame frame = store_.get(index);
+        FrameInput input;
+        input.depth = &frame.depth;
+        input.color = frame.color.empty() ? nullptr : &frame.color;
+        input.intrinsics = frame.intrinsics;
+        input.intermediate = true;
+        for (bool out : {true, false}) {
+            input.deintegrate = out;
+            input.cameraToWorld = out ? frame.pose : newPose;
+            volume.submitFrame(input);
+            const FrameReport r = volume.finishFrame();
+            report.blocksFreed += r.counters.blocksFreed;
+            report.observationsDropped += r.counters.observationsDropped;
+            report.warnings.insert(report.warnings.end(), r.warnings.begin(), r.warnings.end());
+        }
+        store_.setPose(index, newPose);
+        pending_.erase(index);
+        report.frames.push_back(index);
+        ++report.framesRefused;
+    }
+    if (report.observationsDropped > 0)
+        report.warnings.push_back(std::to_string(report.observationsDropped) +
+                                  " corner updates of the re-fused frames could not be applied exactly (a corner at its observation "
+                                  "limit, or a map that does not hold what the frame store says it fused)");
+    report.milliseconds = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    return report;
+}
+
+}  // namespace vkmesh::gpu

@@ -1,0 +1,65 @@
+// Component: the map corrector (docs/CORRECTION.md). Keeps what every fused frame fused (a FrameStore: depth,
+// colour, the pose it was fused at) and re-fuses the frames whose poses changed: each is de-integrated at its
+// old pose (exactly: shared_layout.h "A TSDF corner") and integrated at its new one, largest pose change first,
+// a budget of frames per call, so that a live run keeps its frame rate while the map converges. The volume's
+// incremental mesh follows through its usual passes, and its deltas report every change.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "core/frame_store.h"
+#include "core/types.h"
+#include "gpu/gpu_volume.h"
+
+namespace vkmesh::gpu {
+
+// What applying corrections did.
+struct CorrectionReport {
+    uint32_t framesRefused = 0;        // frames de-integrated at their old pose and integrated at the new one
+    uint32_t blocksFreed = 0;          // blocks left with no observation, freed with their mesh
+    uint32_t observationsDropped = 0;  // corner updates that could not be applied exactly (0 for a consistent map)
+    double milliseconds = 0;           // wall time
+    std::vector<uint32_t> frames;      // the frames re-fused, in the order they were
+    std::vector<std::string> warnings; // capacity problems of the re-fusion frames, dropped observations
+};
+
+// How far a pose moved, for ranking corrections: the translation in metres plus the geodesic rotation angle
+// in radians (a point 1 m in front of the camera moves about that far). A geodesic angle, not Euler angles,
+// which wrap near +-pi (../shared/docs/global-consistency.md).
+double poseChange(const Pose& from, const Pose& to);
+
+// Where a map's frame store is saved: beside the map, with the extension .vkframes (map.vkmap -> map.vkframes).
+std::filesystem::path frameStorePathOf(const std::filesystem::path& mapPath);
+
+class MapCorrector {
+public:
+    explicit MapCorrector(FrameStore store) : store_(std::move(store)) {}
+
+    // Records a frame just fused at `cameraToWorld` (its index: the position in the caller's sequence).
+    void keep(uint32_t index, double timestamp, const Intrinsics& intrinsics, const Pose& cameraToWorld, const DepthImage& depth,
+              const ColorImage* color);
+
+    // Queues new poses for frames already kept (a later pose for the same frame replaces a queued one). Every
+    // pose is checked first: an unknown frame, a non-finite or non-rigid pose throws Error naming it, and then
+    // nothing is queued (validatePose's rules, io/trajectory.h). A frame whose pose did not move (poseChange
+    // below 1e-9) is not queued.
+    void correct(const std::vector<uint32_t>& frames, const std::vector<Pose>& poses);
+    size_t pending() const { return pending_.size(); }
+
+    // Re-fuses up to `budget` queued frames into `volume` (largest pose change first) as intermediate frames:
+    // the caller's next frame, or GpuVolume::publishMesh(), exports the mesh and takes the deltas.
+    CorrectionReport apply(GpuVolume& volume, size_t budget);
+
+    const FrameStore& store() const { return store_; }
+    FrameStore& store() { return store_; }
+
+private:
+    FrameStore store_;
+    std::map<uint32_t, Pose> pending_;
+};
+
+}  // namespace vkmesh::gpu
