@@ -519,6 +519,8 @@ public:
             std::vector<gpu::PoolInfo> pools;
             uint32_t frames = 0;
             gpu::FrameReport last;
+            std::optional<FrameStoreStats> store;   // keep_frames
+            size_t pendingCorrections = 0;
         };
         Snapshot s = locked([&](Reconstructor& rec) {
             Snapshot s;
@@ -537,6 +539,8 @@ public:
             }
             s.frames = rec.framesIntegrated();
             s.last = lastReport_;
+            if (const FrameStore* store = rec.frameStore()) s.store = store->stats();
+            s.pendingCorrections = rec.pendingCorrections();
             return s;
         });
         const gpu::GpuVolumeConfig& c = s.config;
@@ -557,6 +561,14 @@ public:
                                  "solve"_a = options_.tracker.solveOnGpu ? "gpu" : "host", "downsample"_a = options_.tracker.downsample);
         d["color"] = py::dict("fused"_a = c.params.colorFusion != ColorFusion::Off, "mode"_a = colorModeName(c.params.colorFusion),
                               "recency"_a = shortest(c.params.colorRecency));
+        if (s.store) {
+            const FrameStoreStats& fs = *s.store;
+            d["frame_store"] = py::dict("frames"_a = fs.frames, "frames_spilled"_a = fs.framesSpilled, "raw_bytes"_a = fs.rawBytes,
+                                        "compressed_bytes"_a = fs.compressedBytes, "bytes_in_memory"_a = fs.bytesInMemory,
+                                        "bytes_on_disk"_a = fs.bytesOnDisk,
+                                        "bytes_per_frame"_a = fs.frames ? double(fs.compressedBytes) / double(fs.frames) : 0.0,
+                                        "pending_corrections"_a = s.pendingCorrections);
+        }
         d["recycling"] = py::dict("keep_radius"_a = shortest(c.keepRadius), "recycle"_a = c.recycle,
                                   "recycle_after_frames"_a = c.recycleAfterFrames, "starve_weight"_a = shortest(c.starveWeight));
         d["capacities"] = py::dict("grow"_a = c.growCapacities, "blocks"_a = c.blockCapacity, "hash_slots"_a = c.hashCapacity,
@@ -1038,10 +1050,12 @@ in order to an empty mesh gives mesh().
 Counts, capacities and memory as a dict, with the keys `vkmesh fuse --stats` uses for the same things:
 device, int64_atomics, frames, voxel_size, truncation_m, allocation_stride, max_depth, color, capacities,
 recycling, and after the first frame blocks, heaps, gpu_pool_bytes, gpu_bytes_total and last_frame (its
-GPU milliseconds per stage, counts, capacity warnings and growth).
+GPU milliseconds per stage, counts, capacity warnings and growth); with keep_frames, frame_store (frames,
+compressed bytes in memory and on disk, bytes_per_frame, pending_corrections).
 )doc")
         .def("save", &PyReconstructor::save, "path"_a, R"doc(
-Writes everything the reconstruction holds after the last frame to a map file (.vkmap, docs/MAPFILE.md).
+Writes everything the reconstruction holds after the last frame to a map file (.vkmap, docs/MAPFILE.md), and with
+keep_frames the kept frames beside it (the path with the extension .vkframes, docs/CORRECTION.md).
 Reconstructor.load(path), `vkmesh fuse --load path` and `vkmesh export path` continue from it exactly.
 Raises vkmesh.Error before the first frame or when the file cannot be written.
 )doc")

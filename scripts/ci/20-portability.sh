@@ -65,6 +65,7 @@ if [[ $parts == all || $parts == gpu-av ]]; then
     Tracking.IcpSumsMatchCpuReference                          # tracking: filter, pyramids, model maps, ICP sums (track_*)
     Tracking.GpuSolvedStepMatchesTheHostSolve                  # tracking's GPU-solved mode (track_icp_solve)
     SolvedOn/TrackingModes.JumpPastTheBoundIsRejectedAndTrackingPicksUpAgain/Gpu  # loss on the GPU (track_decide), fusion in tracking's submission, a skipped frame
+    DeintegrationTest.GpuMatchesTheCpuReferenceBitForBit       # de-integration: lookup-only allocation, fusion backwards, free_emptied
   )
   # Parameterized tests are named "Suite/Test.Name/Param  # GetParam() = ..." by gtest_discover_tests: a name
   # ends at the end of the string or at a space.

@@ -42,10 +42,12 @@ void main() {
             // A block handed out this frame may hold a previous owner's values: start from nothing.
             int oldSum = fresh ? 0 : voxelSdfSum[v];
             float oldWeight = fresh ? 0.0 : voxelWeight[v];
-            float oldSdf = tsdfMean(oldSum, oldWeight);
             int newSum = oldSum;
             float newWeight = oldWeight;
-            float newSdf = oldSdf;
+            // The distances before and after, computed only for a corner this frame changes (the others keep
+            // theirs, flip nothing and change no mask): a division each, which the lean loop should not pay for all.
+            float oldSdf = 0.0, newSdf = 0.0;
+            bool changed = false;
 
             precise vec3 world = vec3(origin + ivec3(l)) * params.voxelSize;
             precise vec3 cam = transformPoint(worldToCamera, world);
@@ -65,7 +67,9 @@ void main() {
                             newSum = removing ? oldSum - steps : oldSum + steps;
                             newWeight = removing ? oldWeight - 1.0 : oldWeight + 1.0;
                             if (newWeight == 0.0) newSum = 0;   // (already 0 when the map holds the frame)
+                            oldSdf = tsdfMean(oldSum, oldWeight);
                             newSdf = tsdfMean(newSum, newWeight);
+                            changed = true;
                             ++updated;
                         } else {
                             ++dropped;
@@ -85,10 +89,10 @@ void main() {
                 }
             }
             bool wasObserved = oldWeight >= params.minMeshWeight, isObserved = newWeight >= params.minMeshWeight;
-            if (wasObserved != isObserved || (isObserved && (oldSdf < 0.0) != (newSdf < 0.0))) flipped |= 1u << k;
+            if (changed && (wasObserved != isObserved || (isObserved && (oldSdf < 0.0) != (newSdf < 0.0)))) flipped |= 1u << k;
             // With refinement the masks of the TSDF that decide_mesh_signs reads (a fresh block's are zero, as are
             // the old values it starts from).
-            if (volumeRefines()) maskChange |= (tsdfMaskBits(oldSdf, oldWeight) ^ tsdfMaskBits(newSdf, newWeight)) << (3u * k);
+            if (volumeRefines() && changed) maskChange |= (tsdfMaskBits(oldSdf, oldWeight) ^ tsdfMaskBits(newSdf, newWeight)) << (3u * k);
             if (fresh || newWeight != oldWeight || newSum != oldSum) {
                 voxelSdfSum[v] = newSum;
                 voxelWeight[v] = newWeight;

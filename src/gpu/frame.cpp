@@ -458,11 +458,13 @@ FrameReport GpuVolume::finishFrame() {
 FrameReport GpuVolume::publishMesh() {
     if (inFlight_) throw Error("publishMesh: a frame is in flight (finishFrame first)");
     FrameReport report;
-    VkCommandBuffer cmd = beginSubmission();
     if (config_.publishMesh) {
-        exportMesh_->ensureCapacity(counters_.read().verticesInUse, counters_.read().liveTriangles, params_);
-        recordExport(cmd);
+        if (exportMesh_->selected() != 0) exportMesh_->select(0, params_);
+        const Counters last = counters_.read();
+        exportMesh_->ensureCapacity(last.verticesInUse, last.liveTriangles, params_);
     }
+    VkCommandBuffer cmd = beginSubmission();
+    if (config_.publishMesh) recordExport(cmd);
     if (deltas_) deltas_->record(cmd);
     counters_.recordReadback(cmd);
     recorder_.submitAndWait();
