@@ -383,11 +383,11 @@ void printRun(const VoxelRun& r, size_t repeat) {
             std::printf("  (--track-solve gpu: tracking, fusion and meshing are one submission; both wall rows are the whole frame's)\n");
     }
     if (!r.refuseWallMs.empty()) {
-        row("correction: take out, GPU", summarize(r.deintegrateGpuMs));
-        row("correction: fuse again, GPU", summarize(r.reintegrateGpuMs));
-        row("correction: take out, wall", summarize(r.deintegrateWallMs));
-        row("correction: fuse again, wall", summarize(r.reintegrateWallMs));
-        row("correction: re-fuse, wall", summarize(r.refuseWallMs));
+        row("correct: take out, GPU", summarize(r.deintegrateGpuMs));
+        row("correct: refuse, GPU", summarize(r.reintegrateGpuMs));
+        row("correct: take out, wall", summarize(r.deintegrateWallMs));
+        row("correct: refuse, wall", summarize(r.reintegrateWallMs));
+        row("correct: both, wall", summarize(r.refuseWallMs));
         const double frame = summarize(r.wallMs).median;
         std::printf("  re-fusing a frame costs %.2fx fusing one (wall medians); observations not taken out: %zu (must be 0)\n",
                     frame > 0 ? summarize(r.refuseWallMs).median / frame : 0.0, r.observationsDropped);

@@ -16,9 +16,12 @@ std::filesystem::path frameStorePathOf(const std::filesystem::path& mapPath) {
 }
 
 double poseChange(const Pose& from, const Pose& to) {
-    const Eigen::Matrix3d relative = from.topLeftCorner<3, 3>().transpose() * to.topLeftCorner<3, 3>();
-    const double cosine = std::clamp((relative.trace() - 1.0) / 2.0, -1.0, 1.0);
-    return (to.topRightCorner<3, 1>() - from.topRightCorner<3, 1>()).norm() + std::acos(cosine);
+    const Eigen::Matrix3d r = from.topLeftCorner<3, 3>().transpose() * to.topLeftCorner<3, 3>();
+    // The angle from its sine and cosine (atan2): acos of the cosine alone loses all precision near 0, where
+    // an unchanged pose would seem to have turned by 1e-8 rad.
+    const double sine = 0.5 * Eigen::Vector3d(r(2, 1) - r(1, 2), r(0, 2) - r(2, 0), r(1, 0) - r(0, 1)).norm();
+    const double cosine = 0.5 * (r.trace() - 1.0);
+    return (to.topRightCorner<3, 1>() - from.topRightCorner<3, 1>()).norm() + std::atan2(sine, cosine);
 }
 
 void MapCorrector::keep(uint32_t index, double timestamp, const Intrinsics& intrinsics, const Pose& cameraToWorld,

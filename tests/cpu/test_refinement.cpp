@@ -401,15 +401,16 @@ TEST(CornerRefinement, MaskWordDecisionEqualsTheCornerRuleOnRandomWindows) {
 namespace vkmesh {
 namespace {
 
-// edgeCrossing (docs/REFINEMENT.md, "Vertices"): unrefined, exactly the zero crossing clamped to the edge; refined,
+// edgeCrossing (docs/REFINEMENT.md, "Vertices"): unrefined, the zero crossing kept 1/1024 off the ends; refined,
 // never on a corner, so that the vertices of two edges that meet at a corner never share a position.
 TEST(EdgeCrossing, RefinedVerticesStayOffTheCorners) {
     const float flippedMargin = 1.0f / float(gpu::FLIPPED_EDGE_MARGIN_INVERSE);
     const float margin = 1.0f / float(gpu::REFINED_EDGE_MARGIN_INVERSE);
-    // Unrefined: the crossing, clamped to the edge when extrapolated.
+    // Unrefined: the crossing, kept 1/1024 off the ends too (d = 0 exactly is common with integer sums:
+    // shared_layout.h "A TSDF corner"), and no flipped corner to stop before.
     EXPECT_EQ(edgeCrossing(-0.25f, 0.75f, false), 0.25f);
-    EXPECT_EQ(edgeCrossing(0.0f, -1.0f, false), 0.0f);       // d = 0 on the low corner: the vertex on it
-    EXPECT_EQ(edgeCrossing(0.5f, 0.25f, false), 1.0f);       // one corner flipped: clamped onto it
+    EXPECT_EQ(edgeCrossing(0.0f, -1.0f, false), margin);     // d = 0 on the low corner: next to it, not on it
+    EXPECT_EQ(edgeCrossing(0.5f, 0.25f, false), 1.0f - margin);
     EXPECT_EQ(edgeCrossing(0.3f, 0.3f, false), 0.5f);
     // Refined: a flipped edge's vertex stops next to the flipped corner, whichever end it is.
     EXPECT_EQ(edgeCrossing(0.5f, 0.25f, true), 1.0f - flippedMargin);
@@ -430,7 +431,7 @@ TEST(EdgeCrossing, RefinedVerticesStayOffTheCorners) {
         const float plain = edgeCrossing(lo, hi, false), refined = edgeCrossing(lo, hi, true);
         ASSERT_GE(refined, margin) << lo << " " << hi;
         ASSERT_LE(refined, 1.0f - margin) << lo << " " << hi;
-        ASSERT_TRUE(plain >= 0.0f && plain <= 1.0f);
+        ASSERT_TRUE(plain >= margin && plain <= 1.0f - margin);
         // Where the corners differ in sign and the crossing is inside the margins, refinement leaves it alone.
         if ((lo < 0.0f) != (hi < 0.0f) && plain >= margin && plain <= 1.0f - margin) ASSERT_EQ(refined, plain);
     }

@@ -15,6 +15,7 @@
 #include "core/mesh_analysis.h"
 #include "cpu/reference_volume.h"
 #include "gpu/gpu_volume.h"
+#include "gpu/map_corrector.h"
 #include "gpu_fixture.h"
 #include "mesh_checks.h"
 #include "synth/synthetic_scene.h"
@@ -238,6 +239,27 @@ TEST_F(DeintegrationTest, ABoundedMapRefusesAndAFrameItDoesNotHoldIsCounted) {
     volume.integrate(frames[0].depth, intrinsics(), frames[0].pose);
     const gpu::FrameReport r = volume.deintegrate(frames[1].depth, nullptr, intrinsics(), frames[1].pose);
     EXPECT_GT(r.counters.observationsDropped, 0u);
+}
+
+}  // namespace
+}  // namespace vkmesh
+
+namespace vkmesh {
+namespace {
+
+// The ranking of corrections: metres plus the geodesic angle, exactly 0 for an unchanged pose (so it is not
+// queued), and right near pi, where Euler angles wrap.
+TEST(PoseChange, MetresPlusGeodesicRadians) {
+    const Pose a = drifted(synth::cameraPath(24, synth::PathKind::Orbit)[3], 5);
+    EXPECT_EQ(gpu::poseChange(a, a), 0.0);
+    Pose b = a;
+    b.topRightCorner<3, 1>() += Eigen::Vector3d(0.03, 0.0, -0.04);
+    EXPECT_NEAR(gpu::poseChange(a, b), 0.05, 1e-12);
+    for (double degrees : {1e-4, 0.5, 90.0, 179.9}) {
+        Pose c = a;
+        c.topLeftCorner<3, 3>() = a.topLeftCorner<3, 3>() * Eigen::AngleAxisd(degrees * M_PI / 180.0, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+        EXPECT_NEAR(gpu::poseChange(a, c), degrees * M_PI / 180.0, 1e-9) << degrees;
+    }
 }
 
 }  // namespace
