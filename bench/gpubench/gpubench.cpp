@@ -279,10 +279,7 @@ void fuseSequence(const vkmesh::vk::Context& context, const std::vector<Frame>& 
         };
         for (const auto& [i, pose] : fusedAt) {
             const Frame& frame = rendered[i % rendered.size()];
-            vkmesh::gpu::FrameInput input;
-            input.depth = &frame.depth;
-            input.color = &frame.color;
-            input.intrinsics = intrinsics;
+            vkmesh::gpu::FrameInput input = vkmesh::gpu::FrameInput::fromHost(frame.depth, &frame.color, intrinsics, pose);
             input.intermediate = true;
             double wall[2] = {0, 0};
             for (bool out : {true, false}) {

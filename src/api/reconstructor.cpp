@@ -171,11 +171,7 @@ Reconstructor::AsyncFrame Reconstructor::submitAsync(const gpu::FrameInput& inpu
 Reconstructor::AsyncFrame Reconstructor::integrateAsync(const DepthImage& depth, const ColorImage* color, const Intrinsics& intrinsics,
                                                         const Pose& cameraToWorld, const vk::SubmitSync& sync) {
     createVolume(depth.width, depth.height);
-    gpu::FrameInput input;
-    input.depth = &depth;
-    input.color = color;
-    input.intrinsics = intrinsics;
-    input.cameraToWorld = cameraToWorld;
+    gpu::FrameInput input = gpu::FrameInput::fromHost(depth, color, intrinsics, cameraToWorld);
     input.sync = sync;
     AsyncFrame out = submitAsync(input);   // checks the input first
     keepFrame(depth, color, intrinsics, cameraToWorld);

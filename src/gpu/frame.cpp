@@ -192,11 +192,7 @@ FrameReport GpuVolume::integrate(const DepthImage& depth, const Intrinsics& intr
 
 FrameReport GpuVolume::integrate(const DepthImage& depth, const ColorImage* color, const Intrinsics& intrinsics,
                                  const Pose& cameraToWorld, const vk::SubmitSync& sync) {
-    FrameInput input;
-    input.depth = &depth;
-    input.color = color;
-    input.intrinsics = intrinsics;
-    input.cameraToWorld = cameraToWorld;
+    FrameInput input = FrameInput::fromHost(depth, color, intrinsics, cameraToWorld);
     input.sync = sync;
     submitFrame(input);
     return finishFrame();
@@ -204,11 +200,7 @@ FrameReport GpuVolume::integrate(const DepthImage& depth, const ColorImage* colo
 
 FrameReport GpuVolume::deintegrate(const DepthImage& depth, const ColorImage* color, const Intrinsics& intrinsics,
                                    const Pose& cameraToWorld) {
-    FrameInput input;
-    input.depth = &depth;
-    input.color = color;
-    input.intrinsics = intrinsics;
-    input.cameraToWorld = cameraToWorld;
+    FrameInput input = FrameInput::fromHost(depth, color, intrinsics, cameraToWorld);
     input.deintegrate = true;
     submitFrame(input);
     return finishFrame();

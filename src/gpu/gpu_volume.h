@@ -173,6 +173,15 @@ struct GpuImageInput {
 
 // One frame's input: host images (depth, and colour or nullptr) or GPU ones (gpuDepth, gpuColor).
 struct FrameInput {
+    // A frame from host images (the images must outlive submitFrame(), which copies them).
+    static FrameInput fromHost(const DepthImage& depth, const ColorImage* color, const Intrinsics& intrinsics, const Pose& cameraToWorld) {
+        FrameInput in;
+        in.depth = &depth;
+        in.color = color;
+        in.intrinsics = intrinsics;
+        in.cameraToWorld = cameraToWorld;
+        return in;
+    }
     const DepthImage* depth = nullptr;
     const ColorImage* color = nullptr;
     GpuImageInput gpuDepth, gpuColor;

@@ -64,10 +64,7 @@ CorrectionReport MapCorrector::apply(GpuVolume& volume, size_t budget) {
     for (const auto& [negativeChange, index] : order) {
         const Pose newPose = pending_.at(index);
         const StoredFrame frame = store_.get(index);
-        FrameInput input;
-        input.depth = &frame.depth;
-        input.color = frame.color.empty() ? nullptr : &frame.color;
-        input.intrinsics = frame.intrinsics;
+        FrameInput input = FrameInput::fromHost(frame.depth, frame.color.empty() ? nullptr : &frame.color, frame.intrinsics, frame.pose);
         input.intermediate = true;
         for (bool out : {true, false}) {
             input.deintegrate = out;

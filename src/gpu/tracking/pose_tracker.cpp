@@ -213,11 +213,7 @@ TrackedFusion PoseTracker::trackAndFuse(GpuVolume& volume, const DepthImage& dep
     const MeshBuffers mesh = volume.meshBuffers();   // last frame's mesh: the frame's own export replaces it later
     const Pose lastTracked = lastTracked_;
     const double recent = recentRmse();
-    FrameInput input;
-    input.depth = &depth;
-    input.color = fusedColor;
-    input.intrinsics = intrinsics;
-    input.cameraToWorld = predicted;   // not read: the pose comes from the tracker
+    FrameInput input = FrameInput::fromHost(depth, fusedColor, intrinsics, predicted);   // the pose is not read: the tracker's is
     input.sync = sync;
     input.recordPose = [&](VkCommandBuffer cmd, const vk::Buffer& framePose) {
         tracker.recordTrackAndDecide(cmd, *in.depth, in.intrinsics, mesh, predicted, predicted, in.color, lastTracked, recent, framePose);
