@@ -542,6 +542,19 @@ TEST(Cli, CorrectRefusesDriftedFramesIntoTheTrueMap) {
     ASSERT_EQ(again.exitCode, 0) << again.err;
     EXPECT_EQ(nlohmann::json::parse(readText(out / "again.json"))["correction"]["frames_refused"], 0);
 
+    // A map continued with --load keeps its store: frames from both runs can be corrected.
+    CliRun firstHalf = runCli("fuse " + driftSeq.string() + " --frames 3 -o " + (out / "x.ply").string() + " --save " +
+                              (out / "half.vkmap").string() + common);
+    ASSERT_EQ(firstHalf.exitCode, 0) << firstHalf.err;
+    CliRun secondHalf = runCli("fuse " + driftSeq.string() + " --load " + (out / "half.vkmap").string() + " --first-frame 3 -o " +
+                               (out / "x.ply").string() + " --save " + (out / "whole.vkmap").string() + " -q --validation");
+    ASSERT_EQ(secondHalf.exitCode, 0) << secondHalf.err;
+    CliRun both = runCli("correct " + (out / "whole.vkmap").string() + " --trajectory " + (out / "truth.txt").string() + " -o " +
+                         (out / "both.ply").string() + " --stats " + (out / "both.json").string());
+    ASSERT_EQ(both.exitCode, 0) << both.err;
+    EXPECT_EQ(nlohmann::json::parse(readText(out / "both.json"))["correction"]["frames_refused"], 5);
+    EXPECT_EQ(countTriangleMismatches(canonicalTriangles(a), canonicalTriangles(readPly(out / "both.ply")), 0), 0u);
+
     // Bad input: the store of another map, a missing store, a pose that is not rigid.
     fs::copy_file(out / "corrected.vkframes", out / "drift.vkframes", fs::copy_options::overwrite_existing);
     CliRun wrongStore = runCli("correct " + (out / "drift.vkmap").string() + " --trajectory " + (out / "truth.txt").string() + " -o " +
