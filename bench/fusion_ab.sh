@@ -2,7 +2,7 @@
 # Two builds of vkmesh side by side on the same sequences: fusion's cost (wall and GPU ms per frame, medians) and
 # accuracy (the synthetic room's F-score against its ground truth, colour error against every 10th input frame),
 # runs alternating A B A B so that the machine's drift hits both alike. Used for issue 29 (exact fusion against
-# the float running average it replaced: docs/RESULTS.md "Issue 29").
+# the float running average it replaced: docs/RESULTS.md "Map correction").
 #
 #   bench/fusion_ab.sh OUT_DIR CLI_A CLI_B [--rounds 2] [--frames 150] [--voxel 0.02]
 #

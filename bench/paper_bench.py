@@ -577,7 +577,7 @@ def vk(e, variant, path):
 def markdown(r, figure_link=None):
     m = r["meta"]
     L = []
-    title = "## Paper evaluation: `bench/paper_bench.py`" + (" (QUICK smoke run, not reference numbers)" if m["quick"] else "")
+    title = "### Paper evaluation: `bench/paper_bench.py`" + (" (QUICK smoke run, not reference numbers)" if m["quick"] else "")
     L += [title, "",
           f"Command: `{m['command']}` ({m['date']}, total {m['runtime_s']:.0f} s). "
           f"Machine: `{m['hostname']}`, {m['cpus']} CPUs; Vulkan device: {m['device'] or 'unknown'}; "
@@ -591,7 +591,7 @@ def markdown(r, figure_link=None):
     # Table I
     states = {str(vk(e, "incremental", "refine")) for e in r["datasets"] if vk(e, "incremental", "refine") is not None}
     ours = "vkmesh default run" + (f" (refinement {'on' if states == {'True'} else 'off'})" if len(states) == 1 else "")
-    L += [f"### Table I (paper) shape, voxel {m['voxel'] * 100:g} cm", "", f"Ours = {ours}; lock-free = the same with `--lock-free`.", "",
+    L += [f"#### Table I (paper) shape, voxel {m['voxel'] * 100:g} cm", "", f"Ours = {ours}; lock-free = the same with `--lock-free`.", "",
           "| dataset | frames | meshing ms/frame (ours) | all ms/frame (ours) | vertices ours | baseline | ours / baseline "
           "| lock-free / lock-based meshing | Open3D VBG integrate ms | Open3D VBG integrate + extraction ms/frame "
           "| Open3D VBG vertices |",
@@ -621,7 +621,7 @@ def markdown(r, figure_link=None):
     cols = ["dataset", "run", "refine", "meshing ms (median)", "meshing ms, last 10% frames (mean)", "alloc + fuse ms",
             "whole frame ms", "final extraction ms", "vertices", "triangles"] + [share_names[f] for f in share_fields] + \
            ["other CPU load"]
-    L += ["", f"### Every run, voxel {m['voxel'] * 100:g} cm", "", "| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
+    L += ["", f"#### Every run, voxel {m['voxel'] * 100:g} cm", "", "| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
     blank = " |" * (len(cols) - 3)
     labels = (("incremental", "vkmesh default (incremental)"), ("refine", "vkmesh --refine"),
               ("no_refine", "vkmesh --no-refine"), ("lock_free", "vkmesh --lock-free"),
@@ -674,7 +674,7 @@ def markdown(r, figure_link=None):
           f"(above {BUSY_WARNING:.0%} the timings are suspect; Open3D's OpenMP loops slow down 10-30x on a busy machine)."]
 
     # Open3D extraction every frame
-    L += ["", "### Open3D: integrate + full extraction every frame", "",
+    L += ["", "#### Open3D: integrate + full extraction every frame", "",
           "Extracting after every frame of a long sequence takes minutes, so `open3d_peer.py --extract-every K` "
           "times a full `extract_triangle_mesh` after every K-th frame (K = frames / "
           f"{r['meta']['extraction_points']}, rounded up) in a separate run; the extraction time after each "
@@ -699,7 +699,7 @@ def markdown(r, figure_link=None):
             fmt(100 * f["estimate_error_mean"], "+.1f") + " %" if "estimate_error_mean" in f else "-"))
 
     # Accuracy
-    L += ["", "### Accuracy on the synthetic room (`vkmesh eval` against `gt_points.ply`)", ""]
+    L += ["", "#### Accuracy on the synthetic room (`vkmesh eval` against `gt_points.ply`)", ""]
     evals = [(e["dataset"], lbl, v) for e in r["datasets"] for lbl, v in (e.get("eval") or {}).items()]
     raw = next((v["raw"] for _, _, v in evals if v and v.get("raw")), None)
     if raw:
@@ -736,7 +736,7 @@ def markdown(r, figure_link=None):
 
     # Sweep
     sw = r.get("sweep")
-    L += ["", "### Vertex count over resolution (paper Fig. 6a)", ""]
+    L += ["", "#### Vertex count over resolution (paper Fig. 6a)", ""]
     if not sw:
         L.append("Not run.")
     else:
@@ -757,14 +757,14 @@ def markdown(r, figure_link=None):
                 p["triangles"], fmt(p["mesh_ms"]), fmt(p["whole_ms"]), pools, fmt(p["seconds"], ".0f")))
 
     # Notes and failures
-    L += ["", "### Notes", ""] + [f"- {n}" for n in r["notes"]]
+    L += ["", "#### Notes", ""] + [f"- {n}" for n in r["notes"]]
     # Runs under a second are left out: over such short intervals the share is mostly noise.
     busy = [x for x in r["runs"] if (x.get("other_cpu_share") or 0) > BUSY_WARNING and (x.get("seconds") or 0) >= 1]
     if busy:
         timed = [x for x in r["runs"] if (x.get("seconds") or 0) >= 1]
         L.append(f"- **{len(busy)} of {len(timed)} runs (of 1 s or more) had other processes using more than {BUSY_WARNING:.0%} of "
                  "the CPU** (their timings are not representative): " + ", ".join(x["name"] for x in busy) + ".")
-    L += ["", "### Failures", ""]
+    L += ["", "#### Failures", ""]
     if not r["failures"]:
         L.append("None.")
     for f in r["failures"]:

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Refinement on (the default) against --no-refine (docs/REFINEMENT.md; the table of docs/RESULTS.md, issue 13).
+# Refinement on (the default) against --no-refine (docs/REFINEMENT.md; docs/RESULTS.md, "Mesh quality", "Refinement").
 # For each dataset: vkmesh fuse twice with --stats at 3 cm, then a table of what refinement changes:
 # irregular cube share, sliver share, boundary edges (the mesh must not crack), vertices at the position of
 # another (none, refined or not: docs/REFINEMENT.md "Vertices"), meshing and fusion GPU ms

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The browser viewer's measurements (docs/RESULTS.md, "Browser viewer"; docs/VIEWER.md).
+"""The browser viewer's measurements (docs/RESULTS.md, "Viewer"; docs/VIEWER.md).
 
   bench/viewer_bench.py live DATASET [--voxel 0.03] [--frames N]   fusion's ms/frame with no page, one Chromium
         page, a deliberately slow page; bytes per frame on the wire; how far behind the live page is

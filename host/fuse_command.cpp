@@ -80,10 +80,11 @@ struct FuseArgs {
     // Camera tracking (docs/TRACKING.md): estimate every pose after the first against the mesh.
     bool track = false;
     std::string trajectoryPath;        // the pose used for every frame, TUM format
-    std::string trackIterations;       // "10,5,4": ICP iterations per level, finest first
+    std::string trackIterations;       // "3,4,4": ICP iterations per level, finest first (empty: by size)
     float trackColorWeight = gpu::TrackerOptions{}.colorWeight;   // the photometric term's weight (0: off)
     std::string trackSolve = "host";   // where the ICP systems are solved: host (double, a wait per iteration) or gpu
-    int trackDownsample = 1;            // track on frames downsampled by 1, 2 or 4
+    int trackDownsample = gpu::TrackerOptions{}.downsample;   // track on frames downsampled by 1, 2 or 4 (0: by width)
+    int trackModelReuse = gpu::TrackerOptions{}.modelReuseFrames;   // frames in a row that may reuse the model maps
     const CLI::App* cmd = nullptr;   // which options were given (a loaded map's settings fill the others)
 };
 
@@ -162,9 +163,10 @@ int runFuse(const FuseArgs& args) {
     if (args.growHeaps)
         std::cerr << "note: --grow-heaps is deprecated and has no effect: capacities grow by default (--no-grow keeps them fixed)\n";
     if ((!args.trackIterations.empty() || args.cmd->get_option("--track-color-weight")->count() > 0 ||
-         args.cmd->get_option("--track-solve")->count() > 0 || args.cmd->get_option("--track-downsample")->count() > 0) &&
+         args.cmd->get_option("--track-solve")->count() > 0 || args.cmd->get_option("--track-downsample")->count() > 0 ||
+         args.cmd->get_option("--track-model-reuse")->count() > 0) &&
         !args.track)
-        throw Error("--track-iterations, --track-color-weight, --track-solve and --track-downsample need --track");
+        throw Error("--track-iterations, --track-color-weight, --track-solve, --track-downsample and --track-model-reuse need --track");
     std::optional<std::array<int, gpu::TRACK_LEVELS>> iterations;
     if (!args.trackIterations.empty()) iterations = parseIterations(args.trackIterations);
     DatasetArgs data = args.data;
@@ -248,10 +250,13 @@ int runFuse(const FuseArgs& args) {
         trackerOptions.colorWeight = args.trackColorWeight;
         trackerOptions.solveOnGpu = args.trackSolve == "gpu";
         trackerOptions.downsample = args.trackDownsample;
+        trackerOptions.modelReuseFrames = args.trackModelReuse;
         tracker.emplace(context, trackerOptions);
     }
     std::vector<TimedPose> trajectory;   // the pose used for every frame (tracked, predicted or given)
     std::vector<double> trackMs, trackGpuMs, trackIterations, trackSubmissions, trackRmse, trackInlierShare;
+    size_t modelDraws = 0;   // tracked frames that drew the mesh (the others reused the last model maps)
+    std::vector<double> trackPositionError;   // metres from the dataset's pose, frames that have one
     std::map<std::string, std::vector<double>> trackStageMs;   // per tracking stage (timestamps)
     size_t lostFrames = 0;
     std::vector<json> lostList;
@@ -338,6 +343,7 @@ int runFuse(const FuseArgs& args) {
                 for (const auto& [name, ms] : tr.gpuStageMilliseconds) trackStageMs[name].push_back(ms);
                 trackIterations.push_back(tr.iterations);
                 trackSubmissions.push_back(tr.submissions);
+                modelDraws += tr.modelDrawn;
                 if (tr.tracked) {
                     trackRmse.push_back(tr.rmse);
                     trackInlierShare.push_back(tr.validPixels > 0 ? tr.inliers / tr.validPixels : 0.0);
@@ -345,6 +351,10 @@ int runFuse(const FuseArgs& args) {
             }
             pose = tr.cameraToWorld;
             trajectory.push_back({dataset->frame(i).timestamp, pose});
+            // The dataset's own pose (ground truth), where it has one, against the tracked one: the first frame's
+            // is shared, so no alignment is needed (bench/ate.py aligns, as TUM's tools do).
+            if (dataset->frame(i).hasPose)
+                trackPositionError.push_back((pose.block<3, 1>(0, 3) - dataset->frame(i).cameraToWorld.block<3, 1>(0, 3)).norm());
             if (!tr.tracked) {
                 ++lostFrames;
                 if (lostList.size() < 1000) lostList.push_back({{"frame", i}, {"reason", tr.lostReason}});
@@ -606,6 +616,11 @@ int runFuse(const FuseArgs& args) {
         gpuTrackMs["p90"] = percentile(trackGpuMs, 0.9);
         json stages = json::object();
         for (const auto& [name, values] : trackStageMs) stages[name] = statsOf(values);
+        double squared = 0;
+        for (double e : trackPositionError) squared += e * e;
+        json positionError = {{"frames", trackPositionError.size()},
+                              {"rmse", trackPositionError.empty() ? 0.0 : std::sqrt(squared / double(trackPositionError.size()))},
+                              {"max", trackPositionError.empty() ? 0.0 : *std::max_element(trackPositionError.begin(), trackPositionError.end())}};
         json its = statsOf(trackIterations);
         its["total"] = std::accumulate(trackIterations.begin(), trackIterations.end(), 0.0);
         stats["tracking"] = {{"enabled", true},
@@ -624,7 +639,13 @@ int runFuse(const FuseArgs& args) {
                              // --track-solve gpu: tracking, fusion and meshing are one submission per frame, so
                              // ms_per_frame (wall) holds the fusion and meshing too
                              {"fused_in_tracking_submission", args.trackSolve == "gpu"},
-                             {"downsample", args.trackDownsample},
+                             {"downsample", gpu::trackingDownsample(tracker->options(), intrinsics.width)},
+                             // frames whose tracking drew the mesh; the others reused the last maps (--track-model-reuse)
+                             {"model_draws", modelDraws},
+                             {"model_reuse_frames", args.trackModelReuse},
+                             // against the dataset's poses where it has them (the first frame's is shared: no
+                             // alignment); metres
+                             {"position_error_m", positionError},
                              {"trajectory", args.trajectoryPath}};
     } else {
         stats["tracking"] = {{"enabled", false}, {"trajectory", args.trajectoryPath}};
@@ -648,6 +669,13 @@ int runFuse(const FuseArgs& args) {
         std::cout << "  tracking: " << trackMs.size() - lostFrames << " frames tracked, " << lostFrames << " lost; "
                   << statsOf(trackMs)["median"] << " ms/frame (median), " << statsOf(trackIterations)["mean"] << " iterations/frame (mean)"
                   << (args.trajectoryPath.empty() ? std::string() : " -> " + args.trajectoryPath) << "\n";
+    if (tracker && !trackPositionError.empty()) {
+        char line[160];
+        std::snprintf(line, sizeof line, "  tracked positions against the dataset's poses: RMSE %.1f mm, largest %.1f mm over %zu frames\n",
+                      1000 * stats["tracking"]["position_error_m"]["rmse"].get<double>(),
+                      1000 * stats["tracking"]["position_error_m"]["max"].get<double>(), trackPositionError.size());
+        std::cout << line;
+    }
     if (rendering) std::cout << "  " << picturesWritten << " pictures (" << args.renderView << " view) -> " << args.renderDir << "\n";
     if (deltaStream) std::cout << "  mesh deltas: " << deltaStream->bytesWritten() << " bytes -> " << args.deltasPath << "\n";
     if (!args.loadPath.empty()) std::cout << "  map loaded from " << args.loadPath << " (" << loadMs << " ms), frames from " << args.firstFrame << "\n";
@@ -728,7 +756,9 @@ Run addFuseCommand(CLI::App& app) {
                   "Datasets without poses need it");
     cmd->add_option("--trajectory", args->trajectoryPath,
                     "write the pose used for every frame (tracked or given) in TUM format: timestamp tx ty tz qx qy qz qw");
-    cmd->add_option("--track-iterations", args->trackIterations, "ICP iterations per pyramid level, finest first (default 10,5,4)");
+    cmd->add_option("--track-iterations", args->trackIterations,
+                    "ICP iterations per pyramid level, finest first (default by the finest tracked level's width: 3,4,4 from 320 "
+                    "pixels wide, 10,5,4 below)");
     cmd->add_option("--track-color-weight", args->trackColorWeight,
                     "weight of tracking's photometric term (the frame's intensity against the mesh's fused colours; needs "
                     "colour images and colour fusion); 0: geometry only")
@@ -738,9 +768,15 @@ Run addFuseCommand(CLI::App& app) {
                     "float; the frame's tracking, fusion and meshing in one submission; docs/TRACKING.md)")
         ->check(CLI::IsMember({"host", "gpu"}));
     cmd->add_option("--track-downsample", args->trackDownsample,
-                    "track on the frames downsampled by 1, 2 or 4 (fusion keeps the full frames): 2 on 640x480 is a quarter of "
-                    "the finest level's work (docs/TRACKING.md)")
-        ->check(CLI::IsMember({1, 2, 4}));
+                    "track on the frames downsampled by 1, 2 or 4 (fusion keeps the full frames); 0 (default): 2 for frames at "
+                    "least 640 pixels wide, else 1 (on 640x480 a quarter of the finest level's work at the same accuracy; "
+                    "docs/TRACKING.md)")
+        ->check(CLI::IsMember({0, 1, 2, 4}));
+    cmd->add_option("--track-model-reuse", args->trackModelReuse,
+                    "let up to this many frames in a row (default 2) reuse the model maps (the mesh drawn at an earlier pose) "
+                    "while the predicted pose is within 4 cm and 4 degrees of where they were drawn; 0 draws the mesh for "
+                    "every frame")
+        ->check(CLI::Range(0, 1000));
     cmd->add_option("--serve", args->servePort,
                     "serve the live browser viewer on this port while fusing (docs/VIEWER.md; open the URL it prints)")
         ->check(CLI::Range(0, 65535));

@@ -1,7 +1,9 @@
 // `vkmesh soak`: a long run over the synthetic room with revisits, recording per frame how full the hash,
 // the block pool and the mesh heaps are, to show that bounded maps (--keep-radius, --recycle) keep them flat.
 //   vkmesh soak -o soak.csv [--frames 3000 --laps 6 --width 160 --height 120 --voxel 0.05]
-//               [--keep-radius 2.0] [--recycle] [--summary summary.json]
+//               [--keep-radius 2.0] [--recycle] [--summary summary.json] [--track]
+// With --track every lap is tracked (its first frame placed at its true pose, the rest tracked against the
+// mesh) in a new copy of the room, so tracking's cost per frame can be followed as the map grows.
 // bench/soak_plot.py draws the CSVs of several runs.
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
@@ -11,10 +13,13 @@
 #include <fstream>
 #include <iostream>
 #include <memory>
+#include <optional>
 
 #include "cli_options.h"
 #include "commands.h"
+#include "core/camera.h"
 #include "gpu/gpu_volume.h"
+#include "gpu/tracking/pose_tracker.h"
 #include "synth/synthetic_scene.h"
 #include "vk/context.h"
 
@@ -31,7 +36,9 @@ struct SoakArgs {
     float maxDepth = 5.0f;
     VolumeOptions volume = soakDefaults();
     bool noise = true;
+    bool track = false;   // track every lap after its first frame (in a new copy of the room unless --rooms)
     DeviceArgs device;
+    CLI::App* cmd = nullptr;
 
     // A coarser voxel and a smaller pool than fuse's defaults: long runs at small image sizes.
     static VolumeOptions soakDefaults() {
@@ -50,7 +57,21 @@ struct Occupancy {
 int runSoak(const SoakArgs& a) {
     if (a.laps == 0 || a.frames < a.laps) throw Error("soak needs at least one frame per lap");
     vk::Context context(a.device.contextOptions());
-    gpu::GpuVolume volume(context, a.volume.toConfig(a.maxDepth, a.width, a.height));
+    gpu::GpuVolumeConfig config = a.volume.toConfig(a.maxDepth, a.width, a.height);
+    if (a.track) {
+        if (config.meshMode != gpu::MeshMode::Incremental) throw Error("soak --track needs --mode incremental (it tracks against the mesh)");
+        config.publishMesh = true;   // tracking draws the mesh fused so far
+    }
+    gpu::GpuVolume volume(context, config);
+    std::optional<gpu::PoseTracker> tracker;
+    if (a.track) {
+        gpu::TrackerOptions trackerOptions;
+        trackerOptions.maxDepth = a.maxDepth;
+        tracker.emplace(context, trackerOptions);
+    }
+    // Tracking: a new copy of the room for every lap unless --rooms says otherwise, so the map grows lap after
+    // lap and the tracked view never holds more of it than one room.
+    const size_t rooms = a.track && a.cmd->get_option("--rooms")->count() == 0 ? a.laps : a.rooms;
 
     const synth::SyntheticScene scene = synth::SyntheticScene::defaultRoom();
     const Intrinsics intrinsics = synth::kinectIntrinsics(a.width, a.height);
@@ -64,7 +85,7 @@ int runSoak(const SoakArgs& a) {
     std::ofstream csv(a.output);
     if (!csv) throw Error("cannot write " + a.output);
     // Per-stage GPU ms after the original columns (added, so scripts reading the old ones keep working): how
-    // each pass's cost follows the map's size (docs/RESULTS.md, issue 14's flat-cost target). A stage a frame
+    // each pass's cost follows the map's size (docs/RESULTS.md, "Speed per frame", the flat-cost target). A stage a frame
     // does not run is 0; a name not listed here (a future pass) goes to ms_other.
     static const std::vector<std::string> kStages = {"rehash",     "allocate",   "fuse",           "mesh_mark",
                                                      "recycle_retire", "mesh_claim", "mesh_update", "mesh_triangulate",
@@ -72,8 +93,10 @@ int runSoak(const SoakArgs& a) {
     csv << "frame,lap,hash_entries,hash_tombstones,hash_rebuilt,blocks_in_use,vertices_in_use,chunks_in_use,live_triangles,"
            "touched_blocks,blocks_freed,blocks_retired,blocks_starved,warnings,gpu_ms,wall_ms";
     for (const std::string& stage : kStages) csv << ",ms_" << stage;
-    csv << ",ms_other\n";
+    csv << ",ms_other,track_ms,track_gpu_ms,tracked,track_error_m\n";   // tracking's columns: 0 without --track
     std::vector<Occupancy> highWater(a.laps, Occupancy{0, 0, 0, 0, 0, 0});
+    std::vector<std::vector<double>> lapTrackMs(a.laps), lapTrackError(a.laps);   // tracked frames, per lap
+    size_t lostFrames = 0;
     size_t warnings = 0, rebuilds = 0;
     uint64_t freed = 0;
     const auto start = std::chrono::steady_clock::now();
@@ -84,9 +107,20 @@ int runSoak(const SoakArgs& a) {
         const Pose& pose = lap[i % framesPerLap];
         DepthImage depth = scene.renderDepth(intrinsics, pose, options);
         Pose placed = pose;
-        placed(0, 3) += kRoomSpacing * double((i / framesPerLap) % a.rooms);
+        placed(0, 3) += kRoomSpacing * double((i / framesPerLap) % rooms);
+        const size_t lapIndex = i / framesPerLap;
         auto t0 = std::chrono::steady_clock::now();
-        gpu::FrameReport r = volume.integrate(depth, intrinsics, placed);
+        gpu::FrameReport r;
+        std::optional<gpu::TrackingReport> tracking;   // a tracked frame (not a lap's first)
+        if (tracker && i % framesPerLap != 0) {
+            gpu::TrackedFusion f = tracker->trackAndFuse(volume, depth, intrinsics, nullptr, nullptr);
+            tracking = f.tracking;
+            if (f.fused) r = *f.fused;
+            else ++lostFrames;
+        } else {
+            if (tracker) tracker->start(placed);   // a lap starts where the camera is placed
+            r = volume.integrate(depth, intrinsics, placed);
+        }
         const double wallMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
         double gpuMs = 0;
         for (const auto& [name, ms] : r.stageMs) gpuMs += ms;
@@ -95,7 +129,6 @@ int runSoak(const SoakArgs& a) {
         warnings += r.warnings.size();
         rebuilds += k.hashRebuilt;
         freed += k.blocksFreed;
-        const size_t lapIndex = i / framesPerLap;
         Occupancy& hw = highWater[lapIndex];
         hw.hashEntries = std::max(hw.hashEntries, k.hashEntries);
         hw.hashTombstones = std::max(hw.hashTombstones, k.hashTombstones);
@@ -111,7 +144,13 @@ int runSoak(const SoakArgs& a) {
         for (const auto& [name, ms] : r.stageMs)
             stageMs[size_t(std::find(kStages.begin(), kStages.end(), name) - kStages.begin())] += ms;
         for (double ms : stageMs) csv << "," << ms;
-        csv << "\n";
+        double trackError = 0;
+        if (tracking) {
+            trackError = (tracking->cameraToWorld.block<3, 1>(0, 3) - placed.block<3, 1>(0, 3)).norm();
+            if (tracking->tracked) lapTrackMs[lapIndex].push_back(tracking->milliseconds), lapTrackError[lapIndex].push_back(trackError);
+        }
+        csv << "," << (tracking ? tracking->milliseconds : 0.0) << "," << (tracking ? tracking->gpuMilliseconds : 0.0) << ","
+            << (tracking && tracking->tracked ? 1 : 0) << "," << trackError << "\n";
         if ((i + 1) % 250 == 0)
             std::cerr << "frame " << i + 1 << "/" << framesPerLap * a.laps << "  blocks " << k.blocksInUse << "  vertices "
                       << k.verticesInUse << "\n";
@@ -119,7 +158,7 @@ int runSoak(const SoakArgs& a) {
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
     std::cout << "vkmesh soak: " << framesPerLap * a.laps << " frames (" << a.laps << " laps of " << framesPerLap << "), "
-              << a.rooms << " room(s), " << a.width << "x" << a.height << ", voxel " << a.volume.voxel << " m, keep radius "
+              << rooms << " room(s), " << a.width << "x" << a.height << ", voxel " << a.volume.voxel << " m, keep radius "
               << (a.volume.keepRadius > 0 ? std::to_string(a.volume.keepRadius) + " m" : std::string("off")) << ", recycling "
               << (a.volume.recycle ? "on" : "off") << ", " << seconds << " s\n"
               << "  high water per lap: hash entries / tombstones / blocks / vertices / chunks / triangles\n";
@@ -132,13 +171,35 @@ int runSoak(const SoakArgs& a) {
                             {"vertices", h.vertices}, {"chunks", h.chunks}, {"triangles", h.triangles}});
     }
     std::cout << "  blocks freed " << freed << ", hash rebuilds " << rebuilds << ", warnings " << warnings << "\n";
+    // Tracking per lap: the median wall time of its tracked frames (the flat-cost check compares the last lap's
+    // with the first's) and the largest position error against the true poses.
+    auto median = [](std::vector<double> v) {
+        if (v.empty()) return 0.0;
+        std::nth_element(v.begin(), v.begin() + long(v.size() / 2), v.end());
+        return v[v.size() / 2];
+    };
+    nlohmann::json trackingJson;
+    if (tracker) {
+        nlohmann::json perLap = nlohmann::json::array();
+        std::cout << "  tracking per lap: median ms per tracked frame / largest position error (m)\n";
+        for (size_t l = 0; l < a.laps; ++l) {
+            const double ms = median(lapTrackMs[l]);
+            const double worst = lapTrackError[l].empty() ? 0.0 : *std::max_element(lapTrackError[l].begin(), lapTrackError[l].end());
+            std::cout << "  lap " << l + 1 << ": " << ms << " / " << worst << "\n";
+            perLap.push_back({{"median_ms", ms}, {"tracked_frames", lapTrackMs[l].size()}, {"max_position_error_m", worst}});
+        }
+        const double first = median(lapTrackMs.front()), last = median(lapTrackMs.back());
+        std::cout << "  tracking: last lap / first lap median " << (first > 0 ? last / first : 0.0) << ", lost frames " << lostFrames << "\n";
+        trackingJson = {{"per_lap", perLap}, {"last_over_first", first > 0 ? last / first : 0.0}, {"lost_frames", lostFrames}};
+    }
     if (!a.summaryPath.empty()) {
-        nlohmann::json s = {{"frames", framesPerLap * a.laps}, {"laps", a.laps}, {"rooms", a.rooms}, {"width", a.width}, {"height", a.height},
+        nlohmann::json s = {{"frames", framesPerLap * a.laps}, {"laps", a.laps}, {"rooms", rooms}, {"width", a.width}, {"height", a.height},
                             {"voxel", a.volume.voxel}, {"keep_radius", a.volume.keepRadius}, {"recycle", a.volume.recycle},
                             {"recycle_after_frames", a.volume.recycleAfter}, {"starve_weight", a.volume.starveWeight},
                             {"block_capacity", volume.config().blockCapacity}, {"hash_capacity", volume.config().hashCapacity},
                             {"high_water_per_lap", lapsJson}, {"blocks_freed", freed}, {"hash_rebuilds", rebuilds},
                             {"warnings", warnings}, {"seconds", seconds}, {"device", context.info().name}};
+        if (tracker) s["tracking"] = trackingJson;
         std::ofstream file(a.summaryPath);
         if (!file) throw Error("cannot write " + a.summaryPath);
         file << s.dump(2) << "\n";
@@ -164,6 +225,11 @@ Run addSoakCommand(CLI::App& app) {
     cmd->add_option("--max-depth", args->maxDepth, "ignore depth beyond M metres")->check(CLI::PositiveNumber);
     args->volume.addCommon(cmd);
     cmd->add_flag("--noise,!--no-noise", args->noise, "Kinect-like depth noise (default on)");
+    cmd->add_flag("--track", args->track,
+                  "track the camera (every lap's first frame at its true pose, the rest against the mesh), each lap in a new "
+                  "copy of the room unless --rooms is given: tracking's cost per frame as the map grows (CSV columns "
+                  "track_ms, track_gpu_ms, tracked, track_error_m; per-lap medians in the output and --summary)");
+    args->cmd = cmd;
     args->device.add(cmd);
     return [args]() { return runSoak(*args); };
 }

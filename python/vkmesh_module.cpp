@@ -415,7 +415,7 @@ public:
         const gpu::TrackingReport& t = tracked->tracking;
         return py::dict("pose"_a = poseToPython(tracked->cameraToWorld), "tracked"_a = t.tracked, "lost_reason"_a = t.lostReason,
                         "iterations"_a = t.iterations, "inliers"_a = t.inliers, "valid_pixels"_a = t.validPixels, "rmse"_a = t.rmse,
-                        "ms"_a = t.milliseconds);
+                        "ms"_a = t.milliseconds, "model_drawn"_a = t.modelDrawn);
     }
 
     // New poses for fused frames (Reconstructor::correct): indices (N,) and poses (N, 4, 4), all checked first.
@@ -558,7 +558,8 @@ public:
         d["lock_free"] = c.lockFree;
         d["track_deltas"] = options_.trackDeltas;
         d["tracking"] = py::dict("color_weight"_a = shortest(options_.tracker.colorWeight),
-                                 "solve"_a = options_.tracker.solveOnGpu ? "gpu" : "host", "downsample"_a = options_.tracker.downsample);
+                                 "solve"_a = options_.tracker.solveOnGpu ? "gpu" : "host", "downsample"_a = options_.tracker.downsample,
+                                 "model_reuse"_a = options_.tracker.modelReuseFrames);
         d["color"] = py::dict("fused"_a = c.params.colorFusion != ColorFusion::Off, "mode"_a = colorModeName(c.params.colorFusion),
                               "recency"_a = shortest(c.params.colorRecency));
         if (s.store) {
@@ -741,7 +742,7 @@ std::unique_ptr<PyReconstructor> makeReconstructor(float voxelSize, float trunca
                                                    bool lockFree, const Capacities& capacities, bool growCapacities, float keepRadius,
                                                    bool recycle, long long recycleAfterFrames, float starveWeight, bool validation,
                                                    float trackColorWeight, const std::string& trackSolve, int trackDownsample,
-                                                   const CorrectionSettings& correction) {
+                                                   int trackModelReuse, const CorrectionSettings& correction) {
     ReconstructorOptions o;
     correction.applyTo(o);
     gpu::GpuVolumeConfig& c = o.volume;
@@ -773,9 +774,12 @@ std::unique_ptr<PyReconstructor> makeReconstructor(float voxelSize, float trunca
     if (trackSolve != "host" && trackSolve != "gpu") throw py::value_error("track_solve '" + trackSolve + "' must be 'host' or 'gpu'");
     o.tracker.colorWeight = trackColorWeight;
     o.tracker.solveOnGpu = trackSolve == "gpu";
-    if (trackDownsample != 1 && trackDownsample != 2 && trackDownsample != 4)
-        throw py::value_error("track_downsample " + std::to_string(trackDownsample) + " must be 1, 2 or 4");
+    if (trackDownsample != 0 && trackDownsample != 1 && trackDownsample != 2 && trackDownsample != 4)
+        throw py::value_error("track_downsample " + std::to_string(trackDownsample) + " must be 0 (by the frame's width), 1, 2 or 4");
     o.tracker.downsample = trackDownsample;
+    if (trackModelReuse < 0 || trackModelReuse > 1000)
+        throw py::value_error("track_model_reuse " + std::to_string(trackModelReuse) + " must be in 0..1000");
+    o.tracker.modelReuseFrames = trackModelReuse;
     o.trackDeltas = trackDeltas;
     o.device = deviceOptions(device, validation);
     std::unique_ptr<Reconstructor> rec;
@@ -956,7 +960,11 @@ Keyword arguments (all optional):
   track_color_weight    tracking (integrate without a pose): the photometric term's weight (--track-color-weight; 0.1)
   track_solve           tracking: 'host' (systems solved in double, a GPU submission per ICP iteration) or 'gpu'
                         (in float; the frame's tracking, fusion and meshing in one submission) (--track-solve; 'host')
-  track_downsample      tracking on the frames downsampled by 1, 2 or 4 (--track-downsample; 1)
+  track_downsample      tracking on the frames downsampled by 1, 2 or 4; 0: 2 for frames at least 640 pixels wide,
+                        else 1 (--track-downsample; 0)
+  track_model_reuse     tracking: frames in a row that may reuse the model maps (the mesh drawn for an earlier frame)
+                        while the camera is predicted within 4 cm and 4 degrees of where they were drawn; 0: the
+                        mesh is drawn for every frame (--track-model-reuse; 2)
   keep_frames           keep every fused frame (compressed) so that correct() can re-fuse frames whose poses
                         change; save() writes them beside the map (docs/CORRECTION.md; False)
   corrections_per_frame corrected frames re-fused by each later integrate() (2)
@@ -972,14 +980,14 @@ Bad settings raise ValueError; no usable device or a capacity that does not fit 
                          long long touchedCapacity, long long vertexCapacity, long long chunkCapacity, long long retypeCapacity,
                          long long deltaRecordCapacity, bool growCapacities, double keepRadius, bool recycle,
                          long long recycleAfterFrames, double starveWeight, bool validation, double trackColorWeight,
-                         const std::string& trackSolve, int trackDownsample, bool keepFrames, long long correctionsPerFrame,
-                         double framesBudgetMb, const std::string& framesSpill) {
+                         const std::string& trackSolve, int trackDownsample, int trackModelReuse, bool keepFrames,
+                         long long correctionsPerFrame, double framesBudgetMb, const std::string& framesSpill) {
                  return makeReconstructor(voxelSize, truncationVoxels, maxDepth, device, colorMode, colorRecency, trackDeltas,
                                           maxWeight, minWeight, allocationStride, refine, refineEpsilonVoxels, lockFree,
                                           {blockCapacity, hashCapacity, touchedCapacity, vertexCapacity, chunkCapacity,
                                            retypeCapacity, deltaRecordCapacity},
                                           growCapacities, keepRadius, recycle, recycleAfterFrames, starveWeight, validation,
-                                          float(trackColorWeight), trackSolve, trackDownsample,
+                                          float(trackColorWeight), trackSolve, trackDownsample, trackModelReuse,
                                           {keepFrames, correctionsPerFrame, framesBudgetMb, framesSpill});
              }),
              py::kw_only(), "voxel_size"_a = shortest(dp.voxelSize), "truncation_voxels"_a = shortest(dp.truncVoxels),
@@ -994,7 +1002,8 @@ Bad settings raise ValueError; no usable device or a capacity that does not fit 
              "grow_capacities"_a = dc.growCapacities, "keep_radius"_a = shortest(dc.keepRadius), "recycle"_a = dc.recycle,
              "recycle_after_frames"_a = dc.recycleAfterFrames, "starve_weight"_a = shortest(dc.starveWeight), "validation"_a = false,
              "track_color_weight"_a = shortest(gpu::TrackerOptions{}.colorWeight), "track_solve"_a = "host",
-             "track_downsample"_a = gpu::TrackerOptions{}.downsample, "keep_frames"_a = false,
+             "track_downsample"_a = gpu::TrackerOptions{}.downsample,
+             "track_model_reuse"_a = gpu::TrackerOptions{}.modelReuseFrames, "keep_frames"_a = false,
              "corrections_per_frame"_a = ReconstructorOptions{}.correctionsPerFrame, "frames_budget_mb"_a = 1024.0, "frames_spill"_a = "")
         .def("integrate", &PyReconstructor::integrate, "depth"_a, "intrinsics"_a, "pose"_a = py::none(), "depth_scale"_a = 5000.0,
              "color"_a = py::none(), R"doc(

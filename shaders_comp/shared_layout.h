@@ -415,7 +415,15 @@ VKM_CONST TRACK_BINDING_INTENSITY = 9u;       // float per pyramid pixel: the fr
 VKM_CONST TRACK_BINDING_MODEL_INTENSITY = 10u;// float per pyramid pixel: the mesh's vertex colour as intensity (< 0: none)
 VKM_CONST TRACK_BINDING_STATE = 11u;          // TrackStateGpu: the estimate the GPU-solved mode refines in place
 VKM_CONST TRACK_BINDING_FRAME_POSE = 12u;     // the volume's FramePoseGpu (BINDING_FRAME_POSE), written by track_decide
-VKM_CONST TRACK_BINDING_COUNT = 13u;
+// The ICP's reads of the per-pixel maps above, as texel buffers (samplerBuffer views of the same buffers; on
+// lavapipe texelFetch is a vector gather where an SSBO load at per-lane addresses is a loop over the lanes).
+VKM_CONST TRACK_BINDING_VERTEX_TEXELS = 13u;          // TRACK_BINDING_VERTICES as RGBA32F
+VKM_CONST TRACK_BINDING_NORMAL_TEXELS = 14u;          // TRACK_BINDING_NORMALS as RGBA32F
+VKM_CONST TRACK_BINDING_MODEL_POSITION_TEXELS = 15u;  // TRACK_BINDING_MODEL_POSITIONS as RGBA32F
+VKM_CONST TRACK_BINDING_MODEL_NORMAL_TEXELS = 16u;    // TRACK_BINDING_MODEL_NORMALS as RGBA32F
+VKM_CONST TRACK_BINDING_INTENSITY_TEXELS = 17u;       // TRACK_BINDING_INTENSITY as R32F
+VKM_CONST TRACK_BINDING_MODEL_INTENSITY_TEXELS = 18u; // TRACK_BINDING_MODEL_INTENSITY as R32F
+VKM_CONST TRACK_BINDING_COUNT = 19u;
 // What one ICP iteration sums over the pixels (one float each). J = [(p - c) x n, n] (6) is the residual
 // r = n . (p - q)'s derivative with respect to a step of the camera pose: a rotation about the camera's
 // centre c and a translation, both in world axes (core/icp_solve.h, applyTwist); w the robust weight. The 6x6 system is symmetric: its upper triangle, row by row.
@@ -489,6 +497,9 @@ struct TrackPush {
 // TrackPush::flags. With TRACK_FLAG_STATE the ICP passes read the estimate from TrackStateGpu (which
 // track_icp_solve updates) instead of cameraToWorld, and do nothing once their level has stopped.
 VKM_CONST TRACK_FLAG_STATE = 1u;
+// With TRACK_FLAG_CHECKERBOARD track_icp_reduce visits only the level's pixels with x + y even (half of them, every
+// row; the level's width is even): TrackerOptions::checkerboard at the finest level.
+VKM_CONST TRACK_FLAG_CHECKERBOARD = 2u;
 VKM_CONST TRACK_FLAG_LEVEL_SHIFT = 8u;
 
 // The GPU-solved mode's state (docs/TRACKING.md, "One submission"): every ICP iteration's solve pass reads the

@@ -1,7 +1,7 @@
 #version 450
 // Model maps for tracking, fragment stage: the nearest surface's world position and unit normal, w = 1, and
 // its vertex colours' intensity; the maps are cleared to w = 0 (and -1), so w = 0 means "no model at this
-// pixel". The same shader runs in the depth pass (colour writes off), so both passes discard alike.
+// pixel". Only front faces are drawn (src/gpu/tracking/model_maps.cpp, record()).
 layout(location = 0) in vec3 worldPos;
 layout(location = 1) in vec3 worldNormal;
 layout(location = 2) in float intensity;

@@ -20,10 +20,8 @@ void main() {
     worldPos = inPosition;
     worldNormal = inNormal;
     intensity = inColor.a > 0.0 ? dot(inColor.rgb, vec3(0.299, 0.587, 0.114)) : -4.0;
-    // The depth pass and the colour pass (which keeps only fragments at exactly the depth the first wrote) must
-    // compute the same position bit for bit: `precise` forbids the compiler to contract either differently.
-    // (`invariant gl_Position` says the same, but the validation layer's SPIR-V checker of Debian 12 rejects
-    // the decoration glslang puts on gl_PerVertex.)
+    // `precise`: the position is computed the same way wherever this shader is compiled (no contraction into
+    // fused multiply-adds that one compiler makes and another does not).
     precise vec3 c;
     c.x = dot(pc.worldToCamera[0].xyz, inPosition) + pc.worldToCamera[0].w;
     c.y = dot(pc.worldToCamera[1].xyz, inPosition) + pc.worldToCamera[1].w;

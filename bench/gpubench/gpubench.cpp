@@ -77,7 +77,9 @@ struct Options {
     bool validation = false;
     bool publish = false;
     bool track = false;        // every frame after a run's first tracked against the mesh (docs/TRACKING.md)
-    std::string trackSolve = "host";   // where tracking solves its 6x6 systems: host (a wait per iteration) or gpu
+    // where tracking solves its 6x6 systems: host (a wait per iteration), gpu, or both (each voxel size run in
+    // both modes, side by side: on a GPU this says which should be the default there)
+    std::string trackSolve = "both";
     bool correct = false;      // after each run, every frame re-fused at a moved pose (docs/CORRECTION.md)
     bool quick = false;
     std::string jsonPath;
@@ -179,6 +181,10 @@ struct VoxelRun {
     // --track: per tracked frame, the tracker's GPU and wall time, host round trips and the position error
     // against the rendered pose; frames lost.
     std::vector<double> trackGpuMs, trackWallMs, trackSubmissions, trackErrorMm;
+    std::vector<std::string> trackStageOrder;                 // the tracker's stages (pyramid, model maps, ICP)
+    std::map<std::string, std::vector<double>> trackStageMs;  //  ... their GPU ms per tracked frame
+    size_t modelDraws = 0;                                    // tracked frames that drew the mesh (not reused maps)
+    std::string trackSolve;       // "host" or "gpu" (--track)
     bool oneSubmission = false;   // --track-solve gpu: tracked frames fused in tracking's submission
     size_t lostFrames = 0;
     // --correct: per re-fused frame, the de-integration's and the re-integration's GPU and wall time (each an
@@ -233,6 +239,11 @@ void fuseSequence(const vkmesh::vk::Context& context, const std::vector<Frame>& 
                 run->trackWallMs.push_back(tr.milliseconds);
                 run->trackSubmissions.push_back(tr.submissions);
                 run->trackErrorMm.push_back(1e3 * (tr.cameraToWorld.block<3, 1>(0, 3) - frame.pose.block<3, 1>(0, 3)).norm());
+                for (const auto& [name, ms] : tr.gpuStageMilliseconds) {
+                    if (!run->trackStageMs.count(name)) run->trackStageOrder.push_back(name);
+                    run->trackStageMs[name].push_back(ms);
+                }
+                run->modelDraws += tr.modelDrawn;
                 run->lostFrames += !tr.tracked;
                 run->oneSubmission = tracked->oneSubmission;
             }
@@ -351,9 +362,10 @@ DriverDescription describeDriver(const vkmesh::vk::Context& context) {
 }
 
 void printRun(const VoxelRun& r, size_t repeat) {
-    std::printf("\nvoxel %s: %zu frames in %zu run(s), %.1f s; at the end %u blocks, %u vertices, %u triangles, %.0f MiB on "
+    std::printf("\nvoxel %s%s: %zu frames in %zu run(s), %.1f s; at the end %u blocks, %u vertices, %u triangles, %.0f MiB on "
                 "the GPU\n",
-                cm(r.voxel).c_str(), r.frames, repeat, r.seconds, r.last.blocksInUse, r.last.verticesInUse,
+                cm(r.voxel).c_str(), r.trackSolve.empty() ? "" : (", tracked, systems solved on the " + r.trackSolve).c_str(),
+                r.frames, repeat, r.seconds, r.last.blocksInUse, r.last.verticesInUse,
                 r.last.liveTriangles, double(r.gpuBytes) / (1 << 20));
     if (r.growths || r.deferredAttempts || r.warnings)
         std::printf("  capacity growths %zu, frames run again after growing %zu, warnings %zu\n", r.growths,
@@ -371,11 +383,13 @@ void printRun(const VoxelRun& r, size_t repeat) {
     }
     row("whole frame, wall", summarize(r.wallMs));
     if (!r.trackWallMs.empty()) {
+        for (const std::string& name : r.trackStageOrder) row("tracking: " + name, summarize(r.trackStageMs.at(name)));
         row("tracking, GPU", summarize(r.trackGpuMs));
         row("tracking, wall", summarize(r.trackWallMs));
         row("tracking, round trips", summarize(r.trackSubmissions));
         row("tracking, error (mm)", summarize(r.trackErrorMm));
-        std::printf("  frames lost by tracking: %zu\n", r.lostFrames);
+        std::printf("  frames lost by tracking: %zu; frames that drew the mesh: %zu of %zu (the others reused the model maps)\n",
+                    r.lostFrames, r.modelDraws, r.trackWallMs.size());
         if (r.oneSubmission)
             std::printf("  (--track-solve gpu: tracking, fusion and meshing are one submission; both wall rows are the whole frame's)\n");
     }
@@ -394,6 +408,8 @@ void printRun(const VoxelRun& r, size_t repeat) {
 json runJson(const VoxelRun& r) {
     json stages = json::object();
     for (const std::string& name : r.stageOrder) stages[name] = toJson(summarize(r.stageMs.at(name)));
+    json trackStages = json::object();
+    for (const std::string& name : r.trackStageOrder) trackStages[name] = toJson(summarize(r.trackStageMs.at(name)));
     if (!r.meshMs.empty()) stages["mesh_total"] = toJson(summarize(r.meshMs));   // fuse's --stats name
     return json{{"voxel_size", r.voxel},
                 {"frames", r.frames},
@@ -415,6 +431,9 @@ json runJson(const VoxelRun& r) {
                                                           {"submissions_per_frame", toJson(summarize(r.trackSubmissions))},
                                                           {"position_error_mm", toJson(summarize(r.trackErrorMm))},
                                                           {"lost_frames", r.lostFrames},
+                                                          {"solve", r.trackSolve},
+                                                          {"gpu_ms_stages", trackStages},
+                                                          {"model_draws", r.modelDraws},
                                                           // tracking, fusion and meshing in one submission:
                                                           // both wall times are the whole frame's
                                                           {"fused_in_tracking_submission", r.oneSubmission}}},
@@ -476,6 +495,8 @@ int run(Options o, const CLI::App& cli) {
     if (o.warmup > 0) {   // raises the GPU's clocks and fills the driver's caches before anything is timed
         std::fprintf(stderr, "warm-up: %zu untimed frames at %s\n", o.warmup, cm(o.voxels.front()).c_str());
         fuseSequence(context, rendered, o.warmup, o.voxels.front(), o.publish, o.track, o.trackSolve == "gpu", false, nullptr);
+        if (o.track && o.trackSolve == "both")   // the other mode's pipelines and caches too
+            fuseSequence(context, rendered, std::min<size_t>(o.warmup, 10), o.voxels.front(), o.publish, true, true, false, nullptr);
     }
     std::vector<VoxelRun> runs;
     // Written after every voxel size, so that a run stopped part way (run.sh's --timeout) leaves what it measured.
@@ -515,18 +536,25 @@ int run(Options o, const CLI::App& cli) {
         file.close();
         if (!file) throw Error("cannot write " + o.jsonPath);
     };
+    // With --track, one run per solve mode asked for (both by default), each voxel size in each mode.
+    std::vector<std::string> solveModes = {""};
+    if (o.track) solveModes = o.trackSolve == "both" ? std::vector<std::string>{"host", "gpu"} : std::vector<std::string>{o.trackSolve};
     for (double voxel : o.voxels) {
-        VoxelRun r;
-        r.voxel = voxel;
-        const auto t0 = Clock::now();
-        for (size_t rep = 0; rep < o.repeat; ++rep) {
-            std::fprintf(stderr, "fusing %zu frames at %s (%zu/%zu)...\n", o.frames, cm(voxel).c_str(), rep + 1, o.repeat);
-            fuseSequence(context, rendered, o.frames, voxel, o.publish, o.track, o.trackSolve == "gpu", o.correct, &r);
+        for (const std::string& solve : solveModes) {
+            VoxelRun r;
+            r.voxel = voxel;
+            r.trackSolve = solve;
+            const auto t0 = Clock::now();
+            for (size_t rep = 0; rep < o.repeat; ++rep) {
+                std::fprintf(stderr, "fusing %zu frames at %s%s (%zu/%zu)...\n", o.frames, cm(voxel).c_str(),
+                             solve.empty() ? "" : (", tracking solved on the " + solve).c_str(), rep + 1, o.repeat);
+                fuseSequence(context, rendered, o.frames, voxel, o.publish, o.track, solve == "gpu", o.correct, &r);
+            }
+            r.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+            printRun(r, o.repeat);
+            runs.push_back(std::move(r));
+            if (!o.jsonPath.empty()) writeJson(false);
         }
-        r.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
-        printRun(r, o.repeat);
-        runs.push_back(std::move(r));
-        if (!o.jsonPath.empty()) writeJson(false);
     }
 
     // The goals of issue 14 are for an H100/H200-class GPU; on any other device this is only a comparison.
@@ -576,9 +604,9 @@ int main(int argc, char** argv) {
                  "the predicted pose) and fused at the tracked pose; reports the tracker's GPU time and its error "
                  "(with it, the orbit has 240 poses unless --loop-frames says)");
     cli.add_option("--track-solve", o.trackSolve,
-                   "with --track: where the ICP systems are solved: host (double, one submission per iteration) or gpu (float, "
-                   "the frame's tracking in one submission)")
-        ->check(CLI::IsMember({"host", "gpu"}));
+                   "with --track: where the ICP systems are solved: host (double, one submission per iteration), gpu (float, "
+                   "the frame's tracking in one submission), or both (default: every voxel size run in each mode)")
+        ->check(CLI::IsMember({"host", "gpu", "both"}));
     cli.add_flag("--correct", o.correct,
                  "after each run, re-fuse every frame as a pose correction does (de-integrated at its pose, fused again 1 cm "
                  "and 0.5 degrees away; docs/CORRECTION.md) and report the cost against fusing a frame");

@@ -156,13 +156,14 @@ void referenceDownsampleModel(const std::vector<Eigen::Vector4f>& positions, con
 
 IcpSums referenceIcpSums(const TrackingLevel& frame, const std::vector<Eigen::Vector4f>& modelPositions,
                          const std::vector<Eigen::Vector4f>& modelNormals, const Pose& estimate, const Pose& modelPose,
-                         const IcpGates& gates, const PhotometricLevel& photometric) {
+                         const IcpGates& gates, const PhotometricLevel& photometric, bool checkerboard) {
     using namespace gpu;
     IcpSums sums{};
     const RigidRows toWorld = rigidRows(estimate), toModel = rigidRows(inverseRigid(modelPose));
     const Intrinsics& k = frame.intrinsics;
     const int w = frame.width, h = frame.height;
     for (size_t i = 0; i < frame.points.size(); ++i) {
+        if (checkerboard && (i % size_t(w) + i / size_t(w)) % 2 != 0) continue;   // TRACK_FLAG_CHECKERBOARD
         const Eigen::Vector4f& point = frame.points[i];
         const Eigen::Vector4f& normal = frame.normals[i];
         if (point.w() == 0.0f || normal.w() == 0.0f) continue;

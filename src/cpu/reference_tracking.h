@@ -34,7 +34,8 @@ void referenceDownsampleModel(const std::vector<Eigen::Vector4f>& positions, con
 
 // One ICP iteration's sums (track_icp_reduce.comp) at one level: the frame's points and normals against the
 // model maps (world space, drawn at modelPose), for the frame at `estimate`, with the level's gates. Each pixel's terms are formed in
-// float as on the GPU and summed in double (the GPU sums in float: compare with a tolerance).
+// float as on the GPU and summed in double (the GPU sums in float: compare with a tolerance). `checkerboard`:
+// only the pixels with x + y even (TRACK_FLAG_CHECKERBOARD).
 // The photometric term's input at one level (TrackerOptions::colorWeight): the frame's and the model's
 // intensity maps (< 0: none), and its weight and Huber delta. Off when `weight` is 0.
 struct PhotometricLevel {
@@ -45,6 +46,6 @@ struct PhotometricLevel {
 };
 IcpSums referenceIcpSums(const TrackingLevel& frame, const std::vector<Eigen::Vector4f>& modelPositions,
                          const std::vector<Eigen::Vector4f>& modelNormals, const Pose& estimate, const Pose& modelPose,
-                         const IcpGates& gates, const PhotometricLevel& photometric = {});
+                         const IcpGates& gates, const PhotometricLevel& photometric = {}, bool checkerboard = false);
 
 }  // namespace vkmesh::cpu

@@ -12,7 +12,7 @@ namespace {
 
 // The few SPIR-V opcodes, decorations and storage classes the reflection needs (SPIR-V spec, section 3).
 enum : uint32_t {
-    kOpExecutionMode = 16, kOpTypePointer = 32, kOpVariable = 59, kOpLoad = 61, kOpStore = 62, kOpCopyMemory = 63,
+    kOpExecutionMode = 16, kOpTypeImage = 25, kOpTypeSampledImage = 27, kOpTypePointer = 32, kOpVariable = 59, kOpLoad = 61, kOpStore = 62, kOpCopyMemory = 63,
     kOpCopyMemorySized = 64, kOpAccessChain = 65, kOpInBoundsAccessChain = 66, kOpPtrAccessChain = 67, kOpArrayLength = 68,
     kOpInBoundsPtrAccessChain = 70, kOpDecorate = 71, kOpCopyObject = 83, kOpFunctionCall = 57, kOpAtomicLoad = 227,
     kOpAtomicStore = 228, kOpAtomicFirst = 229 /* OpAtomicExchange */, kOpAtomicLast = 242 /* OpAtomicXor */,
@@ -20,7 +20,8 @@ enum : uint32_t {
     kOpAtomicFAddEXT = 6035,
 };
 enum : uint32_t { kDecorationBlock = 2, kDecorationBufferBlock = 3, kDecorationBinding = 33, kDecorationDescriptorSet = 34 };
-enum : uint32_t { kStorageUniform = 2, kStorageStorageBuffer = 12 };
+enum : uint32_t { kStorageUniformConstant = 0, kStorageUniform = 2, kStorageStorageBuffer = 12 };
+constexpr uint32_t kDimBuffer = 5;
 constexpr uint32_t kExecutionModeLocalSize = 17;
 constexpr uint32_t kSpirvMagic = 0x07230203;
 
@@ -35,6 +36,7 @@ std::vector<ShaderBinding> reflectBindings(std::span<const uint32_t> spirv, cons
     std::unordered_map<uint32_t, uint32_t> binding, set;   // id -> decoration value
     std::set<uint32_t> block, bufferBlock;                 // struct types decorated Block / BufferBlock
     std::unordered_map<uint32_t, uint32_t> pointee;        // pointer type id -> pointee type id
+    std::set<uint32_t> sampledBufferImages, texelBuffers;  // OpTypeImage Dim Buffer, Sampled 1; sampled images of them
     std::unordered_map<uint32_t, Variable> variables;      // global variables of interest
     std::set<uint32_t> used;
     auto use = [&](uint32_t id) { used.insert(id); };
@@ -48,6 +50,10 @@ std::vector<ShaderBinding> reflectBindings(std::span<const uint32_t> spirv, cons
             if (w[2] == kDecorationDescriptorSet && count >= 4) set[w[1]] = w[3];
             if (w[2] == kDecorationBlock) block.insert(w[1]);
             if (w[2] == kDecorationBufferBlock) bufferBlock.insert(w[1]);
+        } else if (op == kOpTypeImage && count >= 9) {
+            if (w[3] == kDimBuffer && w[7] == 1) sampledBufferImages.insert(w[1]);
+        } else if (op == kOpTypeSampledImage && count >= 3) {
+            if (sampledBufferImages.count(w[2])) texelBuffers.insert(w[1]);
         } else if (op == kOpTypePointer && count >= 4) {
             pointee[w[1]] = w[3];
         } else if (op == kOpVariable && count >= 4) {
@@ -78,8 +84,10 @@ std::vector<ShaderBinding> reflectBindings(std::span<const uint32_t> spirv, cons
             b.type = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
         else if (v.storageClass == kStorageUniform && block.count(type))
             b.type = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER;
+        else if (v.storageClass == kStorageUniformConstant && texelBuffers.count(type))
+            b.type = VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;   // a samplerBuffer (texelFetch)
         else
-            throw fail("binding " + std::to_string(b.binding) + " is neither a uniform nor a storage buffer");
+            throw fail("binding " + std::to_string(b.binding) + " is neither a uniform buffer, a storage buffer nor a samplerBuffer");
         out.push_back(b);
     }
     std::sort(out.begin(), out.end(), [](const ShaderBinding& a, const ShaderBinding& b) { return a.binding < b.binding; });
@@ -104,7 +112,28 @@ uint32_t reflectWorkgroupSize(std::span<const uint32_t> spirv, const std::string
 BindingTable::BindingTable(const Context& context, uint32_t pushConstantSize, uint32_t features)
     : context_(context), pushConstantSize_(pushConstantSize), features_(features) {}
 
-BindingTable::~BindingTable() = default;
+BindingTable::~BindingTable() {
+    for (auto& [binding, b] : bound_)
+        if (b.view) vkDestroyBufferView(context_.device(), b.view, nullptr);
+}
+
+void BindingTable::bindTexels(uint32_t binding, const Buffer& buffer, VkFormat format, uint32_t texelBytes) const {
+    const VkDeviceSize texels = buffer.size() / texelBytes;
+    if (texels > context_.properties().limits.maxTexelBufferElements)
+        throw Error("Buffer '" + buffer.name() + "' (" + std::to_string(texels) + " texels) exceeds the device's maxTexelBufferElements of " +
+                    std::to_string(context_.properties().limits.maxTexelBufferElements));
+    VkBufferViewCreateInfo info{VK_STRUCTURE_TYPE_BUFFER_VIEW_CREATE_INFO};
+    info.buffer = buffer.handle();
+    info.format = format;
+    info.offset = 0;
+    info.range = texels * texelBytes;
+    VkBufferView view = VK_NULL_HANDLE;
+    check(vkCreateBufferView(context_.device(), &info, nullptr, &view), "vkCreateBufferView");
+    Bound& b = bound_[binding];
+    if (b.view) vkDestroyBufferView(context_.device(), b.view, nullptr);   // no recorded use may be pending (bind())
+    b = {buffer.handle(), buffer.size(), buffer.name(), view};
+    for (const ComputePipeline* p : pipelines_) p->write(binding, b);
+}
 
 void BindingTable::bind(uint32_t binding, const Buffer& buffer) const {
     if (buffer.size() > context_.maxStorageBufferRange())
@@ -112,6 +141,7 @@ void BindingTable::bind(uint32_t binding, const Buffer& buffer) const {
                     "maxStorageBufferRange of " + std::to_string(context_.maxStorageBufferRange()) +
                     " bytes; lower the capacity that sizes it");
     Bound& b = bound_[binding];
+    if (b.view) vkDestroyBufferView(context_.device(), b.view, nullptr);
     b = {buffer.handle(), buffer.size(), buffer.name()};
     for (const ComputePipeline* p : pipelines_) p->write(binding, b);
 }
@@ -131,10 +161,11 @@ ComputePipeline::ComputePipeline(const Context& context, const BindingTable& tab
     VkDevice device = context.device();
 
     std::vector<VkDescriptorSetLayoutBinding> layoutBindings;
-    uint32_t uniform = 0;
+    uint32_t uniform = 0, texel = 0;
     for (const ShaderBinding& b : bindings_) {
         layoutBindings.push_back({b.binding, b.type, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr});
         uniform += b.type == VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER;
+        texel += b.type == VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
     }
     VkDescriptorSetLayoutCreateInfo setInfo{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
     setInfo.bindingCount = uint32_t(layoutBindings.size());
@@ -154,6 +185,7 @@ ComputePipeline::ComputePipeline(const Context& context, const BindingTable& tab
         std::vector<VkDescriptorPoolSize> sizes;
         if (storage) sizes.push_back({VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, storage});
         if (uniform) sizes.push_back({VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, uniform});
+        if (texel) sizes.push_back({VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, texel});
         VkDescriptorPoolCreateInfo poolInfo{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
         poolInfo.maxSets = 1;
         poolInfo.poolSizeCount = uint32_t(sizes.size());
@@ -211,13 +243,18 @@ ComputePipeline::~ComputePipeline() {
 void ComputePipeline::write(uint32_t binding, const BindingTable::Bound& bound) const {
     auto it = std::find_if(bindings_.begin(), bindings_.end(), [&](const ShaderBinding& b) { return b.binding == binding; });
     if (it == bindings_.end()) return;   // a buffer this shader does not use
+    const bool texels = it->type == VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
+    if (texels != (bound.view != VK_NULL_HANDLE))
+        throw Error("shader '" + name_ + "' reads binding " + std::to_string(binding) + (texels ? " as texels but buffer '" : " as a buffer but '") +
+                    bound.name + (texels ? "' is bound as a buffer (BindingTable::bindTexels)" : "' is bound as texels"));
     VkDescriptorBufferInfo info{bound.buffer, 0, bound.size};
     VkWriteDescriptorSet write{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
     write.dstSet = set_;
     write.dstBinding = binding;
     write.descriptorCount = 1;
     write.descriptorType = it->type;
-    write.pBufferInfo = &info;
+    if (texels) write.pTexelBufferView = &bound.view;
+    else write.pBufferInfo = &info;
     vkUpdateDescriptorSets(context_.device(), 1, &write, 0, nullptr);
 }
 

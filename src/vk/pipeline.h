@@ -58,6 +58,11 @@ public:
     // (Re)points `binding` at the whole buffer. Never while a command buffer that uses it is recorded but
     // not yet finished (descriptor sets are updated at once).
     void bind(uint32_t binding, const Buffer& buffer) const;
+    // (Re)points `binding` at a view of the whole buffer as texels of `format` (`texelBytes` each), for a shader
+    // that reads it as a samplerBuffer: on lavapipe texelFetch is a vector gather where an SSBO load at per-lane
+    // addresses is a loop over the lanes (docs/TRACKING.md). Throws Error past the device's maxTexelBufferElements.
+    // The buffer needs VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT.
+    void bindTexels(uint32_t binding, const Buffer& buffer, VkFormat format, uint32_t texelBytes) const;
     uint32_t pushConstantSize() const { return pushConstantSize_; }
     uint32_t features() const { return features_; }
 
@@ -67,6 +72,7 @@ private:
         VkBuffer buffer = VK_NULL_HANDLE;
         VkDeviceSize size = 0;
         std::string name;
+        VkBufferView view = VK_NULL_HANDLE;   // bindTexels: the table's own view of the buffer
     };
     const Context& context_;
     uint32_t pushConstantSize_;

@@ -446,6 +446,8 @@ TEST(Cli, TrackStartsFromTheDatasetsFirstPose) {
     EXPECT_LT((tracked[0].cameraToWorld - truth[0].cameraToWorld).cwiseAbs().maxCoeff(), 1e-8);
     for (size_t i = 1; i < tracked.size(); ++i)
         EXPECT_LT((tracked[i].cameraToWorld.block<3, 1>(0, 3) - truth[i].cameraToWorld.block<3, 1>(0, 3)).norm(), 0.01) << i;
+    // The summary says how far the tracked positions are from the dataset's (its own comparison, printed by the demo).
+    EXPECT_NE(r.out.find("tracked positions against the dataset's poses: RMSE"), std::string::npos) << r.out;
 
     // The same with the systems solved on the GPU: one submission per frame, as close to the truth. (Not the same
     // poses: float steps differ from double ones in the 7th digit, and the difference grows through the map each
@@ -459,6 +461,15 @@ TEST(Cli, TrackStartsFromTheDatasetsFirstPose) {
         EXPECT_LT((onGpu[i].cameraToWorld.block<3, 1>(0, 3) - truth[i].cameraToWorld.block<3, 1>(0, 3)).norm(), 0.01) << i;
     const auto gpuStats = nlohmann::json::parse(test::readText(d / "g.json"));
     EXPECT_EQ(gpuStats["tracking"]["solve"], "gpu");
+    // Against the dataset's poses (8 frames, the first shared); the model maps reused by some of the 7 tracked
+    // frames, at most 2 in a row (the default); tracked at the frame's own size (160 x 120: no downsampling below
+    // 640 pixels wide).
+    EXPECT_EQ(gpuStats["tracking"]["position_error_m"]["frames"], 8);
+    EXPECT_LT(gpuStats["tracking"]["position_error_m"]["max"].get<double>(), 0.01);
+    EXPECT_GE(gpuStats["tracking"]["model_draws"].get<int>(), 3);
+    EXPECT_LT(gpuStats["tracking"]["model_draws"].get<int>(), 7);
+    EXPECT_EQ(gpuStats["tracking"]["model_reuse_frames"], 2);
+    EXPECT_EQ(gpuStats["tracking"]["downsample"], 1);
     EXPECT_EQ(gpuStats["tracking"]["submissions_per_frame"]["max"], 1);
     EXPECT_EQ(gpuStats["tracking"]["fused_in_tracking_submission"], true);   // fusion and meshing in that submission
     EXPECT_EQ(gpuStats["frames"]["integrated"], 8) << gpuStats["frames"].dump();

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <limits>
 #include <map>
 #include <numbers>
@@ -87,15 +88,20 @@ UploadedMesh upload(const vk::Context& context, const std::vector<gpu::Vertex>& 
 }
 
 // A square of side 2 * half in the world plane z = depth, normal -z (facing a camera at the origin looking
-// along +z), split into n x n quads.
-void planeMesh(float depth, float half, int n, std::vector<gpu::Vertex>& vertices, std::vector<uint32_t>& indices) {
+// along +z), split into n x n quads wound as the mesh's: counter-clockwise seen from the side the normal
+// points to (free space). `seenFromBehind`: the normal +z and the winding reversed, a back face for that camera.
+
+void planeMesh(float depth, float half, int n, std::vector<gpu::Vertex>& vertices, std::vector<uint32_t>& indices,
+               bool seenFromBehind = false) {
+    const float normalZ = seenFromBehind ? 1.0f : -1.0f;
     for (int j = 0; j <= n; ++j)
         for (int i = 0; i <= n; ++i)
-            vertices.push_back(gpu::Vertex{-half + 2 * half * i / n, -half + 2 * half * j / n, depth, 1u, 0, 0, -1, 0, 0});
+            vertices.push_back(gpu::Vertex{-half + 2 * half * i / n, -half + 2 * half * j / n, depth, 1u, 0, 0, normalZ, 0, 0});
     for (int j = 0; j < n; ++j)
         for (int i = 0; i < n; ++i) {
-            uint32_t a = j * (n + 1) + i, b = a + 1, c = a + n + 1, d = c + 1;
-            indices.insert(indices.end(), {a, b, d, a, d, c});
+            uint32_t a = j * (n + 1) + i, b = a + 1, c = a + n + 1, d = c + 1;   // a b: +x; a c: +y
+            if (seenFromBehind) indices.insert(indices.end(), {a, b, d, a, d, c});
+            else indices.insert(indices.end(), {a, d, b, a, c, d});   // (d - a) x (b - a) points to -z
         }
 }
 
@@ -174,6 +180,20 @@ TEST_F(Tracking, ModelMapsOfAPlaneAreItsRayIntersections) {
         EXPECT_GT(inside, 10000u);
         EXPECT_EQ(wrong, 0u) << "fy " << k.fy;
         EXPECT_EQ(outsideWithModel, 0u) << "fy " << k.fy;
+        // The same plane seen from behind (its normal and winding away from the camera) is a back face: not drawn,
+        // as a ray cast of the TSDF would not stop there.
+        {
+            std::vector<gpu::Vertex> backVertices;
+            std::vector<uint32_t> backIndices;
+            planeMesh(depth, 1.0f, 8, backVertices, backIndices, /*seenFromBehind=*/true);
+            UploadedMesh back = upload(context(), backVertices, backIndices);
+            tracker.prepare(none, k, back.buffers(), Pose::Identity());
+            const CameraTracker::Maps backMaps = tracker.downloadMaps();
+            size_t drawn = 0;
+            for (int i = 0; i < kWidth * kHeight; ++i) drawn += backMaps.modelPositions[size_t(i)].w() != 0.0f;
+            EXPECT_EQ(drawn, 0u) << "fy " << k.fy;
+            tracker.prepare(none, k, mesh.buffers(), Pose::Identity());
+        }
         // The coarser levels: the CPU reference's downsampling of the GPU's level 0.
         std::vector<Eigen::Vector4f> positions = levelOf(maps.modelPositions, tracker, 0), normals = levelOf(maps.modelNormals, tracker, 0);
         for (int l = 1; l < int(gpu::TRACK_LEVELS); ++l) {
@@ -209,19 +229,34 @@ TEST_F(Tracking, IcpSumsMatchCpuReference) {
     ColorImage color0, color2;
     const DepthImage depth0 = roomFrame(0, &color0), depth2 = roomFrame(2, &color2);
     volume.integrate(depth0, &color0, k, orbit()[0]);
-    // Both ways of splitting the pixels among invocations (a GPU's 16, a CPU device's 64) and both weights.
-    for (auto [colorWeight, perInvocation] : {std::pair{0.0f, 16u}, {0.05f, 64u}, {0.05f, 16u}}) {
+    // Both ways of splitting the pixels among invocations (a GPU's 16, a CPU device's 64), both weights, and
+    // both ways of reading the maps (texel buffers; storage buffers, the fallback of a device whose
+    // maxTexelBufferElements is below the pyramid).
+    // And the finest level's checkerboard (half its pixels).
+    struct Case {
+        float colorWeight;
+        uint32_t perInvocation;
+        bool texelReads, checkerboard;
+    };
+    for (auto [colorWeight, perInvocation, texelReads, checkerboard] :
+         {Case{0.0f, 16u, true, false}, Case{0.05f, 64u, true, false}, Case{0.05f, 16u, false, false}, Case{0.05f, 64u, false, false},
+          Case{0.05f, 64u, true, true}, Case{0.0f, 16u, false, true}}) {
         TrackerOptions options;
         options.colorWeight = colorWeight;
         options.pixelsPerInvocation = perInvocation;
+        options.texelReads = texelReads;
+        options.checkerboard = checkerboard;
         CameraTracker tracker(context(), kWidth, kHeight, options);
+        EXPECT_EQ(tracker.readsTexels(), texelReads);   // lavapipe's limit holds a 320 x 240 pyramid
+        EXPECT_EQ(tracker.checkerboardUsed(), checkerboard);   // 320 pixels wide
         tracker.prepare(depth2, k, volume.meshBuffers(), orbit()[0], &color2);
         const CameraTracker::Maps maps = tracker.downloadMaps();
         const gpu::TrackParamsGpu params = gpu::trackParamsFor(options);
         const auto frame = cpu::referenceTrackingPyramid(depth2, k, params);
         for (int l = 0; l < int(gpu::TRACK_LEVELS); ++l) {
             SCOPED_TRACE("colour weight " + std::to_string(colorWeight) + ", " + std::to_string(perInvocation) +
-                         " pixels per invocation, level " + std::to_string(l));
+                         " pixels per invocation, " + (texelReads ? "texel" : "buffer") + " reads" +
+                         (checkerboard ? ", checkerboard" : "") + ", level " + std::to_string(l));
             cpu::TrackingLevel level = frame[l];
             level.points = levelOf(maps.points, tracker, l);   // the GPU's own maps: this checks the ICP pass alone
             level.normals = levelOf(maps.normals, tracker, l);
@@ -237,7 +272,8 @@ TEST_F(Tracking, IcpSumsMatchCpuReference) {
             for (const Pose& estimate : {orbit()[0], orbit()[1]}) {
                 const IcpSums gpuSums = tracker.sums(l, estimate);
                 const IcpSums ref = cpu::referenceIcpSums(level, levelOf(maps.modelPositions, tracker, l), levelOf(maps.modelNormals, tracker, l),
-                                                          estimate, orbit()[0], gpu::icpGatesFor(options, l), photometric);
+                                                          estimate, orbit()[0], gpu::icpGatesFor(options, l), photometric,
+                                                          checkerboard && l == 0);
                 ASSERT_GT(ref[gpu::TRACK_SUM_INLIERS], 100);
                 // Counts: the same pixels pass the same gates (computed the same way in float).
                 EXPECT_EQ(gpuSums[gpu::TRACK_SUM_VALID], ref[gpu::TRACK_SUM_VALID]);
@@ -266,10 +302,10 @@ struct TrackedRun {
 
 // Fuses `frames` frames of the orbit, every pose after the first tracked (the systems solved on the host, or
 // on the GPU with the fusion in the same submission: one per frame).
-TrackedRun trackOrbit(const vk::Context& context, size_t frames, bool noise, float voxel, bool solveOnGpu = false, int downsample = 1) {
+TrackedRun trackOrbit(const vk::Context& context, size_t frames, bool noise, float voxel, bool solveOnGpu = false, int downsample = 1,
+                      TrackerOptions options = {}) {
     gpu::GpuVolume volume(context, volumeConfig(voxel));
     const Intrinsics k = synth::kinectIntrinsics(kWidth, kHeight);
-    TrackerOptions options;
     options.maxDepth = 5.0f;
     options.solveOnGpu = solveOnGpu;
     options.downsample = downsample;
@@ -306,7 +342,7 @@ TEST_P(TrackingModes, NoiselessSequenceTrackedFromItsFirstPoseWithinTwoMillimetr
     const TrackedRun run = trackOrbit(context(), 30, /*noise=*/false, 0.02f, onGpu);
     for (size_t i = 0; i < run.reports.size(); ++i) {
         EXPECT_TRUE(run.reports[i].tracked) << "frame " << i << ": " << run.reports[i].lostReason;
-        if (i > 0) EXPECT_EQ(run.reports[i].submissions, onGpu ? 1u : uint32_t(run.reports[i].iterations) + 1u) << "frame " << i;
+        if (i > 0) { EXPECT_EQ(run.reports[i].submissions, onGpu ? 1u : uint32_t(run.reports[i].iterations) + 1u) << "frame " << i; }
     }
     // Against the exact poses, without any alignment (the first pose is the true one).
     const double rmse = positionRmse(run.poses);
@@ -332,6 +368,62 @@ TEST_F(Tracking, DownsampledFramesStillTrackTheNoiselessSequence) {
     TrackerOptions bad;
     bad.downsample = 3;
     EXPECT_THROW(PoseTracker(context(), bad), Error);
+}
+
+// Reused model maps (TrackerOptions::modelReuse*): a frame predicted close to where the maps were drawn is
+// associated with them instead of a new draw, at most modelReuseFrames frames in a row; the noiseless orbit is
+// still tracked within a few millimetres, in both solve modes.
+TEST_P(TrackingModes, ReusedModelMapsStillTrackTheNoiselessSequence) {
+    if (const std::string why = test::lavapipeCannotDraw(); !why.empty()) GTEST_SKIP() << why;   // these tests draw the mesh
+    TrackerOptions options;
+    options.modelReuseFrames = 2;
+    options.modelReuseMetres = 0.05;   // the orbit moves about 1 cm and 1 degree per frame
+    options.modelReuseDegrees = 5.0;
+    const TrackedRun run = trackOrbit(context(), 20, /*noise=*/false, 0.02f, GetParam(), 1, options);
+    size_t draws = 0, reusedInARow = 0, longestReuse = 0;
+    for (size_t i = 1; i < run.reports.size(); ++i) {
+        EXPECT_TRUE(run.reports[i].tracked) << "frame " << i << ": " << run.reports[i].lostReason;
+        draws += run.reports[i].modelDrawn;
+        reusedInARow = run.reports[i].modelDrawn ? 0 : reusedInARow + 1;
+        longestReuse = std::max(longestReuse, reusedInARow);
+    }
+    const double rmse = positionRmse(run.poses);
+    std::printf("20 noiseless frames, maps reused up to 2 frames in a row: %zu draws for %zu tracked frames, position RMSE %.3f mm\n", draws,
+                run.reports.size() - 1, rmse * 1e3);
+    EXPECT_EQ(longestReuse, 2u);                       // the bound holds, and reuse happened
+    EXPECT_LE(draws, (run.reports.size() - 1) / 2);   // the frame after the first draws, then 2 reuse, ...
+    EXPECT_LT(rmse, 0.003);
+    // Reuse off: every tracked frame draws the mesh.
+    TrackerOptions off;
+    off.modelReuseFrames = 0;
+    const TrackedRun fresh = trackOrbit(context(), 4, /*noise=*/false, 0.02f, GetParam(), 1, off);
+    for (size_t i = 1; i < fresh.reports.size(); ++i) EXPECT_TRUE(fresh.reports[i].modelDrawn) << "frame " << i;
+}
+
+// `vkmesh soak --track`: every lap tracked in a new copy of the room (its first frame placed), the map growing lap
+// after lap; the CSV gains the tracking columns and the summary the per-lap medians (the flat-cost check).
+TEST_F(Tracking, SoakTracksEveryLapInANewCopyOfTheRoom) {
+    if (const std::string why = test::lavapipeCannotDraw(); !why.empty()) GTEST_SKIP() << why;   // tracking draws the mesh
+    const std::filesystem::path d = test::makeTempDir("soak_track");
+    const test::CliRun r = test::runCli("soak -o " + (d / "soak.csv").string() + " --frames 120 --laps 3 --track --summary " +
+                                        (d / "summary.json").string());
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    const std::string csv = test::readText(d / "soak.csv");
+    EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 121);
+    EXPECT_NE(csv.substr(0, csv.find('\n')).find(",ms_other,track_ms,track_gpu_ms,tracked,track_error_m"), std::string::npos);
+    const std::string summary = test::readText(d / "summary.json");
+    EXPECT_NE(summary.find("\"rooms\": 3"), std::string::npos) << summary;   // a room per lap
+    EXPECT_NE(summary.find("\"last_over_first\""), std::string::npos) << summary;
+    EXPECT_NE(summary.find("\"lost_frames\": 0"), std::string::npos) << summary;
+    // 39 tracked frames per lap (the first is placed; 9 degrees of the orbit apart), each within the 5 cm voxels'
+    // reach of the truth.
+    size_t lap = 0;
+    for (size_t at = summary.find("\"tracked_frames\": "); at != std::string::npos; at = summary.find("\"tracked_frames\": ", at + 1), ++lap)
+        EXPECT_EQ(std::stoi(summary.substr(at + 18)), 39) << "lap " << lap;
+    EXPECT_EQ(lap, 3u);
+    for (size_t at = summary.find("\"max_position_error_m\": "); at != std::string::npos; at = summary.find("\"max_position_error_m\": ", at + 1))
+        EXPECT_LT(std::stod(summary.substr(at + 24)), 0.05);
+    std::filesystem::remove_all(d);
 }
 
 // A colour image of the wrong size is refused before anything is recorded, also when the frame would be fused in
@@ -408,11 +500,9 @@ TEST_F(Tracking, GpuSolvedStepMatchesTheHostSolve) {
 // the mesh's triangles (which the fusion's atomics change from run to run: two volumes fused from the same
 // frames hold the same triangles in another order), so the same frames give the same poses bit for bit.
 // Before the maps were drawn order-independently, two runs differed at frame 5 of these 10 in two runs of three
-// (one pixel where two triangles met at the same depth; docs/TRACKING.md, "Determinism").
+// (one pixel where a front and a back face met at the same depth; docs/TRACKING.md, "Determinism").
 TEST_P(TrackingModes, SameFramesGiveTheSameTrajectoryBitForBit) {
     if (const std::string why = test::lavapipeCannotDraw(); !why.empty()) GTEST_SKIP() << why;   // these tests draw the mesh
-    if (!gpu::ModelMapRenderer::drawsTiesIndependentOfOrder(context()))
-        GTEST_SKIP() << "the device cannot blend RGBA32F attachments: equal-depth triangles keep the draw order";
     const TrackedRun a = trackOrbit(context(), 10, /*noise=*/true, 0.03f, GetParam());
     const TrackedRun b = trackOrbit(context(), 10, /*noise=*/true, 0.03f, GetParam());
     ASSERT_EQ(a.poses.size(), b.poses.size());

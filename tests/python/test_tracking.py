@@ -41,9 +41,10 @@ def test_tracking_with_the_systems_solved_on_the_gpu(tmp_path):
     folder = vkmesh.synth(tmp_path / "room", frames=240, width=160, height=120)
     frames = list(vkmesh.open_dataset(folder, frames=6))
     r = vkmesh.Reconstructor(voxel_size=0.03, track_solve="gpu", track_color_weight=0)
-    assert r.stats()["tracking"] == {"color_weight": 0.0, "solve": "gpu", "downsample": 1}
+    assert r.stats()["tracking"] == {"color_weight": 0.0, "solve": "gpu", "downsample": 0, "model_reuse": 2}   # 0: by width
     results = [r.integrate(f.depth, f.intrinsics) for f in frames]
     assert all(res["tracked"] for res in results[1:]), [res["lost_reason"] for res in results]
+    assert any(not res["model_drawn"] for res in results[1:]), "the model maps reused (track_model_reuse=2)"
     first = np.linalg.inv(frames[0].pose)
     for i, f in enumerate(frames):
         assert np.linalg.norm(r.trajectory()[i][:3, 3] - (first @ f.pose)[:3, 3]) < 0.01, i
@@ -60,6 +61,8 @@ def test_tracking_with_the_systems_solved_on_the_gpu(tmp_path):
         vkmesh.Reconstructor(track_color_weight=-1)
     with pytest.raises(ValueError, match="track_downsample"):
         vkmesh.Reconstructor(track_downsample=3)
+    with pytest.raises(ValueError, match="track_model_reuse"):
+        vkmesh.Reconstructor(track_model_reuse=-1)
 
 
 def test_integrate_with_a_pose_returns_none_and_is_in_the_trajectory(small_sequence):

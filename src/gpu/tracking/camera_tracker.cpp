@@ -12,6 +12,8 @@ namespace vkmesh::gpu {
 namespace {
 
 constexpr VkBufferUsageFlags kStorage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
+// The per-pixel maps the ICP pass reads as texel buffers too.
+constexpr VkBufferUsageFlags kMap = kStorage | VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT;
 
 uint32_t levelWidth(int width, int level) { return uint32_t(width) >> level; }
 uint32_t levelHeight(int height, int level) { return uint32_t(height) >> level; }
@@ -28,12 +30,26 @@ uint32_t pixelsPerInvocationFor(const vk::Context& context, const TrackerOptions
 
 }  // namespace
 
+// The options with the iterations resolved for frames `width` pixels wide.
+static TrackerOptions withIterations(TrackerOptions options, int width) {
+    options.iterations = trackingIterations(options, width);
+    return options;
+}
+
+std::array<int, TRACK_LEVELS> trackingIterations(const TrackerOptions& options, int width) {
+    if (options.iterations != std::array<int, TRACK_LEVELS>{}) return options.iterations;
+    // Measured (docs/RESULTS.md, "Tracking"): at 320 x 240, 3 / 4 / 4 tracks TUM fr1/rpy, ICL-NUIM and the
+    // synthetic room as well as 10 / 5 / 4 in 0.6x the iterations; at 160 x 120 it triples the error.
+    return width >= 320 ? std::array<int, TRACK_LEVELS>{3, 4, 4} : std::array<int, TRACK_LEVELS>{10, 5, 4};
+}
+
 TrackParamsGpu trackParamsFor(const TrackerOptions& o) {
     if (o.filterRadius > 4) throw Error("tracking: filter radius " + std::to_string(o.filterRadius) + " is above 4 pixels");
     for (int n : o.iterations)
         if (n < 0 || n > 100) throw Error("tracking: " + std::to_string(n) + " iterations per level is outside 0..100");
-    // The finest level's last system is what the loss checks read (inliers, conditioning).
-    if (o.iterations[0] < 1) throw Error("tracking: the finest level needs at least 1 iteration (got 0)");
+    // The finest level's last system is what the loss checks read (inliers, conditioning); all 0 is "by size".
+    if (o.iterations[0] < 1 && o.iterations != std::array<int, TRACK_LEVELS>{})
+        throw Error("tracking: the finest level needs at least 1 iteration (got 0)");
     for (uint32_t l = 0; l < TRACK_LEVELS; ++l)
         if (!(o.distanceGates[l] > 0) || !(o.huberDeltas[l] > 0) || !(o.normalGateDegrees[l] > 0 && o.normalGateDegrees[l] <= 180))
             throw Error("tracking: level " + std::to_string(l) + "'s distance gate and Huber delta must be positive, its normal gate in "
@@ -96,29 +112,31 @@ static uint32_t pyramidSize(int width, int height, std::array<uint32_t, TRACK_LE
 }
 
 CameraTracker::CameraTracker(const vk::Context& context, int width, int height, const TrackerOptions& options)
-    : context_(context), width_(width), height_(height), options_(options),
+    : context_(context), width_(width), height_(height), options_(withIterations(options, width)),
       pyramidPixels_(pyramidSize(width, height, offsets_)),
       pixelsPerInvocation_(pixelsPerInvocationFor(context, options)),
+      texelReads_(options.texelReads && pyramidPixels_ <= context.properties().limits.maxTexelBufferElements),
+      checkerboard_(options.checkerboard && width >= 320 && width % 2 == 0),
       table_(context, sizeof(TrackPush)),
       params_(context, sizeof(TrackParamsGpu), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, vk::MemoryUse::Upload, "tracking params"),
       rawDepth_(context, VkDeviceSize(width) * height * sizeof(float), kStorage, vk::MemoryUse::Upload, "tracking depth input"),
       rawIntensity_(context, VkDeviceSize(width) * height * sizeof(float), kStorage, vk::MemoryUse::Upload, "tracking intensity input"),
       depth_(context, VkDeviceSize(pyramidPixels_) * sizeof(float), kStorage, vk::MemoryUse::Device, "tracking depth pyramid"),
-      points_(context, VkDeviceSize(pyramidPixels_) * 16, kStorage, vk::MemoryUse::Device, "tracking point pyramid"),
-      normals_(context, VkDeviceSize(pyramidPixels_) * 16, kStorage, vk::MemoryUse::Device, "tracking normal pyramid"),
-      modelPositions_(context, VkDeviceSize(pyramidPixels_) * 16, kStorage, vk::MemoryUse::Device, "tracking model positions"),
-      modelNormals_(context, VkDeviceSize(pyramidPixels_) * 16, kStorage, vk::MemoryUse::Device, "tracking model normals"),
+      points_(context, VkDeviceSize(pyramidPixels_) * 16, kMap, vk::MemoryUse::Device, "tracking point pyramid"),
+      normals_(context, VkDeviceSize(pyramidPixels_) * 16, kMap, vk::MemoryUse::Device, "tracking normal pyramid"),
+      modelPositions_(context, VkDeviceSize(pyramidPixels_) * 16, kMap, vk::MemoryUse::Device, "tracking model positions"),
+      modelNormals_(context, VkDeviceSize(pyramidPixels_) * 16, kMap, vk::MemoryUse::Device, "tracking model normals"),
       partials_(context, VkDeviceSize(std::max(1u, reduceGroups(uint32_t(width) * height))) * TRACK_SUM_COUNT * sizeof(float), kStorage,
                 vk::MemoryUse::Device, "tracking partial sums"),
       sums_(context, TRACK_SUM_COUNT * sizeof(float), kStorage, vk::MemoryUse::Readback, "tracking sums"),
-      intensity_(context, VkDeviceSize(pyramidPixels_) * sizeof(float), kStorage, vk::MemoryUse::Device, "tracking intensity pyramid"),
-      modelIntensity_(context, VkDeviceSize(pyramidPixels_) * sizeof(float), kStorage, vk::MemoryUse::Device, "tracking model intensity"),
+      intensity_(context, VkDeviceSize(pyramidPixels_) * sizeof(float), kMap, vk::MemoryUse::Device, "tracking intensity pyramid"),
+      modelIntensity_(context, VkDeviceSize(pyramidPixels_) * sizeof(float), kMap, vk::MemoryUse::Device, "tracking model intensity"),
       state_(context, sizeof(TrackStateGpu), kStorage, vk::MemoryUse::Readback, "tracking state"),
       filter_(context, table_, "track_filter_depth"),
       downsampleDepth_(context, table_, "track_downsample_depth"),
       vertexNormals_(context, table_, "track_vertex_normals"),
       downsampleModel_(context, table_, "track_downsample_model"),
-      reduce_(context, table_, "track_icp_reduce"),
+      reduce_(context, table_, texelReads_ ? "track_icp_reduce" : "track_icp_reduce_buffers"),
       sum_(context, table_, "track_icp_sum"),
       solve_(context, table_, "track_icp_solve"),
       decide_(context, table_, "track_decide"),
@@ -141,6 +159,14 @@ CameraTracker::CameraTracker(const vk::Context& context, int width, int height, 
     table_.bind(TRACK_BINDING_INTENSITY, intensity_);
     table_.bind(TRACK_BINDING_MODEL_INTENSITY, modelIntensity_);
     table_.bind(TRACK_BINDING_STATE, state_);
+    if (texelReads_) {
+        table_.bindTexels(TRACK_BINDING_VERTEX_TEXELS, points_, VK_FORMAT_R32G32B32A32_SFLOAT, 16);
+        table_.bindTexels(TRACK_BINDING_NORMAL_TEXELS, normals_, VK_FORMAT_R32G32B32A32_SFLOAT, 16);
+        table_.bindTexels(TRACK_BINDING_MODEL_POSITION_TEXELS, modelPositions_, VK_FORMAT_R32G32B32A32_SFLOAT, 16);
+        table_.bindTexels(TRACK_BINDING_MODEL_NORMAL_TEXELS, modelNormals_, VK_FORMAT_R32G32B32A32_SFLOAT, 16);
+        table_.bindTexels(TRACK_BINDING_INTENSITY_TEXELS, intensity_, VK_FORMAT_R32_SFLOAT, 4);
+        table_.bindTexels(TRACK_BINDING_MODEL_INTENSITY_TEXELS, modelIntensity_, VK_FORMAT_R32_SFLOAT, 4);
+    }
 }
 
 CameraTracker::~CameraTracker() { recorder_.wait(); }
@@ -204,9 +230,12 @@ void CameraTracker::recordPrepare(VkCommandBuffer cmd, const DepthImage& depth, 
     checkFrame(depth, color);
     intrinsics_ = intrinsics;
     intrinsics_.width = width_, intrinsics_.height = height_;
-    modelPose_ = modelPose;
+    const bool drawModel = !(keepModelMaps_ && modelDrawn_);
+    if (drawModel) {
+        modelPose_ = modelPose;
+        copyRows(paramValues_.modelWorldToCamera, inverseRigid(modelPose));
+    }
     std::memcpy(rawDepth_.mapped(), depth.meters.data(), depth.meters.size() * sizeof(float));
-    copyRows(paramValues_.modelWorldToCamera, inverseRigid(modelPose));
     const bool withColor = options_.colorWeight > 0 && color && !color->empty();
     if (withColor) {
         // Rec. 601 luma in [0, 1], as the model map's (shaders_render/track_model.vert).
@@ -237,20 +266,36 @@ void CameraTracker::recordPrepare(VkCommandBuffer cmd, const DepthImage& depth, 
     for (int l = 0; l < int(TRACK_LEVELS); ++l) pixelGroups(vertexNormals_, l);
     vk::memoryBarrier(cmd);
     timer_.mark(cmd, "track_pyramid");
-    const float nearDepth = std::max(0.01f, options_.minDepth * 0.5f);
-    const float farDepth = options_.maxDepth > 0 ? options_.maxDepth * 2.0f : 100.0f;
-    modelMaps_.record(cmd, mesh, modelPose, intrinsics_, nearDepth, farDepth, modelPositions_, modelNormals_, modelIntensity_);
-    for (int l = 1; l < int(TRACK_LEVELS); ++l) {
-        pixelGroups(downsampleModel_, l);
-        vk::memoryBarrier(cmd);
+    if (drawModel) {
+        // The far plane at the frame's farthest measurement plus twice the widest association gate: a model point
+        // further away can be associated with no pixel, and it hides nothing (it is the farthest). Triangles
+        // beyond it are clipped, which costs the rasterizer less than drawing and depth-testing them behind the
+        // walls of the view: with the plane at twice the maximum depth, other rooms of the soak were drawn
+        // (docs/RESULTS.md, "Tracking").
+        const float nearDepth = std::max(0.01f, options_.minDepth * 0.5f);
+        float farDepth = options_.maxDepth > 0 ? options_.maxDepth * 2.0f : 100.0f;
+        float farthest = 0;
+        for (float d : depth.meters)
+            if (d > farthest && std::isfinite(d) && (options_.maxDepth <= 0 || d <= options_.maxDepth)) farthest = d;
+        const float widestGate = *std::max_element(options_.distanceGates.begin(), options_.distanceGates.end());
+        if (farthest > 0) farDepth = std::max(nearDepth + 0.1f, std::min(farthest + 2.0f * widestGate, farDepth));
+        modelMaps_.record(cmd, mesh, modelPose, intrinsics_, nearDepth, farDepth, modelPositions_, modelNormals_, modelIntensity_);
+        for (int l = 1; l < int(TRACK_LEVELS); ++l) {
+            pixelGroups(downsampleModel_, l);
+            vk::memoryBarrier(cmd);
+        }
+        modelDrawn_ = true;
     }
     timer_.mark(cmd, "track_model");
 }
 
 void CameraTracker::recordIcpIteration(VkCommandBuffer cmd, int level, const Pose& estimate, bool solveOnGpu) {
-    const uint32_t groups = reduceGroups(levelWidth(width_, level) * levelHeight(height_, level));
+    const bool checkerboard = checkerboard_ && level == 0;
+    const uint32_t pixels = levelWidth(width_, level) * levelHeight(height_, level);
+    const uint32_t groups = reduceGroups(checkerboard ? pixels / 2 : pixels);
     TrackPush push = levelPush(level, estimate);
     if (solveOnGpu) push.flags = TRACK_FLAG_STATE | uint32_t(level) << TRACK_FLAG_LEVEL_SHIFT;
+    if (checkerboard) push.flags |= TRACK_FLAG_CHECKERBOARD;
     reduce_.dispatch(cmd, &push, groups);
     vk::memoryBarrier(cmd);
     TrackPush sumPush{};

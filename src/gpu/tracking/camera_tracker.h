@@ -2,8 +2,9 @@
 // frame to vkmesh's own mesh by point-to-plane ICP, frame to model:
 //   prepare()  one submission: the frame's depth -> bilateral filter -> TRACK_LEVELS-level pyramid -> point and
 //              normal maps per level; the mesh drawn at the model pose (ModelMapRenderer) -> model position and
-//              normal maps, downsampled alike.
-//   sums()     one submission per ICP iteration: projective association with distance and normal gates, Huber
+//              normal maps, downsampled alike (or, after keepModelMaps(true), the last frame's maps kept).
+//   sums()     one submission per ICP iteration (the maps read as texel buffers where the device allows; the
+//              finest level on a checkerboard): projective association with distance and normal gates, Huber
 //              weights, the 6x6 system's terms summed per workgroup by a fixed tree and the partials added in
 //              a fixed order (the same frames give the same poses, bit for bit); the host solves in double
 //              (core/icp_solve.h).
@@ -35,11 +36,14 @@
 namespace vkmesh::gpu {
 
 struct TrackerOptions {
-    // ICP iterations per pyramid level, finest (level 0) first; the coarsest level runs first.
-    std::array<int, TRACK_LEVELS> iterations{10, 5, 4};
+    // ICP iterations per pyramid level, finest (level 0) first; the coarsest level runs first. All 0 (the
+    // default): by the finest tracked level's width (trackingIterations()): 3, 4, 4 from 320 pixels wide (VGA frames
+    // tracked at 320 x 240, or 320 x 240 frames), 10, 5, 4 below, where the coarse levels are tiny (40 x 30) and
+    // the finest level does the work (docs/RESULTS.md, "Tracking").
+    std::array<int, TRACK_LEVELS> iterations{0, 0, 0};
     // A level stops early once a step rotates less than this (radians) and moves less than this (metres).
-    double stopRotation = 1e-5;
-    double stopTranslation = 1e-5;
+    double stopRotation = 1e-4;
+    double stopTranslation = 1e-4;
     // Bilateral filter of the depth before tracking (fusion takes the raw depth).
     float filterSpatialSigma = 4.5f;   // pixels
     float filterDepthSigma = 0.03f;    // metres
@@ -56,7 +60,7 @@ struct TrackerOptions {
     // The photometric term: the frame's intensity against the mesh's vertex colours drawn at the model pose,
     // for frames with colour (and a mesh with colours), added to the geometric system with this weight per
     // pixel (0: geometry only). Intensities are in [0, 1], point-to-plane residuals in metres. On TUM fr1/rpy
-    // (fast rotation) it halves the trajectory error (docs/RESULTS.md, "Issue 22").
+    // (fast rotation) it halves the trajectory error (docs/RESULTS.md, "Tracking").
     float colorWeight = 0.1f;
     float colorHuber = 0.1f;
     // Depth samples outside [minDepth, maxDepth] are ignored (maxDepth 0: no limit).
@@ -78,12 +82,34 @@ struct TrackerOptions {
     // Pixels each invocation of the ICP reduction sums (1..TRACK_MAX_PIXELS_PER_INVOCATION); 0: by device, 64
     // on a CPU device (lavapipe: each workgroup costs) and 16 on a GPU (which wants many workgroups).
     uint32_t pixelsPerInvocation = 0;
+    // The ICP pass reads the per-pixel maps as texel buffers (texelFetch) where the device's
+    // maxTexelBufferElements holds the pyramid, else as storage buffers (false: always). On lavapipe a texel
+    // fetch is a vector gather and an SSBO load at per-lane addresses a loop over the lanes (docs/TRACKING.md).
+    bool texelReads = true;
+    // The finest level's ICP visits half its pixels, a checkerboard (x + y even), when that level is at least
+    // 320 pixels wide (and of even width); below, every pixel (checkerboardUsed()). On TUM fr1/rpy at 320 x 240:
+    // 0.88x the tracking time, the same trajectory errors on the three shared sequences (docs/RESULTS.md).
+    bool checkerboard = true;
     // Track on the frames downsampled by this factor (1, 2 or 4; PoseTracker): the pyramid's finest level is
     // width / downsample by height / downsample, with intrinsics to match; fusion still takes the full frame.
-    // 2 on 640 x 480 frames is a quarter of the finest level's work (docs/TRACKING.md, docs/RESULTS.md).
-    int downsample = 1;
+    // 0 (the default): 2 for frames at least 640 pixels wide, else 1 (trackingDownsample()); at 640 x 480 that is a
+    // quarter of the finest level's work at the same accuracy (docs/TRACKING.md, docs/RESULTS.md "Tracking").
+    int downsample = 0;
+    // Reuse of the model maps (PoseTracker; InfiniTAM's idea): a frame whose predicted pose lies within
+    // modelReuseMetres and modelReuseDegrees of the pose the maps were last drawn at is associated with those
+    // maps (at that pose) instead of a new draw of the mesh, for at most modelReuseFrames frames in a row
+    // (0: the mesh is drawn for every frame). The surface fused meanwhile is missing from reused maps. The
+    // defaults draw half the frames' maps on ICL-NUIM and the synthetic room and 70 % on TUM fr1/rpy, with the
+    // same trajectory errors (docs/RESULTS.md, "Tracking"): on lavapipe the draw is the largest part of tracking.
+    int modelReuseFrames = 2;
+    double modelReuseMetres = 0.04;
+    double modelReuseDegrees = 4.0;
 };
 
+// The factor frames `width` pixels wide are tracked downsampled by (TrackerOptions::downsample, 0 resolved).
+int trackingDownsample(const TrackerOptions& options, int width);
+// The iterations per level (TrackerOptions::iterations, all 0 resolved) for a finest tracked level `width` wide.
+std::array<int, TRACK_LEVELS> trackingIterations(const TrackerOptions& options, int width);
 // The options as the shaders read them (TrackParamsGpu, without the model pose); throws Error naming a value
 // out of range.
 TrackParamsGpu trackParamsFor(const TrackerOptions& options);
@@ -118,6 +144,12 @@ public:
     // width x height; colour is used only with options.colorWeight > 0.
     void prepare(const DepthImage& depth, const Intrinsics& intrinsics, const MeshBuffers& mesh, const Pose& modelPose,
                  const ColorImage* color = nullptr);
+    // Whether the next prepare() (or trackInOneSubmission / recordTrackAndDecide) keeps the model maps of the last
+    // one, drawn at modelPose(), instead of drawing `mesh` at its `modelPose` (ignored until maps were drawn).
+    void keepModelMaps(bool keep) { keepModelMaps_ = keep; }
+    // The pose the current model maps were drawn at, and whether any were.
+    const Pose& modelPose() const { return modelPose_; }
+    bool hasModelMaps() const { return modelDrawn_; }
     // One ICP iteration's sums at `level` for the frame at `estimate` (after prepare; one submission).
     IcpSums sums(int level, const Pose& estimate);
     // ICP from `initial`, coarse to fine (after prepare).
@@ -143,6 +175,8 @@ public:
     // all and per stage: track_pyramid (filter, pyramids), track_model (the mesh drawn, its maps), track_icp.
     double gpuMilliseconds() const;
     const std::vector<std::pair<std::string, double>>& gpuStageMilliseconds() const { return stageMs_; }
+    bool readsTexels() const { return texelReads_; }   // which ICP pass this device and these options got
+    bool checkerboardUsed() const { return checkerboard_; }   // TrackerOptions::checkerboard at this size
     int width() const { return width_; }
     int height() const { return height_; }
     const TrackerOptions& options() const { return options_; }
@@ -178,8 +212,12 @@ private:
     std::array<uint32_t, TRACK_LEVELS> offsets_{};
     uint32_t pyramidPixels_ = 0;
     uint32_t pixelsPerInvocation_ = 16;   // TrackParamsGpu::pixelsPerInvocation for this device
+    bool texelReads_ = false;             // the ICP reads the maps as texel buffers (TrackerOptions::texelReads)
+    bool checkerboard_ = false;           // the finest level's ICP visits a checkerboard (TrackerOptions::checkerboard)
     Intrinsics intrinsics_;
     Pose modelPose_ = Pose::Identity();
+    bool keepModelMaps_ = false;   // keepModelMaps()
+    bool modelDrawn_ = false;      // the model buffers hold maps drawn at modelPose_
     vk::BindingTable table_;
     TrackParamsGpu paramValues_{};   // what params_ holds (the model pose changes every prepare())
     vk::Buffer params_, rawDepth_, rawIntensity_, depth_, points_, normals_, modelPositions_, modelNormals_, partials_, sums_;

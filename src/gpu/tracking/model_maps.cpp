@@ -21,15 +21,9 @@ constexpr int kDepthImage = 3;
 VkFormat imageFormat(int i) { return i == kDepthImage ? kDepthFormat : i == 2 ? kIntensityFormat : kMapFormat; }
 
 
-// Where no model was drawn the position and normal maps keep their clear value: xyz this far below any real
-// coordinate (so that the MAX blend of the equal-depth pass always takes a drawn value), w = 0 ("no model").
+// Where no model was drawn the position and normal maps keep their clear value: xyz far from any real
+// coordinate, w = 0 ("no model").
 constexpr float kNoModel = -3.0e38f;
-
-bool canBlend(const vk::Context& context, VkFormat format) {
-    VkFormatProperties props{};
-    vkGetPhysicalDeviceFormatProperties(context.physicalDevice(), format, &props);
-    return (props.optimalTilingFeatures & VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BLEND_BIT) != 0;
-}
 
 void requireFormat(const vk::Context& context, VkFormat format, VkFormatFeatureFlags feature, const char* what) {
     VkFormatProperties props{};
@@ -52,7 +46,6 @@ ModelMapRenderer::ModelMapRenderer(const vk::Context& context, int width, int he
     requireFormat(context, kMapFormat, VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BIT, "R32G32B32A32_SFLOAT colour attachment");
     requireFormat(context, kIntensityFormat, VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BIT, "R32_SFLOAT colour attachment");
     requireFormat(context, kDepthFormat, VK_FORMAT_FEATURE_DEPTH_STENCIL_ATTACHMENT_BIT, "D32_SFLOAT depth attachment");
-    tiesIndependentOfOrder_ = drawsTiesIndependentOfOrder(context);
 
     VkDevice device = context.device();
     VkShaderModule vert = VK_NULL_HANDLE, frag = VK_NULL_HANDLE;
@@ -159,18 +152,19 @@ ModelMapRenderer::ModelMapRenderer(const vk::Context& context, int width, int he
         viewportState.pScissors = &scissor;
         VkPipelineRasterizationStateCreateInfo raster{VK_STRUCTURE_TYPE_PIPELINE_RASTERIZATION_STATE_CREATE_INFO};
         raster.polygonMode = VK_POLYGON_MODE_FILL;
-        raster.cullMode = VK_CULL_MODE_NONE;   // the nearest surface, whichever side (and a negative fy mirrors)
-        raster.frontFace = VK_FRONT_FACE_COUNTER_CLOCKWISE;
+        raster.cullMode = VK_CULL_MODE_BACK_BIT;   // only the sides facing free space (record())
         raster.lineWidth = 1.0f;
         VkPipelineMultisampleStateCreateInfo multisample{VK_STRUCTURE_TYPE_PIPELINE_MULTISAMPLE_STATE_CREATE_INFO};
         multisample.rasterizationSamples = VK_SAMPLE_COUNT_1_BIT;
-        // Two pipelines (record(): why). The depth pass writes the nearest depth and no colour; the colour pass
-        // draws where the depth is equal, without writing it, and blends by MAX where the device can.
+        // One pass, the nearest front face wins (record(): why front faces only). Two pipelines that differ only
+        // in which winding is the front: a negative fx * fy mirrors the picture and so the winding.
         VkPipelineDepthStencilStateCreateInfo depthState{VK_STRUCTURE_TYPE_PIPELINE_DEPTH_STENCIL_STATE_CREATE_INFO};
         depthState.depthTestEnable = VK_TRUE;
         depthState.depthWriteEnable = VK_TRUE;
         depthState.depthCompareOp = VK_COMPARE_OP_LESS;
-        VkPipelineColorBlendAttachmentState blendAttachments[3]{};   // colour writes off
+        VkPipelineColorBlendAttachmentState blendAttachments[3]{};
+        for (auto& b : blendAttachments)
+            b.colorWriteMask = VK_COLOR_COMPONENT_R_BIT | VK_COLOR_COMPONENT_G_BIT | VK_COLOR_COMPONENT_B_BIT | VK_COLOR_COMPONENT_A_BIT;
         VkPipelineColorBlendStateCreateInfo blend{VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO};
         blend.attachmentCount = 3;
         blend.pAttachments = blendAttachments;
@@ -187,17 +181,13 @@ ModelMapRenderer::ModelMapRenderer(const vk::Context& context, int width, int he
         info.layout = pipelineLayout_;
         info.renderPass = renderPass_;
         info.subpass = 0;
-        VKM_CHECK(vkCreateGraphicsPipelines(device, VK_NULL_HANDLE, 1, &info, nullptr, &depthPipeline_));
-
-        depthState.depthWriteEnable = VK_FALSE;
-        depthState.depthCompareOp = VK_COMPARE_OP_EQUAL;
-        for (auto& b : blendAttachments) {
-            b.colorWriteMask = VK_COLOR_COMPONENT_R_BIT | VK_COLOR_COMPONENT_G_BIT | VK_COLOR_COMPONENT_B_BIT | VK_COLOR_COMPONENT_A_BIT;
-            b.blendEnable = tiesIndependentOfOrder_ ? VK_TRUE : VK_FALSE;
-            b.colorBlendOp = b.alphaBlendOp = VK_BLEND_OP_MAX;   // MAX ignores the blend factors
-            b.srcColorBlendFactor = b.dstColorBlendFactor = b.srcAlphaBlendFactor = b.dstAlphaBlendFactor = VK_BLEND_FACTOR_ONE;
-        }
-        VKM_CHECK(vkCreateGraphicsPipelines(device, VK_NULL_HANDLE, 1, &info, nullptr, &colorPipeline_));
+        // The mesh's triangles are counter-clockwise seen from free space (docs/ARCHITECTURE.md); the projection
+        // keeps the image's axes (x right, y down, as Vulkan's framebuffer), under which a counter-clockwise
+        // triangle seen from the camera has Vulkan's positive area when fx * fy > 0.
+        raster.frontFace = VK_FRONT_FACE_COUNTER_CLOCKWISE;
+        VKM_CHECK(vkCreateGraphicsPipelines(device, VK_NULL_HANDLE, 1, &info, nullptr, &pipeline_));
+        raster.frontFace = VK_FRONT_FACE_CLOCKWISE;
+        VKM_CHECK(vkCreateGraphicsPipelines(device, VK_NULL_HANDLE, 1, &info, nullptr, &mirroredPipeline_));
     } catch (...) {
         if (vert) vkDestroyShaderModule(device, vert, nullptr);
         if (frag) vkDestroyShaderModule(device, frag, nullptr);
@@ -208,16 +198,12 @@ ModelMapRenderer::ModelMapRenderer(const vk::Context& context, int width, int he
     vkDestroyShaderModule(device, frag, nullptr);
 }
 
-bool ModelMapRenderer::drawsTiesIndependentOfOrder(const vk::Context& context) {
-    return canBlend(context, kMapFormat) && canBlend(context, kIntensityFormat);
-}
-
 ModelMapRenderer::~ModelMapRenderer() { release(); }
 
 void ModelMapRenderer::release() {
     VkDevice device = context_.device();
-    if (depthPipeline_) vkDestroyPipeline(device, depthPipeline_, nullptr);
-    if (colorPipeline_) vkDestroyPipeline(device, colorPipeline_, nullptr);
+    if (pipeline_) vkDestroyPipeline(device, pipeline_, nullptr);
+    if (mirroredPipeline_) vkDestroyPipeline(device, mirroredPipeline_, nullptr);
     if (pipelineLayout_) vkDestroyPipelineLayout(device, pipelineLayout_, nullptr);
     if (framebuffer_) vkDestroyFramebuffer(device, framebuffer_, nullptr);
     if (renderPass_) vkDestroyRenderPass(device, renderPass_, nullptr);
@@ -227,7 +213,7 @@ void ModelMapRenderer::release() {
         if (memory_[i]) vkFreeMemory(device, memory_[i], nullptr);
         views_[i] = VK_NULL_HANDLE, images_[i] = VK_NULL_HANDLE, memory_[i] = VK_NULL_HANDLE;
     }
-    depthPipeline_ = VK_NULL_HANDLE, colorPipeline_ = VK_NULL_HANDLE, pipelineLayout_ = VK_NULL_HANDLE, framebuffer_ = VK_NULL_HANDLE, renderPass_ = VK_NULL_HANDLE;
+    pipeline_ = VK_NULL_HANDLE, mirroredPipeline_ = VK_NULL_HANDLE, pipelineLayout_ = VK_NULL_HANDLE, framebuffer_ = VK_NULL_HANDLE, renderPass_ = VK_NULL_HANDLE;
 }
 
 void ModelMapRenderer::record(VkCommandBuffer cmd, const MeshBuffers& mesh, const Pose& cameraToWorld, const Intrinsics& intrinsics,
@@ -256,19 +242,23 @@ void ModelMapRenderer::record(VkCommandBuffer cmd, const MeshBuffers& mesh, cons
     begin.pClearValues = clears;
     vkCmdBeginRenderPass(cmd, &begin, VK_SUBPASS_CONTENTS_INLINE);
     if (hasMesh) {
-        // The mesh's triangle order changes from run to run (its heaps are allocated by atomics), and where two
-        // triangles meet a pixel at exactly the same depth (a fold at a silhouette) one draw would keep
-        // whichever came first: the same frames would give poses differing in the 9th digit. So the maps are
-        // drawn twice: the nearest depth first, then every triangle at exactly that depth, combined by MAX per
-        // component, which is the same in any order (tied triangles agree to float rounding).
+        // One draw of the faces seen from free space, the nearest kept (depth LESS). The mesh's triangle order
+        // changes from run to run (its heaps are allocated by atomics), so the maps must not depend on which of
+        // two triangles at exactly the same depth at a pixel centre came first. Culling back faces is what
+        // makes that so: two front faces sharing an edge lie on opposite sides of it on screen, and the
+        // rasterizer's fill rule gives a pixel centre on the edge to exactly one of them; the ties that two
+        // passes (nearest depth, then the equal-depth triangles blended by MAX) used to resolve were folds at
+        // silhouettes, a front face against a back one. It is also what a ray cast of the TSDF finds (the
+        // first zero crossing from free space into the surface), and a back face's normal points away from
+        // the camera, which the ICP's normal gate rejects anyway. Half the draws of the two-pass maps:
+        // 47 -> 25 ms per frame on lavapipe (docs/RESULTS.md, "Tracking").
         VkDeviceSize zero = 0;
         vkCmdBindVertexBuffers(cmd, 0, 1, &mesh.vertices, &zero);
         vkCmdBindIndexBuffer(cmd, mesh.indices, 0, VK_INDEX_TYPE_UINT32);
-        for (VkPipeline pipeline : {depthPipeline_, colorPipeline_}) {
-            vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline);
-            vkCmdPushConstants(cmd, pipelineLayout_, VK_SHADER_STAGE_VERTEX_BIT, 0, sizeof(push), &push);
-            vkCmdDrawIndexedIndirect(cmd, mesh.drawIndirect, mesh.drawIndirectOffset, 1, 0);
-        }
+        const bool mirrored = intrinsics.fx * intrinsics.fy < 0;
+        vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, mirrored ? mirroredPipeline_ : pipeline_);
+        vkCmdPushConstants(cmd, pipelineLayout_, VK_SHADER_STAGE_VERTEX_BIT, 0, sizeof(push), &push);
+        vkCmdDrawIndexedIndirect(cmd, mesh.drawIndirect, mesh.drawIndirectOffset, 1, 0);
     }
     vkCmdEndRenderPass(cmd);
 

@@ -1,8 +1,8 @@
 // Tracking's model maps: vkmesh's mesh drawn by the Vulkan rasterizer at a camera pose with the depth camera's
 // own intrinsics, into a world-space position map and a unit-normal map (RGBA32F, w = 1 where the mesh is,
-// 0 elsewhere, where xyz is meaningless) and an intensity map of its vertex colours (R32F, -1 where it has none), then copied into
-// level 0 of the tracker's model pyramid buffers. One draw replaces a raycast
-// of the TSDF (shaders_render/track_model.*). The draw reads the mesh buffers as they are (MeshBuffers, an
+// 0 elsewhere, where xyz is meaningless) and an intensity map of its vertex colours (R32F, -1 where it has none),
+// then copied into level 0 of the tracker's model pyramid buffers. Only the faces seen from free space are
+// drawn, nearest first, in one pass. One draw replaces a raycast of the TSDF (shaders_render/track_model.*). The draw reads the mesh buffers as they are (MeshBuffers, an
 // indirect indexed draw), so no mesh goes through the host.
 #pragma once
 
@@ -29,12 +29,6 @@ public:
     void record(VkCommandBuffer cmd, const MeshBuffers& mesh, const Pose& cameraToWorld, const Intrinsics& intrinsics,
                 float nearDepth, float farDepth, const vk::Buffer& positions, const vk::Buffer& normals,
                 const vk::Buffer& intensity) const;
-    // Whether the maps are the same whatever the order of the mesh's triangles: the device blends RGBA32F and
-    // R32F attachments (record(): equal-depth triangles are combined by MAX). Without, a pixel where two
-    // triangles lie at exactly the same depth keeps the last one drawn.
-    bool tiesIndependentOfOrder() const { return tiesIndependentOfOrder_; }
-    static bool drawsTiesIndependentOfOrder(const vk::Context& context);
-
 private:
     void release();
     const vk::Context& context_;
@@ -46,8 +40,8 @@ private:
     VkRenderPass renderPass_ = VK_NULL_HANDLE;
     VkFramebuffer framebuffer_ = VK_NULL_HANDLE;
     VkPipelineLayout pipelineLayout_ = VK_NULL_HANDLE;
-    VkPipeline depthPipeline_ = VK_NULL_HANDLE, colorPipeline_ = VK_NULL_HANDLE;
-    bool tiesIndependentOfOrder_ = false;
+    VkPipeline pipeline_ = VK_NULL_HANDLE;           // front faces counter-clockwise (fx * fy > 0)
+    VkPipeline mirroredPipeline_ = VK_NULL_HANDLE;   // clockwise (a negative fx * fy mirrors the picture)
 };
 
 }  // namespace vkmesh::gpu

@@ -62,16 +62,24 @@ std::string format(const char* pattern, double a, double b) {
 
 }  // namespace
 
+int trackingDownsample(const TrackerOptions& options, int width) {
+    // 640 x 480 (the common RGB-D frame) tracks as well at 320 x 240, at a quarter of the finest level's work;
+    // smaller frames keep every pixel (docs/RESULTS.md, "Tracking").
+    if (options.downsample == 0) return width >= 640 ? 2 : 1;
+    return options.downsample;
+}
+
 PoseTracker::PoseTracker(const vk::Context& context, const TrackerOptions& options) : context_(context), options_(options) {
-    if (options.downsample != 1 && options.downsample != 2 && options.downsample != 4)
-        throw Error("tracking: downsample " + std::to_string(options.downsample) + " is not 1, 2 or 4");
+    if (options.downsample != 0 && options.downsample != 1 && options.downsample != 2 && options.downsample != 4)
+        throw Error("tracking: downsample " + std::to_string(options.downsample) + " is not 0 (by the frame's width), 1, 2 or 4");
     trackParamsFor(options);   // every other setting checked before the first frame
 }
 
 PoseTracker::~PoseTracker() = default;
 
 PoseTracker::TrackingInput PoseTracker::trackingInput(const DepthImage& depth, const ColorImage* color, const Intrinsics& intrinsics) {
-    if (options_.downsample == 1) return {&depth, color, intrinsics};   // CameraTracker checks the sizes
+    const int downsample = trackingDownsample(options_, depth.width);
+    if (downsample == 1) return {&depth, color, intrinsics};   // CameraTracker checks the sizes
     // Checked before they are read here.
     if (depth.width < 0 || depth.height < 0 || depth.meters.size() != size_t(depth.width) * size_t(depth.height))
         throw Error("tracking: a depth image of " + std::to_string(depth.meters.size()) + " samples is not " + std::to_string(depth.width) +
@@ -85,7 +93,7 @@ PoseTracker::TrackingInput PoseTracker::trackingInput(const DepthImage& depth, c
     const bool withColor = color && !color->empty() && options_.colorWeight > 0;
     if (withColor) smallColor_ = halveColor(*color);
     int levels = 1;
-    if (options_.downsample == 4) {
+    if (downsample == 4) {
         smallDepth_ = halveDepth(smallDepth_, band);
         if (withColor) smallColor_ = halveColor(smallColor_);
         levels = 2;
@@ -98,6 +106,7 @@ TrackingReport PoseTracker::start(const Pose& cameraToWorld) {
     lastTracked_ = cameraToWorld;
     velocity_ = Pose::Identity();
     recentRmse_.clear();
+    modelFresh_ = false;   // a new start (a jump, a new map): the mesh is drawn again
     TrackingReport report;
     report.cameraToWorld = cameraToWorld;
     report.tracked = true;
@@ -142,6 +151,18 @@ CameraTracker& PoseTracker::trackerFor(const DepthImage& depth) {
     return *tracker_;
 }
 
+bool PoseTracker::reuseModelMaps(CameraTracker& tracker, const Pose& predicted) {
+    bool reuse = modelFresh_ && tracker.hasModelMaps() && modelReuses_ < options_.modelReuseFrames;
+    if (reuse) {
+        const Pose moved = inverseRigid(tracker.modelPose()) * predicted;
+        reuse = translationMetres(moved) <= options_.modelReuseMetres && rotationDegrees(moved) <= options_.modelReuseDegrees;
+    }
+    modelReuses_ = reuse ? modelReuses_ + 1 : 0;
+    modelFresh_ = true;
+    tracker.keepModelMaps(reuse);
+    return reuse;
+}
+
 double PoseTracker::recentRmse() const {
     return recentRmse_.empty() ? 0.0 : std::accumulate(recentRmse_.begin(), recentRmse_.end(), 0.0) / double(recentRmse_.size());
 }
@@ -169,6 +190,7 @@ TrackingReport PoseTracker::conclude(const IcpResult& icp, uint32_t reason, doub
         report.lostReason = lossText(reason, icp.finalSystem, conditioning, motion, recentRmse(), options_);
         report.cameraToWorld = predicted;
         velocity_ = Pose::Identity();   // the motion is unknown now: predict the last tracked pose
+        modelFresh_ = false;            // and draw the mesh for the next frame
     }
     return report;
 }
@@ -178,6 +200,7 @@ TrackingReport PoseTracker::track(const DepthImage& depth, const Intrinsics& int
     const TrackingInput in = trackingInput(depth, color, intrinsics);
     CameraTracker& tracker = trackerFor(*in.depth);
     const Pose predicted = prediction();
+    const bool reused = reuseModelMaps(tracker, predicted);
     IcpResult icp;
     if (options_.solveOnGpu) {
         icp = tracker.trackInOneSubmission(*in.depth, in.intrinsics, mesh, predicted, predicted, in.color);
@@ -188,6 +211,7 @@ TrackingReport PoseTracker::track(const DepthImage& depth, const Intrinsics& int
     const Pose motion = inverseRigid(lastTracked_) * icp.cameraToWorld;
     const uint32_t reason = trackingLoss(icp.finalSystem, icp.finalStep.solved, icp.finalStep.conditioning, motion, recentRmse(), options_);
     TrackingReport report = conclude(icp, reason, icp.finalStep.conditioning, icp.cameraToWorld, predicted);
+    report.modelDrawn = !reused;
     report.milliseconds = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     return report;
 }
@@ -210,6 +234,7 @@ TrackedFusion PoseTracker::trackAndFuse(GpuVolume& volume, const DepthImage& dep
     CameraTracker& tracker = trackerFor(*in.depth);
     tracker.checkFrame(*in.depth, in.color);   // recordPose must not throw: the frame would be half recorded
     const Pose predicted = prediction();
+    const bool reused = reuseModelMaps(tracker, predicted);
     const MeshBuffers mesh = volume.meshBuffers();   // last frame's mesh: the frame's own export replaces it later
     const Pose lastTracked = lastTracked_;
     const double recent = recentRmse();
@@ -224,6 +249,7 @@ TrackedFusion PoseTracker::trackAndFuse(GpuVolume& volume, const DepthImage& dep
     // The GPU's verdict is what happened (the frame was fused or not); the pose is the GPU's own estimate, the one
     // the volume fused at.
     out.tracking = conclude(icp, icp.gpuLostReason, icp.gpuConditioning, icp.gpuEstimate, predicted);
+    out.tracking.modelDrawn = !reused;
     out.oneSubmission = true;
     out.tracking.milliseconds = out.fuseMilliseconds = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     if (frame.skipped != !out.tracking.tracked)

@@ -35,6 +35,7 @@ struct TrackingReport {
     double conditioning = 0;
     double milliseconds = 0;                // wall time of track()
     double gpuMilliseconds = 0;             // GPU time of the tracking passes (timestamps)
+    bool modelDrawn = false;                // the mesh was drawn for this frame (not the last maps reused)
     std::vector<std::pair<std::string, double>> gpuStageMilliseconds;   // ... per stage (CameraTracker)
 };
 
@@ -89,6 +90,9 @@ private:
     TrackingInput trackingInput(const DepthImage& depth, const ColorImage* color, const Intrinsics& intrinsics);
     CameraTracker& trackerFor(const DepthImage& depth);
     double recentRmse() const;
+    // Whether the frame predicted at `predicted` reuses the last model maps (TrackerOptions::modelReuse*); tells
+    // the tracker so.
+    bool reuseModelMaps(CameraTracker& tracker, const Pose& predicted);
     // The report of a frame whose ICP found `icp` (its verdict `reason`), and the prediction state moved on.
     TrackingReport conclude(const IcpResult& icp, uint32_t reason, double conditioning, const Pose& estimate, const Pose& predicted);
     const vk::Context& context_;
@@ -98,6 +102,8 @@ private:
     Pose lastTracked_ = Pose::Identity();
     Pose velocity_ = Pose::Identity();         // last tracked motion, in the camera's frame
     std::deque<double> recentRmse_;            // of the last tracked frames (the "error rises" check)
+    int modelReuses_ = 0;                      // frames in a row that reused the model maps
+    bool modelFresh_ = false;                  // the maps were drawn since start() and no frame was lost since
     DepthImage smallDepth_;                    // the frame downsampled (options.downsample > 1)
     ColorImage smallColor_;
 };
