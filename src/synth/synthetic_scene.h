@@ -112,6 +112,23 @@ public:
     // red/white stripes, torus 4 cm green/yellow checker, rounded_box 15 mm blue/white stripes, ramp 10 cm
     // orange/black checker, thin_plate 12 cm purple/grey stripes, pole uniform cyan.
     static SyntheticScene defaultRoom();
+    // A gallery for drift and loop-closure tests: "hall", 13 m x 13 m x 3 m, its floor at z = 0 around the
+    // world origin, turned -25 degrees about the vertical, with 24 distinct exhibits ("exhibit_00" ..
+    // "exhibit_23": boxes, spheres, cylinders and tori, each of its own size, colours and pattern) on a ring of
+    // radius ~5.3 m along the walls. Its path (PathKind::GalleryLoop) circles the middle looking outward, so
+    // every view shows the floor, a wall and two or three exhibits, and most of it is new until the loop closes:
+    // frame-to-model tracking drifts there (the default room, always seen whole, barely does). The hall's
+    // 0.5 m checker and the exhibits are textured for the colour term, and nothing repeats around the ring, so
+    // a place recognizer can tell where on the loop it is.
+    static SyntheticScene gallery();
+    // A false-loop trap: a room of 9 m x 4 m x 2.5 m, its floor at z = 0 around the world origin, turned 15
+    // degrees about the vertical, with two identical groups of objects ("a_*" and "b_*": the same box,
+    // sphere, cylinder and torus, same sizes, colours and patterns, in the same layout) 4.4 m apart along its
+    // length, 1.1 m in front of a long wall. What surrounds them differs: a tall pole left of group a, a
+    // slanted board right of group b, and a few other objects between the groups that keep tracking alive
+    // while the camera travels (PathKind::TwinVisit). Seen from the same spot relative to either group, most
+    // of the view is the same; a loop closer that trusts appearance alone closes a loop that is not there.
+    static SyntheticScene twinGroups();
     // A single sphere in empty space (everything outside it is free space).
     static SyntheticScene singleSphere(const Eigen::Vector3d& center, double radius);
     // Free space where normal . p > offset, matter below; `normal` need not be unit length (it is normalised,
@@ -161,15 +178,29 @@ Intrinsics kinectIntrinsics(int width = 640, int height = 480);
 void validateIntrinsics(const Intrinsics& intrinsics);
 
 enum class PathKind {
-    Orbit,    // one smooth loop around the default room's centre, the last frame one step before the first
-    Revisit,  // the same loop driven three times, for loop-closure / revisiting tests: with frames a multiple
-              // of 3, frame i and frame i + frames / 3 have the same pose
+    Orbit,        // defaultRoom(): one smooth loop around the room's centre, the last frame one step before the first
+    Revisit,      // defaultRoom(): the same loop driven three times, for loop-closure / revisiting tests: with
+                  // frames a multiple of 3, frame i and frame i + frames / 3 have the same pose
+    GalleryLoop,  // gallery(): a circle of radius 3.3 m around the hall's centre, looking outward at the walls
+                  // and exhibits (so the model keeps growing: tracking drifts), 1.4 m +- 0.1 m high, pitched
+                  // ~18 degrees down, with a gentle sway of radius, heading, pitch and roll. It starts at rest,
+                  // reaching full speed over the first tenth of a lap; the lap takes 5/6 of the frames and the
+                  // last sixth drives the start again: with frames a multiple of 6, frame i + 5 frames / 6 has
+                  // frame i's pose for every i from frames / 12 on (the first pass is at full speed there).
+    TwinVisit,    // twinGroups(): a first quarter swaying in front of group a (looking at it), a half travelling
+                  // sideways along the room to group b (looking at the wall and the objects between), a last
+                  // quarter in front of group b repeating the first quarter's poses relative to its group: with
+                  // frames a multiple of 4, frame i + 3 frames / 4 is frame i's pose moved by the groups' offset.
 };
 
-// Camera-to-world poses for the default room: an ellipse of 3.2 m x 2.3 m around the room centre, camera
-// height 1.5 m +- 0.2 m, looking at the objects (a gently wandering target ~0.55 m above the floor) with
-// +-10 degrees of roll, so planes are seen from many angles. All rotations are proper (orthonormal,
-// det +1). Throws Error for frames = 0.
+// The name `vkmesh synth --path` takes: "orbit", "revisit", "gallery-loop", "twin-visit".
+std::string_view pathName(PathKind kind);
+
+// Camera-to-world poses for the scene the path is made for (see PathKind). Orbit and Revisit, in the default
+// room: an ellipse of 3.2 m x 2.3 m around the room centre, camera height 1.5 m +- 0.2 m, looking at the
+// objects (a gently wandering target ~0.55 m above the floor) with +-10 degrees of roll, so planes are seen
+// from many angles. Every path is smooth (neighbouring frames close in position and angle) and every
+// rotation proper (orthonormal, det +1). Throws Error for frames = 0.
 std::vector<Pose> cameraPath(size_t frames, PathKind kind = PathKind::Orbit);
 
 // The seed frame `frame` of a sequence seeded `seed` is rendered with (writeTumSequence, synth/tum_sequence.h):

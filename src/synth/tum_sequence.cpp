@@ -153,7 +153,7 @@ const char* kReadmeText =
 
 void writeTumSequence(const std::filesystem::path& dir, const SyntheticScene& scene, const SequenceOptions& options) {
     const std::string where = "writeTumSequence('" + dir.string() + "'): ";
-    if (options.frames == 0) throw Error(where + "frames must be at least 1, got 0");
+    if (options.frames == 0 && options.poses.empty()) throw Error(where + "frames must be at least 1, got 0");
     if (options.width <= 0 || options.height <= 0)
         throw Error(where + "image size " + std::to_string(options.width) + "x" + std::to_string(options.height) +
                     " must be positive");
@@ -182,7 +182,7 @@ void writeTumSequence(const std::filesystem::path& dir, const SyntheticScene& sc
                         (error ? error.message() : std::string("not a directory")));
     }
 
-    const std::vector<Pose> poses = cameraPath(options.frames, options.path);
+    const std::vector<Pose> poses = options.poses.empty() ? cameraPath(options.frames, options.path) : options.poses;
     RenderOptions renderOptions;
     renderOptions.maxRange = options.maxRange;
     renderOptions.noise = options.noise;
@@ -238,9 +238,11 @@ void writeTumSequence(const std::filesystem::path& dir, const SyntheticScene& sc
     {
         const std::filesystem::path path = dir / "README.txt";
         std::ofstream out = openForWriting(path);
-        out << kReadmeText << "Frames: " << options.frames << ", " << options.width << "x" << options.height
+        const std::string pathDescription =
+            options.poses.empty() ? std::string(pathName(options.path)) : std::string("given poses");
+        out << kReadmeText << "Frames: " << poses.size() << ", " << options.width << "x" << options.height
             << ", noise: " << (options.noise ? "Kinect-like (seed " + std::to_string(options.seed) + ")" : "none")
-            << ", path: " << (options.path == PathKind::Revisit ? "revisit (the loop driven 3 times)" : "orbit")
+            << ", path: " << pathDescription
             << ", colour noise sigma: " << options.colorNoise << ", exposure drift: " << options.exposureDrift
             << ".\n";
         finishWriting(out, path);

@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <vector>
 
 #include "core/types.h"
 #include "synth/synthetic_scene.h"
@@ -21,6 +22,9 @@ struct SequenceOptions {
     bool noise = false;
     uint32_t seed = 1;  // frame i is rendered with a seed derived from (seed, i)
     PathKind path = PathKind::Orbit;
+    // When not empty, exactly these camera-to-world poses are rendered, one frame each (frames and path are
+    // ignored): a test can cut frames out of a path (a kidnapped camera) or splice paths together.
+    std::vector<Pose> poses;
     float maxRange = 8;
     double gtPointSpacing = 0.005;  // metres between ground-truth surface samples in gt_points.ply
     double colorNoise = 0;     // sigma of per-pixel colour noise, 0-255 units (RenderOptions::colorNoise)
@@ -29,9 +33,9 @@ struct SequenceOptions {
     double exposureDrift = 0;
 };
 
-// Writes a TUM-layout sequence of `scene` seen along cameraPath(options.frames, options.path) into `dir`
-// (created if needed). The path is made for defaultRoom(); another scene is seen from the same poses (they
-// circle the world z axis at ~1.5 m height, looking down at a point ~0.55 m above the origin). Files:
+// Writes a TUM-layout sequence of `scene` seen along cameraPath(options.frames, options.path), or from
+// options.poses when given, into `dir` (created if needed). Each path is made for one scene (PathKind says
+// which); another scene is seen from the same poses. Files:
 //   depth/NNNNNN.png   uint16, metres x 5000 rounded, 0 = no measurement;
 //   depth.txt          "timestamp depth/NNNNNN.png", timestamps 1.0, 1.033, ...;
 //   rgb/NNNNNN.png     8-bit RGB on the depth grid (the same camera): the scene's textures, with the
@@ -43,7 +47,8 @@ struct SequenceOptions {
 //                      exact texture colour at gain 1) sampled uniformly by area on the visible-from-free-space
 //                      surface of every object;
 //   scene.json         the objects, their parameters and textures;  README.txt  what all this is.
-// Throws Error naming the folder, file or value at fault (frames = 0, bad intrinsics, unwritable folder).
+// Throws Error naming the folder, file or value at fault (frames = 0 without poses, bad intrinsics, a pose
+// that is not rigid, unwritable folder).
 void writeTumSequence(const std::filesystem::path& dir, const SyntheticScene& scene,
                       const SequenceOptions& options = {});
 

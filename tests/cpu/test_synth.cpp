@@ -15,6 +15,7 @@
 #include <numbers>
 #include <set>
 #include <sstream>
+#include <utility>
 
 using namespace vkmesh;
 using namespace vkmesh::synth;
@@ -343,6 +344,120 @@ TEST(SyntheticPath, ProperSmoothLoops) {
         }
     }
     EXPECT_THROW(cameraPath(0), Error);
+}
+
+namespace {
+
+// The loop-closure scenes' paths: smooth, rigid, in free space.
+void expectSmoothInFreeSpace(const std::vector<Pose>& path, const SyntheticScene& scene, double clearance) {
+    for (size_t i = 0; i < path.size(); ++i) {
+        expectProperRotation(path[i]);
+        const Eigen::Vector3d eye = path[i].topRightCorner<3, 1>();
+        EXPECT_GT(scene.sdf(eye), clearance) << "camera " << i << " too close to something";
+        if (i + 1 == path.size()) break;
+        EXPECT_LT((path[i + 1].topRightCorner<3, 1>() - eye).norm(), 0.15) << i;
+        const Eigen::Matrix3d relative = path[i].topLeftCorner<3, 3>().transpose() * path[i + 1].topLeftCorner<3, 3>();
+        EXPECT_LT(Eigen::AngleAxisd(relative).angle(), 0.1) << i;
+    }
+}
+
+}  // namespace
+
+TEST(SyntheticPath, GalleryLoopLooksOutwardAndRevisitsItsStart) {
+    const auto scene = SyntheticScene::gallery();
+    const std::vector<Pose> path = cameraPath(240, PathKind::GalleryLoop);
+    ASSERT_EQ(path.size(), 240u);
+    expectSmoothInFreeSpace(path, scene, 0.5);
+    const Eigen::Vector3d hallCenter = scene.object("hall").center();
+    for (size_t i = 0; i < path.size(); ++i) {
+        const Eigen::Vector3d eye = path[i].topRightCorner<3, 1>();
+        Eigen::Vector3d outward = eye - hallCenter;
+        outward.z() = 0;
+        EXPECT_GT(path[i].col(2).head<3>().dot(outward.normalized()), 0.8) << "camera " << i << " not looking outward";
+    }
+    // The path starts at rest: frame 1 is a small step, not a lap's average one.
+    const Eigen::Vector3d firstStep = path[1].topRightCorner<3, 1>() - path[0].topRightCorner<3, 1>();
+    EXPECT_LT(firstStep.norm(), 0.01);
+    // The last sixth drives the start again: near an early pose throughout, and exactly on one once the first
+    // pass is at full speed (a lap is 200 frames, its first 20 the start from rest).
+    for (size_t i = 200; i < path.size(); ++i) {
+        double nearest = 1e9;
+        for (size_t j = 0; j < 60; ++j) nearest = std::min(nearest, (path[i] - path[j]).cwiseAbs().maxCoeff());
+        EXPECT_LT(nearest, i >= 210 ? 1e-6 : 0.05) << "frame " << i << " revisits no early pose";
+    }
+}
+
+TEST(SyntheticPath, TwinVisitSeesBothGroupsFromTheSameSpot) {
+    const auto scene = SyntheticScene::twinGroups();
+    // The groups are identical but for where they stand.
+    const Eigen::Vector3d offset = scene.object("b_box").center() - scene.object("a_box").center();
+    EXPECT_GT(offset.norm(), 4.0);
+    for (const char* part : {"box", "sphere", "cylinder", "torus"}) {
+        const Object& a = scene.object(std::string("a_") + part);
+        const Object& b = scene.object(std::string("b_") + part);
+        EXPECT_EQ(a.kind, b.kind) << part;
+        EXPECT_LT((b.center() - a.center() - offset).norm(), 1e-12) << part;
+        EXPECT_LT((b.objectToWorld.linear() - a.objectToWorld.linear()).cwiseAbs().maxCoeff(), 1e-12) << part;
+        EXPECT_EQ(a.halfExtents, b.halfExtents) << part;
+        EXPECT_EQ(a.radius, b.radius) << part;
+        EXPECT_EQ(a.texture.a, b.texture.a) << part;
+        EXPECT_EQ(a.texture.period, b.texture.period) << part;
+    }
+    const std::vector<Pose> path = cameraPath(200, PathKind::TwinVisit);
+    ASSERT_EQ(path.size(), 200u);
+    expectSmoothInFreeSpace(path, scene, 0.3);
+    // The last quarter is the first moved by the groups' offset: the same view of the other group.
+    for (size_t i = 0; i < 50; ++i) {
+        const Pose& early = path[i];
+        const Pose& late = path[i + 150];
+        const Eigen::Matrix3d turn = late.topLeftCorner<3, 3>() - early.topLeftCorner<3, 3>();
+        EXPECT_LT(turn.cwiseAbs().maxCoeff(), 1e-9) << i;
+        EXPECT_LT((late.topRightCorner<3, 1>() - early.topRightCorner<3, 1>() - offset).norm(), 1e-9) << i;
+    }
+    // Each visit looks at its group.
+    for (const auto& [frame, name] : {std::pair<size_t, const char*>{10, "a_sphere"}, {160, "b_sphere"}}) {
+        const Eigen::Vector3d inCamera = path[frame].topLeftCorner<3, 3>().transpose() *
+                                         (scene.object(name).center() - path[frame].topRightCorner<3, 1>());
+        EXPECT_GT(inCamera.z(), 1.0) << name;
+        EXPECT_LT(std::abs(inCamera.x()), 0.5 * inCamera.z()) << name;
+    }
+    EXPECT_EQ(pathName(PathKind::GalleryLoop), "gallery-loop");
+    EXPECT_EQ(pathName(PathKind::TwinVisit), "twin-visit");
+}
+
+// ----------------------------------------------------------------------------------------------------------
+TEST(SyntheticSequence, RendersGivenPosesInsteadOfThePath) {
+    const auto dir = test::makeTempDir("synth_given_poses");
+    const auto scene = SyntheticScene::twinGroups();
+    const std::vector<Pose> path = cameraPath(40, PathKind::TwinVisit);
+    SequenceOptions options;
+    options.frames = 40;  // ignored: the poses say how many
+    options.width = 32;
+    options.height = 24;
+    options.intrinsics = kinectIntrinsics(32, 24);
+    options.gtPointSpacing = 0.2;
+    options.poses = {path[0], path[5], path[33]};  // a kidnapped camera: frames cut out
+    writeTumSequence(dir, scene, options);
+
+    EXPECT_EQ(readDataLines(dir / "depth.txt").size(), 3u);
+    EXPECT_EQ(readDataLines(dir / "rgb.txt").size(), 3u);
+    const auto groundTruth = readDataLines(dir / "groundtruth.txt");
+    ASSERT_EQ(groundTruth.size(), 3u);
+    for (size_t frame = 0; frame < 3; ++frame) {
+        const Eigen::Vector3d t(std::stod(groundTruth[frame][1]), std::stod(groundTruth[frame][2]),
+                                std::stod(groundTruth[frame][3]));
+        EXPECT_LT((t - options.poses[frame].topRightCorner<3, 1>()).cwiseAbs().maxCoeff(), 1e-8) << frame;
+    }
+    EXPECT_FALSE(std::filesystem::exists(dir / "depth" / "000003.png"));
+    const cv::Mat png = cv::imread((dir / "depth" / "000002.png").string(), cv::IMREAD_UNCHANGED);
+    const DepthImage expected = scene.renderDepth(options.intrinsics, options.poses[2]);
+    ASSERT_EQ(png.type(), CV_16UC1);
+    int mismatches = 0;
+    for (int v = 0; v < 24; ++v)
+        for (int u = 0; u < 32; ++u)
+            mismatches += png.at<uint16_t>(v, u) != static_cast<uint16_t>(std::lround(expected.at(u, v) * 5000.0));
+    EXPECT_EQ(mismatches, 0);
+    std::filesystem::remove_all(dir);
 }
 
 // ----------------------------------------------------------------------------------------------------------
