@@ -26,6 +26,7 @@
 #include "api/exported_mesh.h"
 #include "cli_options.h"
 #include "commands.h"
+#include "fuse_loop_closure.h"
 #include "core/map_format.h"
 #include "core/mesh_analysis.h"
 #include "core/refinement.h"
@@ -85,6 +86,10 @@ struct FuseArgs {
     std::string trackSolve = "host";   // where the ICP systems are solved: host (double, a wait per iteration) or gpu
     int trackDownsample = gpu::TrackerOptions{}.downsample;   // track on frames downsampled by 1, 2 or 4 (0: by width)
     int trackModelReuse = gpu::TrackerOptions{}.modelReuseFrames;   // frames in a row that may reuse the model maps
+    // Loop closure and relocalisation (docs/LOOP_CLOSURE.md).
+    bool loopClosure = false;
+    std::string trajectoryOnlinePath;  // the poses as they were when each frame was fused
+    size_t correctionsPerFrame = 2;    // queued corrections re-fused before each frame
     const CLI::App* cmd = nullptr;   // which options were given (a loaded map's settings fill the others)
 };
 
@@ -167,6 +172,10 @@ int runFuse(const FuseArgs& args) {
          args.cmd->get_option("--track-model-reuse")->count() > 0) &&
         !args.track)
         throw Error("--track-iterations, --track-color-weight, --track-solve, --track-downsample and --track-model-reuse need --track");
+    if ((args.loopClosure || !args.trajectoryOnlinePath.empty()) && !args.track)
+        throw Error("--loop-closure and --trajectory-online need --track (loops are closed over tracked poses)");
+    if (args.cmd->get_option("--corrections-per-frame")->count() > 0 && !args.loopClosure)
+        throw Error("--corrections-per-frame needs --loop-closure");
     std::optional<std::array<int, gpu::TRACK_LEVELS>> iterations;
     if (!args.trackIterations.empty()) iterations = parseIterations(args.trackIterations);
     DatasetArgs data = args.data;
@@ -221,7 +230,8 @@ int runFuse(const FuseArgs& args) {
     // store is continued (and must be the one saved with it).
     if (args.keepFrames && args.savePath.empty()) throw Error("--keep-frames keeps the frames with the map: give --save too");
     std::optional<gpu::MapCorrector> corrector;
-    if (!args.savePath.empty() && !args.noKeepFrames) {
+    if (args.loopClosure && args.noKeepFrames) throw Error("--loop-closure re-fuses the frames a loop moves: it cannot go with --no-keep-frames");
+    if ((!args.savePath.empty() && !args.noKeepFrames) || args.loopClosure) {
         FrameStoreOptions storeOptions;
         storeOptions.memoryBudgetBytes = size_t(args.framesBudgetMb * 1024 * 1024);
         storeOptions.spillFolder = args.framesSpill;
@@ -253,12 +263,20 @@ int runFuse(const FuseArgs& args) {
         trackerOptions.modelReuseFrames = args.trackModelReuse;
         tracker.emplace(context, trackerOptions);
     }
+    std::optional<FuseLoopClosure> loopClosure;
+    if (args.loopClosure) {
+        slam::LoopClosureOptions loopOptions;
+        loopOptions.tracker = tracker->options();
+        loopClosure.emplace(loopOptions, args.correctionsPerFrame);
+    }
+    std::vector<size_t> trajectoryFrames;   // the dataset frame of each trajectory entry
     std::vector<TimedPose> trajectory;   // the pose used for every frame (tracked, predicted or given)
     std::vector<double> trackMs, trackGpuMs, trackIterations, trackSubmissions, trackRmse, trackInlierShare;
     size_t modelDraws = 0;   // tracked frames that drew the mesh (the others reused the last model maps)
     std::vector<double> trackPositionError;   // metres from the dataset's pose, frames that have one
     std::map<std::string, std::vector<double>> trackStageMs;   // per tracking stage (timestamps)
     size_t lostFrames = 0;
+    size_t relocalisedFrames = 0;   // lost by tracking from the prediction, then relocalised (--loop-closure)
     std::vector<json> lostList;
     std::optional<DeltaStreamWriter> deltaStream;
     if (!args.deltasPath.empty()) deltaStream.emplace(args.deltasPath);
@@ -336,8 +354,19 @@ int runFuse(const FuseArgs& args) {
                 }
                 tr = tracker->start(dataset->frame(i).hasPose ? dataset->frame(i).cameraToWorld : Pose::Identity());
             } else {
+                if (loopClosure) loopClosure->beforeFrame(volume, *corrector);
                 trackedFusion = tracker->trackAndFuse(volume, depth, intrinsics, &color, fuseColor ? &color : nullptr);
                 tr = trackedFusion->tracking;
+                if (!tr.tracked && loopClosure && valid > 0) {
+                    // Relocalisation: tracked again from the keyframes that look like this frame.
+                    std::optional<gpu::TrackedFusion> found =
+                        loopClosure->relocalise(uint32_t(i), volume, *tracker, depth, &color, fuseColor ? &color : nullptr, intrinsics, tr.cameraToWorld);
+                    if (found) {
+                        trackedFusion = std::move(found);
+                        tr = trackedFusion->tracking;
+                        ++relocalisedFrames;
+                    }
+                }
                 trackMs.push_back(tr.milliseconds);
                 trackGpuMs.push_back(tr.gpuMilliseconds);
                 for (const auto& [name, ms] : tr.gpuStageMilliseconds) trackStageMs[name].push_back(ms);
@@ -351,6 +380,7 @@ int runFuse(const FuseArgs& args) {
             }
             pose = tr.cameraToWorld;
             trajectory.push_back({dataset->frame(i).timestamp, pose});
+            trajectoryFrames.push_back(i);
             // The dataset's own pose (ground truth), where it has one, against the tracked one: the first frame's
             // is shared, so no alignment is needed (bench/ate.py aligns, as TUM's tools do).
             if (dataset->frame(i).hasPose)
@@ -382,6 +412,7 @@ int runFuse(const FuseArgs& args) {
         }
         ++integrated;
         if (corrector) corrector->keep(uint32_t(i), dataset->frame(i).timestamp, intrinsics, pose, depth, fuseColor ? &color : nullptr);
+        if (loopClosure) loopClosure->frameFused(uint32_t(i), depth, &color, intrinsics, pose, *corrector, *tracker);
         double meshMs = 0;
         for (const auto& [name, ms] : report.stageMs) {
             stageMs[name].push_back(ms);
@@ -458,6 +489,15 @@ int runFuse(const FuseArgs& args) {
     }
     if (tty && !args.quiet) std::cerr << "\n";
     if (integrated == 0 && args.loadPath.empty()) throw Error("none of the " + std::to_string(dataset->size()) + " frames could be fused");
+    if (!args.trajectoryOnlinePath.empty()) writeTumTrajectory(args.trajectoryOnlinePath, trajectory);
+    if (loopClosure) {
+        // The loops' corrections not yet re-fused, all now; the trajectory takes every frame's latest pose.
+        loopClosure->finish(volume, *corrector);
+        for (size_t k = 0; k < trajectory.size(); ++k) {
+            Pose latest;
+            if (loopClosure->latestPose(uint32_t(trajectoryFrames[k]), latest)) trajectory[k].cameraToWorld = latest;
+        }
+    }
     const double fuseSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (!args.trajectoryPath.empty()) writeTumTrajectory(args.trajectoryPath, trajectory);
 
@@ -646,9 +686,28 @@ int runFuse(const FuseArgs& args) {
                              // against the dataset's poses where it has them (the first frame's is shared: no
                              // alignment); metres
                              {"position_error_m", positionError},
-                             {"trajectory", args.trajectoryPath}};
+                             {"relocalised_frames", relocalisedFrames},
+                             {"trajectory", args.trajectoryPath},
+                             {"trajectory_online", args.trajectoryOnlinePath}};
     } else {
         stats["tracking"] = {{"enabled", false}, {"trajectory", args.trajectoryPath}};
+    }
+    if (loopClosure) {
+        json lc = loopClosure->stats();
+        // The final poses (every loop's correction applied) against the dataset's, as position_error_m above.
+        std::vector<double> errors;
+        for (size_t k = 0; k < trajectory.size(); ++k)
+            if (dataset->frame(trajectoryFrames[k]).hasPose)
+                errors.push_back((trajectory[k].cameraToWorld.block<3, 1>(0, 3) - dataset->frame(trajectoryFrames[k]).cameraToWorld.block<3, 1>(0, 3)).norm());
+        double squared = 0;
+        for (double e : errors) squared += e * e;
+        lc["position_error_m"] = {{"frames", errors.size()},
+                                  {"rmse", errors.empty() ? 0.0 : std::sqrt(squared / double(errors.size()))},
+                                  {"max", errors.empty() ? 0.0 : *std::max_element(errors.begin(), errors.end())}};
+        lc["corrections_per_frame"] = args.correctionsPerFrame;
+        stats["loop_closure"] = lc;
+    } else {
+        stats["loop_closure"] = {{"enabled", false}};
     }
     stats["warnings"] = warnings;
     if (!args.statsPath.empty()) {
@@ -669,6 +728,12 @@ int runFuse(const FuseArgs& args) {
         std::cout << "  tracking: " << trackMs.size() - lostFrames << " frames tracked, " << lostFrames << " lost; "
                   << statsOf(trackMs)["median"] << " ms/frame (median), " << statsOf(trackIterations)["mean"] << " iterations/frame (mean)"
                   << (args.trajectoryPath.empty() ? std::string() : " -> " + args.trajectoryPath) << "\n";
+    if (loopClosure) {
+        const json& lc = stats["loop_closure"];
+        std::cout << "  loop closure: " << lc["keyframes"] << " keyframes, " << lc["loops_accepted"] << " loops accepted of "
+                  << lc["loops_detected"] << " detected, " << lc["relocalisations"] << " relocalisations of " << lc["lost_frames"]
+                  << " lost frames, " << lc["frames_refused"] << " frames re-fused\n";
+    }
     if (tracker && !trackPositionError.empty()) {
         char line[160];
         std::snprintf(line, sizeof line, "  tracked positions against the dataset's poses: RMSE %.1f mm, largest %.1f mm over %zu frames\n",
@@ -755,7 +820,15 @@ Run addFuseCommand(CLI::App& app) {
                   "(the first frame's pose is the dataset's, or identity when it has none; its other poses are not used). "
                   "Datasets without poses need it");
     cmd->add_option("--trajectory", args->trajectoryPath,
-                    "write the pose used for every frame (tracked or given) in TUM format: timestamp tx ty tz qx qy qz qw");
+                    "write the pose used for every frame (tracked or given) in TUM format: timestamp tx ty tz qx qy qz qw; with "
+                    "--loop-closure the final poses, every loop's correction applied");
+    cmd->add_flag("--loop-closure", args->loopClosure,
+                  "with --track: recognise places seen before (keyframes, random ferns), verify them by ICP, optimise a pose graph "
+                  "(Ceres) and re-fuse the frames a loop moves; relocalise lost frames from the keyframes (docs/LOOP_CLOSURE.md)");
+    cmd->add_option("--trajectory-online", args->trajectoryOnlinePath,
+                    "with --track: write the poses as they were when each frame was fused (TUM format), before any loop's correction");
+    cmd->add_option("--corrections-per-frame", args->correctionsPerFrame,
+                    "with --loop-closure: frames a loop moved that are re-fused before each new frame (default 2; the rest after the last frame)");
     cmd->add_option("--track-iterations", args->trackIterations,
                     "ICP iterations per pyramid level, finest first (default by the finest tracked level's width: 3,4,4 from 320 "
                     "pixels wide, 10,5,4 below)");

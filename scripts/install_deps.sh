@@ -12,6 +12,8 @@ packages=(
   libeigen3-dev libopencv-core-dev libopencv-imgcodecs-dev libcli11-dev nlohmann-json3-dev libgtest-dev
   # the frame store (core/frame_store.h): lossless compression of the fused frames
   libzstd-dev
+  # loop closure's pose graph (src/slam/pose_graph.h)
+  libceres-dev
   # the Python module (python/, docs/PYTHON.md) and its tests
   python3-dev pybind11-dev python3-pybind11 python3-numpy python3-pytest
   # the browser viewer (docs/VIEWER.md): Boost.Beast (header-only) for its server, three.js r111 embedded in its

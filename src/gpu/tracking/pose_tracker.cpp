@@ -14,9 +14,9 @@ namespace {
 
 constexpr size_t kRecentFrames = 10;
 
-// Halves a depth image: each pixel averages the 2 x 2 measured samples within `band` metres of the first
-// (track_downsample_depth's rule: no averaging across a depth edge); 0 where none is measured.
-DepthImage halveDepth(const DepthImage& in, float band) {
+}  // namespace
+
+DepthImage halveTrackingDepth(const DepthImage& in, float band) {
     DepthImage out;
     out.width = in.width / 2;
     out.height = in.height / 2;
@@ -37,6 +37,8 @@ DepthImage halveDepth(const DepthImage& in, float band) {
     }
     return out;
 }
+
+namespace {
 
 // Halves a colour image: each pixel the mean of the 2 x 2 (rounded).
 ColorImage halveColor(const ColorImage& in) {
@@ -89,12 +91,12 @@ PoseTracker::TrackingInput PoseTracker::trackingInput(const DepthImage& depth, c
         throw Error("tracking: a " + std::to_string(color->width) + "x" + std::to_string(color->height) + " colour image for a " +
                     std::to_string(depth.width) + "x" + std::to_string(depth.height) + " depth image");
     const float band = 3.0f * options_.filterDepthSigma;
-    smallDepth_ = halveDepth(depth, band);
+    smallDepth_ = halveTrackingDepth(depth, band);
     const bool withColor = color && !color->empty() && options_.colorWeight > 0;
     if (withColor) smallColor_ = halveColor(*color);
     int levels = 1;
     if (downsample == 4) {
-        smallDepth_ = halveDepth(smallDepth_, band);
+        smallDepth_ = halveTrackingDepth(smallDepth_, band);
         if (withColor) smallColor_ = halveColor(smallColor_);
         levels = 2;
     }
@@ -257,6 +259,22 @@ TrackedFusion PoseTracker::trackAndFuse(GpuVolume& volume, const DepthImage& dep
                     (out.tracking.tracked ? "kept" : "lost"));
     if (out.tracking.tracked) out.fused = std::move(frame);
     return out;
+}
+
+TrackedFusion PoseTracker::relocalise(GpuVolume& volume, const Pose& candidate, const DepthImage& depth, const Intrinsics& intrinsics,
+                                      const ColorImage* trackingColor, const ColorImage* fusedColor) {
+    const Pose lastTracked = lastTracked_;
+    lastTracked_ = candidate;
+    velocity_ = Pose::Identity();
+    modelFresh_ = false;
+    TrackedFusion out = trackAndFuse(volume, depth, intrinsics, trackingColor, fusedColor);
+    if (!out.tracking.tracked) lastTracked_ = lastTracked;   // conclude() left the rest as a lost frame does
+    return out;
+}
+
+void PoseTracker::correctLastPose(const Pose& corrected) {
+    lastTracked_ = corrected;
+    modelFresh_ = false;
 }
 
 }  // namespace vkmesh::gpu

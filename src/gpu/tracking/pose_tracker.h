@@ -58,6 +58,11 @@ uint32_t trackingLoss(const IcpSystem& system, bool solved, double conditioning,
 std::string lossText(uint32_t reason, const IcpSystem& system, double conditioning, const Pose& motion, double recentRmse,
                      const TrackerOptions& options);
 
+// Halves a depth image: each pixel averages the 2 x 2 measured samples within `band` metres of the first
+// (track_downsample_depth's rule: no averaging across a depth edge); 0 where none is measured. How downsampled
+// tracking (TrackerOptions::downsample) and the loop closer's registration shrink a frame.
+DepthImage halveTrackingDepth(const DepthImage& in, float band);
+
 class PoseTracker {
 public:
     PoseTracker(const vk::Context& context, const TrackerOptions& options = {});
@@ -76,6 +81,15 @@ public:
     // else track() and then volume.integrate().
     TrackedFusion trackAndFuse(GpuVolume& volume, const DepthImage& depth, const Intrinsics& intrinsics, const ColorImage* trackingColor,
                                const ColorImage* fusedColor, const vk::SubmitSync& sync = {});
+    // Relocalisation (docs/LOOP_CLOSURE.md): trackAndFuse() of a frame from `candidate` instead of the prediction,
+    // with every loss check measured from there (the jump bound from the candidate, not from the last tracked
+    // pose). Tracked: the frame is fused and tracking goes on from it; lost: nothing changed (the state is that of
+    // a lost frame, as before the call).
+    TrackedFusion relocalise(GpuVolume& volume, const Pose& candidate, const DepthImage& depth, const Intrinsics& intrinsics,
+                             const ColorImage* trackingColor, const ColorImage* fusedColor);
+    // The last tracked frame's pose was corrected (a loop closed): the next frame is predicted from `corrected`
+    // with the same motion, and the mesh is drawn anew (maps drawn at the old pose are stale).
+    void correctLastPose(const Pose& corrected);
     // The pose the next frame will be predicted at (constant velocity from the last two tracked frames).
     Pose prediction() const { return lastTracked_ * velocity_; }
     const TrackerOptions& options() const { return options_; }

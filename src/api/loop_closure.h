@@ -1,0 +1,47 @@
+// What a loop closer does for a tracked sequence (docs/LOOP_CLOSURE.md), as the Reconstructor and the CLI see it:
+// after every fused frame it may find that the camera is back at a place it has seen, and answer with new poses
+// for frames already fused (the map's correction re-fuses them); for a frame tracking lost it names poses to try.
+// The implementation (keyframes, random ferns, geometric verification, a Ceres pose graph) is slam::LoopCloser in
+// the vkmesh_slam library: the GPU core declares only this interface, so that an embedding application that does
+// not close loops does not link Ceres.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "core/types.h"
+
+namespace vkmesh {
+
+// One frame as the loop closer sees it: the images as fused (or as tracking lost them) and where it was.
+struct LoopClosureFrame {
+    uint32_t index = 0;                  // the frame's number in the sequence (as the map's correction numbers it)
+    const DepthImage* depth = nullptr;   // metres, 0 = none
+    const ColorImage* color = nullptr;   // registered to the depth, or null / empty
+    Intrinsics intrinsics;
+    Pose cameraToWorld = Pose::Identity();   // fused at (frameFused), or the tracker's prediction (lost frames)
+};
+
+// New camera-to-world poses for frames already fused (an accepted loop moved them), in ascending frame order.
+struct PoseCorrections {
+    std::vector<uint32_t> frames;
+    std::vector<Pose> poses;
+    bool empty() const { return frames.empty(); }
+};
+
+class LoopClosure {
+public:
+    virtual ~LoopClosure() = default;
+    // A frame was fused at frame.cameraToWorld (the first frame, a tracked or a relocalised one). Returns the poses
+    // an accepted loop moved (this frame's among them), or nothing.
+    virtual PoseCorrections frameFused(const LoopClosureFrame& frame) = 0;
+    // A frame tracking lost: camera poses to track it from, most likely first (none: no keyframe looks alike).
+    virtual std::vector<Pose> relocalisationCandidates(const LoopClosureFrame& frame) = 0;
+    // How trying them ended (counted; a success also restarts the pose graph's chain at that frame, whose
+    // frameFused follows).
+    virtual void relocalisationResult(uint32_t frame, bool relocalised, int candidatesTried) = 0;
+    // The latest pose of every frame fused so far (the loops' corrections applied), by frame number.
+    virtual bool latestPose(uint32_t frame, Pose& pose) const = 0;
+};
+
+}  // namespace vkmesh

@@ -1,0 +1,284 @@
+// Loop closure and relocalisation (docs/LOOP_CLOSURE.md): the random ferns, the pose graph, the registration that
+// verifies a loop, and `vkmesh fuse --track --loop-closure` end to end on synthetic sequences with exact ground
+// truth (drift around a loop, kidnapping, a false loop, determinism).
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+#include <set>
+
+#include "core/camera.h"
+#include "core/icp_solve.h"
+#include "io/ply.h"
+#include "io/trajectory.h"
+#include "slam/frame_registration.h"
+#include "slam/pose_graph.h"
+#include "slam/random_ferns.h"
+#include "synth/synthetic_scene.h"
+#include "synth/tum_sequence.h"
+#include "test_support.h"
+
+namespace vkmesh {
+namespace {
+
+namespace fs = std::filesystem;
+
+Pose turned(const Pose& pose, double degrees, const Eigen::Vector3d& axis, const Eigen::Vector3d& moved) {
+    Pose delta = Pose::Identity();
+    delta.block<3, 3>(0, 0) = Eigen::AngleAxisd(degrees * std::numbers::pi / 180.0, axis.normalized()).toRotationMatrix();
+    delta.block<3, 1>(0, 3) = moved;
+    return pose * delta;
+}
+
+// The same view gives the same code; a view a few centimetres away differs in few ferns, a view of another part
+// of the room in many; and the ferns are the same for the same seed (deterministic), others for another seed.
+TEST(RandomFerns, CodesTellNearbyViewsFromOtherPlaces) {
+    const synth::SyntheticScene room = synth::SyntheticScene::defaultRoom();
+    const Intrinsics k = synth::kinectIntrinsics(160, 120);
+    const std::vector<Pose> path = synth::cameraPath(40);
+    ColorImage c0, cNear, cFar;
+    const DepthImage d0 = room.renderDepth(k, path[0], {}, &c0);
+    const DepthImage dNear = room.renderDepth(k, turned(path[0], 1.0, {0, 1, 0}, {0.02, 0, 0}), {}, &cNear);
+    const DepthImage dFar = room.renderDepth(k, path[20], {}, &cFar);
+    const slam::RandomFerns ferns;
+    const slam::FernCode a = ferns.encode(ferns.shrink(d0, &c0));
+    EXPECT_EQ(a.size(), 500u);
+    EXPECT_EQ(a, slam::RandomFerns().encode(slam::RandomFerns().shrink(d0, &c0)));
+    EXPECT_EQ(slam::RandomFerns::dissimilarity(a, a), 0.0);
+    const double near = slam::RandomFerns::dissimilarity(a, ferns.encode(ferns.shrink(dNear, &cNear)));
+    const double far = slam::RandomFerns::dissimilarity(a, ferns.encode(ferns.shrink(dFar, &cFar)));
+    EXPECT_LT(near, 0.25);
+    EXPECT_GT(far, 0.4);
+    EXPECT_GT(far, 2 * near);
+    slam::FernOptions other;
+    other.seed = 2;
+    EXPECT_NE(a, slam::RandomFerns(other).encode(slam::RandomFerns(other).shrink(d0, &c0)));
+    // Depth only: the code still tells the places apart.
+    const double farDepthOnly = slam::RandomFerns::dissimilarity(ferns.encode(ferns.shrink(d0, nullptr)), ferns.encode(ferns.shrink(dFar, nullptr)));
+    EXPECT_GT(farDepthOnly, 0.1);
+    EXPECT_NE(test::errorMessageOf([&] { ferns.shrink(synth::SyntheticScene::defaultRoom().renderDepth(synth::kinectIntrinsics(40, 30), path[0]), nullptr); })
+                  .find("cannot shrink"),
+              std::string::npos);
+}
+
+// The tracker's ICP against a keyframe's depth recovers a known offset between two views of the room.
+TEST(FrameRegistration, RecoversAKnownOffsetBetweenTwoViews) {
+    const synth::SyntheticScene room = synth::SyntheticScene::defaultRoom();
+    const Intrinsics k = synth::kinectIntrinsics(320, 240);
+    const Pose keyPose = synth::cameraPath(40)[3];
+    const Pose truth = turned(keyPose, 3.0, {0.3, 1, 0.2}, {0.04, -0.02, 0.03});
+    synth::RenderOptions noisy;
+    noisy.noise = true;
+    const gpu::TrackerOptions tracker;
+    const slam::RegistrationFrame key = slam::registrationFrame(room.renderDepth(k, keyPose, noisy), k, tracker);
+    noisy.seed = 7;
+    const slam::RegistrationFrame frame = slam::registrationFrame(room.renderDepth(k, truth, noisy), k, tracker);
+    ASSERT_EQ(key.levels.front().width, 160);
+    const slam::Registration r = slam::registerFrame(frame, key, keyPose, keyPose, tracker);
+    ASSERT_TRUE(r.solved);
+    const Pose error = inverseRigid(truth) * r.cameraToWorld;
+    EXPECT_LT(translationMetres(error), 0.005);
+    EXPECT_LT(rotationDegrees(error), 0.3);
+    EXPECT_GT(r.inlierShare(), 0.5);
+}
+
+// A square loop whose odometry drifted: the loop edge closes it, the first node stays, and the drift is spread
+// along the chain (each node moves towards the truth). A loop edge that contradicts everything (a false loop) is
+// held by its Huber loss to a bounded pull.
+TEST(PoseGraph, ALoopEdgeSpreadsTheDriftAlongTheChain) {
+    std::vector<Pose> truth;
+    for (int i = 0; i < 12; ++i) {
+        Pose p = Pose::Identity();
+        const double a = 2 * std::numbers::pi * i / 12;
+        p.block<3, 3>(0, 0) = Eigen::AngleAxisd(a, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+        p.block<3, 1>(0, 3) = Eigen::Vector3d(std::cos(a), std::sin(a), 0);
+        truth.push_back(p);
+    }
+    // Odometry with a small bias per step: the chain drifts.
+    Pose bias = Pose::Identity();
+    bias.block<3, 3>(0, 0) = Eigen::AngleAxisd(0.01, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    bias(0, 3) = 0.009;
+    slam::PoseGraph graph;
+    std::vector<Pose> drifted{truth[0]};
+    for (int i = 1; i < 12; ++i) drifted.push_back(drifted.back() * inverseRigid(truth[size_t(i - 1)]) * truth[size_t(i)] * bias);
+    for (const Pose& p : drifted) graph.addNode(p);
+    const slam::Information odometry = slam::diagonalInformation(0.01, 0.005);
+    for (int i = 1; i < 12; ++i) graph.addEdge({i - 1, i, inverseRigid(drifted[size_t(i - 1)]) * drifted[size_t(i)], odometry, false});
+    double before = 0;
+    for (int i = 0; i < 12; ++i) before += translationMetres(inverseRigid(truth[size_t(i)]) * drifted[size_t(i)]);
+    ASSERT_GT(translationMetres(inverseRigid(truth[11]) * drifted[11]), 0.05);
+    // The loop: node 11 seen from node 0, exactly.
+    const int loop = graph.addEdge({0, 11, inverseRigid(truth[0]) * truth[11], slam::diagonalInformation(0.005, 0.002), true});
+    const slam::PoseGraphSolve solve = graph.optimise(50, 3.0);
+    EXPECT_TRUE(solve.converged);
+    EXPECT_LT(solve.finalCost, solve.initialCost);
+    EXPECT_TRUE(graph.pose(0).isApprox(truth[0], 1e-12));
+    double after = 0;
+    for (int i = 0; i < 12; ++i) after += translationMetres(inverseRigid(truth[size_t(i)]) * graph.pose(i));
+    EXPECT_LT(after, 0.5 * before);
+    EXPECT_LT(graph.whitenedError(size_t(loop)), 3.0);
+    // Deterministic: the same graph again gives the same poses bit for bit.
+    slam::PoseGraph again;
+    for (const Pose& p : drifted) again.addNode(p);
+    for (const auto& e : graph.edges()) again.addEdge(e);
+    again.optimise(50, 3.0);
+    for (int i = 0; i < 12; ++i) EXPECT_EQ(again.pose(i), graph.pose(i)) << i;
+    EXPECT_NE(test::errorMessageOf([&] { graph.addEdge({0, 12, Pose::Identity(), odometry, false}); }).find("node"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace vkmesh
+
+namespace vkmesh {
+namespace {
+
+// The noisy room's revisit path (three laps of 60 frames at 320 x 240), rendered once for the tests below, with
+// frames cut out of laps 2 and 3 so that the camera jumps 10 times to places lap 1 saw: frames 0-55, then 4
+// frames of every 12 from frame 60 on (each kept run starts with a jump of 5 or 8 frames: 30-48 degrees).
+const fs::path& kidnapSequence() {
+    static fs::path dir = [] {
+        fs::path d = test::makeTempDir("loop_kidnap_seq");
+        const test::CliRun r = test::runCli("synth " + d.string() + " --frames 180 --path revisit --noise --width 320 --height 240");
+        EXPECT_EQ(r.exitCode, 0) << r.err;
+        std::ifstream in(d / "depth.txt");
+        std::string line, kept;
+        int frame = 0;
+        while (std::getline(in, line)) {
+            if (line.empty() || line[0] == '#') {
+                kept += line + "\n";
+                continue;
+            }
+            if (frame < 56 || (frame >= 60 && (frame - 60) % 12 < 4)) kept += line + "\n";
+            ++frame;
+        }
+        in.close();
+        std::ofstream(d / "depth.txt") << kept;
+        return d;
+    }();
+    return dir;
+}
+
+double angleDegrees(const Pose& a, const Pose& b) { return rotationDegrees(inverseRigid(a) * b); }
+double distanceMetres(const Pose& a, const Pose& b) { return (a.block<3, 1>(0, 3) - b.block<3, 1>(0, 3)).norm(); }
+
+// Kidnapping: after each of the 10 jumps the camera is relocalised within 5 frames, within 5 cm and 5 degrees of
+// the truth, in at least 9 of the 10; no frame stays lost for good, and the map holds only tracked frames.
+TEST(LoopClosure, KidnappedCameraIsRelocalisedFromTheKeyframes) {
+    if (const std::string why = test::lavapipeCannotDraw(); !why.empty()) GTEST_SKIP() << why;   // tracking draws the mesh
+    const fs::path d = test::makeTempDir("loop_kidnap");
+    const test::CliRun r = test::runCli("fuse " + kidnapSequence().string() + " --track --loop-closure --voxel 0.03 --trajectory-online " +
+                                        (d / "online.txt").string() + " --stats " + (d / "s.json").string() + " -o " + (d / "m.ply").string() + " -q");
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    const auto stats = nlohmann::json::parse(test::readText(d / "s.json"));
+    const std::vector<TimedPose> online = readTumTrajectory(d / "online.txt");
+    const std::vector<TimedPose> truth = readTumTrajectory(kidnapSequence() / "groundtruth.txt");
+    ASSERT_EQ(online.size(), 96u);
+    auto truthAt = [&](double timestamp) {
+        for (const TimedPose& t : truth)
+            if (std::abs(t.timestamp - timestamp) < 1e-6) return t.cameraToWorld;
+        ADD_FAILURE() << "no true pose at " << timestamp;
+        return Pose(Pose::Identity());
+    };
+    std::set<size_t> relocalisedFrames;
+    for (const auto& e : stats["loop_closure"]["relocalisation"])
+        if (e["relocalised"].get<bool>()) relocalisedFrames.insert(e["frame"].get<size_t>());
+    std::set<size_t> lost;
+    for (const auto& e : stats["tracking"]["lost"]) lost.insert(e["frame"].get<size_t>());
+    int recovered = 0;
+    for (size_t jump = 56; jump < 96; jump += 4) {
+        // The first frame of the run that is fused (tracked or relocalised), within 5 frames of the jump.
+        for (size_t f = jump; f < jump + 4 && f < online.size(); ++f) {
+            if (lost.count(f)) continue;
+            const Pose want = truthAt(online[f].timestamp);
+            const double metres = distanceMetres(online[f].cameraToWorld, want), degrees = angleDegrees(online[f].cameraToWorld, want);
+            if (metres < 0.05 && degrees < 5.0) ++recovered;
+            else ADD_FAILURE() << "frame " << f << " after the jump at " << jump << " is " << metres << " m, " << degrees << " degrees off";
+            break;
+        }
+    }
+    EXPECT_GE(recovered, 9);
+    EXPECT_GE(relocalisedFrames.size(), 9u);
+    EXPECT_EQ(stats["loop_closure"]["relocalisations"].get<size_t>(), relocalisedFrames.size());
+    EXPECT_EQ(stats["tracking"]["relocalised_frames"].get<size_t>(), relocalisedFrames.size());
+    EXPECT_EQ(stats["loop_closure"]["observations_dropped"], 0);
+    fs::remove_all(d);
+}
+
+// The same frames give the same loop decisions and relocalisations, and the same trajectory and mesh to within
+// a millimetre, run after run. Not bit for bit: once a loop's corrections are re-fused, the runs differ by about
+// 1e-5 m (tracking alone is bit-exact, tests/gpu/test_tracking.cpp); docs/LOOP_CLOSURE.md, "Determinism".
+TEST(LoopClosure, SameFramesGiveTheSameLoopDecisionsAndTrajectory) {
+    if (const std::string why = test::lavapipeCannotDraw(); !why.empty()) GTEST_SKIP() << why;
+    const fs::path d = test::makeTempDir("loop_determinism");
+    nlohmann::json loops[2];
+    for (int run = 0; run < 2; ++run) {
+        const std::string tag = std::to_string(run);
+        const test::CliRun r = test::runCli("fuse " + kidnapSequence().string() + " --track --loop-closure --frames 72 --voxel 0.03 --trajectory " +
+                                            (d / ("t" + tag + ".txt")).string() + " --stats " + (d / ("s" + tag + ".json")).string() +
+                                            " -o " + (d / ("m" + tag + ".ply")).string() + " -q");
+        ASSERT_EQ(r.exitCode, 0) << r.err;
+        loops[run] = nlohmann::json::parse(test::readText(d / ("s" + tag + ".json")))["loop_closure"];
+    }
+    EXPECT_GT(loops[0]["loops_detected"].get<int>() + loops[0]["relocalisations"].get<int>(), 0) << "nothing to compare";
+    ASSERT_EQ(loops[0]["loops"].size(), loops[1]["loops"].size());
+    for (size_t i = 0; i < loops[0]["loops"].size(); ++i)
+        for (const char* key : {"frame", "keyframe_frame", "accepted", "reason"})
+            EXPECT_EQ(loops[0]["loops"][i][key], loops[1]["loops"][i][key]) << "loop " << i << " " << key;
+    EXPECT_EQ(loops[0]["relocalisation"], loops[1]["relocalisation"]);
+    const std::vector<TimedPose> a = readTumTrajectory(d / "t0.txt"), b = readTumTrajectory(d / "t1.txt");
+    ASSERT_EQ(a.size(), b.size());
+    for (size_t i = 0; i < a.size(); ++i) {
+        EXPECT_LT(distanceMetres(a[i].cameraToWorld, b[i].cameraToWorld), 0.001) << "frame " << i;
+        EXPECT_LT(angleDegrees(a[i].cameraToWorld, b[i].cameraToWorld), 0.05) << "frame " << i;
+    }
+    const Mesh m0 = readPly(d / "m0.ply"), m1 = readPly(d / "m1.ply");
+    EXPECT_NEAR(double(m0.triangles.size()), double(m1.triangles.size()), 0.01 * double(m0.triangles.size()));
+    fs::remove_all(d);
+}
+
+// A false loop: two identical groups of objects 4.5 m apart (synth --scene twins), the second seen from the very
+// viewpoints the first was. The ferns find them alike; every such loop is rejected (the registration from the old
+// keyframe's pose fits, but moves the camera further than tracking can have drifted), and the final trajectory is
+// the tracked one: the map is not bent.
+TEST(LoopClosure, TwinPlacesDoNotCloseAFalseLoop) {
+    if (const std::string why = test::lavapipeCannotDraw(); !why.empty()) GTEST_SKIP() << why;
+    const fs::path d = test::makeTempDir("loop_twins");
+    test::CliRun r = test::runCli("synth " + (d / "seq").string() + " --scene twins --path twin-visit --frames 200 --noise --width 320 --height 240 "
+                                  "--gt-spacing 0.05");
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    r = test::runCli("fuse " + (d / "seq").string() + " --track --loop-closure --voxel 0.03 --trajectory " + (d / "final.txt").string() +
+                     " --trajectory-online " + (d / "online.txt").string() + " --stats " + (d / "s.json").string() + " -o /dev/null -q");
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    const auto stats = nlohmann::json::parse(test::readText(d / "s.json"));
+    EXPECT_EQ(stats["tracking"]["lost_frames"], 0);
+    int twinLoops = 0;
+    for (const auto& loop : stats["loop_closure"]["loops"]) {
+        // Frame i + 150 sees the second group from where frame i saw the first.
+        if (loop["frame"].get<int>() - loop["keyframe_frame"].get<int>() < 100) continue;
+        ++twinLoops;
+        EXPECT_FALSE(loop["accepted"].get<bool>()) << loop.dump();
+    }
+    EXPECT_GT(twinLoops, 0) << "the ferns found no look-alike: the test tests nothing";
+    const std::vector<TimedPose> online = readTumTrajectory(d / "online.txt"), final = readTumTrajectory(d / "final.txt");
+    ASSERT_EQ(online.size(), final.size());
+    for (size_t i = 0; i < online.size(); ++i)
+        EXPECT_LT(distanceMetres(online[i].cameraToWorld, final[i].cameraToWorld), 0.02) << "frame " << i << " was moved";
+    fs::remove_all(d);
+}
+
+// Bad combinations are clear errors.
+TEST(LoopClosure, OptionsNeedTracking) {
+    const test::CliRun r = test::runCli("fuse " + kidnapSequence().string() + " --loop-closure -o /dev/null");
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_NE(r.err.find("need --track"), std::string::npos) << r.err;
+    const test::CliRun s = test::runCli("fuse " + kidnapSequence().string() + " --track --corrections-per-frame 3 -o /dev/null");
+    EXPECT_NE(s.exitCode, 0);
+    EXPECT_NE(s.err.find("--corrections-per-frame needs --loop-closure"), std::string::npos) << s.err;
+}
+
+}  // namespace
+}  // namespace vkmesh
