@@ -268,6 +268,9 @@ int runFuse(const FuseArgs& args) {
         slam::LoopClosureOptions loopOptions;
         loopOptions.tracker = tracker->options();
         loopClosure.emplace(loopOptions, args.correctionsPerFrame);
+        // A continued map: the keyframes and the pose graph saved with it (absent: the loop closer starts empty).
+        if (!args.loadPath.empty() && std::filesystem::exists(loopClosurePathOf(args.loadPath)))
+            loopClosure->load(loopClosurePathOf(args.loadPath), loadedSaveId);
     }
     std::vector<size_t> trajectoryFrames;   // the dataset frame of each trajectory entry
     std::vector<TimedPose> trajectory;   // the pose used for every frame (tracked, predicted or given)
@@ -509,6 +512,7 @@ int runFuse(const FuseArgs& args) {
         const auto t0 = std::chrono::steady_clock::now();
         const uint64_t saveId = volume.save(args.savePath);
         if (corrector) corrector->store().save(gpu::frameStorePathOf(args.savePath).string(), saveId);
+        if (loopClosure) loopClosure->save(loopClosurePathOf(args.savePath), saveId);
         saveMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
         mapBytes = std::filesystem::file_size(args.savePath);
     }

@@ -76,7 +76,6 @@ nlohmann::json FuseLoopClosure::stats() const {
             {"loops_accepted", s.loopsAccepted},
             {"loops_rejected", s.loopsRejected},
             {"loops_consistent", s.loopsConsistent},
-            {"odometry_registered", s.odometryRegistered},
             {"rejected_by", rejectedBy},
             {"lost_frames", s.lostFrames},
             {"relocalisations", s.relocalisations},

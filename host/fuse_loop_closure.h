@@ -6,6 +6,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <filesystem>
 #include <optional>
 #include <vector>
 
@@ -33,6 +34,9 @@ public:
     // The latest pose of a fused frame (false: not fused).
     bool latestPose(uint32_t index, Pose& pose) const { return closer_.latestPose(index, pose); }
     nlohmann::json stats() const;
+    // Beside a saved map (api/loop_closure.h, loopClosurePathOf), so that a run continued with --load finds its places.
+    void save(const std::filesystem::path& path, uint64_t mapId) const { closer_.save(path, mapId); }
+    void load(const std::filesystem::path& path, uint64_t mapId) { closer_.load(path, mapId); }
 
 private:
     slam::LoopCloser closer_;

@@ -36,6 +36,7 @@
 #include "io/dataset.h"
 #include "io/parsers.h"
 #include "io/ply.h"
+#include "slam/loop_closer.h"
 #include "synth/synthetic_scene.h"
 #include "synth/tum_sequence.h"
 #include "vk/context.h"
@@ -415,7 +416,9 @@ public:
         const gpu::TrackingReport& t = tracked->tracking;
         return py::dict("pose"_a = poseToPython(tracked->cameraToWorld), "tracked"_a = t.tracked, "lost_reason"_a = t.lostReason,
                         "iterations"_a = t.iterations, "inliers"_a = t.inliers, "valid_pixels"_a = t.validPixels, "rmse"_a = t.rmse,
-                        "ms"_a = t.milliseconds, "model_drawn"_a = t.modelDrawn);
+                        "ms"_a = t.milliseconds, "model_drawn"_a = t.modelDrawn, "relocalised"_a = tracked->relocalised,
+                        "relocalisation_candidates_tried"_a = tracked->relocalisationCandidatesTried,
+                        "loop_corrections"_a = tracked->loopCorrections);
     }
 
     // New poses for fused frames (Reconstructor::correct): indices (N,) and poses (N, 4, 4), all checked first.
@@ -521,6 +524,7 @@ public:
             gpu::FrameReport last;
             std::optional<FrameStoreStats> store;   // keep_frames
             size_t pendingCorrections = 0;
+            std::optional<slam::LoopClosureStats> loops;   // loop_closure
         };
         Snapshot s = locked([&](Reconstructor& rec) {
             Snapshot s;
@@ -541,6 +545,7 @@ public:
             s.last = lastReport_;
             if (const FrameStore* store = rec.frameStore()) s.store = store->stats();
             s.pendingCorrections = rec.pendingCorrections();
+            if (const auto* closer = dynamic_cast<const slam::LoopCloser*>(options_.loopClosure.get())) s.loops = closer->stats();
             return s;
         });
         const gpu::GpuVolumeConfig& c = s.config;
@@ -560,6 +565,23 @@ public:
         d["tracking"] = py::dict("color_weight"_a = shortest(options_.tracker.colorWeight),
                                  "solve"_a = options_.tracker.solveOnGpu ? "gpu" : "host", "downsample"_a = options_.tracker.downsample,
                                  "model_reuse"_a = options_.tracker.modelReuseFrames);
+        if (s.loops) {
+            // As `vkmesh fuse --stats` "loop_closure" (host/fuse_loop_closure.cpp), without its per-loop list.
+            const slam::LoopClosureStats& l = *s.loops;
+            py::dict rejectedBy, ms;
+            for (const auto& [reason, n] : l.rejectedBy) rejectedBy[py::str(reason)] = n;
+            for (const auto& [stage, sumCount] : l.milliseconds)
+                ms[py::str(stage)] = py::dict("total"_a = sumCount.first, "count"_a = sumCount.second,
+                                              "mean"_a = sumCount.second ? sumCount.first / sumCount.second : 0.0);
+            d["loop_closure"] = py::dict("enabled"_a = true, "keyframes"_a = l.keyframes, "loops_detected"_a = l.loopsDetected,
+                                         "loops_accepted"_a = l.loopsAccepted, "loops_rejected"_a = l.loopsRejected,
+                                         "loops_consistent"_a = l.loopsConsistent, "rejected_by"_a = rejectedBy, "lost_frames"_a = l.lostFrames,
+                                         "relocalisations"_a = l.relocalisations,
+                                         "relocalisation_candidates_tried"_a = l.relocalisationCandidatesTried,
+                                         "frames_corrected"_a = l.framesCorrected, "graph_solves"_a = l.graphSolves, "ms"_a = ms);
+        } else {
+            d["loop_closure"] = py::dict("enabled"_a = false);
+        }
         d["color"] = py::dict("fused"_a = c.params.colorFusion != ColorFusion::Off, "mode"_a = colorModeName(c.params.colorFusion),
                               "recency"_a = shortest(c.params.colorRecency));
         if (s.store) {
@@ -719,9 +741,11 @@ private:
     double lastCppSeconds_ = 0;
 };
 
-// keep_frames, corrections_per_frame, frames_budget_mb, frames_spill (ReconstructorOptions, docs/CORRECTION.md).
+// keep_frames, corrections_per_frame, frames_budget_mb, frames_spill (ReconstructorOptions, docs/CORRECTION.md), and
+// loop_closure (docs/LOOP_CLOSURE.md: its loop closer is made once the tracker's options are known, withLoopClosure).
 struct CorrectionSettings {
     bool keepFrames = false;
+    bool loopClosure = false;
     long long correctionsPerFrame = ReconstructorOptions{}.correctionsPerFrame;
     double framesBudgetMb = 1024;
     std::string framesSpill;
@@ -733,6 +757,13 @@ struct CorrectionSettings {
         o.correctionsPerFrame = uint32_t(correctionsPerFrame);
         o.frameStore.memoryBudgetBytes = size_t(framesBudgetMb * 1024 * 1024);
         o.frameStore.spillFolder = framesSpill;
+    }
+    void withLoopClosure(ReconstructorOptions& o) const {
+        if (!loopClosure) return;
+        if (!keepFrames) throw py::value_error("loop_closure=True re-fuses the frames a loop moves: it needs keep_frames=True");
+        slam::LoopClosureOptions lo;
+        lo.tracker = o.tracker;
+        o.loopClosure = std::make_shared<slam::LoopCloser>(lo);
     }
 };
 
@@ -780,6 +811,7 @@ std::unique_ptr<PyReconstructor> makeReconstructor(float voxelSize, float trunca
     if (trackModelReuse < 0 || trackModelReuse > 1000)
         throw py::value_error("track_model_reuse " + std::to_string(trackModelReuse) + " must be in 0..1000");
     o.tracker.modelReuseFrames = trackModelReuse;
+    correction.withLoopClosure(o);
     o.trackDeltas = trackDeltas;
     o.device = deviceOptions(device, validation);
     std::unique_ptr<Reconstructor> rec;
@@ -970,6 +1002,9 @@ Keyword arguments (all optional):
   corrections_per_frame corrected frames re-fused by each later integrate() (2)
   frames_budget_mb, frames_spill   the kept frames' memory budget in MiB (1024) and a folder for those beyond it
                         ('' : none, and a frame beyond the budget raises vkmesh.Error) (--frames-budget, --frames-spill)
+  loop_closure          tracking: recognise places seen before, verify them, optimise a pose graph and re-fuse the
+                        frames a loop moves; relocalise lost frames from keyframes (docs/LOOP_CLOSURE.md; needs
+                        keep_frames=True; --loop-closure; False)
 
 Bad settings raise ValueError; no usable device or a capacity that does not fit it raises vkmesh.Error.
 )doc")
@@ -981,14 +1016,14 @@ Bad settings raise ValueError; no usable device or a capacity that does not fit 
                          long long deltaRecordCapacity, bool growCapacities, double keepRadius, bool recycle,
                          long long recycleAfterFrames, double starveWeight, bool validation, double trackColorWeight,
                          const std::string& trackSolve, int trackDownsample, int trackModelReuse, bool keepFrames,
-                         long long correctionsPerFrame, double framesBudgetMb, const std::string& framesSpill) {
+                         long long correctionsPerFrame, double framesBudgetMb, const std::string& framesSpill, bool loopClosure) {
                  return makeReconstructor(voxelSize, truncationVoxels, maxDepth, device, colorMode, colorRecency, trackDeltas,
                                           maxWeight, minWeight, allocationStride, refine, refineEpsilonVoxels, lockFree,
                                           {blockCapacity, hashCapacity, touchedCapacity, vertexCapacity, chunkCapacity,
                                            retypeCapacity, deltaRecordCapacity},
                                           growCapacities, keepRadius, recycle, recycleAfterFrames, starveWeight, validation,
                                           float(trackColorWeight), trackSolve, trackDownsample, trackModelReuse,
-                                          {keepFrames, correctionsPerFrame, framesBudgetMb, framesSpill});
+                                          {keepFrames, loopClosure, correctionsPerFrame, framesBudgetMb, framesSpill});
              }),
              py::kw_only(), "voxel_size"_a = shortest(dp.voxelSize), "truncation_voxels"_a = shortest(dp.truncVoxels),
              // `vkmesh fuse --max-depth` defaults to 4 m (host/cli_options.h, DatasetArgs), not VolumeParams' 5 m.
@@ -1004,7 +1039,8 @@ Bad settings raise ValueError; no usable device or a capacity that does not fit 
              "track_color_weight"_a = shortest(gpu::TrackerOptions{}.colorWeight), "track_solve"_a = "host",
              "track_downsample"_a = gpu::TrackerOptions{}.downsample,
              "track_model_reuse"_a = gpu::TrackerOptions{}.modelReuseFrames, "keep_frames"_a = false,
-             "corrections_per_frame"_a = ReconstructorOptions{}.correctionsPerFrame, "frames_budget_mb"_a = 1024.0, "frames_spill"_a = "")
+             "corrections_per_frame"_a = ReconstructorOptions{}.correctionsPerFrame, "frames_budget_mb"_a = 1024.0, "frames_spill"_a = "",
+             "loop_closure"_a = false)
         .def("integrate", &PyReconstructor::integrate, "depth"_a, "intrinsics"_a, "pose"_a = py::none(), "depth_scale"_a = 5000.0,
              "color"_a = py::none(), R"doc(
 Fuses one frame and updates the mesh; returns when the GPU has finished it.
@@ -1075,7 +1111,7 @@ Raises vkmesh.Error before the first frame or when the file cannot be written.
                         return loadReconstructor(path, device, trackDeltas,
                                                  {blockCapacity, hashCapacity, touchedCapacity, vertexCapacity, chunkCapacity,
                                                   retypeCapacity, deltaRecordCapacity},
-                                                 validation, {keepFrames, correctionsPerFrame, framesBudgetMb, framesSpill});
+                                                 validation, {keepFrames, false, correctionsPerFrame, framesBudgetMb, framesSpill});
                     },
                     "path"_a, py::kw_only(), "device"_a = py::none(), "track_deltas"_a = false, "block_capacity"_a = dc.blockCapacity,
                     "hash_capacity"_a = dc.hashCapacity, "touched_capacity"_a = dc.touchedCapacity,

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <cstdint>
+#include <filesystem>
 #include <vector>
 
 #include "core/types.h"
@@ -42,6 +43,17 @@ public:
     virtual void relocalisationResult(uint32_t frame, bool relocalised, int candidatesTried) = 0;
     // The latest pose of every frame fused so far (the loops' corrections applied), by frame number.
     virtual bool latestPose(uint32_t frame, Pose& pose) const = 0;
+    // Kept with a saved map (beside it: loopClosurePathOf), tied to it by the map's save id: a run continued from
+    // the map recognises the places it saw. load() throws Error naming the file for a file of another map, a
+    // newer version, a truncated or corrupt file; it replaces what the loop closer held.
+    virtual void save(const std::filesystem::path& path, uint64_t mapId) const = 0;
+    virtual void load(const std::filesystem::path& path, uint64_t mapId) = 0;
 };
+
+// Where a map's loop-closure state is kept: beside the map, with the extension .vkloops.
+inline std::filesystem::path loopClosurePathOf(const std::filesystem::path& mapPath) {
+    std::filesystem::path p = mapPath;
+    return p.replace_extension(".vkloops");
+}
 
 }  // namespace vkmesh

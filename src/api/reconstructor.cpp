@@ -10,6 +10,8 @@ ReconstructorOptions checked(ReconstructorOptions options) {
         throw Error("Reconstructor keeps the incremental mesh: options.volume.meshMode must be Incremental");
     options.volume.publishMesh = true;
     options.volume.trackDeltas = options.trackDeltas;
+    if (options.loopClosure && !options.keepFrames)
+        throw Error("loop closure re-fuses the frames a loop moves: it needs keepFrames (Python keep_frames=True)");
     return options;
 }
 
@@ -120,6 +122,8 @@ TrackedFrame Reconstructor::integrate(const DepthImage& depth, const ColorImage*
         tracker_->start(trajectory_.empty() ? Pose::Identity() : trajectory_.back());
     }
     TrackedFrame out;
+    const uint32_t index = firstFrameIndex_ + uint32_t(trajectory_.size());
+    LoopClosure* loops = options_.loopClosure.get();
     if (volume_->framesIntegrated() == 0) {
         // Nothing fused yet (a new reconstruction): the frame starts the map where the tracker stands.
         out.tracking = tracker_->start(tracker_->prediction());
@@ -127,6 +131,21 @@ TrackedFrame Reconstructor::integrate(const DepthImage& depth, const ColorImage*
     } else {
         applyCorrections(options_.correctionsPerFrame);
         gpu::TrackedFusion f = tracker_->trackAndFuse(*volume_, depth, intrinsics, color, color, sync);
+        if (!f.tracking.tracked && loops) {
+            // Relocalisation: tracked again from the poses of the keyframes that look like this frame.
+            const Pose predicted = f.tracking.cameraToWorld;
+            for (const Pose& candidate : loops->relocalisationCandidates({index, &depth, color, intrinsics, predicted})) {
+                ++out.relocalisationCandidatesTried;
+                gpu::TrackedFusion g = tracker_->relocalise(*volume_, candidate, depth, intrinsics, color, color);
+                if (g.tracking.tracked) {
+                    f = std::move(g);
+                    out.relocalised = true;
+                    break;
+                }
+            }
+            loops->relocalisationResult(index, out.relocalised, out.relocalisationCandidatesTried);
+            if (!out.relocalised) f.tracking.cameraToWorld = predicted;
+        }
         out.tracking = std::move(f.tracking);
         out.fused = std::move(f.fused);
     }
@@ -134,6 +153,15 @@ TrackedFrame Reconstructor::integrate(const DepthImage& depth, const ColorImage*
     if (out.fused) keepFrame(depth, color, intrinsics, out.cameraToWorld);
     trajectory_.push_back(out.cameraToWorld);
     lastDelta_ = out.fused ? out.fused->delta : MeshDelta{};
+    if (out.fused && loops) {
+        const PoseCorrections moved = loops->frameFused({index, &depth, color, intrinsics, out.cameraToWorld});
+        if (!moved.empty()) {
+            corrector_->correct(moved.frames, moved.poses);
+            out.loopCorrections = uint32_t(moved.frames.size());
+            // Tracking goes on from this frame's corrected pose (the next frame is predicted in the corrected map).
+            if (Pose corrected; loops->latestPose(index, corrected)) tracker_->correctLastPose(corrected);
+        }
+    }
     return out;
 }
 
@@ -198,9 +226,12 @@ gpu::ExportedMesh Reconstructor::downloadMesh() {
 void Reconstructor::save(const std::filesystem::path& path) {
     finish();
     if (!volume_) throw Error("cannot save " + path.string() + ": no frame has been integrated yet");
+    // With loop closure, the loops' corrections are re-fused first: the loop closer's state holds them as done.
+    if (options_.loopClosure && corrector_ && corrector_->pending() > 0) finishCorrections();
     const uint64_t saveId = volume_->save(path);
     // Queued corrections are not saved: the store holds the poses the map was fused at.
     if (corrector_) corrector_->store().save(frameStorePath(path).string(), saveId);
+    if (options_.loopClosure) options_.loopClosure->save(loopClosurePathOf(path), saveId);
 }
 
 void Reconstructor::loadMap(const map::MapData& m, const std::filesystem::path& path) {
@@ -215,6 +246,8 @@ void Reconstructor::loadMap(const map::MapData& m, const std::filesystem::path& 
     config.trackDeltas = options_.trackDeltas;
     volume_ = gpu::GpuVolume::load(*context_, m, config, path.string());
     firstFrameIndex_ = m.framesIntegrated;
+    // The loop closer's keyframes and graph saved with the map (absent: it starts empty).
+    if (options_.loopClosure && std::filesystem::exists(loopClosurePathOf(path))) options_.loopClosure->load(loopClosurePathOf(path), m.saveId);
     if (!corrector_) return;
     const std::filesystem::path storePath = frameStorePath(path);
     if (!std::filesystem::exists(storePath))

@@ -30,6 +30,7 @@
 #include <memory>
 #include <optional>
 
+#include "api/loop_closure.h"
 #include "core/mesh_delta.h"
 #include "core/types.h"
 #include "core/frame_store.h"
@@ -59,6 +60,11 @@ struct ReconstructorOptions {
     // Queued corrections re-fused by each integrate() before its frame (a de-integration and an integration
     // each); finishCorrections() does all that are left at once.
     uint32_t correctionsPerFrame = 2;
+    // Loop closure and relocalisation for frames integrated without a pose (docs/LOOP_CLOSURE.md): an
+    // implementation of the LoopClosure interface, slam::LoopCloser from the vkmesh_slam library (which links
+    // Ceres; the GPU core does not). Needs keepFrames: the frames a loop moves are re-fused through correct().
+    // nullptr (the default): off.
+    std::shared_ptr<LoopClosure> loopClosure;
 };
 
 // A frame integrated without a pose: the pose tracking found (or predicted, when the frame was lost) and
@@ -67,6 +73,13 @@ struct TrackedFrame {
     Pose cameraToWorld = Pose::Identity();
     gpu::TrackingReport tracking;
     std::optional<gpu::FrameReport> fused;
+    // With options.loopClosure: tracking lost the frame from its prediction and a keyframe's pose found it again
+    // (tracking holds that attempt's report), after this many keyframes were tried (0: not lost);
+    bool relocalised = false;
+    int relocalisationCandidatesTried = 0;
+    // ... and a loop closed at this frame: this many fused frames were queued for correction (their new poses;
+    // re-fused correctionsPerFrame per later integrate(), or by finishCorrections()).
+    uint32_t loopCorrections = 0;
     bool lost() const { return !fused.has_value(); }
 };
 
@@ -162,7 +175,9 @@ public:
     // have. The map's settings are used (voxel size, truncation, ...); options.volume's capacities where larger
     // than the map's; the image size is the map's. Errors (bad file, a map that does not fit the device) name
     // the file and the problem, and nothing is created.
-    void save(const std::filesystem::path& path);   // finishes an asynchronous frame in flight first
+    void save(const std::filesystem::path& path);   // finishes an asynchronous frame in flight first; with
+                                                    // loopClosure re-fuses the queued corrections and keeps its
+                                                    // state beside the map (loopClosurePathOf)
     static std::unique_ptr<Reconstructor> load(const std::filesystem::path& path, const ReconstructorOptions& options = {});
     static std::unique_ptr<Reconstructor> load(const std::filesystem::path& path, const vk::ExternalDevice& device,
                                                const ReconstructorOptions& options = {});

@@ -1,11 +1,16 @@
 #include "slam/loop_closer.h"
 
+#include <zstd.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstring>
+#include <fstream>
 #include <numbers>
 
 #include "core/camera.h"
+#include "core/map_format.h"
 #include "gpu/tracking/pose_tracker.h"
 
 namespace vkmesh::slam {
@@ -99,33 +104,11 @@ PoseCorrections LoopCloser::frameFused(const LoopClosureFrame& frame) {
         relocalisedFrom_.reset();
     } else if (id > 0) {
         const Keyframe& previous = keyframes_.back();
-        Pose motion = inverseRigid(graph_.pose(previous.node)) * frame.cameraToWorld;
-        // The tracked motion is measured against the mesh: when the camera comes back to a place mapped before,
-        // frame-to-model tracking snaps onto the old surface, and the drift of the way there ends up in this one
-        // motion. The same motion registered frame to frame (independent of the mesh) does not contain it; where
-        // the two disagree, the edge takes the registered one, so that a loop closed later spreads the snap back
-        // over the way it accumulated (a consistent trajectory keeps the tracked motions: no registration noise).
-        currentRegistration_ = registrationFrame(key.depth, key.intrinsics, options_.tracker, options_.registrationWidth);
-        if (options_.odometryCheck && !previousRegistration_.empty()) {
-            const auto tr = Clock::now();
-            const Registration r = registerFrame(currentRegistration_, previousRegistration_, graph_.pose(previous.node), frame.cameraToWorld,
-                                                 options_.tracker);
-            if (verified(r, frame.cameraToWorld).empty()) {
-                const Pose registered = inverseRigid(graph_.pose(previous.node)) * r.cameraToWorld;
-                const Pose disagreement = inverseRigid(motion) * registered;
-                if (translationMetres(disagreement) > options_.odometryCheckMetres || rotationDegrees(disagreement) > options_.odometryCheckDegrees) {
-                    motion = registered;
-                    ++stats_.odometryRegistered;
-                }
-            }
-            time("odometry", msSince(tr));
-        }
+        const Pose motion = inverseRigid(graph_.pose(previous.node)) * frame.cameraToWorld;
         const double sigmaMetres = options_.odometrySigmaMetres + options_.odometrySigmaPerMetre * translationMetres(motion);
         const double sigmaDegrees = options_.odometrySigmaDegrees + options_.odometrySigmaPerDegree * rotationDegrees(motion);
         graph_.addEdge({previous.node, key.node, motion, diagonalInformation(sigmaMetres, sigmaDegrees * kRadiansPerDegree), false});
     }
-    if (currentRegistration_.empty())
-        currentRegistration_ = registrationFrame(key.depth, key.intrinsics, options_.tracker, options_.registrationWidth);
     keyframes_.push_back(std::move(key));
     frames_[frame.index] = {id, Pose::Identity(), frame.cameraToWorld};
     ++stats_.keyframes;
@@ -144,8 +127,9 @@ PoseCorrections LoopCloser::frameFused(const LoopClosureFrame& frame) {
     if (alike.size() > size_t(options_.candidates)) alike.resize(size_t(options_.candidates));
     time("search", msSince(t));
     if (!alike.empty()) {
+        const RegistrationFrame currentFrame = registrationFrame(current.depth, current.intrinsics, options_.tracker, options_.registrationWidth);
         for (const auto& [d, k] : alike) {
-            const LoopOutcome outcome = tryLoop(current, currentRegistration_, k, d);
+            const LoopOutcome outcome = tryLoop(current, currentFrame, k, d);
             if (outcome == LoopOutcome::Closed) {
                 result = corrections();
                 stats_.framesCorrected += uint32_t(result.frames.size());
@@ -153,8 +137,6 @@ PoseCorrections LoopCloser::frameFused(const LoopClosureFrame& frame) {
             if (outcome != LoopOutcome::Rejected) break;
         }
     }
-    previousRegistration_ = std::move(currentRegistration_);
-    currentRegistration_ = {};
     time("frame", msSince(t0));
     return result;
 }
@@ -199,6 +181,21 @@ LoopCloser::LoopOutcome LoopCloser::tryLoop(const Keyframe& current, const Regis
         if (failure.empty()) {
             match = r;
             break;
+        }
+    }
+    // Both ways: the old keyframe registered to the current frame (placed where the match says) must land where
+    // the old keyframe is. A registration that slid along a weakly constrained direction does not come back.
+    if (match) {
+        const Registration back = registerFrame(oldFrame, currentFrame, match->cameraToWorld, oldPose, options_.tracker);
+        const Pose disagreement = inverseRigid(oldPose) * back.cameraToWorld;
+        const std::string backFailure = verified(back, oldPose);
+        if (!backFailure.empty()) {
+            failure = "the registration back from the old keyframe fails: " + backFailure;
+            match.reset();
+        } else if (translationMetres(disagreement) > options_.symmetricMetres || rotationDegrees(disagreement) > options_.symmetricDegrees) {
+            failure = "the registration back from the old keyframe disagrees by " + std::to_string(translationMetres(disagreement)) + " m, " +
+                      std::to_string(rotationDegrees(disagreement)) + " degrees";
+            match.reset();
         }
     }
     time("verify", msSince(t));
@@ -275,6 +272,182 @@ void LoopCloser::relocalisationResult(uint32_t, bool relocalised, int candidates
         throw Error("loop closure: relocalised by candidate " + std::to_string(candidatesTried) + " of " + std::to_string(lastCandidates_.size()));
     ++stats_.relocalisations;
     relocalisedFrom_ = lastCandidates_[size_t(candidatesTried) - 1];
+}
+
+namespace {
+
+constexpr char kLoopsMagic[8] = {'V', 'K', 'L', 'O', 'O', 'P', 'S', 0};
+constexpr uint32_t kLoopsVersion = 1;
+
+struct Out {
+    std::string bytes;
+    template <class T>
+    void put(const T& v) { bytes.append(reinterpret_cast<const char*>(&v), sizeof(T)); }
+    void pose(const Pose& p) { for (int r = 0; r < 4; ++r) for (int c = 0; c < 4; ++c) put(p(r, c)); }
+};
+
+struct In {
+    const std::string& bytes;
+    size_t at = 0;
+    std::string file;
+    template <class T>
+    T get() {
+        if (bytes.size() - at < sizeof(T)) throw Error("loop closure: " + file + " is truncated (at byte " + std::to_string(at) + " of its state)");
+        T v;
+        std::memcpy(&v, bytes.data() + at, sizeof(T));
+        at += sizeof(T);
+        return v;
+    }
+    Pose pose() {
+        Pose p;
+        for (int r = 0; r < 4; ++r) for (int c = 0; c < 4; ++c) p(r, c) = get<double>();
+        return p;
+    }
+    uint32_t count(size_t bytesEach) {   // a count that the remaining bytes can hold
+        const uint32_t n = get<uint32_t>();
+        if (bytesEach > 0 && n > (bytes.size() - at) / bytesEach) throw Error("loop closure: " + file + " holds a count (" + std::to_string(n) + ") its bytes cannot");
+        return n;
+    }
+};
+
+}  // namespace
+
+void LoopCloser::save(const std::filesystem::path& path, uint64_t mapId) const {
+    Out o;
+    o.put(pathMetres_);
+    o.put(uint8_t(lastPose_.has_value()));
+    o.pose(lastPose_.value_or(Pose::Identity()));
+    o.put(uint32_t(keyframes_.size()));
+    for (const Keyframe& k : keyframes_) {
+        o.put(k.frame);
+        o.put(int32_t(k.node));
+        o.put(uint32_t(k.code.size()));
+        o.bytes.append(reinterpret_cast<const char*>(k.code.data()), k.code.size());
+        o.put(int32_t(k.depth.width));
+        o.put(int32_t(k.depth.height));
+        o.put(k.intrinsics.fx), o.put(k.intrinsics.fy), o.put(k.intrinsics.cx), o.put(k.intrinsics.cy);
+        o.put(k.pathMetres);
+        o.bytes.append(reinterpret_cast<const char*>(k.depth.meters.data()), k.depth.meters.size() * sizeof(float));
+    }
+    o.put(uint32_t(graph_.nodes()));
+    for (const Pose& p : graph_.poses()) o.pose(p);
+    o.put(uint32_t(graph_.edges().size()));
+    for (const PoseGraphEdge& e : graph_.edges()) {
+        o.put(int32_t(e.from)), o.put(int32_t(e.to));
+        o.pose(e.measured);
+        for (int i = 0; i < 36; ++i) o.put(e.information.data()[i]);
+        o.put(uint8_t(e.loop));
+    }
+    o.put(uint32_t(frames_.size()));
+    for (const auto& [index, f] : frames_) {
+        o.put(index);
+        o.put(int32_t(f.keyframe));
+        o.pose(f.relative);
+        o.pose(f.handed);
+    }
+    std::string packed(ZSTD_compressBound(o.bytes.size()), '\0');
+    const size_t n = ZSTD_compress(packed.data(), packed.size(), o.bytes.data(), o.bytes.size(), 3);
+    if (ZSTD_isError(n)) throw Error(std::string("loop closure: compressing the state failed: ") + ZSTD_getErrorName(n));
+    packed.resize(n);
+    Out header;
+    header.bytes.append(kLoopsMagic, sizeof kLoopsMagic);
+    header.put(kLoopsVersion);
+    header.put(mapId);
+    header.put(uint64_t(packed.size()));
+    header.put(map::crc32(packed.data(), packed.size()));
+    const std::filesystem::path tmp = path.string() + ".tmp";
+    {
+        std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+        out.write(header.bytes.data(), std::streamsize(header.bytes.size()));
+        out.write(packed.data(), std::streamsize(packed.size()));
+        out.close();
+        if (!out) throw Error("loop closure: cannot write " + tmp.string());
+    }
+    std::error_code ec;
+    std::filesystem::rename(tmp, path, ec);
+    if (ec) throw Error("loop closure: cannot rename " + tmp.string() + " to " + path.string() + ": " + ec.message());
+}
+
+void LoopCloser::load(const std::filesystem::path& path, uint64_t mapId) {
+    const std::string file = path.string();
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw Error("loop closure: cannot open " + file);
+    const std::string all((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    In h{all, 0, file};
+    if (all.size() < sizeof kLoopsMagic || std::memcmp(all.data(), kLoopsMagic, sizeof kLoopsMagic) != 0)
+        throw Error("loop closure: " + file + " is not a loop-closure file (no VKLOOPS header)");
+    h.at = sizeof kLoopsMagic;
+    const uint32_t version = h.get<uint32_t>();
+    if (version != kLoopsVersion)
+        throw Error("loop closure: " + file + " is version " + std::to_string(version) + "; this vkmesh reads version " + std::to_string(kLoopsVersion));
+    if (h.get<uint64_t>() != mapId) throw Error("loop closure: " + file + " belongs to another map (its map id differs from the map's)");
+    const uint64_t packedBytes = h.get<uint64_t>();
+    const uint32_t crc = h.get<uint32_t>();
+    if (all.size() - h.at != packedBytes) throw Error("loop closure: " + file + " is truncated or has trailing bytes");
+    if (map::crc32(all.data() + h.at, packedBytes) != crc) throw Error("loop closure: " + file + " is corrupt (CRC mismatch)");
+    const unsigned long long rawBytes = ZSTD_getFrameContentSize(all.data() + h.at, packedBytes);
+    if (rawBytes == ZSTD_CONTENTSIZE_ERROR || rawBytes == ZSTD_CONTENTSIZE_UNKNOWN || rawBytes > (uint64_t(1) << 34))
+        throw Error("loop closure: " + file + " holds no readable zstd frame");
+    std::string raw(rawBytes, '\0');
+    const size_t n = ZSTD_decompress(raw.data(), raw.size(), all.data() + h.at, packedBytes);
+    if (ZSTD_isError(n) || n != rawBytes) throw Error("loop closure: " + file + ": its state does not decompress");
+
+    In r{raw, 0, file};
+    LoopCloser loaded(options_);
+    loaded.pathMetres_ = r.get<double>();
+    const bool hasLast = r.get<uint8_t>() != 0;
+    const Pose last = r.pose();
+    if (hasLast) loaded.lastPose_ = last;
+    const uint32_t keyframes = r.count(40);
+    for (uint32_t i = 0; i < keyframes; ++i) {
+        Keyframe k;
+        k.frame = r.get<uint32_t>();
+        k.node = r.get<int32_t>();
+        const uint32_t codeSize = r.count(1);
+        k.code.assign(raw.begin() + std::ptrdiff_t(r.at), raw.begin() + std::ptrdiff_t(r.at + codeSize));
+        r.at += codeSize;
+        k.depth.width = r.get<int32_t>();
+        k.depth.height = r.get<int32_t>();
+        k.intrinsics.fx = r.get<float>(), k.intrinsics.fy = r.get<float>(), k.intrinsics.cx = r.get<float>(), k.intrinsics.cy = r.get<float>();
+        k.intrinsics.width = k.depth.width, k.intrinsics.height = k.depth.height;
+        k.pathMetres = r.get<double>();
+        if (k.depth.width <= 0 || k.depth.height <= 0 || k.depth.width > 16384 || k.depth.height > 16384 ||
+            size_t(k.depth.width) * size_t(k.depth.height) * sizeof(float) > raw.size() - r.at)
+            throw Error("loop closure: " + file + ": keyframe " + std::to_string(i) + " has a bad image size");
+        k.depth.meters.resize(size_t(k.depth.width) * size_t(k.depth.height));
+        std::memcpy(k.depth.meters.data(), raw.data() + r.at, k.depth.meters.size() * sizeof(float));
+        r.at += k.depth.meters.size() * sizeof(float);
+        loaded.keyframes_.push_back(std::move(k));
+    }
+    const uint32_t nodes = r.count(128);
+    for (uint32_t i = 0; i < nodes; ++i) loaded.graph_.addNode(r.pose());
+    const uint32_t edges = r.count(128 + 288 + 9);
+    for (uint32_t i = 0; i < edges; ++i) {
+        PoseGraphEdge e;
+        e.from = r.get<int32_t>(), e.to = r.get<int32_t>();
+        e.measured = r.pose();
+        for (int j = 0; j < 36; ++j) e.information.data()[j] = r.get<double>();
+        e.loop = r.get<uint8_t>() != 0;
+        loaded.graph_.addEdge(e);   // checks the nodes and the information
+    }
+    const uint32_t frames = r.count(264);
+    for (uint32_t i = 0; i < frames; ++i) {
+        const uint32_t index = r.get<uint32_t>();
+        FusedFrame f;
+        f.keyframe = r.get<int32_t>();
+        f.relative = r.pose();
+        f.handed = r.pose();
+        if (f.keyframe < 0 || size_t(f.keyframe) >= loaded.keyframes_.size())
+            throw Error("loop closure: " + file + ": frame " + std::to_string(index) + " follows keyframe " + std::to_string(f.keyframe) + " of " +
+                        std::to_string(loaded.keyframes_.size()));
+        loaded.frames_[index] = f;
+    }
+    for (const Keyframe& k : loaded.keyframes_)
+        if (k.node < 0 || size_t(k.node) >= loaded.graph_.nodes())
+            throw Error("loop closure: " + file + ": a keyframe's node " + std::to_string(k.node) + " is not in the graph");
+    if (r.at != raw.size()) throw Error("loop closure: " + file + " has bytes after its state");
+    loaded.stats_.keyframes = uint32_t(loaded.keyframes_.size());
+    *this = std::move(loaded);
 }
 
 }  // namespace vkmesh::slam

@@ -30,7 +30,8 @@ namespace vkmesh::slam {
 struct LoopClosureOptions {
     FernOptions ferns;
     gpu::TrackerOptions tracker;        // the registration's pyramid, gates and stopping rule (the tracker's own)
-    int registrationWidth = 160;        // frames halved until at most this wide for verification
+    int registrationWidth = 320;        // frames halved until at most this wide for verification (VGA: 320 x 240,
+                                        // as tracking; at 160 the loops' errors made TUM fr1/rpy's ATE worse)
     double keyframeMetres = 0.10;       // a new keyframe once the camera moved this far from the last one,
     double keyframeDegrees = 10.0;      // or turned this far
     // Loop candidates: keyframes at least this many keyframes and frames older than the new one, whose codes
@@ -41,7 +42,7 @@ struct LoopClosureOptions {
     int candidates = 3;
     // Verification (on top of the tracker's own loss checks): the registration's inliers cover at least this
     // share of the frame's valid pixels, and their RMSE is below maxRmse metres.
-    double minInlierShare = 0.30;
+    double minInlierShare = 0.50;
     double maxRmse = 0.015;
     // Plausibility: a loop may move the camera by at most driftBaseMetres + driftPerMetre x the path travelled
     // since the old keyframe (and driftBaseDegrees + driftDegreesPerMetre x that path): tracking does not drift
@@ -49,15 +50,14 @@ struct LoopClosureOptions {
     double driftBaseMetres = 0.10, driftPerMetre = 0.05;
     double driftBaseDegrees = 5.0, driftDegreesPerMetre = 2.0;
     // A verified loop that moves the camera less than this and turns it less than this agrees with the trajectory
-    // (counted as consistent): no edge, no solve. Below it a registration at registration size is not more precise
-    // than tracking, and re-solving for its noise made TUM fr1/rpy's ATE worse (docs/RESULTS.md, "Loop closure").
-    double minLoopCorrectionMetres = 0.03, minLoopCorrectionDegrees = 2.0;
-    // odometryCheck: an odometry edge takes the keyframes' registered motion instead of the tracked one where the
-    // two differ by more than this (tracking snapped onto a surface mapped long before; loop_closer.cpp says why).
-    // Off by default: on the gallery sequence it made the final trajectory worse (the corrected poses and the
-    // tracker, which follows the old map, pulled against each other; docs/LOOP_CLOSURE.md).
-    bool odometryCheck = false;
-    double odometryCheckMetres = 0.01, odometryCheckDegrees = 0.5;
+    // (counted as consistent): no edge, no solve. Below it a single frame's registration is not more precise than
+    // frame-to-model tracking: at 2 cm / 1 degree TUM fr1/rpy's ATE went 2.28 -> 2.57 cm, at 3 cm / 2 degrees to
+    // 2.31 cm, at 5 cm / 3 degrees it stays 2.28 (docs/RESULTS.md, "Loop closure").
+    double minLoopCorrectionMetres = 0.05, minLoopCorrectionDegrees = 3.0;
+    // Verification both ways: the old keyframe registered back to the current frame (placed where the match says)
+    // must land within this of where it is: a registration that slid along a weakly constrained direction does
+    // not come back.
+    double symmetricMetres = 0.01, symmetricDegrees = 0.5;
     // The pose graph: odometry edges' standard deviation grows with the motion between the keyframes (a
     // tracker's drift), loop edges are as precise as a registration; loops take a Huber loss at this many
     // standard deviations. After the solve, a loop still off by more than maxLoopError deviations is rejected.
@@ -81,7 +81,6 @@ struct LoopClosureStats {
     uint32_t loopsAccepted = 0;
     uint32_t loopsRejected = 0;
     uint32_t loopsConsistent = 0;      // verified, but the trajectory already agrees: nothing to correct
-    uint32_t odometryRegistered = 0;   // odometry edges that took the registered motion (tracking snapped)
     std::map<std::string, uint32_t> rejectedBy;   // "registration", "implausible", "graph"
     uint32_t lostFrames = 0, relocalisations = 0, relocalisationCandidatesTried = 0;
     uint32_t framesCorrected = 0;      // poses handed back (a frame counts once per loop that moved it)
@@ -106,6 +105,12 @@ public:
     std::vector<Pose> relocalisationCandidates(const LoopClosureFrame& frame) override;
     void relocalisationResult(uint32_t frame, bool relocalised, int candidatesTried) override;
     bool latestPose(uint32_t frame, Pose& pose) const override;
+    // File layout (little-endian): "VKLOOPS" and a 0 byte, u32 version (1), u64 map id, u64 payload bytes, u32
+    // CRC-32 (map::crc32) of the payload, then the payload: zstd of the state (the path length, the last pose,
+    // every keyframe with its code and registration depth, the graph's nodes and edges, every fused frame's
+    // keyframe and poses; f64 poses row-major). Counters (stats()) start again at 0.
+    void save(const std::filesystem::path& path, uint64_t mapId) const override;
+    void load(const std::filesystem::path& path, uint64_t mapId) override;
     const LoopClosureStats& stats() const { return stats_; }
     const LoopClosureOptions& options() const { return options_; }
     const PoseGraph& graph() const { return graph_; }
@@ -143,9 +148,7 @@ private:
     std::optional<Pose> lastPose_;
     // A relocalisation succeeded: the next fused frame becomes a keyframe tied to this keyframe.
     std::optional<int> relocalisedFrom_;
-    std::vector<int> lastCandidates_;
-    // The newest keyframe's registration pyramid (its odometry check, its loops) and the one before (the check).
-    RegistrationFrame currentRegistration_, previousRegistration_;   // relocalisationCandidates' keyframes, in the order returned
+    std::vector<int> lastCandidates_;   // relocalisationCandidates' keyframes, in the order returned
     LoopClosureStats stats_;
 };
 

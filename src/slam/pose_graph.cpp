@@ -100,7 +100,7 @@ PoseGraphSolve PoseGraph::optimise(int maxIterations, double huberWhitened) {
         residual.measuredTranslation = edge.measured.block<3, 1>(0, 3);
         residual.sqrtInformation = sqrtOf(edge.information);
         auto* cost = new ceres::AutoDiffCostFunction<RelativePoseResidual, 6, 4, 3, 4, 3>(new RelativePoseResidual(residual));
-        ceres::LossFunction* loss = edge.loop ? new ceres::HuberLoss(huberWhitened) : nullptr;
+        ceres::LossFunction* loss = edge.loop && huberWhitened > 0 ? new ceres::HuberLoss(huberWhitened) : nullptr;
         problem.AddResidualBlock(cost, loss, rotations[size_t(edge.from)].data(), translations[size_t(edge.from)].data(),
                                  rotations[size_t(edge.to)].data(), translations[size_t(edge.to)].data());
     }

@@ -43,6 +43,7 @@ public:
     const std::vector<PoseGraphEdge>& edges() const { return edges_; }
     const Pose& pose(int node) const { return poses_.at(size_t(node)); }
     void setPoses(const std::vector<Pose>& poses) { poses_ = poses; }
+    void clear() { poses_.clear(), edges_.clear(); }
     const std::vector<Pose>& poses() const { return poses_; }
     // Moves every node but the first to the least-squares fit of the edges (Levenberg-Marquardt, sparse
     // Cholesky, one thread: the same graph gives the same poses bit for bit).

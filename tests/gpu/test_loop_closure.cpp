@@ -16,6 +16,7 @@
 #include "io/ply.h"
 #include "io/trajectory.h"
 #include "slam/frame_registration.h"
+#include "slam/loop_closer.h"
 #include "slam/pose_graph.h"
 #include "slam/random_ferns.h"
 #include "synth/synthetic_scene.h"
@@ -33,6 +34,9 @@ Pose turned(const Pose& pose, double degrees, const Eigen::Vector3d& axis, const
     delta.block<3, 1>(0, 3) = moved;
     return pose * delta;
 }
+
+double angleDegrees(const Pose& a, const Pose& b) { return rotationDegrees(inverseRigid(a) * b); }
+double distanceMetres(const Pose& a, const Pose& b) { return (a.block<3, 1>(0, 3) - b.block<3, 1>(0, 3)).norm(); }
 
 // The same view gives the same code; a view a few centimetres away differs in few ferns, a view of another part
 // of the room in many; and the ferns are the same for the same seed (deterministic), others for another seed.
@@ -130,6 +134,63 @@ TEST(PoseGraph, ALoopEdgeSpreadsTheDriftAlongTheChain) {
     EXPECT_NE(test::errorMessageOf([&] { graph.addEdge({0, 12, Pose::Identity(), odometry, false}); }).find("node"), std::string::npos);
 }
 
+// The loop closer on its own (no GPU): a lap of the room whose poses drift as a tracker's do (a world-frame error
+// growing along the path: 8 cm and 2 degrees by the lap's end), then the start again. The revisit is recognised,
+// verified against the first keyframes' depth, and the graph's corrections move the drifted frames back towards
+// the truth; after a correction the poses given go on from the corrected one, as the tracker's do
+// (PoseTracker::correctLastPose).
+TEST(LoopCloser, ClosesALoopOverDriftedPosesAndCorrectsTheFrames) {
+    const synth::SyntheticScene room = synth::SyntheticScene::defaultRoom();
+    const Intrinsics k = synth::kinectIntrinsics(160, 120);
+    const std::vector<Pose> path = synth::cameraPath(120, synth::PathKind::Revisit);   // 3 laps of 40 frames
+    slam::LoopClosureOptions options;
+    options.registrationWidth = 160;
+    slam::LoopCloser closer(options);
+    std::vector<Pose> given;
+    Pose followed = Pose::Identity();   // the corrections so far, as the tracker takes them on
+    uint32_t closedAt = 0;
+    size_t corrected = 0;
+    for (uint32_t i = 0; i < 52; ++i) {
+        const double s = double(i) / 40.0;
+        const Pose drift = turned(Pose::Identity(), 2.0 * s, {0, 0, 1}, {0.08 * s, 0.03 * s, 0.0});
+        given.push_back(followed * drift * path[i]);
+        synth::RenderOptions noisy;
+        noisy.noise = true;
+        noisy.seed = i + 1;
+        ColorImage color;
+        const DepthImage depth = room.renderDepth(k, path[i], noisy, &color);
+        const PoseCorrections c = closer.frameFused({i, &depth, &color, k, given[i]});
+        if (c.empty()) continue;
+        EXPECT_TRUE(std::is_sorted(c.frames.begin(), c.frames.end()));
+        corrected += c.frames.size();
+        if (closedAt == 0) closedAt = i;
+        Pose latest;
+        ASSERT_TRUE(closer.latestPose(i, latest));
+        followed = latest * inverseRigid(drift * path[i]);
+    }
+    const slam::LoopClosureStats& stats = closer.stats();
+    ASSERT_GE(stats.loopsAccepted, 1u) << "no loop closed (detected " << stats.loopsDetected << ", rejected " << stats.loopsRejected << ")";
+    EXPECT_GE(closedAt, 38u);
+    EXPECT_GT(corrected, 20u);
+    // The frames of the lap's second half were furthest off; the corrections bring them back.
+    double before = 0, after = 0;
+    int counted = 0;
+    for (uint32_t i = 20; i < 40; ++i) {
+        Pose latest;
+        ASSERT_TRUE(closer.latestPose(i, latest)) << i;
+        before += distanceMetres(given[i], path[i]);
+        after += distanceMetres(latest, path[i]);
+        ++counted;
+    }
+    EXPECT_LT(after, 0.5 * before) << "mean error " << before / counted << " -> " << after / counted << " m";
+    // The frame that closed the loop, and those after it, are where the truth is, within the drift that goes on.
+    Pose last;
+    ASSERT_TRUE(closer.latestPose(51, last));
+    EXPECT_LT(distanceMetres(last, path[51]), 0.03);
+    Pose unknown;
+    EXPECT_FALSE(closer.latestPose(1000, unknown));
+}
+
 }  // namespace
 }  // namespace vkmesh
 
@@ -162,8 +223,6 @@ const fs::path& kidnapSequence() {
     return dir;
 }
 
-double angleDegrees(const Pose& a, const Pose& b) { return rotationDegrees(inverseRigid(a) * b); }
-double distanceMetres(const Pose& a, const Pose& b) { return (a.block<3, 1>(0, 3) - b.block<3, 1>(0, 3)).norm(); }
 
 // Kidnapping: after each of the 10 jumps the camera is relocalised within 5 frames, within 5 cm and 5 degrees of
 // the truth, in at least 9 of the 10; no frame stays lost for good, and the map holds only tracked frames.
@@ -267,6 +326,62 @@ TEST(LoopClosure, TwinPlacesDoNotCloseAFalseLoop) {
     ASSERT_EQ(online.size(), final.size());
     for (size_t i = 0; i < online.size(); ++i)
         EXPECT_LT(distanceMetres(online[i].cameraToWorld, final[i].cameraToWorld), 0.02) << "frame " << i << " was moved";
+    fs::remove_all(d);
+}
+
+// The keyframes and the pose graph are saved with the map: a run continued from it relocalises a jump to a place
+// only the first run saw. A corrupt or foreign state is refused naming the file.
+TEST(LoopClosure, KeyframesAreSavedWithTheMap) {
+    if (const std::string why = test::lavapipeCannotDraw(); !why.empty()) GTEST_SKIP() << why;
+    const fs::path d = test::makeTempDir("loop_save");
+    const std::string seq = kidnapSequence().string(), map = (d / "m.vkmap").string();
+    test::CliRun r = test::runCli("fuse " + seq + " --track --loop-closure --frames 56 --voxel 0.03 --save " + map + " --stats " +
+                                  (d / "a.json").string() + " -o /dev/null -q");
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    ASSERT_TRUE(fs::exists(d / "m.vkloops"));
+    const auto first = nlohmann::json::parse(test::readText(d / "a.json"))["loop_closure"];
+    // Frames 56-63: the first is the jump to lap 2 (frame 72 of the rendered path).
+    r = test::runCli("fuse " + seq + " --track --loop-closure --load " + map + " --first-frame 56 --frames 64 --stats " + (d / "b.json").string() +
+                     " -o /dev/null -q");
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    const auto second = nlohmann::json::parse(test::readText(d / "b.json"))["loop_closure"];
+    EXPECT_GT(second["keyframes"].get<int>(), first["keyframes"].get<int>());
+    EXPECT_GE(second["relocalisations"].get<int>(), 1);
+
+    std::string bytes = test::readText(d / "m.vkloops");
+    bytes[bytes.size() / 2] ^= 0x5a;
+    test::writeBytes(d / "m.vkloops", bytes);
+    r = test::runCli("fuse " + seq + " --track --loop-closure --load " + map + " --first-frame 56 --frames 60 -o /dev/null -q");
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_NE(r.err.find("m.vkloops is corrupt"), std::string::npos) << r.err;
+    test::writeBytes(d / "m.vkloops", bytes.substr(0, 30));
+    r = test::runCli("fuse " + seq + " --track --loop-closure --load " + map + " --first-frame 56 --frames 60 -o /dev/null -q");
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_NE(r.err.find("m.vkloops is truncated"), std::string::npos) << r.err;
+    fs::remove_all(d);
+}
+
+// The drift sequence (synth --scene gallery: a 13 m hall circled looking outward; tracking drifts up to 12 cm
+// before the start comes back into view). Frame-to-model tracking snaps back onto the start's surfaces before a
+// keyframe there is recognised, so the loops found there agree with the trajectory: loop closure must then leave
+// the trajectory as tracking made it (no loop may bend it), lose no frame and recognise the start.
+// (The target, 3x lower ATE with loop closure, is not met: docs/LOOP_CLOSURE.md, "Limits".)
+TEST(LoopClosure, DriftingGalleryIsNotMadeWorse) {
+    if (const std::string why = test::lavapipeCannotDraw(); !why.empty()) GTEST_SKIP() << why;
+    const fs::path d = test::makeTempDir("loop_gallery");
+    test::CliRun r = test::runCli("synth " + (d / "seq").string() + " --scene gallery --path gallery-loop --frames 300 --noise --width 320 "
+                                  "--height 240 --gt-spacing 0.05");
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    r = test::runCli("fuse " + (d / "seq").string() + " --track --loop-closure --voxel 0.03 --stats " + (d / "s.json").string() + " -o /dev/null -q");
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    const auto stats = nlohmann::json::parse(test::readText(d / "s.json"));
+    EXPECT_EQ(stats["tracking"]["lost_frames"], 0);
+    const double online = stats["tracking"]["position_error_m"]["rmse"], final = stats["loop_closure"]["position_error_m"]["rmse"];
+    EXPECT_GT(stats["tracking"]["position_error_m"]["max"].get<double>(), 0.05) << "the sequence no longer drifts";
+    EXPECT_LE(final, online + 0.001);
+    EXPECT_GT(stats["loop_closure"]["keyframes"].get<int>(), 100);
+    EXPECT_GT(stats["loop_closure"]["loops_detected"].get<int>(), 0);
+    EXPECT_EQ(stats["loop_closure"]["observations_dropped"], 0);
     fs::remove_all(d);
 }
 

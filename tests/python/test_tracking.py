@@ -87,3 +87,25 @@ def test_a_sequence_without_poses_opens_for_tracking(tmp_path):
     first = np.linalg.inv(truth[0])
     for tracked, true in zip(r.trajectory(), truth):
         assert np.linalg.norm(tracked[:3, 3] - (first @ true)[:3, 3]) < 0.01
+
+
+def test_loop_closure_relocalises_a_kidnapped_camera(tmp_path):
+    # Three laps of the room (60 frames each); the camera jumps from frame 55 of lap 1 to frame 72 of lap 2, a view
+    # lap 1 saw: tracking from the prediction loses it, a keyframe's pose finds it again (docs/LOOP_CLOSURE.md).
+    folder = vkmesh.synth(tmp_path / "room", frames=180, width=320, height=240, noise=True, path="revisit")
+    frames = list(vkmesh.open_dataset(folder, frames=80))
+    with pytest.raises(ValueError, match="keep_frames"):
+        vkmesh.Reconstructor(voxel_size=0.03, loop_closure=True)
+    r = vkmesh.Reconstructor(voxel_size=0.03, keep_frames=True, loop_closure=True)
+    used = frames[:56] + frames[72:80]
+    results = [r.integrate(f.depth, f.intrinsics, color=f.color, pose=None) for f in used]
+    assert {"relocalised", "relocalisation_candidates_tried", "loop_corrections"} <= set(results[1])
+    after = results[56:]
+    found = [i for i, res in enumerate(after) if res["relocalised"]]
+    assert found and found[0] < 5, [(res["tracked"], res["lost_reason"]) for res in after]
+    pose = r.trajectory()[56 + found[0]]
+    truth = np.linalg.inv(frames[0].pose) @ used[56 + found[0]].pose   # the first frame is fused at the identity
+    assert np.linalg.norm(pose[:3, 3] - truth[:3, 3]) < 0.05
+    stats = r.stats()["loop_closure"]
+    assert stats["enabled"] and stats["relocalisations"] >= 1 and stats["keyframes"] > 10
+    assert vkmesh.Reconstructor(voxel_size=0.03).stats()["loop_closure"] == {"enabled": False}
