@@ -12,6 +12,10 @@ packages=(
   libeigen3-dev libopencv-core-dev libopencv-imgcodecs-dev libcli11-dev nlohmann-json3-dev libgtest-dev
   # the frame store (core/frame_store.h): lossless compression of the fused frames
   libzstd-dev
+  # recordings (src/io/recordings/: ROS 1 bag chunks in bz2 and lz4, rosbag2's SQLite storage), and the Python
+  # modules their tests write fixtures with (tests/support/recording_writers.py)
+  liblz4-dev libbz2-dev libsqlite3-dev
+  python3-rosbag python3-sensor-msgs python3-geometry-msgs python3-tf2-msgs python3-zstandard python3-lz4
   # loop closure's pose graph (src/slam/pose_graph.h)
   libceres-dev
   # the Python module (python/, docs/PYTHON.md) and its tests
