@@ -347,7 +347,9 @@ TEST(HostileRecordings, Ros1ChunkSizesAndCompression) {
         const size_t size = bytes.find("size=", chunk) + 5;
         // A size one byte off, and a hostile 4 GB size: refused before anything is allocated for it.
         std::string b = bytes;
-        b.replace(size, 4, le32(uint32_t(*reinterpret_cast<const uint32_t*>(bytes.data() + size) + 1)));
+        uint32_t declared = 0;
+        std::memcpy(&declared, bytes.data() + size, 4);
+        b.replace(size, 4, le32(declared + 1));
         expectMentions(errorMessageOf([&] { openRos1Bag(b, "size.bag"); }), {"size.bag", "record at byte", "chunk", "declares"});
         b.replace(size, 4, le32(0xFFFFFFF0u));
         expectMentions(errorMessageOf([&] { openRos1Bag(b, "size.bag"); }), {"size.bag", "record at byte", "limit"});

@@ -23,7 +23,8 @@ namespace vkmesh::io::recording {
 enum class Serialization { Ros1, Cdr };
 
 // A topic as the container declares it: a ROS 1 connection, an MCAP channel with its schema, a rosbag2 topic.
-// Several ROS 1 connections on the same topic (several publishers) are merged into one Connection.
+// Several ROS 1 connections on the same topic (several publishers) are merged into one Connection, as are
+// MCAP channels and rosbag2 split files' topics: one Connection per topic, type and encoding.
 struct Connection {
     uint32_t id = 0;      // its index in Container::connections()
     std::string topic;    // "/camera/depth/image"
@@ -42,7 +43,8 @@ struct MessageRef {
     uint32_t connection = 0;  // index into Container::connections()
     uint64_t logTimeNs = 0;   // when it was recorded (ROS 1 record time, MCAP log_time, rosbag2 timestamp)
     // Where the container finds its bytes: ROS 1 and MCAP: the chunk's (or, unchunked, the record's) byte
-    // offset in the file and the message's offset inside the decompressed chunk; rosbag2: the row id.
+    // offset in the file and the message's offset inside the decompressed chunk (0 unchunked); rosbag2: the
+    // .db3 file's index among the recording's files (split recordings) and the message's row id.
     uint64_t location[2] = {0, 0};
 };
 
