@@ -618,3 +618,34 @@ TEST(Recordings, FuzzSeedsOpen) {
         }
     EXPECT_EQ(n, 7);
 }
+
+// rosbag2 rows that break the format: a topic_id the topics table does not list, a negative timestamp; and a
+// topic in another serialisation, which is listed with its encoding (the dataset layer refuses to decode it).
+TEST(HostileRecordings, Rosbag2Rows) {
+    if (!pythonMissing().empty()) GTEST_SKIP() << pythonMissing();
+    const fs::path dir = test::makeTempDir("hostile_db3_rows");
+    auto write = [&](const std::string& name, const std::string& rows) {
+        fs::path p = dir / name;
+        std::string cmd = "/usr/bin/python3 -c \"import sqlite3; d = sqlite3.connect('" + p.string() +
+                          "'); d.execute('CREATE TABLE topics(id INTEGER PRIMARY KEY, name TEXT, type TEXT, "
+                          "serialization_format TEXT, offered_qos_profiles TEXT)'); d.execute('CREATE TABLE "
+                          "messages(id INTEGER PRIMARY KEY, topic_id INTEGER, timestamp INTEGER, data BLOB)'); "
+                          "d.execute(\\\"INSERT INTO topics VALUES (1, '/t', 'std_msgs/msg/UInt32', 'json', '')\\\"); " +
+                          rows + "; d.commit()\"";
+        EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
+        return p;
+    };
+    fs::path ok = write("json.db3", "d.execute(\\\"INSERT INTO messages VALUES (1, 1, 5, x'7b7d')\\\")");
+    auto c = openContainer(ok);
+    ASSERT_EQ(c->connections().size(), 1u);
+    EXPECT_EQ(c->connections()[0].encoding, "json");
+    EXPECT_EQ(c->connections()[0].type, "std_msgs/UInt32");
+    EXPECT_EQ(c->read(c->messages()[0]), (std::vector<uint8_t>{'{', '}'}));
+    MessageRef missing = c->messages()[0];
+    missing.location[1] = 99;
+    expectMentions(errorMessageOf([&] { c->read(missing); }), {"json.db3", "row 99", "no such row"});
+    fs::path topic = write("topic.db3", "d.execute(\\\"INSERT INTO messages VALUES (7, 3, 5, x'00')\\\")");
+    expectMentions(errorMessageOf([&] { openContainer(topic); }), {"topic.db3", "row 7", "topic_id 3"});
+    fs::path negative = write("negative.db3", "d.execute(\\\"INSERT INTO messages VALUES (8, 1, -5, x'00')\\\")");
+    expectMentions(errorMessageOf([&] { openContainer(negative); }), {"negative.db3", "row 8", "negative timestamp"});
+}
