@@ -7,11 +7,18 @@
 namespace vkmesh::cli {
 
 void DatasetArgs::add(CLI::App* cmd) {
-    cmd->add_option("DATASET", dataset, "dataset folder (TUM, ICL-NUIM, Redwood, 7-Scenes layout)")->required();
+    cmd->add_option("DATASET", dataset,
+                    "dataset folder (TUM, ICL-NUIM, Redwood, 7-Scenes, a folder with camera.json) or recording (ROS 1 .bag, "
+                    "RealSense .bag, .mcap, rosbag2 .db3 or folder)")
+        ->required();
     cmd->add_option("--frames", frames, "use at most N frames (0 = all)");
     cmd->add_option("--max-depth", maxDepth, "ignore depth beyond M metres")->check(CLI::PositiveNumber);
     cmd->add_option("--intrinsics", intrinsics, "override the camera: fx,fy,cx,cy");
     cmd->add_option("--depth-scale", depthScale, "raw depth units per metre (5000 TUM, 1000 mm)")->check(CLI::PositiveNumber);
+    cmd->add_option("--depth-topic", depthTopic, "recordings: the depth image topic (default: the one sensor_msgs/Image topic of depth)");
+    cmd->add_option("--color-topic", colorTopic, "recordings: the colour image topic (default: the one of colour, if any)");
+    cmd->add_option("--info-topic", infoTopic,
+                    "recordings: the depth camera's sensor_msgs/CameraInfo topic (default: the one beside the depth topic)");
 }
 
 std::unique_ptr<Dataset> DatasetArgs::open() const {
@@ -21,6 +28,9 @@ std::unique_ptr<Dataset> DatasetArgs::open() const {
     options.maxDepth = maxDepth;
     options.maxFrames = frames;
     options.requirePoses = !posesOptional;
+    options.depthTopic = depthTopic;
+    options.colorTopic = colorTopic;
+    options.infoTopic = infoTopic;
     return Dataset::open(dataset, options);
 }
 

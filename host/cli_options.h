@@ -1,5 +1,6 @@
 // Options more than one subcommand takes, each registered and mapped in one place:
-//   DatasetArgs    DATASET --frames --max-depth --intrinsics --depth-scale   (frames, fuse) -> Dataset::open
+//   DatasetArgs    DATASET --frames --max-depth --intrinsics --depth-scale --depth-topic --color-topic --info-topic
+//                  (frames, fuse) -> Dataset::open
 //   VolumeOptions  --voxel --blocks, bounded maps; fuse adds the tuning ones  (fuse, soak)  -> GpuVolumeConfig
 //   DeviceArgs     --device --validation                                     (fuse, render, soak) -> vk::Context
 #pragma once
@@ -25,6 +26,7 @@ struct DatasetArgs {
     float maxDepth = 4.0f;
     std::string intrinsics;
     double depthScale = 0;
+    std::string depthTopic, colorTopic, infoTopic;  // recordings: which topics, when the types do not tell
     // Frames without a camera pose are kept (the camera is tracked): a dataset without pose files opens.
     bool posesOptional = false;
 

@@ -33,6 +33,7 @@ int runFrames(const FramesArgs& args) {
     j["max_depth"] = args.data.maxDepth;
     j["intrinsics"] = {{"fx", k.fx}, {"fy", k.fy}, {"cx", k.cx}, {"cy", k.cy}, {"width", k.width}, {"height", k.height}};
     j["has_color"] = dataset->hasColor();
+    if (!dataset->description().empty()) j["recording"] = dataset->description();
     j["frames"] = json::array();
     for (size_t i = 0; i < dataset->size(); ++i) {
         const FrameInfo& f = dataset->frame(i);
@@ -41,10 +42,13 @@ int runFrames(const FramesArgs& args) {
             for (int c = 0; c < 4; ++c) m[r * 4 + c] = f.cameraToWorld(r, c);
         // color_path: the frame's colour image as Dataset::loadColor reads it, null when it has none (the
         // file is not registered here: with camera.json colour intrinsics a peer must resample it itself).
-        j["frames"].push_back({{"index", f.index}, {"timestamp", f.timestamp},
-                               {"depth_path", std::filesystem::absolute(f.depthPath).string()}, {"camera_to_world", m},
-                               {"color_path", f.colorPath.empty() ? json(nullptr)
-                                                                  : json(std::filesystem::absolute(f.colorPath).string())}});
+        json frame = {{"index", f.index}, {"timestamp", f.timestamp},
+                      {"depth_path", std::filesystem::absolute(f.depthPath).string()}, {"camera_to_world", m},
+                      {"color_path", f.colorPath.empty() ? json(nullptr) : json(std::filesystem::absolute(f.colorPath).string())}};
+        // A recording's frames are messages in one file: which ones.
+        if (!f.depthRecord.empty()) frame["depth_record"] = f.depthRecord;
+        if (!f.colorRecord.empty()) frame["color_record"] = f.colorRecord;
+        j["frames"].push_back(std::move(frame));
     }
     std::ofstream file(args.out);
     if (!file) throw Error("cannot write " + args.out);

@@ -339,7 +339,7 @@ int runFuse(const FuseArgs& args) {
         ColorImage color;
         if (fuseColor || (tracker && tracker->options().colorWeight > 0 && dataset->hasColor())) {
             std::string problem;
-            color = dataset->loadColor(i, &problem);
+            color = dataset->loadColor(i, &problem, &depth);
             if (color.empty() && !problem.empty()) warn("frame " + std::to_string(i) + (fuseColor ? " fused" : " tracked") + " without colour: " + problem);
             framesWithColor += fuseColor && !color.empty();
         }
@@ -565,6 +565,7 @@ int runFuse(const FuseArgs& args) {
     stats["dataset"] = {{"path", std::filesystem::absolute(dataset->folder()).string()},
                         {"kind", toString(dataset->kind())},
                         {"frames_available", dataset->size()}};
+    if (!dataset->description().empty()) stats["dataset"]["recording"] = dataset->description();
     stats["device"] = context.info().name;
     stats["int64_atomics"] = context.int64Atomics();   // the block hash's path (docs/HASH.md)
     stats["mode"] = vo.mode;

@@ -869,7 +869,7 @@ public:
         {
             py::gil_scoped_release release;   // PNG/JPEG decoding; the reader is const and stateless
             depth = ds_->loadDepth(i);
-            color = ds_->loadColor(i, &colorWarning);
+            color = ds_->loadColor(i, &colorWarning, &depth);
         }
         const FrameInfo& f = ds_->frame(i);
         py::array d = moveToArray<float>(std::move(depth.meters), 1).reshape({depth.height, depth.width});
@@ -1156,8 +1156,12 @@ the port is taken (naming it). stop_serving() or close() stops it.
 
     py::class_<PyDataset>(m, "_Dataset")
         .def(py::init([](const fs::path& path, size_t frames, float maxDepth, const py::object& intrinsics, const py::object& depthScale,
-                         bool requirePoses) {
+                         bool requirePoses, const std::string& depthTopic, const std::string& colorTopic,
+                         const std::string& infoTopic) {
                  DatasetOptions o;
+                 o.depthTopic = depthTopic;
+                 o.colorTopic = colorTopic;
+                 o.infoTopic = infoTopic;
                  o.maxFrames = frames;
                  o.requirePoses = requirePoses;
                  o.maxDepth = maxDepth;
@@ -1170,7 +1174,8 @@ the port is taken (naming it). stop_serving() or close() stops it.
                  }
                  return std::make_unique<PyDataset>(std::move(ds));
              }),
-             "path"_a, "frames"_a, "max_depth"_a, "intrinsics"_a, "depth_scale"_a, "require_poses"_a = true)
+             "path"_a, "frames"_a, "max_depth"_a, "intrinsics"_a, "depth_scale"_a, "require_poses"_a = true,
+             "depth_topic"_a = "", "color_topic"_a = "", "info_topic"_a = "")
         .def("__len__", [](const PyDataset& d) { return d.get().size(); })
         .def("load", &PyDataset::load, "index"_a)
         .def_property_readonly("folder", [](const PyDataset& d) { return d.get().folder().string(); })

@@ -227,9 +227,11 @@ class Dataset:
 
 
 def open_dataset(path, frames: int = 0, intrinsics=None, depth_scale: Optional[float] = None,
-                 max_depth: float = 0.0, require_poses: bool = True) -> Dataset:
-    """Opens a depth sequence: a folder in TUM RGB-D, ICL-NUIM, Redwood or 7-Scenes layout, detected as
-    `vkmesh fuse` detects it (README.md lists what each layout needs).
+                 max_depth: float = 0.0, require_poses: bool = True, *, depth_topic: str = "",
+                 color_topic: str = "", info_topic: str = "") -> Dataset:
+    """Opens a depth sequence: a folder in TUM RGB-D, ICL-NUIM, Redwood or 7-Scenes layout, or a recording
+    (ROS 1 bag, RealSense bag, MCAP, rosbag2), detected as `vkmesh fuse` detects it (README.md lists what each
+    layout needs; docs/RECORDINGS.md the recordings).
 
     frames       use at most this many frames (0: all), like --frames
     intrinsics   (fx, fy, cx, cy) overriding the dataset's, like --intrinsics
@@ -238,6 +240,8 @@ def open_dataset(path, frames: int = 0, intrinsics=None, depth_scale: Optional[f
                  depth beyond its own max_depth anyway, so this is rarely needed.
     require_poses  False: a sequence without poses opens too (as `vkmesh fuse --track`), and every listed
                  frame is kept; a frame without a pose has pose None (docs/TRACKING.md)
+    depth_topic, color_topic, info_topic  recordings: the topics to read, like --depth-topic, --color-topic,
+                 --info-topic (default: chosen by message type)
 
     Raises vkmesh.Error naming the file or value at fault for a folder it cannot use.
     """
@@ -248,7 +252,7 @@ def open_dataset(path, frames: int = 0, intrinsics=None, depth_scale: Optional[f
     if not (np.isfinite(max_depth) and max_depth >= 0):
         raise ValueError(f"max_depth {max_depth} must be a finite number >= 0 (0 = no limit)")
     return Dataset(_vkmesh._Dataset(os.fspath(path), int(frames), float(max_depth), intrinsics, depth_scale,
-                                    bool(require_poses)))
+                                    bool(require_poses), str(depth_topic), str(color_topic), str(info_topic)))
 
 
 class Device(NamedTuple):

@@ -2,8 +2,11 @@
 // what is common to every layout: calibration precedence, maxFrames, frame 0's image size, colour
 // registration; then loads frames.
 #include "io/dataset.h"
+#include "io/color_registration.h"
 #include "io/datasets/layout_reader.h"
+#include "io/datasets/recording_source.h"
 #include "io/parsers.h"
+#include "io/recordings/container.h"
 
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
@@ -61,6 +64,10 @@ std::string toString(DatasetKind kind) {
         case DatasetKind::Redwood: return "Redwood";
         case DatasetKind::SevenScenes: return "7-Scenes";
         case DatasetKind::Folder: return "folder";
+        case DatasetKind::RosBag: return "ROS 1 bag";
+        case DatasetKind::RealSenseBag: return "RealSense bag";
+        case DatasetKind::Mcap: return "MCAP";
+        case DatasetKind::Rosbag2: return "rosbag2";
     }
     return "unknown";
 }
@@ -75,7 +82,11 @@ std::unique_ptr<Dataset> Dataset::open(const fs::path& folderIn, const DatasetOp
 
     std::error_code ec;
     if (!fs::exists(folderIn, ec)) throw Error("dataset folder " + folderIn.string() + " does not exist");
-    if (!fs::is_directory(folderIn, ec)) throw Error("dataset path " + folderIn.string() + " is not a folder");
+    // A recording is a file (or a rosbag2 folder), recognised by its content rather than its name.
+    const bool isRecording = io::recording::detectContainer(folderIn) != io::recording::ContainerKind::None;
+    if (!isRecording && !fs::is_directory(folderIn, ec))
+        throw Error("dataset path " + folderIn.string() +
+                    " is neither a folder nor a recording (a ROS 1 bag, an MCAP file, a rosbag2 .db3 or folder)");
     // Canonical so that "seq/", "." or a symlink still give the real folder name, which carries the
     // sequence name that selects TUM/ICL intrinsics.
     fs::path folder = fs::weakly_canonical(fs::absolute(folderIn), ec);
@@ -84,8 +95,10 @@ std::unique_ptr<Dataset> Dataset::open(const fs::path& folderIn, const DatasetOp
 
     // --- detect the layout ---
     Layout layout;
-    LayoutFiles files = scanLayout(folder);
-    if (files.tumList) {
+    LayoutFiles files = isRecording ? LayoutFiles{} : scanLayout(folder);
+    if (isRecording) {
+        layout = readRecording(folder, options);
+    } else if (files.tumList) {
         layout = readTum(folder, folderName, options.requirePoses);
     } else if (files.redwood()) {
         if (files.logs.size() > 1) {
@@ -133,23 +146,25 @@ std::unique_ptr<Dataset> Dataset::open(const fs::path& folderIn, const DatasetOp
     ds->maxDepth_ = options.maxDepth;
     ds->warnings_ = std::move(layout.warnings);
     ds->skippedFrames_ = layout.skipped;
+    ds->recording_ = layout.recording;
+    ds->description_ = layout.description;
 
     // --- calibration: DatasetOptions > camera.json > the sequence's own file (7-Scenes) > the layout's preset ---
     fs::path cameraJson = folder / "camera.json";
     std::optional<io::CameraJson> camera;
-    if (fs::is_regular_file(cameraJson, ec)) {
+    if (!isRecording && fs::is_regular_file(cameraJson, ec)) {
         camera = readCameraJson(cameraJson);
         if (!camera->ignoredKeys.empty()) {
             std::string keys;
             for (const auto& key : camera->ignoredKeys) keys += (keys.empty() ? "" : ", ") + key;
             ds->warnings_.push_back(cameraJson.string() + ": ignored unknown keys " + keys +
                                     " (known: fx, fy, cx, cy, depth_scale, width, height, color_fx, color_fy, color_cx, color_cy, "
-                                    "color_width, color_height)");
+                                    "color_width, color_height, depth_to_color)");
         }
     }
     // The preset is read only when something is left to it, so that a fully calibrated folder needs no data files.
     const bool intrinsicsGiven = options.intrinsics || (camera && camera->hasAllIntrinsics()) || layout.folderIntrinsics;
-    const bool scaleGiven = options.depthScale || (camera && camera->depthScale);
+    const bool scaleGiven = options.depthScale || (camera && camera->depthScale) || layout.ownDepthScale;
     Intrinsics k;
     double scale = 0;
     if ((!intrinsicsGiven || !scaleGiven) && layout.preset.empty()) {
@@ -176,6 +191,7 @@ std::unique_ptr<Dataset> Dataset::open(const fs::path& folderIn, const DatasetOp
                                     fmt(k.cy) + " (give --intrinsics or a camera.json)");
     }
     if (layout.folderIntrinsics) k = *layout.folderIntrinsics;
+    if (layout.ownDepthScale) scale = *layout.ownDepthScale;
     if (camera) {
         const io::CameraJson& c = *camera;
         if (c.fx) k.fx = float(*c.fx);
@@ -205,7 +221,7 @@ std::unique_ptr<Dataset> Dataset::open(const fs::path& folderIn, const DatasetOp
     for (size_t i = 0; i < layout.frames.size(); ++i) {
         layout.frames[i].index = i;
         // A listed file that is missing fails now rather than minutes into a reconstruction.
-        if (!fs::is_regular_file(layout.frames[i].depthPath, ec))
+        if (!isRecording && !fs::is_regular_file(layout.frames[i].depthPath, ec))
             throw Error("depth image " + layout.frames[i].depthPath.string() + " (frame " + std::to_string(i) +
                         ") does not exist");
     }
@@ -213,7 +229,7 @@ std::unique_ptr<Dataset> Dataset::open(const fs::path& folderIn, const DatasetOp
     size_t withColor = 0, missingColor = 0;
     for (FrameInfo& f : layout.frames) {
         if (f.colorPath.empty()) continue;
-        if (fs::is_regular_file(f.colorPath, ec)) {
+        if (isRecording || fs::is_regular_file(f.colorPath, ec)) {
             ++withColor;
             continue;
         }
@@ -232,10 +248,16 @@ std::unique_ptr<Dataset> Dataset::open(const fs::path& folderIn, const DatasetOp
     ds->frames_ = std::move(layout.frames);
 
     // The image size comes from frame 0; loadDepth holds every other frame to it.
-    cv::Mat first = readRawDepth(ds->frames_.front().depthPath);
-    k.width = first.cols;
-    k.height = first.rows;
-    const std::string firstName = ds->frames_.front().depthPath.string();
+    if (isRecording) {
+        const DepthImage first = ds->recording_->loadDepth(0, scale, 0);
+        k.width = first.width;
+        k.height = first.height;
+    } else {
+        cv::Mat first = readRawDepth(ds->frames_.front().depthPath);
+        k.width = first.cols;
+        k.height = first.rows;
+    }
+    const std::string firstName = isRecording ? ds->frames_.front().depthRecord : ds->frames_.front().depthPath.string();
     // A calibration that states its image size must match the images: fusing 320x240 images with 640x480
     // intrinsics gives a plausible-looking but wrong mesh.
     if (camera && ((camera->width && *camera->width != k.width) || (camera->height && *camera->height != k.height)))
@@ -251,11 +273,21 @@ std::unique_ptr<Dataset> Dataset::open(const fs::path& folderIn, const DatasetOp
                                 firstName + "): are the intrinsics for another image size?");
     ds->intrinsics_ = k;
 
+    // A recording's colour camera: its own intrinsics, and extrinsics where the recording has them.
+    if (layout.colorCamera && ds->hasColor_) {
+        ds->colorIntrinsics_ = layout.colorCamera->intrinsics;
+        ds->depthToColor_ = layout.colorCamera->depthToColor;
+    }
+
     // A colour camera of its own (camera.json color_*): every depth pixel's ray, projected into it, gives the
     // remap that puts colour on the depth grid. The colour images' size is the file's, or frame 0's image.
-    if (camera && camera->colorFx && ds->hasColor_) {
-        Intrinsics ck{float(*camera->colorFx), float(*camera->colorFy), float(*camera->colorCx), float(*camera->colorCy),
-                      camera->colorWidth.value_or(0), camera->colorHeight.value_or(0)};
+    // With depth_to_color (a baseline between the cameras) colour is registered through depth, per frame;
+    // the colour camera's intrinsics are then its own (color_*) or, without them, the depth camera's.
+    if (camera && (camera->colorFx || camera->depthToColor) && ds->hasColor_) {
+        Intrinsics ck = camera->colorFx ? Intrinsics{float(*camera->colorFx), float(*camera->colorFy), float(*camera->colorCx),
+                                                     float(*camera->colorCy), camera->colorWidth.value_or(0),
+                                                     camera->colorHeight.value_or(0)}
+                                        : Intrinsics{k.fx, k.fy, k.cx, k.cy, 0, 0};
         if (ck.width == 0 || ck.height == 0) {
             const auto withColor = std::find_if(ds->frames_.begin(), ds->frames_.end(),
                                                 [](const FrameInfo& f) { return !f.colorPath.empty(); });
@@ -271,7 +303,10 @@ std::unique_ptr<Dataset> Dataset::open(const fs::path& folderIn, const DatasetOp
                 ds->hasColor_ = false;
             }
         }
-        if (ds->hasColor_) {
+        if (ds->hasColor_ && camera->depthToColor) {
+            ds->colorIntrinsics_ = ck;
+            ds->depthToColor_ = *camera->depthToColor;
+        } else if (ds->hasColor_) {
             ds->colorIntrinsics_ = ck;
             ds->colorMapX_.resize(size_t(k.width) * k.height);
             ds->colorMapY_.resize(size_t(k.width) * k.height);
@@ -295,6 +330,13 @@ const FrameInfo& Dataset::frame(size_t i) const {
 
 DepthImage Dataset::loadDepth(size_t i) const {
     const FrameInfo& f = frame(i);
+    if (recording_) {
+        DepthImage d = recording_->loadDepth(i, depthScale_, maxDepth_);
+        if (d.width != intrinsics_.width || d.height != intrinsics_.height)
+            throw Error(f.depthRecord + ": depth image is " + std::to_string(d.width) + "x" + std::to_string(d.height) +
+                        " but frame 0's is " + std::to_string(intrinsics_.width) + "x" + std::to_string(intrinsics_.height));
+        return d;
+    }
     cv::Mat raw = readRawDepth(f.depthPath);
     if (raw.cols != intrinsics_.width || raw.rows != intrinsics_.height)
         throw Error("depth image " + f.depthPath.string() + " is " + std::to_string(raw.cols) + "x" +
@@ -303,7 +345,7 @@ DepthImage Dataset::loadDepth(size_t i) const {
     return io::rawDepthToMeters(raw, depthScale_, invalidRaw_, maxDepth_);
 }
 
-ColorImage Dataset::loadColor(size_t i, std::string* warning) const {
+ColorImage Dataset::loadColor(size_t i, std::string* warning, const DepthImage* depth) const {
     const FrameInfo& f = frame(i);
     auto unusable = [&](const std::string& why) {
         if (warning) *warning = why + "; frame " + std::to_string(i) + " has no colour";
@@ -312,7 +354,15 @@ ColorImage Dataset::loadColor(size_t i, std::string* warning) const {
     // A frame without an image is only worth a word when the sequence has colour elsewhere.
     if (f.colorPath.empty())
         return hasColor_ ? unusable("no colour image for depth image " + f.depthPath.filename().string()) : ColorImage{};
-    const std::string name = f.colorPath.string();
+    const std::string name = recording_ ? f.colorRecord : f.colorPath.string();
+    ColorImage image;
+    if (recording_) {
+        try {
+            image = recording_->loadColor(i);
+        } catch (const Error& e) {
+            return unusable(e.what());
+        }
+    } else {
     std::string bytes;
     {
         std::ifstream in(f.colorPath, std::ios::binary);
@@ -320,19 +370,29 @@ ColorImage Dataset::loadColor(size_t i, std::string* warning) const {
         bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
         if (in.bad()) return unusable("error while reading colour image " + name);
     }
-    ColorImage image;
     try {
         image = io::decodeColorImage(bytes, name);
     } catch (const Error& e) {
         return unusable(e.what());
     }
+    }
     const int w = colorIntrinsics_ ? colorIntrinsics_->width : intrinsics_.width;
     const int h = colorIntrinsics_ ? colorIntrinsics_->height : intrinsics_.height;
     if (image.width != w || image.height != h)
         return unusable("colour image " + name + " is " + std::to_string(image.width) + "x" + std::to_string(image.height) +
-                        " but " + (colorIntrinsics_ ? "the colour calibration (camera.json) is for " : "the depth images are ") +
+                        " but " + (colorIntrinsics_ ? "the colour calibration is for " : "the depth images are ") +
                         std::to_string(w) + "x" + std::to_string(h));
     if (!colorIntrinsics_) return image;
+    if (depthToColor_) {
+        // Through each pixel's depth: the colour camera sees the scene from elsewhere.
+        try {
+            const DepthImage loaded = depth ? DepthImage{} : loadDepth(i);
+            return registerColorToDepth(image, ColorCamera{*colorIntrinsics_, *depthToColor_}, depth ? *depth : loaded,
+                                        intrinsics_);
+        } catch (const Error& e) {
+            return unusable(name + ": " + e.what());
+        }
+    }
 
     // Bilinear resampling onto the depth grid; depth pixels outside the colour camera's view get black.
     const cv::Mat src(image.height, image.width, CV_8UC3, image.rgb.data());

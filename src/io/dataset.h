@@ -51,7 +51,13 @@
 
 namespace vkmesh {
 
-enum class DatasetKind { TUM, ICLNUIM, Redwood, SevenScenes, Folder };
+namespace datasets {
+class RecordingSource;  // io/datasets/recording_source.h
+}
+
+// The recordings (a file, or a rosbag2 folder; docs/RECORDINGS.md): RosBag a ROS 1 bag 2.0, RealSenseBag one in
+// librealsense's layout, Mcap an MCAP file, Rosbag2 a rosbag2 SQLite .db3 (or a rosbag2 folder).
+enum class DatasetKind { TUM, ICLNUIM, Redwood, SevenScenes, Folder, RosBag, RealSenseBag, Mcap, Rosbag2 };
 std::string toString(DatasetKind kind);
 
 struct DatasetOptions {
@@ -64,6 +70,9 @@ struct DatasetOptions {
     // opens, and a listed depth frame with no pose near enough is kept (FrameInfo::hasPose false) instead of
     // skipped. true: a sequence without poses is an error saying that --track exists.
     bool requirePoses = true;
+    // Recordings: the topics to read when the type alone does not tell (--depth-topic, --color-topic,
+    // --info-topic: the depth camera's sensor_msgs/CameraInfo). Empty: chosen by message type and name.
+    std::string depthTopic, colorTopic, infoTopic;
 };
 
 struct FrameInfo {
@@ -77,6 +86,9 @@ struct FrameInfo {
     std::filesystem::path colorPath;  // the frame's colour image, as depthPath; empty when it has none
     Pose cameraToWorld = Pose::Identity();  // the dataset's pose when hasPose, identity otherwise
     bool hasPose = false;                   // whether the dataset gave this frame's pose
+    // Recordings: depthPath and colorPath are the recording; these say which message ("message 12 on
+    // /camera/depth/image (chunk at byte 4096)"). Empty for image files.
+    std::string depthRecord, colorRecord;
 };
 
 class Dataset {
@@ -85,10 +97,14 @@ public:
     // poses and reads frame 0's PNG for the image size. Throws vkmesh::Error (naming the file, line or
     // value at fault) on anything it cannot use; frames without a pose are skipped and reported in
     // warnings() instead, unless no frame has one; with options.requirePoses false they are kept without one.
+    // `folder` may also be a recording (a .bag, .mcap or .db3 file, or a rosbag2 folder; detected by content).
     static std::unique_ptr<Dataset> open(const std::filesystem::path& folder, const DatasetOptions& options = {});
 
     DatasetKind kind() const { return kind_; }
     const std::filesystem::path& folder() const { return folder_; }
+    // Recordings: the container and the topics read ("ROS 1 bag, depth /camera/depth/image (32FC1), colour ...");
+    // empty for image folders.
+    const std::string& description() const { return description_; }
     const Intrinsics& intrinsics() const { return intrinsics_; }
     double depthScale() const { return depthScale_; }
     float maxDepth() const { return maxDepth_; }
@@ -116,7 +132,10 @@ public:
     // another size than expected; then *warning (when given) names the file and the problem (it is left
     // untouched otherwise). Never throws for a bad image; only for i out of range. Const and stateless, like
     // loadDepth.
-    ColorImage loadColor(size_t i, std::string* warning = nullptr) const;
+    // With a colour camera beside the depth camera (extrinsics in camera.json's depth_to_color or in a recording),
+    // colour is registered through each pixel's depth (io/color_registration.h): pass frame i's depth when it is
+    // already loaded, or it is loaded here.
+    ColorImage loadColor(size_t i, std::string* warning = nullptr, const DepthImage* depth = nullptr) const;
 
 private:
     Dataset() = default;
@@ -136,6 +155,10 @@ private:
     std::optional<Intrinsics> colorIntrinsics_;
     // With colorIntrinsics_: for every depth pixel, where it lies in the colour image (x, y; cv::remap maps).
     std::vector<float> colorMapX_, colorMapY_;
+    // A colour camera with a baseline (extrinsics known): registered through depth instead of by the maps above.
+    std::optional<Eigen::Matrix4d> depthToColor_;
+    std::shared_ptr<const datasets::RecordingSource> recording_;
+    std::string description_;
 };
 
 // A camera preset: data/cameras/<name>/camera.json with all of fx, fy, cx, cy and depth_scale.

@@ -61,6 +61,9 @@ struct CameraJson {
     // The colour camera's, when it differs from the depth camera's: all four or none (else Error).
     std::optional<double> colorFx, colorFy, colorCx, colorCy;
     std::optional<int> colorWidth, colorHeight;
+    // "depth_to_color": {"rotation": [9 numbers, row-major], "translation": [x, y, z] metres}: p_color = R p_depth + t,
+    // the colour camera's pose relative to the depth camera's (a baseline): colour is then registered through depth.
+    std::optional<Eigen::Matrix4d> depthToColor;
     std::vector<std::string> ignoredKeys;
     bool hasAllIntrinsics() const { return fx && fy && cx && cy; }
 };

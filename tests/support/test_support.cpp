@@ -99,6 +99,20 @@ std::string errorMessageOf(const std::function<void()>& f) {
     return {};
 }
 
+std::string makeRecordings(const std::filesystem::path& folder, const std::filesystem::path& outDir,
+                           const std::string& kinds) {
+    const std::string python = "/usr/bin/python3";
+    const std::string check = python + " -c 'import rosbag, sensor_msgs.msg, zstandard, lz4.frame, PIL, numpy' > /dev/null 2>&1";
+    if (std::system(check.c_str()) != 0)
+        return "the recording fixtures need python3-rosbag, python3-sensor-msgs, python3-zstandard, python3-lz4 and "
+               "python3-pil (scripts/install_deps.sh installs them)";
+    const std::filesystem::path log = outDir.parent_path() / (outDir.filename().string() + ".log");
+    const std::string cmd = python + " " + std::string(VKMESH_SOURCE_DIR) + "/tests/support/make_recordings.py '" +
+                            folder.string() + "' '" + outDir.string() + "' --kinds " + kinds + " > '" + log.string() + "' 2>&1";
+    if (std::system(cmd.c_str()) != 0) ADD_FAILURE() << cmd << " failed:\n" << readText(log);
+    return {};
+}
+
 CliRun runCli(const std::string& args) {
     static std::atomic<int> counter{0};
     const std::filesystem::path dir = makeTempDir("cli_run" + std::to_string(counter++));

@@ -37,6 +37,13 @@ CliRun runCli(const std::string& args);
 
 std::string readText(const std::filesystem::path& path);
 
+// Writes the recordings tests/support/make_recordings.py makes of a TUM-layout `folder` (kinds as it names
+// them, comma-separated) into `outDir`. Returns the reason when they cannot be made here (Debian's
+// python3-rosbag, python3-zstandard, python3-lz4 or python3-pil missing: scripts/install_deps.sh installs them),
+// empty on success; a failure of the script itself is a test failure.
+std::string makeRecordings(const std::filesystem::path& folder, const std::filesystem::path& outDir,
+                           const std::string& kinds);
+
 // Writes `bytes` to `path` as is (binary), creating the parent folders: broken input for the
 // hostile-input tests (truncated files, garbage, empty files).
 void writeBytes(const std::filesystem::path& path, const std::string& bytes);

@@ -5,6 +5,7 @@
 // colour registration).
 #pragma once
 
+#include "io/color_registration.h"
 #include "io/dataset.h"
 #include "io/parsers.h"
 #include "io/text_lines.h"
@@ -14,6 +15,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -21,6 +23,8 @@
 namespace vkmesh::datasets {
 
 namespace fs = std::filesystem;
+
+class RecordingSource;
 
 // Said wherever poses are missing: such a sequence is still usable, with camera tracking.
 inline const std::string kTrackingHint = "vkmesh fuse --track estimates them";
@@ -40,6 +44,12 @@ struct Layout {
     std::vector<std::string> warnings;
     size_t skipped = 0;
     size_t framesWithoutColor = 0;  // in a layout that has colour
+
+    // Recordings (recording_source.h): where the frames' bytes are, and what the recording says of its cameras.
+    std::shared_ptr<const RecordingSource> recording;
+    std::optional<double> ownDepthScale;  // the recording's depth unit (raw units per metre)
+    std::optional<ColorCamera> colorCamera;  // a colour camera of its own: intrinsics and, when known, extrinsics
+    std::string description;  // "ROS 1 bag, depth /camera/depth/image (32FC1), colour /camera/rgb/image_color"
 };
 
 // Per-frame warnings are capped so that a sequence with a long tracking gap does not flood the log.

@@ -5,6 +5,8 @@
 #include "io/parsers.h"
 #include "io/text_lines.h"
 
+#include <Eigen/LU>  // determinant() of depth_to_color's rotation
+
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -138,15 +140,39 @@ CameraJson parseCameraJson(std::istream& in, const std::string& source) {
     c.colorCy = get("color_cy");
     c.colorWidth = getSize("color_width");
     c.colorHeight = getSize("color_height");
+    if (auto it = j.find("depth_to_color"); it != j.end()) {
+        const char* expected = "; expected {\"rotation\": [9 numbers, row-major], \"translation\": [x, y, z] in metres}";
+        if (!it->is_object()) throw Error(source + ": \"depth_to_color\" is " + quote(*it) + expected);
+        auto numbers = [&](const char* key, size_t n) {
+            auto v = it->find(key);
+            if (v == it->end() || !v->is_array() || v->size() != n ||
+                !std::all_of(v->begin(), v->end(), [](const nlohmann::json& x) { return x.is_number() && std::isfinite(x.get<double>()); }))
+                throw Error(source + ": \"depth_to_color\" \"" + key + "\" is " + (v == it->end() ? std::string("missing") : quote(*v)) + expected);
+            std::vector<double> out;
+            for (const auto& x : *v) out.push_back(x.get<double>());
+            return out;
+        };
+        const std::vector<double> r = numbers("rotation", 9), t = numbers("translation", 3);
+        Eigen::Matrix4d T = Eigen::Matrix4d::Identity();
+        for (int row = 0; row < 3; ++row) {
+            for (int col = 0; col < 3; ++col) T(row, col) = r[size_t(row) * 3 + col];
+            T(row, 3) = t[size_t(row)];
+        }
+        const Eigen::Matrix3d R = T.topLeftCorner<3, 3>();
+        if ((R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() > 1e-3 || R.determinant() < 0)
+            throw Error(source + ": \"depth_to_color\" \"rotation\" is not a rotation (orthonormal, determinant +1)");
+        c.depthToColor = T;
+    }
     static const char* known[] = {"fx",       "fy",       "cx",       "cy",          "depth_scale",  "width", "height",
-                                  "color_fx", "color_fy", "color_cx", "color_cy", "color_width", "color_height"};
+                                  "color_fx", "color_fy", "color_cx", "color_cy", "color_width", "color_height",
+                                  "depth_to_color"};
     for (const auto& item : j.items())
         if (std::find_if(std::begin(known), std::end(known), [&](const char* k) { return item.key() == k; }) ==
             std::end(known))
             c.ignoredKeys.push_back(quote(item.key()));
     // A file with none of the keys (another tool's format, e.g. Open3D's "intrinsic_matrix", or every key
     // misspelt) would otherwise be ignored in silence and the layout's default calibration used.
-    const bool anyColor = c.colorFx || c.colorFy || c.colorCx || c.colorCy || c.colorWidth || c.colorHeight;
+    const bool anyColor = c.colorFx || c.colorFy || c.colorCx || c.colorCy || c.colorWidth || c.colorHeight || c.depthToColor;
     if (!c.fx && !c.fy && !c.cx && !c.cy && !c.depthScale && !c.width && !c.height && !anyColor) {
         std::string found;
         for (const auto& k : c.ignoredKeys) found += (found.empty() ? "" : ", ") + k;
