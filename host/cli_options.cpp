@@ -2,7 +2,10 @@
 
 #include <CLI/CLI.hpp>
 
+#include <cstdio>
 #include <iostream>
+
+#include "io/mesh_file.h"
 
 namespace vkmesh::cli {
 
@@ -120,6 +123,35 @@ gpu::GpuVolumeConfig VolumeOptions::toConfig(float maxDepth, int width, int heig
 void DeviceArgs::add(CLI::App* cmd) {
     cmd->add_option("--device", device, "Vulkan device index (see `vkmesh devices`)");
     cmd->add_flag("--validation", validation, "enable the Khronos validation layer (or VKMESH_VALIDATION=1)");
+}
+
+void MeshOutputArgs::add(CLI::App* cmd) {
+    cmd->add_option("-o,--output", path, "mesh file (.ply binary, .obj or .glb binary glTF)")->required();
+    cmd->add_option("--simplify", simplify,
+                    "write a simplified copy keeping about this fraction of the triangles, 0 < RATIO <= 1 (meshoptimizer; "
+                    "its geometric error is reported; the fused mesh itself is not changed)");
+}
+
+void MeshOutputArgs::check() const {
+    meshFormatOf(path);
+    checkSimplifyRatio(simplify, "--simplify");
+}
+
+std::optional<SimplifyReport> MeshOutputArgs::write(const Mesh& mesh) const {
+    if (!simplifying()) {
+        writeMesh(path, mesh);
+        return std::nullopt;
+    }
+    SimplifyReport report;
+    writeMesh(path, simplifyMesh(mesh, simplify, &report));
+    return report;
+}
+
+std::string describe(const SimplifyReport& r) {
+    char line[200];
+    std::snprintf(line, sizeof line, "simplified to %zu of %zu triangles (--simplify %g), geometric error %.2f mm", r.trianglesAfter,
+                  r.trianglesBefore, r.ratio, 1000 * r.errorMetres);
+    return line;
 }
 
 }  // namespace vkmesh::cli

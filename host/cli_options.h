@@ -3,15 +3,18 @@
 //                  (frames, fuse) -> Dataset::open
 //   VolumeOptions  --voxel --blocks, bounded maps; fuse adds the tuning ones  (fuse, soak)  -> GpuVolumeConfig
 //   DeviceArgs     --device --validation                                     (fuse, render, soak) -> vk::Context
+//   MeshOutputArgs -o --simplify                                             (fuse, export) -> writeMesh
 #pragma once
 
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "gpu/gpu_volume.h"
 #include "io/dataset.h"
+#include "io/mesh_simplify.h"
 #include "vk/context.h"
 
 namespace CLI {
@@ -79,5 +82,23 @@ struct DeviceArgs {
     void add(CLI::App* cmd);
     vk::ContextOptions contextOptions() const { return {device, validation}; }
 };
+
+// The mesh a command writes: -o (.ply, .obj or .glb, io/mesh_file.h) and --simplify RATIO (a simplified copy is
+// written; the mesh on the GPU is never changed).
+struct MeshOutputArgs {
+    std::string path;
+    double simplify = 1;   // the fraction of triangles to keep; 1: the mesh as it is
+
+    void add(CLI::App* cmd);
+    // Throws Error for an unknown extension or a ratio outside (0, 1]: called before any work, so that a typo does not
+    // surface after a long fusion.
+    void check() const;
+    bool simplifying() const { return simplify != 1; }
+    // Writes the mesh, simplified when --simplify was given (then returns what simplification did).
+    std::optional<SimplifyReport> write(const Mesh& mesh) const;
+};
+
+// One line for the command's summary: "simplified to T of T0 triangles (--simplify R), geometric error E mm".
+std::string describe(const SimplifyReport& report);
 
 }  // namespace vkmesh::cli

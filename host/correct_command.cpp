@@ -23,7 +23,7 @@
 #include "core/map_format.h"
 #include "gpu/gpu_volume.h"
 #include "gpu/map_corrector.h"
-#include "io/ply.h"
+#include "io/mesh_file.h"
 #include "io/trajectory.h"
 #include "vk/context.h"
 
@@ -51,6 +51,7 @@ struct CorrectArgs {
 
 int runCorrect(const CorrectArgs& args) {
     const auto start = std::chrono::steady_clock::now();
+    meshFormatOf(args.output);   // a mesh name vkmesh cannot write fails now, not after the correction
     const map::MapData m = map::readFile(args.map);   // checked before a device is opened
     const std::filesystem::path framesPath = args.framesPath.empty() ? gpu::frameStorePathOf(args.map) : std::filesystem::path(args.framesPath);
     if (!std::filesystem::exists(framesPath))
@@ -98,10 +99,7 @@ int runCorrect(const CorrectArgs& args) {
     }
     const Mesh mesh = toMesh(volume->exportMesh(), volume->frameNumber());
     const std::filesystem::path out(args.output);
-    if (out.extension() == ".obj")
-        writeObj(out, mesh);
-    else
-        writePly(out, mesh);
+    writeMesh(out, mesh);
     std::cout << "vkmesh correct: " << report.framesRefused << " of " << corrector.store().size() << " frames re-fused ("
               << unchanged << " unchanged, " << unmatched << " trajectory lines without a frame), " << report.blocksFreed
               << " blocks freed, " << report.milliseconds << " ms: " << mesh.positions.size() << " vertices, " << mesh.triangles.size()
@@ -137,7 +135,7 @@ Run addCorrectCommand(CLI::App& app) {
     cmd->add_option("--trajectory", args->trajectory,
                     "corrected poses, TUM format (timestamp tx ty tz qx qy qz qw); frames are matched by timestamp")
         ->required();
-    cmd->add_option("-o,--output", args->output, "mesh file (.ply binary, or .obj)")->required();
+    cmd->add_option("-o,--output", args->output, "mesh file (.ply binary, .obj or .glb binary glTF)")->required();
     cmd->add_option("--save", args->savePath, "save the corrected map (and its frame store beside it)");
     cmd->add_option("--frames", args->framesPath, "the frame store (default: MAP with the extension .vkframes)");
     cmd->add_option("--stats", args->statsPath, "write statistics as JSON (frames re-fused, blocks freed, ms)");

@@ -9,7 +9,7 @@
 #include "commands.h"
 #include "core/mesh_delta.h"
 #include "io/delta_stream.h"
-#include "io/ply.h"
+#include "io/mesh_file.h"
 
 namespace vkmesh::cli {
 
@@ -21,6 +21,7 @@ struct DeltasArgs {
 };
 
 int runDeltas(const DeltasArgs& a) {
+    if (!a.output.empty()) meshFormatOf(a.output);   // before the stream is read
     MeshReplica replica;
     size_t frames = 0, records = 0;
     readDeltaStream(a.stream, [&](const MeshDelta& d) {
@@ -30,7 +31,7 @@ int runDeltas(const DeltasArgs& a) {
         records += d.vertices.size() + d.triangles.size();
     });
     Mesh mesh = replica.toMesh();
-    if (!a.output.empty()) writePly(a.output, mesh);
+    if (!a.output.empty()) writeMesh(a.output, mesh);
     std::cout << "vkmesh deltas: " << frames << " frames, " << records << " records from " << a.stream << " -> mesh at frame "
               << replica.lastFrame() << ": " << mesh.positions.size() << " vertices, " << mesh.triangles.size() << " triangles"
               << (a.output.empty() ? "" : " -> " + a.output) << "\n";
@@ -43,7 +44,7 @@ Run addDeltasCommand(CLI::App& app) {
     auto args = std::make_shared<DeltasArgs>();
     auto* cmd = app.add_subcommand("deltas", "replay a mesh-delta stream as a remote viewer would and write the mesh it ends with");
     cmd->add_option("STREAM", args->stream, "stream written by fuse --deltas")->required();
-    cmd->add_option("-o,--output", args->output, "PLY mesh to write");
+    cmd->add_option("-o,--output", args->output, "mesh file to write (.ply binary, .obj or .glb binary glTF)");
     cmd->add_option("--until-frame", args->untilFrame, "stop after this frame number (0 = all)");
     return [args] { return runDeltas(*args); };
 }

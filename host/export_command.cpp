@@ -1,10 +1,12 @@
-// `vkmesh export MAP -o mesh.ply`: the mesh of a saved map (docs/MAPFILE.md), without fusing anything: the
-// map is loaded on the GPU and its mesh compacted and written, as `vkmesh fuse -o` would have after its last frame.
+// `vkmesh export MAP -o mesh.ply|.obj|.glb [--simplify RATIO]`: the mesh of a saved map (docs/MAPFILE.md), without
+// fusing anything: the map is loaded on the GPU and its mesh compacted and written, as `vkmesh fuse -o` would have
+// after its last frame (simplified, a copy, with --simplify: docs/MESH_FILES.md).
 #include <CLI/CLI.hpp>
 
 #include <filesystem>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "api/exported_mesh.h"
@@ -12,7 +14,6 @@
 #include "commands.h"
 #include "core/map_format.h"
 #include "gpu/gpu_volume.h"
-#include "io/ply.h"
 #include "vk/context.h"
 
 namespace vkmesh::cli {
@@ -21,11 +22,12 @@ namespace {
 
 struct ExportArgs {
     std::string map;
-    std::string output;
+    MeshOutputArgs output;   // -o, --simplify
     DeviceArgs device;
 };
 
 int runExport(const ExportArgs& args) {
+    args.output.check();
     const map::MapData m = map::readFile(args.map);   // checked before a device is opened
     vk::Context context(args.device.contextOptions());
     const gpu::GpuVolumeConfig config = gpu::GpuVolume::mapConfig(m);
@@ -38,14 +40,12 @@ int runExport(const ExportArgs& args) {
         mesh.positions = soup.vertices;
         for (uint32_t t = 0; t < soup.triangleCount(); ++t) mesh.triangles.push_back({3 * t, 3 * t + 1, 3 * t + 2});
     }
-    const std::filesystem::path out(args.output);
-    if (out.extension() == ".obj")
-        writeObj(out, mesh);
-    else
-        writePly(out, mesh);
+    const std::filesystem::path out(args.output.path);
+    const std::optional<SimplifyReport> simplified = args.output.write(mesh);   // a copy; the map is not changed
     std::cout << "vkmesh export: " << args.map << " (" << m.blocks.size() << " blocks, " << m.framesIntegrated << " frames, voxel "
               << m.settings.voxelSize << " m): " << mesh.positions.size() << " vertices, " << mesh.triangles.size() << " triangles -> "
               << out.string() << "\n";
+    if (simplified) std::cout << "  " << describe(*simplified) << "\n";
     return 0;
 }
 
@@ -55,7 +55,7 @@ Run addExportCommand(CLI::App& app) {
     auto args = std::make_shared<ExportArgs>();
     auto* cmd = app.add_subcommand("export", "write the mesh of a saved map (vkmesh fuse --save) without fusing");
     cmd->add_option("MAP", args->map, "map file (.vkmap)")->required();
-    cmd->add_option("-o,--output", args->output, "mesh file (.ply binary, or .obj)")->required();
+    args->output.add(cmd);
     args->device.add(cmd);
     return [args] { return runExport(*args); };
 }

@@ -55,7 +55,7 @@ struct FuseArgs {
     DatasetArgs data;
     VolumeOptions volume;
     DeviceArgs device;
-    std::string output;
+    MeshOutputArgs output;   // -o, --simplify
     std::string statsPath;
     bool growHeaps = false;
     bool quiet = false;
@@ -162,6 +162,7 @@ int runFuse(const FuseArgs& args) {
     // thread starts (the Vulkan driver's included), so that no thread takes it with the default action.
     if (args.servePort >= 0) viewer::blockStopSignals();
 #endif
+    args.output.check();   // the mesh's name and --simplify, before a long run
     // A map to continue is read and checked before anything else is opened.
     std::optional<map::MapData> loaded;
     if (!args.loadPath.empty()) loaded = map::readFile(args.loadPath);
@@ -554,11 +555,10 @@ int runFuse(const FuseArgs& args) {
         baselineVertices = soup.vertices.size();
     }
     double meshWallMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-    std::filesystem::path out(args.output);
-    if (out.extension() == ".obj")
-        writeObj(out, mesh);
-    else
-        writePly(out, mesh);
+    const std::filesystem::path out(args.output.path);
+    const auto t1 = std::chrono::steady_clock::now();
+    const std::optional<SimplifyReport> simplified = args.output.write(mesh);   // a copy is simplified, never the live mesh
+    const double meshWriteMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t1).count();
 
     gpu::Counters k = volume.readCounters();
     json stats;
@@ -626,6 +626,17 @@ int runFuse(const FuseArgs& args) {
     stats["gpu_ms_mesh_export"] = meshStage;
     stats["wall_ms_per_frame"] = statsOf(frameWallMs);
     stats["wall_ms_mesh_export"] = meshWallMs;
+    stats["wall_ms_mesh_write"] = meshWriteMs;   // simplification (--simplify) and the file
+    // "mesh" above describes the fused mesh; with --simplify the file holds the simplified copy described here.
+    if (simplified)
+        stats["simplify"] = {{"enabled", true},
+                             {"ratio", simplified->ratio},
+                             {"triangles_before", simplified->trianglesBefore},
+                             {"triangles_after", simplified->trianglesAfter},
+                             {"error_m", simplified->errorMetres},
+                             {"max_relative_error", kSimplifyMaxRelativeError}};
+    else
+        stats["simplify"] = {{"enabled", false}};
     stats["wall_s_fusion_total"] = fuseSeconds;
     json pools = json::object();
     size_t total = 0;
@@ -726,6 +737,7 @@ int runFuse(const FuseArgs& args) {
               << "  voxel " << vo.voxel << " m, " << k.blocksInUse << " blocks, mesh (" << vo.mode << "): "
               << mesh.positions.size() << " vertices (baseline " << baselineVertices << "), " << mesh.triangles.size()
               << " triangles -> " << out.string() << "\n"
+              << (simplified ? "  " + describe(*simplified) + "\n" : "")
               << "  GPU per frame (median): allocate " << median("allocate") << " ms, fuse " << median("fuse") << " ms, mesh "
               << median("mesh_total") << " ms; "
               << "wall " << statsOf(frameWallMs)["median"].get<double>() << " ms/frame\n";
@@ -791,7 +803,7 @@ Run addFuseCommand(CLI::App& app) {
     auto args = std::make_shared<FuseArgs>();
     auto* cmd = app.add_subcommand("fuse", "fuse a depth sequence into a TSDF on the GPU and write its mesh");
     args->data.add(cmd);
-    cmd->add_option("-o,--output", args->output, "mesh file (.ply binary, or .obj)")->required();
+    args->output.add(cmd);
     cmd->add_option("--stats", args->statsPath, "write counts, timings and memory as JSON");
     args->volume.addCommon(cmd);
     args->volume.addTuning(cmd);

@@ -1,4 +1,4 @@
-// `vkmesh view FILE`: serves the browser viewer (docs/VIEWER.md) for a mesh (.ply), a saved map (.vkmap, its mesh
+// `vkmesh view FILE`: serves the browser viewer (docs/VIEWER.md) for a mesh (.ply or .glb), a saved map (.vkmap, its mesh
 // exported on the GPU) or a mesh-delta stream (.deltas, played frame by frame with a slider) until Ctrl-C.
 #include <CLI/CLI.hpp>
 
@@ -16,7 +16,7 @@
 #include "core/map_format.h"
 #include "gpu/gpu_volume.h"
 #include "io/delta_stream.h"
-#include "io/ply.h"
+#include "io/mesh_file.h"
 #include "viewer/viewer_server.h"
 #include "vk/context.h"
 #endif
@@ -41,14 +41,14 @@ struct ViewArgs {
 int runView(const ViewArgs& a) {
     const std::filesystem::path path(a.file);
     const std::string ext = path.extension().string();
-    if (ext != ".ply" && ext != ".vkmap" && ext != ".deltas")
-        throw Error(a.file + ": cannot view this kind of file (a .ply mesh, a .vkmap map or a .deltas stream)");
+    if (ext != ".ply" && ext != ".glb" && ext != ".vkmap" && ext != ".deltas")
+        throw Error(a.file + ": cannot view this kind of file (a .ply or .glb mesh, a .vkmap map or a .deltas stream)");
     // Read (and check) the file before the port is taken.
     Mesh mesh;
     std::vector<MeshDelta> frames;
     std::string what;
-    if (ext == ".ply") {
-        mesh = readPly(path);
+    if (ext == ".ply" || ext == ".glb") {
+        mesh = readMesh(path);
         what = std::to_string(mesh.triangles.size()) + " triangles";
     } else if (ext == ".vkmap") {
         const map::MapData m = map::readFile(path);
@@ -104,7 +104,7 @@ int runView(const ViewArgs&) {
 Run addViewCommand(CLI::App& app) {
     auto args = std::make_shared<ViewArgs>();
     auto* cmd = app.add_subcommand("view", "serve the browser viewer for a mesh, a map or a delta stream (docs/VIEWER.md)");
-    cmd->add_option("FILE", args->file, ".ply mesh, .vkmap map or .deltas stream (fuse --deltas)")->required();
+    cmd->add_option("FILE", args->file, ".ply or .glb mesh, .vkmap map or .deltas stream (fuse --deltas)")->required();
     cmd->add_option("--port", args->port, "TCP port (default 8080)");
     cmd->add_option("--host", args->host, "address to listen on (default 127.0.0.1: this machine only; 0.0.0.0: every interface)");
     cmd->add_option("--fps", args->fps, "a stream's playback speed in frames per second (default 30)")->check(CLI::PositiveNumber);

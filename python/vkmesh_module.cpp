@@ -35,6 +35,8 @@
 #include "gpu/gpu_volume.h"
 #include "io/dataset.h"
 #include "io/parsers.h"
+#include "io/mesh_file.h"
+#include "io/mesh_simplify.h"
 #include "io/ply.h"
 #include "slam/loop_closer.h"
 #include "synth/synthetic_scene.h"
@@ -1220,23 +1222,34 @@ the port is taken (naming it). stop_serving() or close() stops it.
         synth::writeTumSequence(out, synth::SyntheticScene::defaultRoom(), o);
     });
 
-    m.def("_read_ply", [](const fs::path& path) {
+    m.def("_read_mesh", [](const fs::path& path) {
         Mesh mesh;
         {
             py::gil_scoped_release release;
-            mesh = readPly(path);
+            mesh = readMesh(path);   // .glb as glTF, anything else as PLY
         }
         return PyReconstructor::meshToPython(std::move(mesh));
     });
 
     m.def("_write_mesh", [](const fs::path& path, const py::array& vertices, const py::array& triangles, const py::object& normals,
-                            const py::object& colors, const py::object& ages) {
-        const Mesh mesh = meshFromArrays(vertices, triangles, normals, colors, ages);
-        py::gil_scoped_release release;
-        if (path.extension() == ".obj")
-            writeObj(path, mesh);
-        else
-            writePly(path, mesh);
+                            const py::object& colors, const py::object& ages, const py::object& simplify) -> py::object {
+        Mesh mesh = meshFromArrays(vertices, triangles, normals, colors, ages);
+        meshFormatOf(path);   // an unknown extension fails before any simplification
+        std::optional<SimplifyReport> report;
+        if (!simplify.is_none()) {
+            const double ratio = simplify.cast<double>();
+            checkSimplifyRatio(ratio, "simplify=");
+            report.emplace();
+            py::gil_scoped_release release;
+            mesh = simplifyMesh(mesh, ratio, &*report);
+        }
+        {
+            py::gil_scoped_release release;
+            writeMesh(path, mesh);
+        }
+        if (!report) return py::none();
+        return py::dict("ratio"_a = report->ratio, "triangles_before"_a = report->trianglesBefore,
+                        "triangles_after"_a = report->trianglesAfter, "error_m"_a = report->errorMetres);
     });
 
     m.attr("_DELTA_ADDED") = uint32_t(DeltaKind::Added);

@@ -93,10 +93,15 @@ class Mesh:
                                  f"and shape {_shape(self.ages)}")
             self.ages = self.ages.astype(np.uint32, copy=False)
 
-    def save(self, path) -> None:
-        """Writes the mesh as binary PLY (with normals, colours and ages when present), or as OBJ when the path
-        ends in .obj, exactly as `vkmesh fuse -o` writes its meshes (Open3D and MeshLab read both)."""
-        _vkmesh._write_mesh(os.fspath(path), self.vertices, self.triangles, self.normals, self.colors, self.ages)
+    def save(self, path, simplify=None):
+        """Writes the mesh as binary PLY (with normals, colours and ages when present), as OBJ when the path ends
+        in .obj, or as binary glTF 2.0 when it ends in .glb (Blender, three.js, Unity), exactly as `vkmesh fuse -o`
+        writes its meshes; any other extension raises vkmesh.Error. simplify=RATIO (0 < RATIO <= 1) writes a
+        simplified copy with about that fraction of the triangles (meshoptimizer; this Mesh is not changed) and
+        returns {"ratio", "triangles_before", "triangles_after", "error_m"}: error_m is the geometric error
+        meshoptimizer reports, in metres. Without simplify, returns None."""
+        return _vkmesh._write_mesh(os.fspath(path), self.vertices, self.triangles, self.normals, self.colors, self.ages,
+                                   simplify)
 
     def __repr__(self) -> str:
         extras = [name for name in ("normals", "colors", "ages") if getattr(self, name) is not None]
@@ -105,10 +110,11 @@ class Mesh:
 
 
 def read_mesh(path) -> Mesh:
-    """Reads a PLY file (ascii or binary; what `vkmesh fuse -o mesh.ply` writes, and most tools' PLY) into a
-    Mesh: positions, triangles (polygons split into fans), and normals, colours and ages when the file has
-    them. Raises vkmesh.Error naming the file for a missing, corrupt or unsupported one."""
-    return _vkmesh._read_ply(os.fspath(path))
+    """Reads a PLY file (ascii or binary; what `vkmesh fuse -o mesh.ply` writes, and most tools' PLY), or a
+    binary glTF file when the path ends in .glb, into a Mesh: positions, triangles (polygons split into fans),
+    and normals, colours and ages when the file has them. Raises vkmesh.Error naming the file for a missing,
+    corrupt or unsupported one."""
+    return _vkmesh._read_mesh(os.fspath(path))
 
 
 class MeshDelta:

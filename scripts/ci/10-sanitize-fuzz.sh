@@ -3,7 +3,7 @@
 #  (a) builds vkmesh with clang under AddressSanitizer + UndefinedBehaviorSanitizer (build-asan,
 #      RelWithDebInfo, tests on; any report aborts the test) and runs every CPU test plus the GPU tests
 #      that cover fusion, the incremental mesh, mesh export and the CLI's handling of bad input, on lavapipe;
-#  (b) builds the libFuzzer targets of fuzz/ (build-fuzz: the dataset, PLY, .vkmap and .vkframes readers, the viewer's wire format and page commands, the ROS 1 bag and MCAP containers and the ROS message decoders) and runs each from its seed corpus in
+#  (b) builds the libFuzzer targets of fuzz/ (build-fuzz: the dataset, PLY, binary glTF, .vkmap and .vkframes readers, the viewer's wire format and page commands, the ROS 1 bag and MCAP containers and the ROS message decoders) and runs each from its seed corpus in
 #      fuzz/corpus/<target>/ for FUZZ_SECONDS (default 15) seconds. Any crash, sanitizer report, leak,
 #      timeout, out-of-memory or uncaught non-vkmesh exception fails the job; the input that caused it is
 #      kept as build-fuzz/findings/<target>/crash-* (or leak-, timeout-, oom-) to reproduce with

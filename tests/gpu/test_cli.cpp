@@ -8,11 +8,13 @@
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
+#include <tuple>
 
 #include <Eigen/Geometry>
 
 #include "core/camera.h"
 #include "core/mesh_analysis.h"
+#include "io/gltf.h"
 #include "io/ply.h"
 #include "io/trajectory.h"
 #include "test_support.h"
@@ -143,6 +145,64 @@ TEST(Cli, ObjOutputByExtension) {
     std::string obj = readText(out / "mesh.obj");
     EXPECT_NE(obj.find("\nv "), std::string::npos);
     EXPECT_NE(obj.find("\nf "), std::string::npos);
+    fs::remove_all(out);
+}
+
+// glTF binary out (io/gltf.h): `fuse -o x.glb --simplify 0.5` writes a simplified copy, reports it in --stats (the
+// fused mesh's own counts unchanged), and `export` writes a saved map's mesh as .glb, equal to fuse's PLY; an
+// extension vkmesh cannot write fails before anything is fused.
+TEST(Cli, GlbOutputSimplifiedAndExported) {
+    fs::path out = test::makeTempDir("cli_glb");
+    const std::string seq = smallSequence().string(), map = (out / "m.vkmap").string();
+    CliRun r = runCli("fuse " + seq + " -o " + (out / "half.glb").string() + " --simplify 0.5 --voxel 0.05 --frames 3 -q --save " + map +
+                      " --stats " + (out / "stats.json").string());
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_NE(r.out.find("simplified to "), std::string::npos) << r.out;
+    const nlohmann::json stats = nlohmann::json::parse(readText(out / "stats.json"));
+    const nlohmann::json& s = stats["simplify"];
+    const Mesh half = readGlb(out / "half.glb");
+    EXPECT_TRUE(s["enabled"].get<bool>());
+    EXPECT_EQ(s["ratio"].get<double>(), 0.5);
+    EXPECT_EQ(s["triangles_before"].get<size_t>(), stats["mesh"]["triangles"].get<size_t>());
+    EXPECT_EQ(s["triangles_after"].get<size_t>(), half.triangles.size());
+    EXPECT_LE(half.triangles.size(), stats["mesh"]["triangles"].get<size_t>() / 2);
+    EXPECT_GE(half.triangles.size(), stats["mesh"]["triangles"].get<size_t>() * 2 / 5);
+    EXPECT_GT(s["error_m"].get<double>(), 0);
+    EXPECT_LT(s["error_m"].get<double>(), 0.05);   // under a voxel
+    EXPECT_EQ(half.colors.size(), half.positions.size());   // the synthetic room is coloured
+
+    // The saved map's mesh, whole, as .glb and as .ply: the same vertices and triangles.
+    CliRun glb = runCli("export " + map + " -o " + (out / "all.glb").string());
+    ASSERT_EQ(glb.exitCode, 0) << glb.err;
+    CliRun ply = runCli("export " + map + " -o " + (out / "all.ply").string());
+    ASSERT_EQ(ply.exitCode, 0) << ply.err;
+    // Two exports need not list them in the same order: compared as sets.
+    const Mesh a = readGlb(out / "all.glb"), b = readPly(out / "all.ply");
+    EXPECT_EQ(b.triangles.size(), stats["mesh"]["triangles"].get<size_t>());
+    EXPECT_EQ(countTriangleMismatches(canonicalTriangles(a), canonicalTriangles(b), 0), 0u);
+    auto coloured = [](const Mesh& m) {
+        std::vector<std::tuple<float, float, float, uint8_t, uint8_t, uint8_t>> v;
+        for (size_t i = 0; i < m.positions.size(); ++i)
+            v.emplace_back(m.positions[i].x(), m.positions[i].y(), m.positions[i].z(), m.colors[i][0], m.colors[i][1], m.colors[i][2]);
+        std::sort(v.begin(), v.end());
+        return v;
+    };
+    ASSERT_EQ(a.colors.size(), a.positions.size());
+    ASSERT_EQ(b.colors.size(), b.positions.size());
+    EXPECT_EQ(coloured(a), coloured(b));
+    // The Khronos validator, where it is installed (tests/cpu/test_gltf.cpp skips with a message where it is not).
+    if (std::system("node -e \"require(require('child_process').execSync('npm root -g').toString().trim() + '/gltf-validator')\" >/dev/null 2>&1") == 0) {
+        const int status = std::system(("node " VKMESH_SOURCE_DIR "/scripts/gltf_validate.js " + (out / "half.glb").string() + " " +
+                                        (out / "all.glb").string() + " >" + (out / "validator.log").string() + " 2>&1").c_str());
+        EXPECT_EQ(status, 0) << readText(out / "validator.log");
+    }
+
+    CliRun stl = runCli("fuse " + seq + " -o " + (out / "mesh.stl").string() + " -q");
+    EXPECT_NE(stl.exitCode, 0);
+    EXPECT_NE(stl.err.find(".glb"), std::string::npos) << stl.err;
+    CliRun ratio = runCli("export " + map + " -o " + (out / "x.glb").string() + " --simplify 1.5");
+    EXPECT_NE(ratio.exitCode, 0);
+    EXPECT_NE(ratio.err.find("--simplify 1.5"), std::string::npos) << ratio.err;
     fs::remove_all(out);
 }
 

@@ -81,6 +81,22 @@ def test_mesh_files_round_trip(tmp_path):
     obj = (tmp_path / "plain.obj").read_text()
     assert obj.count("\nv ") == n and obj.count("\nf ") == len(m.triangles)
     assert "vertices" in repr(m) and "with normals, colors, ages" in repr(m)
+    # Binary glTF reads back equal (normals to float precision: glTF stores them normalised).
+    assert m.save(tmp_path / "m.glb") is None
+    glb = vkmesh.read_mesh(tmp_path / "m.glb")
+    for name in ("vertices", "triangles", "colors", "ages"):
+        assert np.array_equal(getattr(glb, name), getattr(m, name)), name
+    assert np.allclose(glb.normals, m.normals / np.linalg.norm(m.normals, axis=1, keepdims=True), atol=1e-6)
+    # simplify= writes a simplified copy (m is unchanged) and says what it did.
+    report = m.save(tmp_path / "half.glb", simplify=0.5)
+    half = vkmesh.read_mesh(tmp_path / "half.glb")
+    assert report["triangles_before"] == len(m.triangles) and report["triangles_after"] == len(half.triangles)
+    assert len(half.triangles) <= len(m.triangles) // 2 and report["error_m"] >= 0
+    assert (half.colors == (10, 200, 30)).all() and len(m.vertices) == n
+    with pytest.raises(vkmesh.Error, match="1.5"):
+        m.save(tmp_path / "bad.glb", simplify=1.5)
+    with pytest.raises(vkmesh.Error, match=r"\.glb"):
+        m.save(tmp_path / "m.stl")
 
 
 def test_deltas_replay_to_the_mesh():
