@@ -380,7 +380,8 @@ ColorImage Dataset::loadColor(size_t i, std::string* warning, const DepthImage* 
     const int h = colorIntrinsics_ ? colorIntrinsics_->height : intrinsics_.height;
     if (image.width != w || image.height != h)
         return unusable("colour image " + name + " is " + std::to_string(image.width) + "x" + std::to_string(image.height) +
-                        " but " + (colorIntrinsics_ ? "the colour calibration is for " : "the depth images are ") +
+                        " but " + (colorIntrinsics_ ? (recording_ ? std::string("the colour camera info is for ") : std::string("the colour calibration (camera.json) is for "))
+                                          : std::string("the depth images are ")) +
                         std::to_string(w) + "x" + std::to_string(h));
     if (!colorIntrinsics_) return image;
     if (depthToColor_) {

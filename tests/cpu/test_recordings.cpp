@@ -611,8 +611,9 @@ TEST(Recordings, FuzzSeedsOpen) {
             for (const auto& m : c->messages()) {
                 auto bytes = c->read(m);
                 const Connection& k = c->connections()[m.connection];
-                if (k.type == "sensor_msgs/Image")
+                if (k.type == "sensor_msgs/Image") {
                     EXPECT_EQ(decodeImage(bytes, k.serialization, c->describe(m)).data.size(), 4u);
+                }
             }
             ++n;
         }

@@ -44,6 +44,26 @@ def test_dataset_frames(small_sequence):
         vkmesh.open_dataset(small_sequence, depth_scale=-1)
 
 
+def test_dataset_from_a_recording(small_sequence, tmp_path):
+    """A recording opens as its folder does: the same frames, depth, colour and poses (docs/RECORDINGS.md)."""
+    import subprocess
+    import sys
+    here = os.path.dirname(os.path.abspath(__file__))
+    try:
+        subprocess.run([sys.executable, "-c", "import rosbag, PIL, zstandard, lz4"], check=True, capture_output=True)
+    except subprocess.CalledProcessError:
+        pytest.skip("the recording fixtures need python3-rosbag, python3-pil, python3-zstandard, python3-lz4")
+    subprocess.run([sys.executable, os.path.join(here, "..", "support", "make_recordings.py"), str(small_sequence),
+                    str(tmp_path), "--kinds", "tum-mcap-zstd"], check=True, capture_output=True)
+    folder = vkmesh.open_dataset(small_sequence)
+    rec = vkmesh.open_dataset(tmp_path / "tum-mcap-zstd.mcap", depth_topic="/camera/depth/image")
+    assert rec.kind == "MCAP" and len(rec) == len(folder) and rec.intrinsics == folder.intrinsics
+    for a, b in zip(folder, rec):
+        assert np.array_equal(a.depth, b.depth) and np.array_equal(a.color, b.color) and np.array_equal(a.pose, b.pose)
+    with pytest.raises(vkmesh.Error, match="--depth-topic /nothing"):
+        vkmesh.open_dataset(tmp_path / "tum-mcap-zstd.mcap", depth_topic="/nothing")
+
+
 def test_iteration_skips_what_the_cli_skips(small_sequence, tmp_path):
     seq = tmp_path / "seq"
     shutil.copytree(small_sequence, seq)
