@@ -4,6 +4,7 @@
 #include "fuzz_common.h"
 #include "io/recordings/messages.h"
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <span>
@@ -18,8 +19,11 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     vkmesh::fuzz::expectOnlyVkmeshErrors([&] {
         switch (pick & 7) {
         case 0: {
+            // The header from the leading bytes, as a dataset reads it (never throws), must be the whole message's.
+            const auto head = decodeLeadingHeader(bytes.first(std::min<size_t>(bytes.size(), 64)), s);
             ImageMessage m = decodeImage(bytes, s, where);
             if (uint64_t(m.step) * m.height > m.data.size()) std::abort();
+            if (head && (head->stampNs != m.header.stampNs || head->frameId != m.header.frameId)) std::abort();
             break;
         }
         case 1: decodeCameraInfo(bytes, s, where); break;

@@ -55,6 +55,15 @@ LayoutFiles scanLayout(const fs::path& dir) {
     return f;
 }
 
+// A colour image file, decoded (JPEG or PNG, 8-bit). Throws Error naming the file.
+ColorImage readColorFile(const fs::path& file) {
+    std::ifstream in(file, std::ios::binary);
+    if (!in) throw Error("cannot open colour image " + file.string());
+    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (in.bad()) throw Error("error while reading colour image " + file.string());
+    return io::decodeColorImage(bytes, file.string());
+}
+
 }  // namespace
 
 std::string toString(DatasetKind kind) {
@@ -356,33 +365,19 @@ ColorImage Dataset::loadColor(size_t i, std::string* warning, const DepthImage* 
         return hasColor_ ? unusable("no colour image for depth image " + f.depthPath.filename().string()) : ColorImage{};
     const std::string name = recording_ ? f.colorRecord : f.colorPath.string();
     ColorImage image;
-    if (recording_) {
-        try {
-            image = recording_->loadColor(i);
-        } catch (const Error& e) {
-            return unusable(e.what());
-        }
-    } else {
-    std::string bytes;
-    {
-        std::ifstream in(f.colorPath, std::ios::binary);
-        if (!in) return unusable("cannot open colour image " + name);
-        bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-        if (in.bad()) return unusable("error while reading colour image " + name);
-    }
     try {
-        image = io::decodeColorImage(bytes, name);
+        image = recording_ ? recording_->loadColor(i) : readColorFile(f.colorPath);
     } catch (const Error& e) {
         return unusable(e.what());
     }
-    }
     const int w = colorIntrinsics_ ? colorIntrinsics_->width : intrinsics_.width;
     const int h = colorIntrinsics_ ? colorIntrinsics_->height : intrinsics_.height;
+    const std::string expected = !colorIntrinsics_ ? "the depth images are "
+                                 : recording_     ? "the colour camera info is for "
+                                                  : "the colour calibration (camera.json) is for ";
     if (image.width != w || image.height != h)
         return unusable("colour image " + name + " is " + std::to_string(image.width) + "x" + std::to_string(image.height) +
-                        " but " + (colorIntrinsics_ ? (recording_ ? std::string("the colour camera info is for ") : std::string("the colour calibration (camera.json) is for "))
-                                          : std::string("the depth images are ")) +
-                        std::to_string(w) + "x" + std::to_string(h));
+                        " but " + expected + std::to_string(w) + "x" + std::to_string(h));
     if (!colorIntrinsics_) return image;
     if (depthToColor_) {
         // Through each pixel's depth: the colour camera sees the scene from elsewhere.

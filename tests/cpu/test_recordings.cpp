@@ -230,6 +230,30 @@ INSTANTIATE_TEST_SUITE_P(Recordings, Fixtures,
                              return s;
                          });
 
+TEST(Recordings, IndexingKeepsEachMessagesHeaderBytes) {
+    // ROS 1 and MCAP chunks keep each message's first bytes while indexing: the header decoded from them is the
+    // one the whole message holds, so a dataset need not read every image twice to pair and pose it.
+    if (!pythonMissing().empty()) GTEST_SKIP() << pythonMissing();
+    for (const char* kind : {"ros1-bz2", "mcap-zstd"}) {
+        auto c = openContainer(fixture(kind));
+        size_t images = 0;
+        for (const auto& m : c->messages()) {
+            const Connection& k = c->connections()[m.connection];
+            if (k.type != "sensor_msgs/Image") continue;
+            ++images;
+            ASSERT_GT(m.headSize, 0u) << kind;
+            const auto head = decodeLeadingHeader(std::span(m.head.data(), m.headSize), k.serialization);
+            ASSERT_TRUE(head.has_value()) << kind;
+            const ImageMessage full = decodeImage(c->read(m), k.serialization, c->describe(m));
+            EXPECT_EQ(head->stampNs, full.header.stampNs) << kind;
+            EXPECT_EQ(head->frameId, full.header.frameId) << kind;
+            // Too few bytes for the header: nothing, not an exception.
+            EXPECT_FALSE(decodeLeadingHeader(std::span(m.head.data(), size_t(6)), k.serialization).has_value());
+        }
+        EXPECT_GT(images, 0u) << kind;
+    }
+}
+
 TEST(Recordings, SeveralChunksAndUnchunkedMcap) {
     if (!pythonMissing().empty()) GTEST_SKIP() << pythonMissing();
     // The ROS 1 fixture spans several chunks (chunk_threshold 1024): messages in the same chunk share its offset.

@@ -532,8 +532,11 @@ Layout readRecording(const fs::path& path, const DatasetOptions& options) {
     auto timedMessages = [&](const Connection& conn) {
         std::vector<Timed> out;
         for (const MessageRef* m : byConnection[conn.id]) {
-            const ImageMessage header = decodeAt(*m, recording::decodeImage);
-            out.push_back({stampOf(header.header, *m), m, header.header.frameId});
+            // The header from the bytes indexing kept, else from the whole message (a second read of it).
+            std::optional<recording::MessageHeader> header =
+                recording::decodeLeadingHeader(std::span(m->head.data(), m->headSize), conn.serialization);
+            if (!header) header = decodeAt(*m, recording::decodeImage).header;
+            out.push_back({stampOf(*header, *m), m, header->frameId});
         }
         std::stable_sort(out.begin(), out.end(), [](const Timed& a, const Timed& b) { return a.t < b.t; });
         return out;

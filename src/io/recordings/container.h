@@ -10,6 +10,8 @@
 
 #include "core/types.h"
 
+#include <algorithm>
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <memory>
@@ -46,6 +48,16 @@ struct MessageRef {
     // offset in the file and the message's offset inside the decompressed chunk (0 unchunked); rosbag2: the
     // .db3 file's index among the recording's files (split recordings) and the message's row id.
     uint64_t location[2] = {0, 0};
+    // The message's first bytes where indexing had them in hand (ROS 1 and MCAP chunks: the scan decompresses
+    // each chunk once), headSize of them (0: none): enough for a sensor_msgs message's header (stamp and frame id),
+    // so that a dataset pairs and poses its images without reading each one a second time (decodeLeadingHeader).
+    static constexpr size_t kHeadBytes = 64;
+    std::array<uint8_t, kHeadBytes> head{};
+    uint8_t headSize = 0;
+    void keepHead(std::string_view data) {
+        headSize = uint8_t(std::min(data.size(), kHeadBytes));
+        std::copy_n(data.begin(), headSize, head.begin());
+    }
 };
 
 class Container {

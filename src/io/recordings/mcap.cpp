@@ -169,6 +169,7 @@ private:
         p.ref.logTimeNs = r.u64("log time");
         p.ref.location[0] = offset;
         p.ref.location[1] = inner;
+        p.ref.keepHead(content.substr(kMessagePrefix));
         pending_.push_back(p);
     }
 

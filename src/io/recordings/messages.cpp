@@ -152,6 +152,18 @@ static_assert(std::endian::native == std::endian::little, "the decoders assume a
 
 }  // namespace
 
+std::optional<MessageHeader> decodeLeadingHeader(std::span<const uint8_t> head, Serialization s) {
+    // The same reader on the first bytes: a header that does not fit in them (a long frame id) throws, and the
+    // caller reads the whole message instead.
+    const std::string where = "a message's leading bytes";  // the Decoder keeps a reference to it
+    try {
+        Decoder d(head, s, where, "std_msgs/Header");
+        return d.header();
+    } catch (const Error&) {
+        return std::nullopt;
+    }
+}
+
 ImageMessage decodeImage(std::span<const uint8_t> bytes, Serialization s, const std::string& where) {
     Decoder d(bytes, s, where, "sensor_msgs/Image");
     ImageMessage m;

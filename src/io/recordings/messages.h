@@ -16,6 +16,7 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -68,6 +69,9 @@ struct KeyValueMessage {
 };
 
 ImageMessage decodeImage(std::span<const uint8_t> bytes, Serialization s, const std::string& where);
+// The std_msgs/Header a message starts with (Image, CameraInfo, ...), from its first bytes (MessageRef::head);
+// nothing when those bytes do not hold all of it. Never throws.
+std::optional<MessageHeader> decodeLeadingHeader(std::span<const uint8_t> head, Serialization s);
 CameraInfoMessage decodeCameraInfo(std::span<const uint8_t> bytes, Serialization s, const std::string& where);
 // tf2_msgs/TFMessage (and ROS 1's tf/tfMessage, the same layout): its transforms.
 std::vector<TransformStampedMessage> decodeTfMessage(std::span<const uint8_t> bytes, Serialization s,

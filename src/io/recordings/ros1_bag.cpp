@@ -179,8 +179,9 @@ private:
                         "), was " + it->second.topic + " (" + it->second.type + ")");
     }
 
-    void message(const Fields& f, uint64_t offset, uint64_t inner) {
+    void message(const Fields& f, uint64_t offset, uint64_t inner, std::string_view data = {}) {
         Pending p;
+        p.ref.keepHead(data);
         p.rosConnection = f.integer<uint32_t>("conn");
         p.ref.logTimeNs = f.timeNs("time");
         p.ref.location[0] = offset;
@@ -201,7 +202,7 @@ private:
             Fields f(rec.header, innerWhere);
             uint8_t op = f.integer<uint8_t>("op");
             if (op == kMessageData)
-                message(f, offset, inner);
+                message(f, offset, inner, rec.data);
             else if (op == kConnection)
                 connection(f, rec.data, innerWhere);
             else
