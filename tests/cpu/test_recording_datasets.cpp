@@ -110,6 +110,12 @@ TEST_F(RecordingDatasets, RealSenseLayoutReadsItsDepthUnitsAndNeedsTracking) {
     // Depth Units 0.0002 as a float is 1/4999.99987: read as the 5000 units per metre it stands for.
     EXPECT_EQ(r->depthScale(), 5000.0);
     expectSameFrames(*f, *r, false, "realsense");
+    // The colour stream's lens distortion is not undone, and the user is told (the depth stream's is zero).
+    std::string warnings;
+    for (const std::string& w : r->warnings()) warnings += w + "\n";
+    EXPECT_NE(warnings.find("Color_0/info/camera_info"), std::string::npos) << warnings;
+    EXPECT_NE(warnings.find("colour camera has lens distortion (Inverse Brown Conrady)"), std::string::npos) << warnings;
+    EXPECT_EQ(warnings.find("depth camera has lens distortion"), std::string::npos) << warnings;
 }
 
 TEST_F(RecordingDatasets, TopicOptionsChooseAndNameWhatIsThere) {

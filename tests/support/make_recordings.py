@@ -150,8 +150,11 @@ def realsense_messages(cam, frames):
         ch, cw = first.shape[:2]
         cfx, cfy = cam.get("color_fx", cam["fx"]), cam.get("color_fy", cam["fy"])
         ccx, ccy = cam.get("color_cx", cam["cx"]), cam.get("color_cy", cam["cy"])
-        msgs.append((color_stream + "/info/camera_info", "sensor_msgs/CameraInfo", t0,
-                     camera_info(t0, "", cw, ch, cfx, cfy, ccx, ccy)))
+        # librealsense's colour streams carry their lens model; vkmesh uses the image as rectified and says so.
+        color_info = camera_info(t0, "", cw, ch, cfx, cfy, ccx, ccy)
+        color_info["distortion_model"] = "Inverse Brown Conrady"
+        color_info["D"] = [0.01, -0.02, 0.0, 0.0, 0.0]
+        msgs.append((color_stream + "/info/camera_info", "sensor_msgs/CameraInfo", t0, color_info))
         # The colour stream's transform from the group's reference (the depth stream) to it: depth_to_color.
         extr = cam.get("depth_to_color", {"rotation": [1, 0, 0, 0, 1, 0, 0, 0, 1], "translation": [0, 0, 0]})
         r = extr["rotation"]

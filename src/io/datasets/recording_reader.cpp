@@ -289,6 +289,15 @@ ColorImage colorFromMessage(const ImageMessage& m, const std::string& where) {
     return out;
 }
 
+// Fusion and colour registration project with a pinhole: say so rather than use a distorted image silently as if
+// it were rectified (a RealSense depth stream's coefficients are zero; its colour stream's often are not).
+void warnIfDistorted(const CameraInfoMessage& info, const std::string& where, const char* camera,
+                     std::vector<std::string>& warnings) {
+    if (std::any_of(info.d.begin(), info.d.end(), [](double v) { return v != 0.0; }))
+        warnings.push_back(where + ": the " + camera + " camera has lens distortion (" + info.distortionModel +
+                           "), which vkmesh does not undo: its images are used as if rectified");
+}
+
 // fx, fy, cx, cy from a CameraInfo's K (row-major: fx 0 cx / 0 fy cy / 0 0 1), checked.
 Intrinsics intrinsicsOf(const CameraInfoMessage& info, const std::string& where) {
     Intrinsics k;
@@ -435,6 +444,7 @@ Layout readRecording(const fs::path& path, const DatasetOptions& options) {
                         std::to_string(depth->first.width) + "x" + std::to_string(depth->first.height) +
                         " (choose the depth camera's info with --info-topic)");
         layout.folderIntrinsics = k;
+        warnIfDistorted(info, c.describe(m), "depth", layout.warnings);
     } else if (!options.intrinsics) {
         throw Error(file + ": no sensor_msgs/CameraInfo for the depth topic " + depth->connection->topic +
                     (infos.empty() ? std::string(" (the recording has none)") : " (choose one with --info-topic)") +
@@ -477,7 +487,9 @@ Layout readRecording(const fs::path& path, const DatasetOptions& options) {
         bool ownCamera = false;
         if (const Connection* colorInfo = infoFor(*color); colorInfo && colorInfo != depthInfo) {
             const MessageRef& m = *byConnection[colorInfo->id].front();
-            camera.intrinsics = intrinsicsOf(decodeAt(m, recording::decodeCameraInfo), c.describe(m));
+            const CameraInfoMessage info = decodeAt(m, recording::decodeCameraInfo);
+            camera.intrinsics = intrinsicsOf(info, c.describe(m));
+            warnIfDistorted(info, c.describe(m), "colour", layout.warnings);
             ownCamera = true;
         }
         camera.intrinsics.width = int(color->first.width);
