@@ -424,6 +424,9 @@ int runFuse(const FuseArgs& args) {
         }
         if (config.meshMode == gpu::MeshMode::Incremental) stageMs["mesh_total"].push_back(meshMs);
         perFrame["touched_blocks"].push_back(report.counters.touchedCount);
+        // Allocation's work: blocks the band walks visited, and the visits that had to ask the hash.
+        perFrame["block_visits"].push_back(report.counters.blockRequests);
+        perFrame["hash_requests"].push_back(report.counters.blockRequests - report.counters.blocksShared);
         perFrame["dirty_blocks"].push_back(report.counters.dirtyCount);
         perFrame["cubes_retyped"].push_back(report.counters.cubesRetyped);
         perFrame["triangles_created"].push_back(report.counters.trianglesCreated);

@@ -14,7 +14,7 @@
 
 layout(local_size_x = WG_PIXELS_X, local_size_y = WG_PIXELS_Y) in;
 
-uint requests = 0u, found = 0u, inserted = 0u, full = 0u, outOfRange = 0u, outsideRadius = 0u;
+uint requests = 0u, found = 0u, inserted = 0u, full = 0u, outOfRange = 0u, outsideRadius = 0u, repeated = 0u;
 
 // Claims `cell`'s key without waiting on anyone (structure/block_hash.glsl). Returns the slot, or
 // NO_BLOCK if none was free within the probe bound.
@@ -33,11 +33,6 @@ uint insertKey(ivec3 cell) {
 }
 
 void touchBlock(ivec3 cell) {
-    ++requests;
-    if (!blockCoordInRange(cell)) { ++outOfRange; return; }
-    // Bounded maps: blocks beyond the keep radius are not allocated (the recycling passes free those
-    // the camera has left behind), so the map stays a ball around the camera.
-    if (blockOutsideKeepRadius(cell)) { ++outsideRadius; return; }
     uint slot = insertKey(cell);
     if (slot == NO_BLOCK) return;
     // The first invocation to stamp the slot with this frame's number lists it, so each block appears
@@ -49,52 +44,91 @@ void touchBlock(ivec3 cell) {
     }
 }
 
+// The blocks this invocation touched last, most recent first. Neighbouring pixels' bands cross mostly the same
+// blocks, so one invocation walking a tile of pixels finds most of its visits here and touches the hash (a
+// scattered read costing ~6-8 ns on lavapipe, twice) only for the others. Eight named variables rather than an
+// array: llvmpipe keeps an array indexed at run time in scratch memory. The first cell is one no band reaches.
+ivec3 recent0 = ivec3(0x7FFFFFFF), recent1 = recent0, recent2 = recent0, recent3 = recent0,
+      recent4 = recent0, recent5 = recent0, recent6 = recent0, recent7 = recent0;
+
+void visitBlock(ivec3 cell) {
+    ++requests;
+    // Counted per visit, like the per-pixel reference: a block out of range or beyond the keep radius is never
+    // looked up, so checking it again costs no scattered read.
+    if (!blockCoordInRange(cell)) { ++outOfRange; return; }
+    // Bounded maps: blocks beyond the keep radius are not allocated (the recycling passes free those
+    // the camera has left behind), so the map stays a ball around the camera.
+    if (blockOutsideKeepRadius(cell)) { ++outsideRadius; return; }
+    if (cell == recent0 || cell == recent1 || cell == recent2 || cell == recent3 ||
+        cell == recent4 || cell == recent5 || cell == recent6 || cell == recent7) {
+        ++repeated;
+        return;
+    }
+    recent7 = recent6; recent6 = recent5; recent5 = recent4; recent4 = recent3;
+    recent3 = recent2; recent2 = recent1; recent1 = recent0; recent0 = cell;
+    touchBlock(cell);
+}
+
+// Walks the band of one sampled pixel.
+void walkPixel(uvec2 pixel, uvec2 size, inout uint valid, inout uint truncated) {
+    float d = depthAt(pixel.y * size.x + pixel.x);
+    if (d >= frame.minDepth && d <= frame.maxDepth) {
+        ++valid;
+        // Camera-frame ray through the pixel, scaled so that its z is 1.
+        precise vec3 ray = vec3((float(pixel.x) - frame.intrinsics.z) / frame.intrinsics.x,
+                                (float(pixel.y) - frame.intrinsics.w) / frame.intrinsics.y, 1.0);
+        float nearZ = max(d - params.truncation, frame.minDepth * 0.5);
+        float farZ = d + params.truncation;
+        float blockSize = params.voxelSize * float(BLOCK_SIDE);
+        precise vec3 a = transformPoint(framePose.cameraToWorld, ray * nearZ) / blockSize;
+        precise vec3 b = transformPoint(framePose.cameraToWorld, ray * farZ) / blockSize;
+
+        // Amanatides & Woo traversal from a to b, parameter t in [0, 1]. Written without dynamic
+        // component indexing (v[axis]), which llvmpipe turns into slow scratch memory.
+        precise vec3 dir = b - a;
+        vec3 fa = floor(a);
+        ivec3 cell = ivec3(fa);
+        ivec3 last = ivec3(floor(b));
+        ivec3 stepDir = ivec3(sign(dir));
+        precise vec3 adir = abs(dir);
+        precise vec3 dist = mix(a - fa, fa + 1.0 - a, greaterThan(dir, vec3(0.0)));
+        bvec3 still = equal(dir, vec3(0.0));
+        precise vec3 tMax = mix(dist / adir, vec3(1e30), still);
+        precise vec3 tDelta = mix(1.0 / adir, vec3(1e30), still);
+        bool cut = true;
+        for (uint s = 0u; s < RAY_MAX_BLOCKS; ++s) {
+            visitBlock(cell);
+            if (cell == last) { cut = false; break; }
+            if (tMax.x <= tMax.y && tMax.x <= tMax.z) {
+                if (tMax.x > 1.0) { cut = false; break; }
+                cell.x += stepDir.x;
+                tMax.x += tDelta.x;
+            } else if (tMax.y <= tMax.z) {
+                if (tMax.y > 1.0) { cut = false; break; }
+                cell.y += stepDir.y;
+                tMax.y += tDelta.y;
+            } else {
+                if (tMax.z > 1.0) { cut = false; break; }
+                cell.z += stepDir.z;
+                tMax.z += tDelta.z;
+            }
+        }
+        if (cut) ++truncated;
+    }
+}
+
 void main() {
     uvec2 size = frameImageSize();
-    uvec2 pixel = gl_GlobalInvocationID.xy * params.allocationStride;
     uint valid = 0u, truncated = 0u;
-    if (all(lessThan(pixel, size)) && !frameSkipped()) {
-        float d = depthAt(pixel.y * size.x + pixel.x);
-        if (d >= frame.minDepth && d <= frame.maxDepth) {
-            valid = 1u;
-            // Camera-frame ray through the pixel, scaled so that its z is 1.
-            precise vec3 ray = vec3((float(pixel.x) - frame.intrinsics.z) / frame.intrinsics.x,
-                                    (float(pixel.y) - frame.intrinsics.w) / frame.intrinsics.y, 1.0);
-            float nearZ = max(d - params.truncation, frame.minDepth * 0.5);
-            float farZ = d + params.truncation;
-            float blockSize = params.voxelSize * float(BLOCK_SIDE);
-            precise vec3 a = transformPoint(framePose.cameraToWorld, ray * nearZ) / blockSize;
-            precise vec3 b = transformPoint(framePose.cameraToWorld, ray * farZ) / blockSize;
-
-            // Amanatides & Woo traversal from a to b, parameter t in [0, 1]. Written without dynamic
-            // component indexing (v[axis]), which llvmpipe turns into slow scratch memory.
-            precise vec3 dir = b - a;
-            vec3 fa = floor(a);
-            ivec3 cell = ivec3(fa);
-            ivec3 last = ivec3(floor(b));
-            ivec3 stepDir = ivec3(sign(dir));
-            precise vec3 adir = abs(dir);
-            precise vec3 dist = mix(a - fa, fa + 1.0 - a, greaterThan(dir, vec3(0.0)));
-            bvec3 still = equal(dir, vec3(0.0));
-            precise vec3 tMax = mix(dist / adir, vec3(1e30), still);
-            precise vec3 tDelta = mix(1.0 / adir, vec3(1e30), still);
-            truncated = 1u;
-            for (uint s = 0u; s < RAY_MAX_BLOCKS; ++s) {
-                touchBlock(cell);
-                if (cell == last) { truncated = 0u; break; }
-                if (tMax.x <= tMax.y && tMax.x <= tMax.z) {
-                    if (tMax.x > 1.0) { truncated = 0u; break; }
-                    cell.x += stepDir.x;
-                    tMax.x += tDelta.x;
-                } else if (tMax.y <= tMax.z) {
-                    if (tMax.y > 1.0) { truncated = 0u; break; }
-                    cell.y += stepDir.y;
-                    tMax.y += tDelta.y;
-                } else {
-                    if (tMax.z > 1.0) { truncated = 0u; break; }
-                    cell.z += stepDir.z;
-                    tMax.z += tDelta.z;
-                }
+    if (!frameSkipped()) {
+        // This invocation's tile of ALLOC_TILE x ALLOC_TILE sampled pixels, rows walked back and forth so
+        // that consecutive pixels are neighbours and share most blocks.
+        uvec2 firstSample = gl_GlobalInvocationID.xy * ALLOC_TILE;
+        for (uint ty = 0u; ty < ALLOC_TILE; ++ty) {
+            for (uint i = 0u; i < ALLOC_TILE; ++i) {
+                uint tx = (ty & 1u) == 0u ? i : ALLOC_TILE - 1u - i;
+                uvec2 pixel = (firstSample + uvec2(tx, ty)) * params.allocationStride;
+                if (all(lessThan(pixel, size))) walkPixel(pixel, size, valid, truncated);
             }
         }
     }
@@ -105,5 +139,6 @@ void main() {
     ADD_COUNTER(hashFull, full);
     ADD_COUNTER(outOfRange, outOfRange);
     ADD_COUNTER(outsideRadius, outsideRadius);
+    ADD_COUNTER(blocksShared, repeated);
     ADD_COUNTER(rayTruncated, truncated);
 }
