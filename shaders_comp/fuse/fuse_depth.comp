@@ -48,6 +48,10 @@ void main() {
             // theirs, flip nothing and change no mask): a division each, which the lean loop should not pay for all.
             float oldSdf = 0.0, newSdf = 0.0;
             bool changed = false;
+            // The corner's colour word when this frame changes it; every colour store is the one below the loop
+            // (llvmpipe turns each store site under divergent control flow into a per-lane scatter of its own).
+            uint newColor = 0u;
+            bool colorChanged = false;
 
             precise vec3 world = vec3(origin + ivec3(l)) * params.voxelSize;
             precise vec3 cam = transformPoint(worldToCamera, world);
@@ -78,12 +82,11 @@ void main() {
                         if (applies && (rgba >> 24) != 0u) {
                             uint oldColor = fresh ? 0u : voxelColor[v];
                             uvec3 rgb = uvec3(rgba, rgba >> 8, rgba >> 16) & 0xFFu;
-                            voxelColor[v] = !removing ? foldVoxelColor(oldColor, oldWeight, newSdf, rgb, origin + ivec3(l))
-                                          : newWeight == 0.0 ? 0u : unfoldVoxelColor(oldColor, oldWeight, newSdf, rgb, origin + ivec3(l));
-                        } else if (fresh && volumeKeepsColor()) {
-                            voxelColor[v] = 0u;
-                        } else if (applies && removing && newWeight == 0.0 && volumeKeepsColor()) {
-                            voxelColor[v] = 0u;   // no observation left: no colour either
+                            newColor = !removing ? foldVoxelColor(oldColor, oldWeight, newSdf, rgb, origin + ivec3(l))
+                                     : newWeight == 0.0 ? 0u : unfoldVoxelColor(oldColor, oldWeight, newSdf, rgb, origin + ivec3(l));
+                            colorChanged = true;
+                        } else if (applies && removing && newWeight == 0.0) {
+                            colorChanged = true;   // no observation left: no colour either (newColor 0)
                         }
                     }
                 }
@@ -97,8 +100,8 @@ void main() {
                 voxelSdfSum[v] = newSum;
                 voxelWeight[v] = newWeight;
             }
-            // A fresh block's corners that this frame did not update still hold a previous owner's colour.
-            if (fresh && newWeight == 0.0 && volumeKeepsColor()) voxelColor[v] = 0u;
+            // A fresh block's corners that this frame gave no colour still hold a previous owner's: cleared.
+            if (volumeKeepsColor() && (colorChanged || fresh)) voxelColor[v] = newColor;
         }
         if (params.incrementalMesh != 0u) {
             for (uint k = 0u; k < VOXELS_PER_INVOCATION && flipped != 0u; ++k) {
