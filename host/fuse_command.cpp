@@ -424,6 +424,7 @@ int runFuse(const FuseArgs& args) {
         }
         if (config.meshMode == gpu::MeshMode::Incremental) stageMs["mesh_total"].push_back(meshMs);
         perFrame["touched_blocks"].push_back(report.counters.touchedCount);
+        perFrame["dispatches"].push_back(report.dispatches);
         // Allocation's work: blocks the band walks visited, and the visits that had to ask the hash.
         perFrame["block_visits"].push_back(report.counters.blockRequests);
         perFrame["hash_requests"].push_back(report.counters.blockRequests - report.counters.blocksShared);

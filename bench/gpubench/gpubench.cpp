@@ -174,6 +174,7 @@ struct VoxelRun {
     std::vector<std::string> stageOrder;           // the pipeline's order, as the timestamps came
     std::map<std::string, std::vector<double>> stageMs;
     std::vector<double> gpuFrameMs, meshMs, wallMs;
+    std::vector<double> dispatches;                // compute dispatches (passes) each frame recorded
     vkmesh::gpu::Counters last{};                  // counters after the last frame of the last repeat
     size_t growths = 0, deferredAttempts = 0, warnings = 0;
     size_t gpuBytes = 0;
@@ -272,6 +273,7 @@ void fuseSequence(const vkmesh::vk::Context& context, const std::vector<Frame>& 
             run->meshMs.push_back(mesh);
         }
         run->wallMs.push_back(wallMs);
+        run->dispatches.push_back(report.dispatches);
         if (correct) fusedAt.emplace_back(i, tracked ? tracked->tracking.cameraToWorld : pose);
         run->last = report.counters;
         run->growths += report.growth.size();
@@ -382,6 +384,9 @@ void printRun(const VoxelRun& r, size_t repeat) {
         row("whole frame, GPU", summarize(r.gpuFrameMs));
     }
     row("whole frame, wall", summarize(r.wallMs));
+    // What a pass costs whatever its work: compare the GPU's whole frame with this count.
+    const Summary passes = summarize(r.dispatches);
+    std::printf("  %-24s %10.0f %10.0f %10.0f %7zu\n", "passes (dispatches)", passes.median, passes.p90, passes.max, passes.count);
     if (!r.trackWallMs.empty()) {
         for (const std::string& name : r.trackStageOrder) row("tracking: " + name, summarize(r.trackStageMs.at(name)));
         row("tracking, GPU", summarize(r.trackGpuMs));
@@ -417,6 +422,7 @@ json runJson(const VoxelRun& r) {
                 {"gpu_ms_per_frame", stages},
                 {"gpu_ms_frame_total", toJson(summarize(r.gpuFrameMs))},
                 {"wall_ms_per_frame", toJson(summarize(r.wallMs))},
+                {"dispatches_per_frame", toJson(summarize(r.dispatches))},
                 {"blocks_in_use", r.last.blocksInUse},
                 {"vertices_in_use", r.last.verticesInUse},
                 {"live_triangles", r.last.liveTriangles},

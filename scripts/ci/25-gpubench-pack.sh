@@ -53,6 +53,7 @@ check_json() {   # FILE VOXEL...: every voxel size has a timed run with per-stag
     grep -Eq "\"voxel_size\": $voxel,?$" "$json" || fail "$json: no run at voxel $voxel"
   done
   grep -q '"mesh_total": {' "$json" || fail "$json: no meshing times"
+  grep -q '"dispatches_per_frame": {' "$json" || fail "$json: no pass count"
   grep -q '"median": null' "$json" && fail "$json: a stage without times"
   return 0
 }

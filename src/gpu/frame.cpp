@@ -325,7 +325,9 @@ void GpuVolume::submitAttempt() {
     lastPush_ = push;
     VkCommandBuffer cmd = recorder_.begin();
     timer_.reset(cmd);
+    const uint64_t dispatchesBefore = table_.dispatchesRecorded();
     recordFrame(cmd, push, f.rebuildHash && f.attempt == 0, f.retryPending, f.attempt == 0);
+    f.report.dispatches = uint32_t(table_.dispatchesRecorded() - dispatchesBefore);
     counters_.recordReadback(cmd);
     if (f.input.recordPose) {
         // Whether the GPU skipped the frame, for finishFrame(); then the flag is cleared, so that passes between

@@ -107,6 +107,9 @@ struct FrameReport {
     // was deferred and run again because its allocation overflowed (growCapacities).
     std::vector<std::string> growth;
     uint32_t deferredAttempts = 0;
+    // Compute dispatches the frame's submission recorded (its last attempt's; vk::BindingTable::dispatchesRecorded):
+    // the passes per frame, each a fixed cost whatever the map.
+    uint32_t dispatches = 0;
     MeshDelta delta;   // this frame's mesh changes when GpuVolumeConfig::trackDeltas (else empty)
     // The frame's pose was recorded on the GPU (FrameInput::recordPose) with "skip": nothing was fused, the map
     // is as it was, and the frame does not count (framesIntegrated(), frameNumber() unchanged).

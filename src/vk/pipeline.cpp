@@ -271,6 +271,7 @@ void ComputePipeline::bind(VkCommandBuffer cmd, const void* push) const {
 void ComputePipeline::dispatch(VkCommandBuffer cmd, const void* push, uint32_t x, uint32_t y, uint32_t z) const {
     bind(cmd, push);
     vkCmdDispatch(cmd, x, y, z);
+    ++table_.dispatchesRecorded_;
 }
 
 void ComputePipeline::dispatchItems(VkCommandBuffer cmd, const void* push, uint32_t items) const {
@@ -281,6 +282,7 @@ void ComputePipeline::dispatchItems(VkCommandBuffer cmd, const void* push, uint3
 void ComputePipeline::dispatchIndirect(VkCommandBuffer cmd, const void* push, const Buffer& args, VkDeviceSize offset) const {
     bind(cmd, push);
     vkCmdDispatchIndirect(cmd, args.handle(), offset);
+    ++table_.dispatchesRecorded_;
 }
 
 }  // namespace vkmesh::vk

@@ -65,6 +65,10 @@ public:
     void bindTexels(uint32_t binding, const Buffer& buffer, VkFormat format, uint32_t texelBytes) const;
     uint32_t pushConstantSize() const { return pushConstantSize_; }
     uint32_t features() const { return features_; }
+    // Dispatches recorded so far by the table's pipelines (direct and indirect, an indirect one that turns out
+    // empty included): the difference over a frame's recording is its pass count, which is a fixed cost per
+    // pass on every device (~26 us on lavapipe).
+    uint64_t dispatchesRecorded() const { return dispatchesRecorded_; }
 
 private:
     friend class ComputePipeline;
@@ -80,6 +84,7 @@ private:
     // Mutable: binding buffers and (un)registering pipelines does not change which numbering the table is.
     mutable std::map<uint32_t, Bound> bound_;
     mutable std::vector<ComputePipeline*> pipelines_;
+    mutable uint64_t dispatchesRecorded_ = 0;
 };
 
 class ComputePipeline {

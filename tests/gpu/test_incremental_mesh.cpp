@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <map>
 #include <memory>
 #include <set>
@@ -57,6 +58,27 @@ void integrateRoom(gpu::GpuVolume& volume, size_t frames, synth::PathKind path =
 TEST_F(GpuTest, RefinementIsOnByDefault) {
     EXPECT_TRUE(gpu::GpuVolumeConfig{}.refine);
     EXPECT_FALSE(cpu::MesherOptions{}.refine);
+}
+
+// A frame reports its pass count (FrameReport::dispatches, printed by gpubench): the same for every steady
+// frame of a volume, more with the incremental mesh than without, more again with refinement's sign passes.
+TEST_F(GpuTest, FramesCountTheirDispatches) {
+    auto dispatches = [&](gpu::MeshMode mode, bool refine) {
+        gpu::GpuVolumeConfig config = meshConfig(refine);
+        config.meshMode = mode;
+        gpu::GpuVolume volume(context(), config);
+        std::vector<gpu::FrameReport> reports;
+        integrateRoom(volume, 3, synth::PathKind::Orbit, 24, &reports);
+        EXPECT_EQ(reports[1].dispatches, reports[2].dispatches);
+        return reports[2].dispatches;
+    };
+    const uint32_t baseline = dispatches(gpu::MeshMode::Baseline, false);
+    const uint32_t incremental = dispatches(gpu::MeshMode::Incremental, false);
+    const uint32_t refined = dispatches(gpu::MeshMode::Incremental, true);
+    EXPECT_GE(baseline, 5u);   // allocation's four passes and fusion at least
+    EXPECT_GT(incremental, baseline + 5u);
+    EXPECT_GT(refined, incremental);
+    std::printf("dispatches per frame: baseline %u, incremental %u, refined %u\n", baseline, incremental, refined);
 }
 
 class IncrementalTest : public GpuTest, public ::testing::WithParamInterface<bool> {};
