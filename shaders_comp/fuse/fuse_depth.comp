@@ -92,7 +92,11 @@ void main() {
                 }
             }
             bool wasObserved = oldWeight >= params.minMeshWeight, isObserved = newWeight >= params.minMeshWeight;
-            if (changed && (wasObserved != isObserved || (isObserved && (oldSdf < 0.0) != (newSdf < 0.0)))) flipped |= 1u << k;
+            // With refinement a cube's type follows its corners' meshing signs, which decide_mesh_signs re-decides
+            // from the masks below and marks where they change: a raw sign flip (mostly noise that refinement
+            // absorbs) marks nothing here, only a change of the observed state does.
+            bool signFlipped = isObserved && (oldSdf < 0.0) != (newSdf < 0.0) && !volumeRefines();
+            if (changed && (wasObserved != isObserved || signFlipped)) flipped |= 1u << k;
             // With refinement the masks of the TSDF that decide_mesh_signs reads (a fresh block's are zero, as are
             // the old values it starts from).
             if (volumeRefines() && changed) maskChange |= (tsdfMaskBits(oldSdf, oldWeight) ^ tsdfMaskBits(newSdf, newWeight)) << (3u * k);

@@ -20,7 +20,8 @@ bool cornerFlipped(float oldSdf, float oldWeight, float newSdf, float newWeight,
 }
 
 FusionCount fuseBlock(ReferenceBlock& block, const BlockCoord& c, const DepthImage& depth, const gpu::FramePush& push,
-                      const FusionRule& rule, std::vector<std::array<int, 3>>* flipped, const ColorImage* color, bool deintegrate) {
+                      const FusionRule& rule, std::vector<std::array<int, 3>>* flipped, const ColorImage* color, bool deintegrate,
+                      std::vector<std::array<int, 3>>* observedFlipped) {
     const bool withColor = rule.colorFusion != ColorFusion::Off && color && !color->empty();
     const float fx = push.intrinsics[0], fy = push.intrinsics[1], cx = push.intrinsics[2], cy = push.intrinsics[3];
     const float truncation = rule.truncation;
@@ -66,6 +67,7 @@ FusionCount fuseBlock(ReferenceBlock& block, const BlockCoord& c, const DepthIma
         }
         // Corners not updated keep their values and never flip.
         if (flipped && cornerFlipped(oldSdf, oldWeight, newSdf, newWeight, rule)) flipped->push_back(corner);
+        if (observedFlipped && (oldWeight >= rule.minMeshWeight) != (newWeight >= rule.minMeshWeight)) observedFlipped->push_back(corner);
     }
     return count;
 }

@@ -38,10 +38,11 @@ struct FusionCount {
 // `color` is given and colour fusion is on, its colour at the same pixel folded into the corner's
 // (foldVoxelColor, core/voxel_color.h). With `deintegrate` the same s is subtracted and 1 taken from the
 // weight (a corner of weight 0 drops it), the colour folded out (unfoldVoxelColor).
-// Appends the corners that flipped (global voxel coordinates) to `flipped` in corner order.
+// Appends the corners that flipped (global voxel coordinates) to `flipped` in corner order, and those whose
+// observed state changed to `observedFlipped` (what fusion marks with refinement, fuse_depth.comp).
 FusionCount fuseBlock(ReferenceBlock& block, const BlockCoord& coord, const DepthImage& depth, const gpu::FramePush& push,
                       const FusionRule& rule, std::vector<std::array<int, 3>>* flipped, const ColorImage* color = nullptr,
-                      bool deintegrate = false);
+                      bool deintegrate = false, std::vector<std::array<int, 3>>* observedFlipped = nullptr);
 
 // For every flipped corner (global voxel coordinates), the 8 cubes around it (corner - o, o in {0,1}^3) in
 // whatever block they lie, for the blocks in `blocks`: the cubes whose MC type may have changed.

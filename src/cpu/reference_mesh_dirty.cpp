@@ -50,15 +50,17 @@ std::vector<ReferenceMesher::DirtyBlock> ReferenceMesher::markDirty(const Refere
     stats.dirtyBlocks = uint32_t(dirty.size());
 
     // The cubes to re-evaluate (the GPU's retype list): all of D, or the cubes around the corners the last
-    // integrate() flipped, with refinement those around the corners whose meshing sign changed, and the
-    // INCOMPLETE cubes (the GPU sets their retype bit again). The other cubes of D keep their type: with none of
-    // their corners changed neither their MC type nor their refined type can change.
+    // integrate() flipped (with refinement: around those whose observed state flipped, and around the corners
+    // whose meshing sign changed), and the INCOMPLETE cubes (the GPU sets their retype bit again). The other
+    // cubes of D keep their type: with none of their corners changed neither their MC type nor their refined
+    // type can change.
     for (DirtyBlock& b : dirty) {
         if (scope == RetypeScope::AllCubes) {
             b.retype.set();
         } else {
-            auto it = volume.retypeCubes().find(b.coord);
-            if (it != volume.retypeCubes().end()) b.retype = it->second;
+            const auto& marked = options_.refine ? volume.observedRetypeCubes() : volume.retypeCubes();
+            auto it = marked.find(b.coord);
+            if (it != marked.end()) b.retype = it->second;
             for (uint32_t cube = 0; cube < VOXELS_PER_BLOCK; ++cube)
                 if (b.state->cubeState[cube] & gpu::CUBE_INCOMPLETE) b.retype.set(cube);
         }

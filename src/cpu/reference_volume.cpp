@@ -47,10 +47,11 @@ ReferenceFrameStats ReferenceVolume::integrate(const DepthImage& depth, const In
     // 2. Fusion of every touched block; a new block starts at sdf 0, weight 0.
     const gpu::FramePush push = makeFramePush(intrinsics, cameraToWorld, params_, 1);
     lastFlipped_.clear();
+    lastObservedFlipped_.clear();
     for (const BlockCoord& c : touched) {
         auto [it, inserted] = blocks_.try_emplace(c);
         if (inserted) ++stats.blocksInserted;
-        const FusionCount count = fuseBlock(it->second, c, depth, push, fusionRule(), &lastFlipped_, color);
+        const FusionCount count = fuseBlock(it->second, c, depth, push, fusionRule(), &lastFlipped_, color, false, &lastObservedFlipped_);
         stats.updatedVoxels += count.updated;
         stats.observationsDropped += count.dropped;
     }
@@ -69,6 +70,7 @@ ReferenceFrameStats ReferenceVolume::integrate(const DepthImage& depth, const In
 
     // 4. The cubes around every flipped corner, in the blocks that exist now.
     retypeCubes_ = cubesAroundCorners(lastFlipped_, blocks_);
+    observedRetypeCubes_ = cubesAroundCorners(lastObservedFlipped_, blocks_);
     return stats;
 }
 
@@ -82,6 +84,7 @@ ReferenceFrameStats ReferenceVolume::deintegrate(const DepthImage& depth, const 
     std::vector<BlockCoord> touched = blocksTouchedBy(depth, intrinsics, cameraToWorld, &stats);
     const gpu::FramePush push = makeFramePush(intrinsics, cameraToWorld, params_, 1);
     lastFlipped_.clear();
+    lastObservedFlipped_.clear();
     std::vector<BlockCoord> found;
     for (const BlockCoord& c : touched) {
         auto it = blocks_.find(c);
@@ -89,7 +92,7 @@ ReferenceFrameStats ReferenceVolume::deintegrate(const DepthImage& depth, const 
             ++stats.blocksMissing;
             continue;
         }
-        const FusionCount count = fuseBlock(it->second, c, depth, push, fusionRule(), &lastFlipped_, color, true);
+        const FusionCount count = fuseBlock(it->second, c, depth, push, fusionRule(), &lastFlipped_, color, true, &lastObservedFlipped_);
         stats.updatedVoxels += count.updated;
         stats.observationsDropped += count.dropped;
         found.push_back(c);
@@ -98,6 +101,7 @@ ReferenceFrameStats ReferenceVolume::deintegrate(const DepthImage& depth, const 
     // The cubes around every flipped corner are marked while the emptied blocks still exist (the GPU marks them
     // in fusion, and frees the blocks after the mesh passes).
     retypeCubes_ = cubesAroundCorners(lastFlipped_, blocks_);
+    observedRetypeCubes_ = cubesAroundCorners(lastObservedFlipped_, blocks_);
     for (const BlockCoord& c : found) {
         const ReferenceBlock& b = blocks_.at(c);
         if (std::all_of(b.weight.begin(), b.weight.end(), [](float w) { return w == 0.0f; })) {

@@ -90,6 +90,9 @@ public:
     // corner, the 8 cubes around it (corner - o, o in {0,1}^3), in whatever block they lie, for the blocks that
     // exist after that call. Every such block is a dirty block of the frame (touched, or touched - o).
     const std::map<BlockCoord, CubeMask>& retypeCubes() const { return retypeCubes_; }
+    // The same for the corners whose observed state flipped: what fusion marks when the mesh is refined (a cube's
+    // refined type follows its corners' meshing signs, whose changes the mesher finds itself).
+    const std::map<BlockCoord, CubeMask>& observedRetypeCubes() const { return observedRetypeCubes_; }
     // Number of cubes in retypeCubes().
     size_t retypeCubeCount() const;
 
@@ -103,8 +106,8 @@ private:
     uint32_t frame_ = 0;                             // integrate() calls so far (the GPU's frame number)
     std::map<BlockCoord, uint32_t> lastTouchedFrame_;   // the GPU's hash stamp of each block
     std::vector<BlockCoord> lastTouched_;
-    std::vector<std::array<int, 3>> lastFlipped_;
-    std::map<BlockCoord, CubeMask> retypeCubes_;
+    std::vector<std::array<int, 3>> lastFlipped_, lastObservedFlipped_;
+    std::map<BlockCoord, CubeMask> retypeCubes_, observedRetypeCubes_;
 };
 
 }  // namespace vkmesh::cpu
