@@ -59,9 +59,9 @@ VKM_CONST HASH_MAX_PROBES = 64u;
 VKM_CONST RAY_MAX_BLOCKS = 32u;
 
 // ---- workgroup sizes -----------------------------------------------------------------------
-VKM_CONST WG_PIXELS_X = 8u;                // allocate_blocks: one invocation per tile of
-VKM_CONST WG_PIXELS_Y = 8u;                //   ALLOC_TILE x ALLOC_TILE sampled pixels (every allocationStride-th)
-VKM_CONST ALLOC_TILE = 4u;
+VKM_CONST WG_PIXELS_X = 8u;                // allocate_blocks: one invocation per column of
+VKM_CONST WG_PIXELS_Y = 8u;                //   ALLOC_COLUMN sampled pixels (every allocationStride-th)
+VKM_CONST ALLOC_COLUMN = 16u;
 VKM_CONST WG_LIST = 64u;                   // one invocation per list entry (assign, collect)
 VKM_CONST WG_BLOCK = 128u;                 // fuse / mesh: one workgroup per block, 4 voxels per invocation
 VKM_CONST VOXELS_PER_INVOCATION = 4u;      // VOXELS_PER_BLOCK / WG_BLOCK
@@ -283,7 +283,7 @@ struct Counters {
     // Corner updates fusion could not apply exactly: an observation of a corner already holding SDF_MAX_COUNT,
     // or a de-integration of a corner holding none (a map that does not hold the frame). Must stay 0.
     uint observationsDropped;
-    // Block visits of allocate_blocks that the same invocation had just made for a neighbouring pixel of its tile
+    // Block visits of allocate_blocks that the same invocation had just made for a neighbouring pixel of its column
     // (no hash request): blockRequests = blocksFound + blocksInserted + hashFull + outOfRange + outsideRadius
     // + blocksShared.
     uint blocksShared;

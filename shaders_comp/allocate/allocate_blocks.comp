@@ -45,7 +45,7 @@ void touchBlock(ivec3 cell) {
 }
 
 // The blocks this invocation touched last, most recent first. Neighbouring pixels' bands cross mostly the same
-// blocks, so one invocation walking a tile of pixels finds most of its visits here and touches the hash (a
+// blocks, so one invocation walking a column of pixels finds most of its visits here and touches the hash (a
 // scattered read costing ~6-8 ns on lavapipe, twice) only for the others. Eight named variables rather than an
 // array: llvmpipe keeps an array indexed at run time in scratch memory. The first cell is one no band reaches.
 ivec3 recent0 = ivec3(0x7FFFFFFF), recent1 = recent0, recent2 = recent0, recent3 = recent0,
@@ -121,15 +121,14 @@ void main() {
     uvec2 size = frameImageSize();
     uint valid = 0u, truncated = 0u;
     if (!frameSkipped()) {
-        // This invocation's tile of ALLOC_TILE x ALLOC_TILE sampled pixels, rows walked back and forth so
-        // that consecutive pixels are neighbours and share most blocks.
-        uvec2 firstSample = gl_GlobalInvocationID.xy * ALLOC_TILE;
-        for (uint ty = 0u; ty < ALLOC_TILE; ++ty) {
-            for (uint i = 0u; i < ALLOC_TILE; ++i) {
-                uint tx = (ty & 1u) == 0u ? i : ALLOC_TILE - 1u - i;
-                uvec2 pixel = (firstSample + uvec2(tx, ty)) * params.allocationStride;
-                if (all(lessThan(pixel, size))) walkPixel(pixel, size, valid, truncated);
-            }
+        // This invocation's column of ALLOC_COLUMN sampled pixels, top down: consecutive pixels are neighbours
+        // and share most blocks, while the lanes of a subgroup read neighbouring pixels of one row (on lavapipe
+        // a column is 0.67 x the allocation time of the same A/B against 0.80 x for a 4 x 4 tile walked back
+        // and forth, with 30 % more hash requests).
+        uvec2 firstSample = gl_GlobalInvocationID.xy * uvec2(1u, ALLOC_COLUMN);
+        for (uint row = 0u; row < ALLOC_COLUMN; ++row) {
+            uvec2 pixel = (firstSample + uvec2(0u, row)) * params.allocationStride;
+            if (all(lessThan(pixel, size))) walkPixel(pixel, size, valid, truncated);
         }
     }
     ADD_COUNTER(validPixels, valid);

@@ -97,8 +97,8 @@ TEST_P(AllocationTest, MatchesReferenceAndCountersConserve) {
         EXPECT_EQ(k.touchedCount, stats.touchedCount);
         EXPECT_EQ(k.blocksInserted, stats.blocksInserted);
         // Every visit of a block is found, inserted, shared (the same invocation had just visited it for a
-        // neighbouring pixel of its tile), or counted as a failure: nothing vanishes. Most visits are shared.
-        // The image is no whole number of tiles at either stride, so partial tiles are covered too.
+        // neighbouring pixel of its column), or counted as a failure: nothing vanishes. Most visits are shared.
+        // The image is no whole number of columns high at either stride, so partial columns are covered too.
         EXPECT_EQ(k.blockRequests, k.blocksFound + k.blocksInserted + k.hashFull + k.outOfRange + k.blocksShared);
         EXPECT_GT(k.blocksShared, k.blocksFound + k.blocksInserted);
         EXPECT_EQ(k.allocRequests, k.blocksInserted);

@@ -16,8 +16,8 @@ void AllocateBlocksStage::record(VkCommandBuffer cmd, const FramePush& push, con
                                  uint32_t pixelStride) const {
     uint32_t width = ((push.imageSize & 0xFFFFu) + pixelStride - 1) / pixelStride;
     uint32_t height = (((push.imageSize >> 16) & FRAME_HEIGHT_MASK) + pixelStride - 1) / pixelStride;   // not FRAME_HAS_COLOR
-    constexpr uint32_t tileX = WG_PIXELS_X * ALLOC_TILE, tileY = WG_PIXELS_Y * ALLOC_TILE;   // sampled pixels per workgroup
-    allocate_.dispatch(cmd, &push, (width + tileX - 1) / tileX, (height + tileY - 1) / tileY);
+    constexpr uint32_t groupHeight = WG_PIXELS_Y * ALLOC_COLUMN;   // sampled rows per workgroup
+    allocate_.dispatch(cmd, &push, (width + WG_PIXELS_X - 1) / WG_PIXELS_X, (height + groupHeight - 1) / groupHeight);
     vk::memoryBarrier(cmd);
     plan_.dispatch(cmd, &push, 1);
     vk::memoryBarrier(cmd);
