@@ -60,15 +60,18 @@ TEST(RecordingsFuse, EveryRecordingFusesToTheFolderMesh) {
     }
 
     // The RealSense bag has no poses: tracked, like the folder fused with --track without its ground truth (with
-    // it, tracking would start from the first true pose rather than the identity).
-    fs::copy(dir / "room", dir / "room_no_poses", fs::copy_options::recursive);
-    fs::remove(dir / "room_no_poses" / "groundtruth.txt");
-    r = runCli("fuse " + (dir / "room_no_poses").string() + common + " --track -o " + (dir / "folder_tracked.ply").string());
-    ASSERT_EQ(r.exitCode, 0) << r.err;
-    r = runCli("fuse " + (dir / "rec" / "realsense.bag").string() + common + " --track -o " + (dir / "realsense.ply").string());
-    ASSERT_EQ(r.exitCode, 0) << r.err;
-    EXPECT_TRUE(sameMesh(dir / "realsense.ply", dir / "folder_tracked.ply"))
-        << "the RealSense bag, tracked, gives another mesh than its folder tracked";
+    // it, tracking would start from the first true pose rather than the identity). Tracking draws the mesh, which
+    // lavapipe cannot do with 4-lane subgroups (the portability job): there the tracked part is left out.
+    if (test::lavapipeCannotDraw().empty()) {
+        fs::copy(dir / "room", dir / "room_no_poses", fs::copy_options::recursive);
+        fs::remove(dir / "room_no_poses" / "groundtruth.txt");
+        r = runCli("fuse " + (dir / "room_no_poses").string() + common + " --track -o " + (dir / "folder_tracked.ply").string());
+        ASSERT_EQ(r.exitCode, 0) << r.err;
+        r = runCli("fuse " + (dir / "rec" / "realsense.bag").string() + common + " --track -o " + (dir / "realsense.ply").string());
+        ASSERT_EQ(r.exitCode, 0) << r.err;
+        EXPECT_TRUE(sameMesh(dir / "realsense.ply", dir / "folder_tracked.ply"))
+            << "the RealSense bag, tracked, gives another mesh than its folder tracked";
+    }
     // Without --track it says how to fuse it.
     r = runCli("fuse " + (dir / "rec" / "realsense.bag").string() + common + " -o " + (dir / "x.ply").string());
     EXPECT_NE(r.exitCode, 0);
