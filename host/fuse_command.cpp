@@ -431,6 +431,7 @@ int runFuse(const FuseArgs& args) {
         perFrame["dirty_blocks"].push_back(report.counters.dirtyCount);
         perFrame["cubes_retyped"].push_back(report.counters.cubesRetyped);
         perFrame["triangles_created"].push_back(report.counters.trianglesCreated);
+        perFrame["vertices_moved"].push_back(report.counters.movedCount);
         hashFull += report.counters.hashFull;
         poolExhausted += report.counters.poolExhausted;
         touchedOverflow += report.counters.touchedCount > volume.config().touchedCapacity;

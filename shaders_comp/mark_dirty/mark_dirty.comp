@@ -1,7 +1,7 @@
 #version 460
 // Incremental mesh, pass 0 (docs/MESH.md): the dirty blocks of this frame are the touched blocks and the
-// existing blocks at T - o, o in {0,1}^3, whose border cubes read corners of T. One invocation per
-// touched entry; the first to stamp a block with this frame's number lists it.
+// existing blocks at T - o, o in {0,1}^3, whose border cubes read corners of T; all of them move their vertices
+// (markBlockDirty). One invocation per touched entry; the first to stamp a block with this frame's number lists it.
 #extension GL_GOOGLE_include_directive : require
 #include "structure/frame.glsl"
 #include "structure/block_hash.glsl"
@@ -19,14 +19,13 @@ void main() {
     ivec3 coord = blockCoords[block].xyz;
     // With refinement a corner's meshing sign reads the corners around it, so the corners whose sign may change
     // lie up to one block ahead too: then the dirty blocks are T + o, o in {-1, 0, 1}^3, and decide_mesh_signs
-    // re-decides all their corners.
+    // re-decides all their corners; the blocks ahead only retype (their vertices read no corner of T).
     uint n = volumeRefines() ? 27u : 8u;
     for (uint o = 0u; o < n; ++o) {
         ivec3 offset = volumeRefines() ? ivec3(int(o % 3u), int((o / 3u) % 3u), int(o / 9u)) - 1
                                            : ivec3(o & 1u, (o >> 1) & 1u, (o >> 2) & 1u);
         uint b = offset == ivec3(0) ? block : findBlock(coord - offset);
         if (b == NO_BLOCK) continue;
-        if (meshStamps[b] != frame.frameNumber && atomicExchange(meshStamps[b], frame.frameNumber) != frame.frameNumber)
-            dirtyList[atomicAdd(counters.dirtyCount, 1u)] = b;
+        markBlockDirty(b, all(greaterThanEqual(offset, ivec3(0))) ? MESH_STAMP_MOVES : MESH_STAMP_DIRTY);
     }
 }

@@ -16,6 +16,5 @@ void main() {
     uint pending = 0u;
     for (uint w = 0u; w < MASK_WORDS; ++w) pending |= retypeMask[b * MASK_WORDS + w];
     if (pending == 0u) return;
-    if (meshStamps[b] != frame.frameNumber && atomicExchange(meshStamps[b], frame.frameNumber) != frame.frameNumber)
-        dirtyList[atomicAdd(counters.dirtyCount, 1u)] = b;
+    markBlockDirty(b, MESH_STAMP_DIRTY);   // its corners did not change: only the waiting cubes are rebuilt
 }

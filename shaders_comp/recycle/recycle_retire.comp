@@ -53,8 +53,7 @@ void main() {
                                                    : ivec3(o & 1u, (o >> 1) & 1u, (o >> 2) & 1u);
                 uint b = offset == ivec3(0) ? block : findBlock(coord - offset);
                 if (b == NO_BLOCK) continue;
-                if (meshStamps[b] != frame.frameNumber && atomicExchange(meshStamps[b], frame.frameNumber) != frame.frameNumber)
-                    dirtyList[atomicAdd(counters.dirtyCount, 1u)] = b;
+                markBlockDirty(b, all(greaterThanEqual(offset, ivec3(0))) ? MESH_STAMP_MOVES : MESH_STAMP_DIRTY);
             }
         }
     }

@@ -41,7 +41,7 @@ CubeRef cubeRef(uint block, uint local) {
 // The same for a cube of any block: a block that is not dirty this frame (a vertex created this frame on an
 // edge owned by a clean block) has no valid cache, and its neighbours are looked up in the hash.
 CubeRef cubeRefAnyBlock(uint block, uint local) {
-    if (meshStamps[block] == frame.frameNumber) return cubeRef(block, local);
+    if (blockDirty(block)) return cubeRef(block, local);
     CubeRef r;
     r.cube = cubeOfLocal(local);
     ivec3 coord = blockCoords[block].xyz;

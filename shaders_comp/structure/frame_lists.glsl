@@ -10,6 +10,10 @@
 
 layout(std430, set = 0, binding = BINDING_TOUCHED) buffer Touched { uint touched[]; };
 layout(std430, set = 0, binding = BINDING_BLOCK_LIST) buffer BlockList { uint blockList[]; };
+// Per block: 2 frame + MESH_STAMP_* for the frame in which the block was last dirty (markBlockDirty). Raised with
+// atomicMax, so the marks of one frame combine in any order.
+const uint MESH_STAMP_DIRTY = 0u;        // re-meshed (retype and claim)
+const uint MESH_STAMP_MOVES = 1u;        // ... and its vertices move
 layout(std430, set = 0, binding = BINDING_MESH_STAMPS) coherent buffer MeshStamps { uint meshStamps[]; };
 layout(std430, set = 0, binding = BINDING_DIRTY_LIST) buffer DirtyList { uint dirtyList[]; };
 layout(std430, set = 0, binding = BINDING_RETYPE_MASK) coherent buffer RetypeMask { uint retypeMask[]; };
@@ -17,8 +21,8 @@ layout(std430, set = 0, binding = BINDING_RETYPE_LIST) buffer RetypeList { uint 
 layout(std430, set = 0, binding = BINDING_GARBAGE) buffer Garbage { uint garbage[]; };
 layout(std430, set = 0, binding = BINDING_MOVED_VERTICES) buffer MovedVertices { uint movedVertices[]; };
 // Per block, NEIGHBORS_PER_BLOCK entries: the block index at each offset in {-1, 0, 1}^3 from it (NO_BLOCK when
-// not allocated), written by cache_neighbors for every dirty block, and so valid for a block whose mesh stamp
-// is this frame's number (the hash does not change during the mesh passes). The mesh passes read a cube's
+// not allocated), written by cache_neighbors for every dirty block, and so valid for a block that is dirty this
+// frame (blockDirty) (the hash does not change during the mesh passes). The mesh passes read a cube's
 // neighbour blocks here instead of probing the hash up to 7 times per cube (26 with refinement; cubeRef,
 // cube_access.glsl), and their pipelines need no hash buffers.
 layout(std430, set = 0, binding = BINDING_BLOCK_NEIGHBORS) buffer BlockNeighbors { uint blockNeighbors[]; };
@@ -71,6 +75,22 @@ void toggleTsdfMasks(uint block, uint change) {
         uint local = lid + (c / 3u) * WG_BLOCK;
         if (((change >> c) & 1u) != 0u) atomicXor(meshSigns[tsdfMaskWord(block, MESH_SIGN_RAW + MASK_WORDS * (c % 3u), local)], 1u << (local % 32u));
     }
+}
+
+// ---- dirty blocks -----------------------------------------------------------------------------------------
+// A block is dirty when a cube of it may change type: its corners or, through its border cubes, a neighbour's
+// changed. Its vertices move only when the corners their positions, normals and colours read changed: those of
+// the edge's owner cube, i.e. the block or the blocks at +o, o in {0,1}^3 (MESH_STAMP_MOVES). With refinement the
+// dirty blocks reach one block further (a corner's meshing sign reads the corners around it), and those extra
+// blocks only retype: list_moved_vertices skips them (a third of the dirty blocks on the synthetic room).
+bool blockDirty(uint block) { return (meshStamps[block] >> 1) == frame.frameNumber; }
+bool blockMovesVertices(uint block) { return meshStamps[block] == 2u * frame.frameNumber + MESH_STAMP_MOVES; }
+
+// Marks `block` dirty this frame with `how` (MESH_STAMP_*); the first to mark it lists it.
+void markBlockDirty(uint block, uint how) {
+    uint stamp = 2u * frame.frameNumber + how;
+    if (meshStamps[block] >= stamp) return;   // already marked so (a plain read first: most marks repeat)
+    if (atomicMax(meshStamps[block], stamp) < 2u * frame.frameNumber) dirtyList[atomicAdd(counters.dirtyCount, 1u)] = block;
 }
 
 uint neighborIndex(ivec3 offset) { return uint((offset.x + 1) + 3 * (offset.y + 1) + 9 * (offset.z + 1)); }

@@ -1,14 +1,15 @@
 #version 460
 // Incremental mesh, pass 2a (paper §V.B): lists the vertices to move for move_vertices, visiting only what
-// exists. The dirty blocks' owned-slot masks (cube_mesh.glsl: one bit per edge slot that holds a vertex),
-// WORDS_PER_INVOCATION words of one axis per invocation (6 invocations per dirty block): it reserves room for
-// their set bits (one atomic per subgroup) and lists each of those slots. Then one invocation per vertex
-// created this frame (the GC candidates so far): a cube of a dirty block can claim an edge owned by a block
-// that is not dirty, whose mask is not visited, so such a vertex's slot is listed here (one whose owner block is
-// dirty already was). The cost follows the frame (the dirty blocks' mask words and set bits, the new vertices),
-// not the map. What is listed is the edge slot, not the vertex: move_vertices reads the vertex there, and the
-// loop over the bits loads nothing (measured on lavapipe, a load per bit inside this divergent loop cost more
-// than the scan of the whole heap it replaces on a small map). 8 words per invocation rather than 1: the
+// exists. The owned-slot masks (cube_mesh.glsl: one bit per edge slot that holds a vertex) of the dirty blocks
+// whose vertices move (blockMovesVertices: fused this frame or reading a fused block's corners; the blocks dirty
+// only because refinement reaches one block further list nothing), WORDS_PER_INVOCATION words of one axis per
+// invocation (6 invocations per dirty block): it reserves room for their set bits (one atomic per subgroup) and
+// lists each of those slots. Then one invocation per vertex created this frame (the GC candidates so far): a cube
+// can claim an edge owned by a block whose vertices do not move, whose mask is not visited, so such a vertex's
+// slot is listed here (one in a moving block already was). The cost follows the frame (the moving blocks' mask
+// words and set bits, the new vertices), not the map. What is listed is the edge slot, not the vertex:
+// move_vertices reads the vertex there, and the loop over the bits loads nothing (measured on lavapipe, a load per
+// bit inside this divergent loop cost more than the scan of the whole heap it replaces on a small map). 8 words per invocation rather than 1: the
 // per-invocation part (dirty list, reservation) is paid 8 times less (listing -25 % on the soak's first lap).
 #extension GL_GOOGLE_include_directive : require
 #include "structure/frame.glsl"
@@ -28,12 +29,13 @@ void main() {
     if (i < groups) {
         uint block = dirtyList[i / GROUPS_PER_BLOCK], first = (i % GROUPS_PER_BLOCK) * WORDS_PER_INVOCATION;
         base = block * OWNED_SLOT_WORDS + first;
-        for (uint w = 0u; w < WORDS_PER_INVOCATION; ++w) count += bitCount(ownedSlots[base + w]);
+        if (blockMovesVertices(block))
+            for (uint w = 0u; w < WORDS_PER_INVOCATION; ++w) count += bitCount(ownedSlots[base + w]);
         axis = first / MASK_WORDS;
         cubes = block * VOXELS_PER_BLOCK + (first % MASK_WORDS) * 32u;   // the cube of bit 0 of the first word
     } else if (i - groups < created) {
         uint slot = vertexOwner[gcCandidate(i - groups)];
-        if (meshStamps[slot / (VOXELS_PER_BLOCK * 3u)] != frame.frameNumber) single = slot;
+        if (!blockMovesVertices(slot / (VOXELS_PER_BLOCK * 3u))) single = slot;
     }
     uint at = reserveMovedVertices(single != EMPTY_SLOT ? 1u : count);   // uniform control flow
     if (single != EMPTY_SLOT) listMovedVertex(at, single);
