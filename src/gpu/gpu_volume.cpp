@@ -147,6 +147,7 @@ GpuVolume::GpuVolume(const vk::Context& context, const GpuVolumeConfig& config)
       recorder_(context),
       timer_(context) {
     const GpuVolumeConfig& c = config_;
+    timer_.setEnabled(c.timeStages);
     touchedFollowsPool_ = config.touchedCapacity == 0;
     // The depth image, then (when colour is fused) the colour image's RGBA8 words: one binding for both.
     const VkDeviceSize pixels = VkDeviceSize(c.imageWidth) * c.imageHeight;

@@ -95,6 +95,10 @@ struct GpuVolumeConfig {
     // full; a frame whose allocation overflowed is grown past and run again, so nothing is lost. Off: fixed
     // capacities, and what does not fit is reported (FrameReport::warnings) and skipped.
     bool growCapacities = true;
+    // GPU timestamps between the stages of every frame (FrameReport::stageMs, and the stage times of mesh
+    // extraction and export). Off: no timestamp is recorded and stageMs is empty; on lavapipe the ~8
+    // timestamps of a frame cost ~0.3-0.4 ms of its ~18 (`vkmesh fuse` turns them off with -q and no --stats).
+    bool timeStages = true;
 };
 
 // What one frame did, from the GPU's counters, and how long each stage took on the GPU.

@@ -119,11 +119,11 @@ StageTimer::~StageTimer() {
 
 void StageTimer::reset(VkCommandBuffer cmd) {
     names_.clear();
-    if (pool_) vkCmdResetQueryPool(cmd, pool_, 0, capacity_);
+    if (pool_ && enabled_) vkCmdResetQueryPool(cmd, pool_, 0, capacity_);
 }
 
 void StageTimer::mark(VkCommandBuffer cmd, const std::string& stageThatEnded) {
-    if (!pool_ || names_.size() >= capacity_) return;
+    if (!pool_ || !enabled_ || names_.size() >= capacity_) return;
     vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, pool_, static_cast<uint32_t>(names_.size()));
     names_.push_back(stageThatEnded);
 }

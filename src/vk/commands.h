@@ -84,6 +84,8 @@ public:
 
     void reset(VkCommandBuffer cmd);                     // at the start of the command buffer
     void mark(VkCommandBuffer cmd, const std::string& stageThatEnded);  // after a stage; first call = start
+    // Off: reset and mark record nothing and read() is empty (a timestamp costs ~50 µs on lavapipe).
+    void setEnabled(bool enabled) { enabled_ = enabled; }
     // (stage name, milliseconds) of the last submission; empty when the device has no timestamps.
     std::vector<std::pair<std::string, double>> read() const;
 
@@ -91,6 +93,7 @@ private:
     const Context& context_;
     VkQueryPool pool_ = VK_NULL_HANDLE;
     uint32_t capacity_ = 0;
+    bool enabled_ = true;
     std::vector<std::string> names_;
 };
 

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cstdlib>
 #include <fstream>
+#include <set>
 #include <sstream>
 #include <tuple>
 
@@ -98,6 +99,29 @@ TEST(Cli, FuseWritesMeshAndStats) {
     stats = nlohmann::json::parse(readText(out / "plain.json"));
     EXPECT_FALSE(stats["refine"].get<bool>());
     EXPECT_EQ(stats["mesh"]["baseline_vertices"].get<size_t>(), 3 * plain.triangles.size());
+
+    // --no-stage-times: no GPU timestamps, so no stage times in --stats or the summary; the same mesh.
+    r = runCli("fuse " + smallSequence().string() + " -o " + (out / "untimed.ply").string() + " --stats " +
+               (out / "untimed.json").string() + " --voxel 0.04 --no-stage-times");
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_NE(r.out.find("GPU stages not timed"), std::string::npos) << r.out;
+    stats = nlohmann::json::parse(readText(out / "untimed.json"));
+    EXPECT_TRUE(stats["gpu_ms_per_frame"].empty()) << stats["gpu_ms_per_frame"].dump();
+    EXPECT_GT(stats["wall_ms_per_frame"]["median"].get<double>(), 0.0);
+    // Compared as sets of triangles by their corner positions (the export's order is not fixed).
+    auto triangleSet = [](const Mesh& m) {
+        std::set<std::array<float, 9>> set;
+        for (const auto& t : m.triangles) {
+            std::array<float, 9> key{};
+            for (int j = 0; j < 3; ++j)
+                for (int a = 0; a < 3; ++a) key[size_t(3 * j + a)] = m.positions[t[j]][a];
+            set.insert(key);
+        }
+        return set;
+    };
+    const Mesh untimed = readPly(out / "untimed.ply");
+    EXPECT_EQ(untimed.triangles.size(), mesh.triangles.size());
+    EXPECT_TRUE(triangleSet(untimed) == triangleSet(mesh));
     fs::remove_all(out);
 }
 
