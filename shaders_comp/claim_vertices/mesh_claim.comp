@@ -44,11 +44,7 @@ void main() {
         uint p = (r.cube.x & 1u) | ((r.cube.y & 1u) << 1) | ((r.cube.z & 1u) << 2);   // block origins are even
         if (min(p, 7u - p) != PARITY_CLASS) return;
     }
-    float d[8];
-    bool present[8];
-    bool observed;
-    uint t = loadCube(r, d, present, observed);
-    uint mask = edgeMaskOf(meshType(r, t, observed));
+    uint mask = edgeMaskOf(listedCubeType(r));
     for (uint n = 0u; n < 12u && mask != 0u; ++n) {   // over the set bits only
         uint e = findLSB(mask);
         mask &= mask - 1u;

@@ -38,7 +38,6 @@ layout(std430, set = 0, binding = BINDING_MESH_SIGNS) coherent buffer MeshSigns 
 uint meshSignWord(uint block, uint local) { return block * MESH_SIGN_WORDS + local / 32u; }
 uint tsdfMaskWord(uint block, uint mask, uint local) { return block * MESH_SIGN_WORDS + mask + local / 32u; }
 
-bool meshSignInside(uint block, uint local) { return ((meshSigns[meshSignWord(block, local)] >> (local % 32u)) & 1u) != 0u; }
 
 // The TSDF mask bits of one corner: bit 0 sdf < 0, bit 1 observed and |sdf| < refineEpsilon, bit 2 observed.
 uint tsdfMaskBits(float sdf, float weight) {

@@ -25,12 +25,9 @@ void listCandidate(uint v) {
 
 void retype(uint id) {
     CubeRef r = cubeRef(id / VOXELS_PER_BLOCK, id % VOXELS_PER_BLOCK);
-    float d[8];
-    bool present[8];
-    bool observed;
     uint state = cubeState[id];
     uint oldType = state & CUBE_TYPE_MASK;
-    uint type = meshType(r, loadCube(r, d, present, observed), observed);
+    uint type = listedCubeType(r);
     if (type == oldType && (state & CUBE_INCOMPLETE) == 0u) return;
     ++retyped;
     uint chunk = state >> CUBE_CHUNK_SHIFT;   // chunk index + 1, 0 = none

@@ -11,13 +11,16 @@
 // r: the owner cube with its corners loaded into d/present; axis: which of its 3 edges.
 void moveVertex(uint v, CubeRef r, uint axis, float d[8], bool present[8]) {
     uint hi = 1u << axis;
+    // The far corner by selects, not d[hi]: a dynamically indexed local array is slow on llvmpipe (blockHolding).
+    float dHi = axis == 0u ? d[1] : (axis == 1u ? d[2] : d[4]);
+    bool presentHi = axis == 0u ? present[1] : (axis == 1u ? present[2] : present[4]);
     // Also edges whose corners share a sign: refinement may use them (the vertex then sits next to the flipped
     // corner, edgeCrossing). Every vertex gets a position, so a new one never keeps a stale one.
-    if (!present[0] || !present[hi]) return;
-    float s = edgeCrossing(d[0], d[hi], volumeRefines());
+    if (!present[0] || !presentHi) return;
+    float s = edgeCrossing(d[0], dHi, volumeRefines());
     vec3 p = edgeVertexPosition(r, 0u, axis, s);
-    vec3 n = vec3(0.0);
-    n[axis] = d[hi] - d[0] >= 0.0 ? 1.0 : -1.0;   // fallback: along the edge, toward free space
+    bvec3 along = equal(uvec3(axis), uvec3(0u, 1u, 2u));
+    vec3 n = mix(vec3(0.0), vec3(dHi - d[0] >= 0.0 ? 1.0 : -1.0), along);   // fallback: along the edge, toward free space
     bool all8 = true;
     for (uint c = 0u; c < 8u; ++c) all8 = all8 && present[c];
     if (all8) {
