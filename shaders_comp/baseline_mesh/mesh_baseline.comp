@@ -27,7 +27,7 @@ void main() {
     }
     barrier();
     CubeRef r;
-    for (uint i = 0u; i < 8u; ++i) r.nb[i] = neighbour[i];
+    [[unroll]] for (uint i = 0u; i < 8u; ++i) r.nb[i] = neighbour[i];
     r.origin = blockCoords[block].xyz * int(BLOCK_SIDE);
 
     uint dropped = 0u;
@@ -54,7 +54,7 @@ void main() {
                 uint e = triangleEdge(type, t);
                 uint lo = edgeLowCorner(e);
                 uint hi = lo | (1u << (e / 4u));
-                meshVertices[base + t] = vec4(edgeVertexPosition(r, lo, e / 4u, edgeCrossing(d[lo], d[hi], false)), 1.0);
+                meshVertices[base + t] = vec4(edgeVertexPosition(r, lo, e / 4u, edgeCrossing(cornerValue(d, lo), cornerValue(d, hi), false)), 1.0);
             }
         }
     }

@@ -35,7 +35,7 @@ void main() {
         vec4 worldToCamera[3] = framePose.worldToCamera;   // read once, not per corner
         uint flipped = 0u;   // which of this invocation's corners flipped (marked after the loop, which stays lean)
         uint maskChange = 0u;    // with refinement: bits 3k..3k+2, how corner k's TSDF masks change (tsdfMaskBits)
-        for (uint k = 0u; k < VOXELS_PER_INVOCATION; ++k) {
+        [[unroll]] for (uint k = 0u; k < VOXELS_PER_INVOCATION; ++k) {
             uint local = gl_LocalInvocationIndex + k * WG_BLOCK;
             uvec3 l = uvec3(local % BLOCK_SIDE, (local / BLOCK_SIDE) % BLOCK_SIDE, local / (BLOCK_SIDE * BLOCK_SIDE));
             uint v = block * VOXELS_PER_BLOCK + local;

@@ -20,7 +20,7 @@ void freeBlockIfEmpty(uint block) {
     if (gl_LocalInvocationIndex == 0u) { weightLeft = 0u; meshLeft = 0u; }
     barrier();
     bool weight = false, mesh = false;
-    for (uint k = 0u; k < VOXELS_PER_INVOCATION; ++k) {
+    [[unroll]] for (uint k = 0u; k < VOXELS_PER_INVOCATION; ++k) {
         uint v = block * VOXELS_PER_BLOCK + gl_LocalInvocationIndex + k * WG_BLOCK;
         weight = weight || voxelWeight[v] != 0.0;
         mesh = mesh || cubeState[v] != 0u || edgeVertexX[v] != EMPTY_SLOT || edgeVertexY[v] != EMPTY_SLOT ||
@@ -37,7 +37,7 @@ void freeBlockIfEmpty(uint block) {
     }
     // A free block is all zero (its weights already are): a block handed out again, or fused without the
     // FRESH flag after a deferred frame (docs/MESH.md, "Capacities"), starts like a never-used one.
-    for (uint k = 0u; k < VOXELS_PER_INVOCATION; ++k) voxelSdfSum[block * VOXELS_PER_BLOCK + gl_LocalInvocationIndex + k * WG_BLOCK] = 0;
+    [[unroll]] for (uint k = 0u; k < VOXELS_PER_INVOCATION; ++k) voxelSdfSum[block * VOXELS_PER_BLOCK + gl_LocalInvocationIndex + k * WG_BLOCK] = 0;
     if (gl_LocalInvocationIndex < MASK_WORDS) retypeMask[block * MASK_WORDS + gl_LocalInvocationIndex] = 0u;
     // Meshing signs and TSDF masks: all corners unobserved and d = 0, so outside, not near, not observed.
     if (gl_LocalInvocationIndex < MESH_SIGN_WORDS) meshSigns[block * MESH_SIGN_WORDS + gl_LocalInvocationIndex] = 0u;

@@ -23,7 +23,7 @@ void main() {
     if (!retire && !starve) return;             // uniform over the workgroup
     uint flipped = 0u;
     uint maskChange = 0u;   // with refinement: bits 3k..3k+2, how corner k's TSDF masks change (tsdfMaskBits)
-    for (uint k = 0u; k < VOXELS_PER_INVOCATION; ++k) {
+    [[unroll]] for (uint k = 0u; k < VOXELS_PER_INVOCATION; ++k) {
         uint local = gl_LocalInvocationIndex + k * WG_BLOCK;
         uint v = block * VOXELS_PER_BLOCK + local;
         float oldWeight = voxelWeight[v];

@@ -27,9 +27,11 @@ inline int bitCount(uint x) { return std::popcount(x); }
 inline int findLSB(uint x) { return x == 0u ? -1 : std::countr_zero(x); }
 #define SW_FN inline
 #define SW_OUT(T) T&
+#define SW_UNROLL
 #else
 #define SW_FN
 #define SW_OUT(T) out T
+#define SW_UNROLL [[unroll]]   // llvmpipe does not unroll short fixed loops itself (frame.glsl)
 #endif
 
 // A word of 4 rows with every corner replaced by its neighbour at dx along x: `left` and `right` are the same
@@ -90,7 +92,7 @@ SW_FN uint swAtMostTwo(uint e1, uint e2, uint e3, uint e4, uint e5, uint e6) {
 // types; those come in complementary pairs, so the distance to a pair {r, ~r} is min(n, 8 - n), n = bitCount(t ^ r).
 SW_FN int swRegularDistance(uint t) {
     int best = 8;
-    for (uint k = 0u; k < 4u; ++k) {
+    SW_UNROLL for (uint k = 0u; k < 4u; ++k) {
         uint r = k == 0u ? 0u : (k == 1u ? 0x0Fu : (k == 2u ? 0x33u : 0x55u));
         int n = bitCount(t ^ r);
         n = n < 8 - n ? n : 8 - n;
@@ -110,7 +112,7 @@ SW_FN uint swCubeType(uint win, uint o) {
 // Whether a near corner with an all-observed window flips (refinedCornerInside's rules 2 and 3).
 SW_FN bool swFlips(uint win) {
     int keep = 0, flip = 0;
-    for (uint o = 0u; o < 8u; ++o) {
+    SW_UNROLL for (uint o = 0u; o < 8u; ++o) {
         uint t = swCubeType(win, o);
         keep += swRegularDistance(t);
         flip += swRegularDistance(t ^ (1u << o));
@@ -182,6 +184,7 @@ SW_FN uint swDecideWord(uint block, uint word, SW_OUT(uint) evaluated) {
 
 #undef SW_FN
 #undef SW_OUT
+#undef SW_UNROLL
 #ifdef __cplusplus
 }  // namespace vkmesh::gpu
 #endif

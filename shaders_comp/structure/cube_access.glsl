@@ -31,7 +31,7 @@ CubeRef cubeRef(uint block, uint local) {
     r.origin = blockCoords[block].xyz * int(BLOCK_SIDE);
     uvec3 far = uvec3(equal(r.cube, uvec3(BLOCK_SIDE - 1u)));
     r.nb[0] = block;
-    for (uint i = 1u; i < 8u; ++i) {
+    [[unroll]] for (uint i = 1u; i < 8u; ++i) {
         uvec3 o = cornerOffset(i);
         r.nb[i] = all(lessThanEqual(o, far)) ? cachedNeighbor(block, ivec3(o)) : NO_BLOCK;
     }
@@ -48,7 +48,7 @@ CubeRef cubeRefAnyBlock(uint block, uint local) {
     r.origin = coord * int(BLOCK_SIDE);
     uvec3 far = uvec3(equal(r.cube, uvec3(BLOCK_SIDE - 1u)));
     r.nb[0] = block;
-    for (uint i = 1u; i < 8u; ++i) {
+    [[unroll]] for (uint i = 1u; i < 8u; ++i) {
         uvec3 o = cornerOffset(i);
         r.nb[i] = all(lessThanEqual(o, far)) ? findBlock(coord + ivec3(o)) : NO_BLOCK;
     }
@@ -67,12 +67,20 @@ uint blockHolding(CubeRef r, uvec3 g, out uvec3 local) {
     return wrap.z ? y1 : y0;
 }
 
+// d[c] for a c known only at run time, by selects (as blockHolding).
+float cornerValue(float d[8], uint c) {
+    bool x = (c & 1u) != 0u, y = (c & 2u) != 0u;
+    float z0 = y ? (x ? d[3] : d[2]) : (x ? d[1] : d[0]);
+    float z1 = y ? (x ? d[7] : d[6]) : (x ? d[5] : d[4]);
+    return (c & 4u) != 0u ? z1 : z0;
+}
+
 // The 8 corner values of a cube (present[c]: the corner's block exists) and its MC type; `observed` is
 // false (type 0) unless every corner's block exists and every corner has weight >= minMeshWeight.
 uint loadCube(CubeRef r, out float d[8], out bool present[8], out bool observed) {
     uint type = 0u;
     observed = true;
-    for (uint c = 0u; c < 8u; ++c) {
+    [[unroll]] for (uint c = 0u; c < 8u; ++c) {
         uvec3 local;
         uint nb = blockHolding(r, r.cube + cornerOffset(c), local);
         d[c] = 0.0;

@@ -6,7 +6,11 @@
 // Rules that hold in every stage (see ../shared/docs/lavapipe.md):
 //   - no invocation waits for another; every loop has a static bound far below 65,535 iterations;
 //   - what one invocation publishes with an atomic, others read in the NEXT dispatch;
-//   - float expressions that the CPU reference must reproduce bit for bit are `precise`.
+//   - float expressions that the CPU reference must reproduce bit for bit are `precise`;
+//   - no local array or vector is indexed by a value known only at run time (select instead: blockHolding,
+//     cornerValue), and short fixed loops carry [[unroll]]: llvmpipe unrolls nothing itself, and a rolled loop
+//     over a cube's 8 corners or a block's 4 corners per invocation indexes its arrays at run time, which costs
+//     per-lane scratch memory or branch ladders (docs/RESULTS.md, issue 33: fusion -11 %, meshing -15 %).
 #ifndef VKMESH_FRAME_GLSL
 #define VKMESH_FRAME_GLSL
 // The 32-bit hash variant (VKMESH_HASH32, docs/HASH.md) uses no 64-bit type at all: it runs on devices
@@ -18,6 +22,7 @@
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
 #extension GL_KHR_shader_subgroup_ballot : require
+#extension GL_EXT_control_flow_attributes : require   // [[unroll]] (the rules above)
 
 #include "shared_layout.h"
 #include "structure/rigid.glsl"

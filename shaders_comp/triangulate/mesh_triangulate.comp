@@ -37,7 +37,7 @@ void retype(uint id) {
         uint base = (chunk - 1u) * CHUNK_WORDS;
         for (uint t = 0u; t < triangleCountOf(oldType); ++t) {
             if (chunkTriangles[base + 3u * t] == INVALID_INDEX) continue;
-            for (uint j = 0u; j < 3u; ++j) {
+            [[unroll]] for (uint j = 0u; j < 3u; ++j) {
                 uint v = chunkTriangles[base + 3u * t + j];
                 if (atomicAdd(vertices[v].refcount, 0xFFFFFFFFu) == 1u) listCandidate(v);
             }
@@ -71,7 +71,7 @@ void retype(uint id) {
             for (uint t = 0u; t < count; ++t) {
                 uint tri[3];
                 bool ok = true;
-                for (uint j = 0u; j < 3u; ++j) {
+                [[unroll]] for (uint j = 0u; j < 3u; ++j) {
                     uint slot = edgeSlot(r, triangleEdge(type, 3u * t + j));
                     tri[j] = slot == NO_BLOCK ? EMPTY_SLOT : edgeLoad(slot);
                     ok = ok && tri[j] < CLAIMED_SLOT;
@@ -82,7 +82,7 @@ void retype(uint id) {
                     ++invalid;
                     continue;
                 }
-                for (uint j = 0u; j < 3u; ++j) {
+                [[unroll]] for (uint j = 0u; j < 3u; ++j) {
                     chunkTriangles[base + 3u * t + j] = tri[j];
                     atomicAdd(vertices[tri[j]].refcount, 1u);
                 }

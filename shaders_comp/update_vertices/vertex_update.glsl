@@ -22,10 +22,10 @@ void moveVertex(uint v, CubeRef r, uint axis, float d[8], bool present[8]) {
     bvec3 along = equal(uvec3(axis), uvec3(0u, 1u, 2u));
     vec3 n = mix(vec3(0.0), vec3(dHi - d[0] >= 0.0 ? 1.0 : -1.0), along);   // fallback: along the edge, toward free space
     bool all8 = true;
-    for (uint c = 0u; c < 8u; ++c) all8 = all8 && present[c];
+    [[unroll]] for (uint c = 0u; c < 8u; ++c) all8 = all8 && present[c];
     if (all8) {
         vec3 g = vec3(0.0);
-        for (uint c = 0u; c < 8u; ++c) g += mix(vec3(-d[c]), vec3(d[c]), bvec3(cornerOffset(c)));
+        [[unroll]] for (uint c = 0u; c < 8u; ++c) g += mix(vec3(-d[c]), vec3(d[c]), bvec3(cornerOffset(c)));
         if (dot(g, g) > 0.0) n = normalize(g);
     }
     vertices[v].px = p.x;
