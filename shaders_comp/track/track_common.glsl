@@ -7,6 +7,7 @@
 #ifndef VKMESH_HASH32
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require   // shared_layout.h declares 64-bit constants
 #endif
+#extension GL_EXT_control_flow_attributes : require   // [[unroll]] (structure/frame.glsl)
 
 #include "shared_layout.h"
 #include "structure/rigid.glsl"

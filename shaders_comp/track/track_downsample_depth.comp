@@ -12,16 +12,16 @@ void main() {
     uvec2 pixel = gl_GlobalInvocationID.xy;
     if (pixel.x >= size.x || pixel.y >= size.y) return;
     float samples[4];
-    for (uint k = 0u; k < 4u; ++k) {
+    [[unroll]] for (uint k = 0u; k < 4u; ++k) {
         uvec2 q = pixel * 2u + uvec2(k & 1u, k >> 1u);
         samples[k] = depthPyramid[pass.finerOffset + q.y * pass.finerWidth + q.x];
     }
     float reference = 0.0;
-    for (uint k = 0u; k < 4u; ++k)
+    [[unroll]] for (uint k = 0u; k < 4u; ++k)
         if (reference == 0.0 && samples[k] > 0.0) reference = samples[k];
     precise float sum = 0.0;
     float count = 0.0;
-    for (uint k = 0u; k < 4u; ++k) {
+    [[unroll]] for (uint k = 0u; k < 4u; ++k) {
         if (samples[k] > 0.0 && abs(samples[k] - reference) <= 3.0 * track.filterDepthSigma) {
             sum += samples[k];
             count += 1.0;
@@ -32,7 +32,7 @@ void main() {
     if (track.frameHasColor != 0u) {
         precise float intensity = 0.0;
         float have = 0.0;
-        for (uint k = 0u; k < 4u; ++k) {
+        [[unroll]] for (uint k = 0u; k < 4u; ++k) {
             uvec2 q = pixel * 2u + uvec2(k & 1u, k >> 1u);
             float i = intensityPyramid[pass.finerOffset + q.y * pass.finerWidth + q.x];
             if (i >= 0.0) intensity += i, have += 1.0;

@@ -12,7 +12,7 @@ void main() {
     uvec2 pixel = gl_GlobalInvocationID.xy;
     if (pixel.x >= size.x || pixel.y >= size.y) return;
     vec4 reference = vec4(0.0);
-    for (uint k = 0u; k < 4u; ++k) {
+    [[unroll]] for (uint k = 0u; k < 4u; ++k) {
         uvec2 q = pixel * 2u + uvec2(k & 1u, k >> 1u);
         vec4 p = modelPositions[pass.finerOffset + q.y * pass.finerWidth + q.x];
         if (reference.w == 0.0 && p.w != 0.0) reference = p;
@@ -21,7 +21,7 @@ void main() {
     precise vec3 normal = vec3(0.0);
     precise float intensity = 0.0;
     float count = 0.0, coloured = 0.0;
-    for (uint k = 0u; k < 4u; ++k) {
+    [[unroll]] for (uint k = 0u; k < 4u; ++k) {
         uvec2 q = pixel * 2u + uvec2(k & 1u, k >> 1u);
         uint fine = pass.finerOffset + q.y * pass.finerWidth + q.x;
         vec4 p = modelPositions[fine];
