@@ -14,6 +14,7 @@
 #include "structure/voxel_color.glsl"
 
 layout(local_size_x = WG_BLOCK) in;
+layout(constant_id = 0) const uint FUSE_DIRECTION = FUSE_BY_FRAME;   // shared_layout.h
 
 // Corners whose sign or observed state flips mark the cubes around them (markCornerRetype, structure/retype_marks.glsl).
 
@@ -23,7 +24,7 @@ void main() {
     uint fused = 0u;
     // De-integration: allocation listed only blocks already in the map (a fresh one, a key that had no block,
     // holds nothing to take out: its corners count as dropped and it is cleared like any fresh block).
-    bool removing = framePose.deintegrate != 0u;
+    bool removing = FUSE_DIRECTION == FUSE_BY_FRAME ? framePose.deintegrate != 0u : FUSE_DIRECTION == FUSE_DEINTEGRATE;
     if (entry != NO_BLOCK) {
         fused = gl_LocalInvocationIndex == 0u ? 1u : 0u;
         bool fresh = (entry & FRESH_BLOCK) != 0u;

@@ -93,7 +93,7 @@ void GpuVolume::recordFrame(VkCommandBuffer cmd, const FramePush& push, bool reb
     deferFrame_.dispatch(cmd, &push, 1);
     vk::memoryBarrier(cmd);
     timer_.mark(cmd, "allocate");
-    fuse_.record(cmd, push, counters_);
+    fuse_.record(cmd, push, counters_, inFlight_->input.deintegrate);
     timer_.mark(cmd, "fuse");
     if (incremental) {
         markDirty_.recordTouched(cmd, push, counters_);

@@ -3,6 +3,8 @@
 //   reads  touched list (allocate), depth image, block coords    writes voxel sdf/weight, retype masks
 #pragma once
 
+#include <memory>
+
 #include "gpu/structure/counter_buffer.h"
 #include "vk/pipeline.h"
 
@@ -11,11 +13,15 @@ namespace vkmesh::gpu {
 class FuseDepthStage {
 public:
     FuseDepthStage(const vk::Context& context, const vk::BindingTable& table);
-    // Over Counters::blockDispatch (one workgroup per touched block, sized by plan_frame).
-    void record(VkCommandBuffer cmd, const FramePush& push, const CounterBuffer& counters) const;
+    // Over Counters::blockDispatch (one workgroup per touched block, sized by plan_frame). `deintegrate`: the
+    // frame's FramePoseGpu::deintegrate (each way has its own pipeline: shared_layout.h, FUSE_INTEGRATE).
+    void record(VkCommandBuffer cmd, const FramePush& push, const CounterBuffer& counters, bool deintegrate) const;
 
 private:
-    vk::ComputePipeline fuse_;
+    const vk::Context& context_;
+    const vk::BindingTable& table_;
+    vk::ComputePipeline integrate_;
+    mutable std::unique_ptr<vk::ComputePipeline> deintegrate_;   // made when a frame first de-integrates
 };
 
 }  // namespace vkmesh::gpu
