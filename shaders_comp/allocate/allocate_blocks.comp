@@ -13,13 +13,14 @@
 #include "structure/depth_input.glsl"
 
 layout(local_size_x = WG_PIXELS_X, local_size_y = WG_PIXELS_Y) in;
+layout(constant_id = 0) const uint ALLOCATE_DIRECTION = FUSE_BY_FRAME;   // shared_layout.h, FUSE_INTEGRATE
 
 uint requests = 0u, found = 0u, inserted = 0u, full = 0u, outOfRange = 0u, outsideRadius = 0u, repeated = 0u;
 
 // Claims `cell`'s key without waiting on anyone (structure/block_hash.glsl). Returns the slot, or
 // NO_BLOCK if none was free within the probe bound.
 uint insertKey(ivec3 cell) {
-    if (framePose.deintegrate != 0u) {
+    if (ALLOCATE_DIRECTION == FUSE_BY_FRAME ? framePose.deintegrate != 0u : ALLOCATE_DIRECTION == FUSE_DEINTEGRATE) {
         uint slot = findSlot(cell);
         if (slot != NO_BLOCK) ++found;
         return slot;

@@ -89,7 +89,7 @@ void GpuVolume::recordFrame(VkCommandBuffer cmd, const FramePush& push, bool reb
         recordRebuildHash(cmd, push);
         timer_.mark(cmd, "rehash");
     }
-    allocate_.record(cmd, push, counters_.buffer(), uint32_t(config_.params.allocationStride));
+    allocate_.record(cmd, push, counters_.buffer(), uint32_t(config_.params.allocationStride), inFlight_->input.deintegrate);
     deferFrame_.dispatch(cmd, &push, 1);
     vk::memoryBarrier(cmd);
     timer_.mark(cmd, "allocate");

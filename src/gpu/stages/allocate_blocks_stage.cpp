@@ -7,17 +7,21 @@
 namespace vkmesh::gpu {
 
 AllocateBlocksStage::AllocateBlocksStage(const vk::Context& context, const vk::BindingTable& layout)
-    : allocate_(context, layout, "allocate_blocks"),
+    : context_(context),
+      layout_(layout),
+      allocate_(context, layout, "allocate_blocks", FUSE_INTEGRATE),
       plan_(context, layout, "plan_frame"),
       assign_(context, layout, "assign_blocks"),
       commit_(context, layout, "commit_allocation") {}
 
 void AllocateBlocksStage::record(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters,
-                                 uint32_t pixelStride) const {
+                                 uint32_t pixelStride, bool deintegrate) const {
+    if (deintegrate && !findForDeintegration_)
+        findForDeintegration_ = std::make_unique<vk::ComputePipeline>(context_, layout_, "allocate_blocks", FUSE_DEINTEGRATE);
     uint32_t width = ((push.imageSize & 0xFFFFu) + pixelStride - 1) / pixelStride;
     uint32_t height = (((push.imageSize >> 16) & FRAME_HEIGHT_MASK) + pixelStride - 1) / pixelStride;   // not FRAME_HAS_COLOR
     constexpr uint32_t groupHeight = WG_PIXELS_Y * ALLOC_COLUMN;   // sampled rows per workgroup
-    allocate_.dispatch(cmd, &push, (width + WG_PIXELS_X - 1) / WG_PIXELS_X, (height + groupHeight - 1) / groupHeight);
+    (deintegrate ? *findForDeintegration_ : allocate_).dispatch(cmd, &push, (width + WG_PIXELS_X - 1) / WG_PIXELS_X, (height + groupHeight - 1) / groupHeight);
     vk::memoryBarrier(cmd);
     plan_.dispatch(cmd, &push, 1);
     vk::memoryBarrier(cmd);

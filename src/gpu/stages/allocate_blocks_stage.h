@@ -1,6 +1,8 @@
 // Stage: block allocation (shaders_comp/allocate/), the first half of paper §V.A.
 #pragma once
 
+#include <memory>
+
 #include "gpu/layout.h"
 #include "vk/buffer.h"
 #include "vk/context.h"
@@ -17,10 +19,15 @@ namespace vkmesh::gpu {
 class AllocateBlocksStage {
 public:
     AllocateBlocksStage(const vk::Context& context, const vk::BindingTable& layout);
-    void record(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters, uint32_t pixelStride) const;
+    // `deintegrate`: the frame's FramePoseGpu::deintegrate (each way has its own allocate_blocks pipeline:
+    // shared_layout.h, FUSE_INTEGRATE).
+    void record(VkCommandBuffer cmd, const FramePush& push, const vk::Buffer& counters, uint32_t pixelStride, bool deintegrate) const;
 
 private:
+    const vk::Context& context_;
+    const vk::BindingTable& layout_;
     vk::ComputePipeline allocate_, plan_, assign_, commit_;
+    mutable std::unique_ptr<vk::ComputePipeline> findForDeintegration_;   // made when a frame first de-integrates
 };
 
 }  // namespace vkmesh::gpu
