@@ -60,6 +60,7 @@ struct FuseArgs {
     bool growHeaps = false;
     bool quiet = false;
     bool noStageTimes = false;
+    bool passTimes = false;
     // Pictures while fusing (drawn from the GPU mesh buffers) and the mesh-delta stream.
     uint32_t renderEvery = 0;
     std::string renderDir;
@@ -216,6 +217,8 @@ int runFuse(const FuseArgs& args) {
     if (rendering && args.renderDir.empty()) throw Error("--render-every needs --render-dir");
     config.publishMesh = rendering || args.track;   // tracking draws the mesh fused so far
     config.timeStages = !args.noStageTimes;
+    if (args.passTimes && args.noStageTimes) throw Error("--pass-times times the passes inside the stages: it cannot go with --no-stage-times");
+    config.timePasses = args.passTimes;
     config.trackDeltas = !args.deltasPath.empty() || serving;
     double loadMs = 0;
     std::unique_ptr<gpu::GpuVolume> volumeOwner;
@@ -306,7 +309,7 @@ int runFuse(const FuseArgs& args) {
     Eigen::Vector3f seenMin = Eigen::Vector3f::Constant(std::numeric_limits<float>::max()), seenMax = -seenMin;
 
     const bool tty = isatty(STDERR_FILENO);
-    std::map<std::string, std::vector<double>> stageMs, perFrame;
+    std::map<std::string, std::vector<double>> stageMs, perFrame, passMs;
     std::vector<double> frameWallMs;
     size_t integrated = 0, skipped = 0, framesWithColor = 0;
     uint64_t hashFull = 0, poolExhausted = 0, touchedOverflow = 0;
@@ -425,6 +428,9 @@ int runFuse(const FuseArgs& args) {
             if (name.rfind("mesh_", 0) == 0) meshMs += ms;
         }
         if (config.meshMode == gpu::MeshMode::Incremental && !report.stageMs.empty()) stageMs["mesh_total"].push_back(meshMs);
+        std::map<std::string, double> framePassMs;   // a pass recorded more than once in the frame: its sum
+        for (const auto& [name, ms] : report.passMs) framePassMs[name] += ms;
+        for (const auto& [name, ms] : framePassMs) passMs[name].push_back(ms);
         perFrame["touched_blocks"].push_back(report.counters.touchedCount);
         perFrame["dispatches"].push_back(report.dispatches);
         // Allocation's work: blocks the band walks visited, and the visits that had to ask the hash.
@@ -619,6 +625,11 @@ int runFuse(const FuseArgs& args) {
     json gpuMs = json::object();
     for (const auto& [name, values] : stageMs) gpuMs[name] = statsOf(values);
     stats["gpu_ms_per_frame"] = gpuMs;
+    if (args.passTimes) {
+        json perPass = json::object();
+        for (const auto& [name, values] : passMs) perPass[name] = statsOf(values);
+        stats["gpu_ms_per_pass"] = perPass;
+    }
     if (stageMs.count("mesh_total")) {
         // The end of the sequence: the mesh is largest there (the peer's full extraction is timed there too).
         const auto& m = stageMs["mesh_total"];
@@ -824,6 +835,9 @@ Run addFuseCommand(CLI::App& app) {
     cmd->add_flag("--no-stage-times", args->noStageTimes,
                   "record no GPU timestamps between stages (~0.3 ms per frame on lavapipe); the summary and --stats then "
                   "have no GPU stage times, only wall times");
+    cmd->add_flag("--pass-times", args->passTimes,
+                  "also a GPU timestamp after every pass (compute dispatch) of a frame: --stats gains gpu_ms_per_pass, each "
+                  "pass's time per frame by shader name (each timestamp costs ~50 us on lavapipe: for profiling)");
     cmd->add_option("--render-every", args->renderEvery, "write a picture of the mesh every N frames (drawn from the GPU buffers)")
         ->check(CLI::PositiveNumber);
     cmd->add_option("--render-dir", args->renderDir, "folder for the --render-every pictures (frame_NNNNNN.png)");

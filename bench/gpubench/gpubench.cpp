@@ -82,6 +82,7 @@ struct Options {
     std::string trackSolve = "both";
     bool correct = false;      // after each run, every frame re-fused at a moved pose (docs/CORRECTION.md)
     bool quick = false;
+    bool passTimes = false;    // a timestamp after every pass as well
     std::string jsonPath;
 };
 
@@ -175,6 +176,9 @@ struct VoxelRun {
     std::map<std::string, std::vector<double>> stageMs;
     std::vector<double> gpuFrameMs, meshMs, wallMs;
     std::vector<double> dispatches;                // compute dispatches (passes) each frame recorded
+    // --pass-times: each pass's GPU ms per frame (a pass recorded twice in a frame: the sum), by shader name
+    std::vector<std::string> passOrder;
+    std::map<std::string, std::vector<double>> passMs;
     vkmesh::gpu::Counters last{};                  // counters after the last frame of the last repeat
     size_t growths = 0, deferredAttempts = 0, warnings = 0;
     size_t gpuBytes = 0;
@@ -194,7 +198,7 @@ struct VoxelRun {
     size_t observationsDropped = 0;
 };
 
-vkmesh::gpu::GpuVolumeConfig volumeConfig(double voxel, bool publish) {
+vkmesh::gpu::GpuVolumeConfig volumeConfig(double voxel, bool publish, bool passTimes) {
     // The library's defaults are `vkmesh fuse`'s (host/cli_options.h takes them from GpuVolumeConfig); colour
     // fusion defaults to the running average, which fuse keeps for input with colour.
     vkmesh::gpu::GpuVolumeConfig config;
@@ -203,6 +207,7 @@ vkmesh::gpu::GpuVolumeConfig volumeConfig(double voxel, bool publish) {
     config.imageWidth = kWidth;
     config.imageHeight = kHeight;
     config.publishMesh = publish;
+    config.timePasses = passTimes;
     return config;
 }
 
@@ -213,8 +218,8 @@ vkmesh::gpu::GpuVolumeConfig volumeConfig(double voxel, bool publish) {
 // With `correct`, after the sequence every fused frame is re-fused as Reconstructor::correct does it: taken out at
 // the pose it was fused at and fused again at that pose moved by 1 cm and 0.5 degrees.
 void fuseSequence(const vkmesh::vk::Context& context, const std::vector<Frame>& rendered, size_t count, double voxel,
-                  bool publish, bool track, bool trackSolveOnGpu, bool correct, VoxelRun* run) {
-    vkmesh::gpu::GpuVolume volume(context, volumeConfig(voxel, publish || track));
+                  bool publish, bool track, bool trackSolveOnGpu, bool correct, bool passTimes, VoxelRun* run) {
+    vkmesh::gpu::GpuVolume volume(context, volumeConfig(voxel, publish || track, passTimes));
     const Intrinsics intrinsics = vkmesh::synth::kinectIntrinsics(kWidth, kHeight);
     std::optional<vkmesh::gpu::PoseTracker> tracker;
     if (track) {
@@ -274,6 +279,12 @@ void fuseSequence(const vkmesh::vk::Context& context, const std::vector<Frame>& 
         }
         run->wallMs.push_back(wallMs);
         run->dispatches.push_back(report.dispatches);
+        std::map<std::string, double> framePassMs;
+        for (const auto& [name, ms] : report.passMs) {
+            if (!run->passMs.count(name) && !framePassMs.count(name)) run->passOrder.push_back(name);
+            framePassMs[name] += ms;
+        }
+        for (const auto& [name, ms] : framePassMs) run->passMs[name].push_back(ms);
         if (correct) fusedAt.emplace_back(i, tracked ? tracked->tracking.cameraToWorld : pose);
         run->last = report.counters;
         run->growths += report.growth.size();
@@ -387,6 +398,11 @@ void printRun(const VoxelRun& r, size_t repeat) {
     // What a pass costs whatever its work: compare the GPU's whole frame with this count.
     const Summary passes = summarize(r.dispatches);
     std::printf("  %-24s %10.0f %10.0f %10.0f %7zu\n", "passes (dispatches)", passes.median, passes.p90, passes.max, passes.count);
+    if (!r.passOrder.empty()) {
+        // --pass-times: where each stage's time goes, pass by pass (each from the timestamp before it).
+        std::printf("  %-24s %10s %10s %10s %7s\n", "pass (GPU ms)", "median", "p90", "max", "frames");
+        for (const std::string& name : r.passOrder) row(name, summarize(r.passMs.at(name)));
+    }
     if (!r.trackWallMs.empty()) {
         for (const std::string& name : r.trackStageOrder) row("tracking: " + name, summarize(r.trackStageMs.at(name)));
         row("tracking, GPU", summarize(r.trackGpuMs));
@@ -416,6 +432,8 @@ json runJson(const VoxelRun& r) {
     json trackStages = json::object();
     for (const std::string& name : r.trackStageOrder) trackStages[name] = toJson(summarize(r.trackStageMs.at(name)));
     if (!r.meshMs.empty()) stages["mesh_total"] = toJson(summarize(r.meshMs));   // fuse's --stats name
+    json passes = json::object();
+    for (const std::string& name : r.passOrder) passes[name] = toJson(summarize(r.passMs.at(name)));
     return json{{"voxel_size", r.voxel},
                 {"frames", r.frames},
                 {"stage_order", r.stageOrder},
@@ -423,6 +441,8 @@ json runJson(const VoxelRun& r) {
                 {"gpu_ms_frame_total", toJson(summarize(r.gpuFrameMs))},
                 {"wall_ms_per_frame", toJson(summarize(r.wallMs))},
                 {"dispatches_per_frame", toJson(summarize(r.dispatches))},
+                {"pass_order", r.passOrder},
+                {"gpu_ms_per_pass", passes},   // empty without --pass-times
                 {"blocks_in_use", r.last.blocksInUse},
                 {"vertices_in_use", r.last.verticesInUse},
                 {"live_triangles", r.last.liveTriangles},
@@ -500,9 +520,9 @@ int run(Options o, const CLI::App& cli) {
 
     if (o.warmup > 0) {   // raises the GPU's clocks and fills the driver's caches before anything is timed
         std::fprintf(stderr, "warm-up: %zu untimed frames at %s\n", o.warmup, cm(o.voxels.front()).c_str());
-        fuseSequence(context, rendered, o.warmup, o.voxels.front(), o.publish, o.track, o.trackSolve == "gpu", false, nullptr);
+        fuseSequence(context, rendered, o.warmup, o.voxels.front(), o.publish, o.track, o.trackSolve == "gpu", false, o.passTimes, nullptr);
         if (o.track && o.trackSolve == "both")   // the other mode's pipelines and caches too
-            fuseSequence(context, rendered, std::min<size_t>(o.warmup, 10), o.voxels.front(), o.publish, true, true, false, nullptr);
+            fuseSequence(context, rendered, std::min<size_t>(o.warmup, 10), o.voxels.front(), o.publish, true, true, false, o.passTimes, nullptr);
     }
     std::vector<VoxelRun> runs;
     // Written after every voxel size, so that a run stopped part way (run.sh's --timeout) leaves what it measured.
@@ -527,7 +547,7 @@ int run(Options o, const CLI::App& cli) {
                     {"scene", {{"name", "synthetic room (vkmesh synth defaults)"}, {"path", "orbit"},
                                {"loop_frames", o.loopFrames}, {"width", kWidth}, {"height", kHeight},
                                {"max_depth", kMaxDepth}, {"color", true}, {"render_s", renderSeconds}}},
-                    {"pipeline", {{"mode", "incremental"}, {"color_fusion", "average"}, {"publish_mesh", o.publish}, {"track", o.track}, {"track_solve", o.trackSolve}, {"correct", o.correct}}},
+                    {"pipeline", {{"mode", "incremental"}, {"color_fusion", "average"}, {"publish_mesh", o.publish}, {"track", o.track}, {"track_solve", o.trackSolve}, {"correct", o.correct}, {"pass_times", o.passTimes}}},
                     {"frames_per_run", o.frames},
                     {"repeat", o.repeat},
                     {"warmup_frames", o.warmup},
@@ -554,7 +574,7 @@ int run(Options o, const CLI::App& cli) {
             for (size_t rep = 0; rep < o.repeat; ++rep) {
                 std::fprintf(stderr, "fusing %zu frames at %s%s (%zu/%zu)...\n", o.frames, cm(voxel).c_str(),
                              solve.empty() ? "" : (", tracking solved on the " + solve).c_str(), rep + 1, o.repeat);
-                fuseSequence(context, rendered, o.frames, voxel, o.publish, o.track, solve == "gpu", o.correct, &r);
+                fuseSequence(context, rendered, o.frames, voxel, o.publish, o.track, solve == "gpu", o.correct, o.passTimes, &r);
             }
             r.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
             printRun(r, o.repeat);
@@ -617,6 +637,9 @@ int main(int argc, char** argv) {
                  "after each run, re-fuse every frame as a pose correction does (de-integrated at its pose, fused again 1 cm "
                  "and 0.5 degrees away; docs/CORRECTION.md) and report the cost against fusing a frame");
     cli.add_option("--json", o.jsonPath, "write the results as JSON to this file");
+    cli.add_flag("--pass-times", o.passTimes,
+                 "also a GPU timestamp after every pass (compute dispatch): the GPU ms of each pass by shader name, printed "
+                 "after the stages and in the JSON (gpu_ms_per_pass)");
     cli.add_flag("--quick", o.quick, "smoke run for a CPU device (lavapipe): 3 frames per voxel size, no warm-up, "
                                      "unless --frames / --warmup say otherwise");
     CLI11_PARSE(cli, argc, argv);

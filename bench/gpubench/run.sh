@@ -141,6 +141,9 @@ main() {
     has --frames || args+=(--frames 60)       # vkmesh synth's default sequence, one lap of the room
     has --repeat || args+=(--repeat 5)        # 300 timed frames per voxel size, each run into a fresh volume
     has --warmup || args+=(--warmup 30)
+    # Each pass's GPU time too: one run on a GPU says which passes cost what there (every pass is already
+    # followed by a full barrier, so a timestamp after it adds little on a GPU).
+    has --pass-times || args+=(--pass-times)
   fi
   args+=("${bench_args[@]}")
   if ((timeout_s > 0)) && command -v timeout >/dev/null 2>&1; then run=(timeout -k 10 "$timeout_s" "${run[@]}"); fi

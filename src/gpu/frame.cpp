@@ -326,7 +326,9 @@ void GpuVolume::submitAttempt() {
     VkCommandBuffer cmd = recorder_.begin();
     timer_.reset(cmd);
     const uint64_t dispatchesBefore = table_.dispatchesRecorded();
+    recordingFrame_ = true;
     recordFrame(cmd, push, f.rebuildHash && f.attempt == 0, f.retryPending, f.attempt == 0);
+    recordingFrame_ = false;
     f.report.dispatches = uint32_t(table_.dispatchesRecorded() - dispatchesBefore);
     counters_.recordReadback(cmd);
     if (f.input.recordPose) {
@@ -400,6 +402,7 @@ FrameReport GpuVolume::finishFrame() {
         report.skipped = true;
         report.counters = k;
         report.stageMs = timer_.read();
+        report.passMs = timer_.readPasses();
         if (deltas_) {
             report.delta = deltas_->collect(recorder_);
             report.delta.frame = frameNumber_;
@@ -408,6 +411,7 @@ FrameReport GpuVolume::finishFrame() {
     }
     if (!f.input.deintegrate) ++framesIntegrated_;
     report.stageMs = timer_.read();
+    report.passMs = timer_.readPasses();
     // Cubes deferred by a full retype list are left for the next frame's retry; INCOMPLETE cubes are retried
     // once after a growth (while the heap stays full they wait for their block to be dirty again).
     if (f.retryPending) retryPending_ = k.retypeDeferred > 0;

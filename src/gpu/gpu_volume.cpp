@@ -145,9 +145,13 @@ GpuVolume::GpuVolume(const vk::Context& context, const GpuVolumeConfig& config)
       meshGc_(context, table_),
       recycle_(context, table_),
       recorder_(context),
-      timer_(context) {
+      timer_(context, config.timePasses ? 192 : 32) {
     const GpuVolumeConfig& c = config_;
     timer_.setEnabled(c.timeStages);
+    if (c.timeStages && c.timePasses)
+        table_.setDispatchObserver([this](VkCommandBuffer cmd, const std::string& pass) {
+            if (recordingFrame_) timer_.markPass(cmd, pass);
+        });
     touchedFollowsPool_ = config.touchedCapacity == 0;
     // The depth image, then (when colour is fused) the colour image's RGBA8 words: one binding for both.
     const VkDeviceSize pixels = VkDeviceSize(c.imageWidth) * c.imageHeight;

@@ -99,12 +99,18 @@ struct GpuVolumeConfig {
     // extraction and export). Off: no timestamp is recorded and stageMs is empty; on lavapipe the ~8
     // timestamps of a frame cost ~0.3-0.4 ms of its ~18 (`vkmesh fuse` turns them off with -q and no --stats).
     bool timeStages = true;
+    // With timeStages, a timestamp after every pass (compute dispatch) of a frame as well (FrameReport::passMs):
+    // where a stage's time goes, pass by pass. Off by default: each timestamp costs ~50 us on lavapipe.
+    bool timePasses = false;
 };
 
 // What one frame did, from the GPU's counters, and how long each stage took on the GPU.
 struct FrameReport {
     Counters counters{};
     std::vector<std::pair<std::string, double>> stageMs;
+    // With GpuVolumeConfig::timePasses: (shader name, ms) of every pass of the frame in order, each from the
+    // timestamp before it (a stage's time is its passes' and its barriers' and copies'); a pass may repeat.
+    std::vector<std::pair<std::string, double>> passMs;
     // Human-readable capacity problems of this frame (empty when none): hash full, pool exhausted, ...
     std::vector<std::string> warnings;
     // What grew before or during this frame ("block pool 16384 -> 32768", ...), and how many times the frame
@@ -395,6 +401,7 @@ private:
     std::optional<MeshDeltaStage> deltas_;
     vk::CommandRecorder recorder_;
     vk::StageTimer timer_;
+    bool recordingFrame_ = false;   // submitAttempt is recording a frame: its passes are timed (timePasses)
     uint32_t frameNumber_ = 0, framesIntegrated_ = 0;
     bool touchedFollowsPool_ = false;   // touchedCapacity was left at its default (the pool's size)
     bool meshPublished_ = false;

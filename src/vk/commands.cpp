@@ -119,6 +119,7 @@ StageTimer::~StageTimer() {
 
 void StageTimer::reset(VkCommandBuffer cmd) {
     names_.clear();
+    isPass_.clear();
     if (pool_ && enabled_) vkCmdResetQueryPool(cmd, pool_, 0, capacity_);
 }
 
@@ -126,18 +127,43 @@ void StageTimer::mark(VkCommandBuffer cmd, const std::string& stageThatEnded) {
     if (!pool_ || !enabled_ || names_.size() >= capacity_) return;
     vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, pool_, static_cast<uint32_t>(names_.size()));
     names_.push_back(stageThatEnded);
+    isPass_.push_back(false);
 }
 
-std::vector<std::pair<std::string, double>> StageTimer::read() const {
-    std::vector<std::pair<std::string, double>> out;
-    if (!pool_ || names_.size() < 2) return out;
+void StageTimer::markPass(VkCommandBuffer cmd, const std::string& passThatEnded) {
+    if (names_.empty()) return;   // before the first stage mark (the start) there is nothing to measure from
+    mark(cmd, passThatEnded);
+    if (isPass_.size() == names_.size()) isPass_.back() = true;
+}
+
+std::vector<uint64_t> StageTimer::ticks() const {
     std::vector<uint64_t> ticks(names_.size());
     check(vkGetQueryPoolResults(context_.device(), pool_, 0, static_cast<uint32_t>(ticks.size()),
                                 ticks.size() * sizeof(uint64_t), ticks.data(), sizeof(uint64_t),
                                 VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT),
           "vkGetQueryPoolResults");
-    for (size_t i = 1; i < ticks.size(); ++i)
-        out.emplace_back(names_[i], double(ticks[i] - ticks[i - 1]) * context_.timestampPeriodNs() * 1e-6);
+    return ticks;
+}
+
+std::vector<std::pair<std::string, double>> StageTimer::read() const {
+    std::vector<std::pair<std::string, double>> out;
+    if (!pool_ || names_.size() < 2) return out;
+    const std::vector<uint64_t> t = ticks();
+    size_t last = 0;   // the stage mark before
+    for (size_t i = 1; i < t.size(); ++i) {
+        if (isPass_[i]) continue;
+        out.emplace_back(names_[i], double(t[i] - t[last]) * context_.timestampPeriodNs() * 1e-6);
+        last = i;
+    }
+    return out;
+}
+
+std::vector<std::pair<std::string, double>> StageTimer::readPasses() const {
+    std::vector<std::pair<std::string, double>> out;
+    if (!pool_ || names_.size() < 2) return out;
+    const std::vector<uint64_t> t = ticks();
+    for (size_t i = 1; i < t.size(); ++i)
+        if (isPass_[i]) out.emplace_back(names_[i], double(t[i] - t[i - 1]) * context_.timestampPeriodNs() * 1e-6);
     return out;
 }
 

@@ -84,10 +84,15 @@ public:
 
     void reset(VkCommandBuffer cmd);                     // at the start of the command buffer
     void mark(VkCommandBuffer cmd, const std::string& stageThatEnded);  // after a stage; first call = start
+    // After one pass (a dispatch) inside a stage: read() does not see it (a stage still spans from the stage mark
+    // before it), readPasses() gives its time since the mark before it, whichever kind.
+    void markPass(VkCommandBuffer cmd, const std::string& passThatEnded);
     // Off: reset and mark record nothing and read() is empty (a timestamp costs ~50 µs on lavapipe).
     void setEnabled(bool enabled) { enabled_ = enabled; }
     // (stage name, milliseconds) of the last submission; empty when the device has no timestamps.
     std::vector<std::pair<std::string, double>> read() const;
+    // (pass name, milliseconds) of the last submission's markPass() calls, in order (a pass may repeat).
+    std::vector<std::pair<std::string, double>> readPasses() const;
 
 private:
     const Context& context_;
@@ -95,6 +100,8 @@ private:
     uint32_t capacity_ = 0;
     bool enabled_ = true;
     std::vector<std::string> names_;
+    std::vector<bool> isPass_;   // per mark: markPass() rather than mark()
+    std::vector<uint64_t> ticks() const;
 };
 
 // Copies host data into any buffer (through a staging buffer when it is not mapped) and back.

@@ -272,6 +272,7 @@ void ComputePipeline::dispatch(VkCommandBuffer cmd, const void* push, uint32_t x
     bind(cmd, push);
     vkCmdDispatch(cmd, x, y, z);
     ++table_.dispatchesRecorded_;
+    if (table_.observer_) table_.observer_(cmd, name_);
 }
 
 void ComputePipeline::dispatchItems(VkCommandBuffer cmd, const void* push, uint32_t items) const {
@@ -283,6 +284,7 @@ void ComputePipeline::dispatchIndirect(VkCommandBuffer cmd, const void* push, co
     bind(cmd, push);
     vkCmdDispatchIndirect(cmd, args.handle(), offset);
     ++table_.dispatchesRecorded_;
+    if (table_.observer_) table_.observer_(cmd, name_);
 }
 
 }  // namespace vkmesh::vk

@@ -8,6 +8,7 @@
 #include <vulkan/vulkan.h>
 
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <optional>
 #include <span>
@@ -69,6 +70,9 @@ public:
     // empty included): the difference over a frame's recording is its pass count, which is a fixed cost per
     // pass on every device (~26 us on lavapipe).
     uint64_t dispatchesRecorded() const { return dispatchesRecorded_; }
+    // Called after every dispatch a pipeline of the table records, with the pipeline's shader name (per-pass
+    // timestamps, GpuVolumeConfig::timePasses); empty: nothing is called.
+    void setDispatchObserver(std::function<void(VkCommandBuffer, const std::string&)> observer) const { observer_ = std::move(observer); }
 
 private:
     friend class ComputePipeline;
@@ -85,6 +89,7 @@ private:
     mutable std::map<uint32_t, Bound> bound_;
     mutable std::vector<ComputePipeline*> pipelines_;
     mutable uint64_t dispatchesRecorded_ = 0;
+    mutable std::function<void(VkCommandBuffer, const std::string&)> observer_;
 };
 
 class ComputePipeline {

@@ -122,6 +122,30 @@ TEST(Cli, FuseWritesMeshAndStats) {
     const Mesh untimed = readPly(out / "untimed.ply");
     EXPECT_EQ(untimed.triangles.size(), mesh.triangles.size());
     EXPECT_TRUE(triangleSet(untimed) == triangleSet(mesh));
+
+    // --pass-times: each pass's time by shader name beside the stage times, which still span their passes; the
+    // same mesh. Without stage times there is nothing to time the passes against.
+    r = runCli("fuse " + smallSequence().string() + " -o " + (out / "passes.ply").string() + " --stats " +
+               (out / "passes.json").string() + " --voxel 0.04 --pass-times");
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    stats = nlohmann::json::parse(readText(out / "passes.json"));
+    const nlohmann::json& passes = stats["gpu_ms_per_pass"];
+    const nlohmann::json& stages = stats["gpu_ms_per_frame"];
+    ASSERT_TRUE(passes.contains("fuse_depth[1]")) << passes.dump();   // [1]: the integrating specialisation
+    for (const char* pass : {"allocate_blocks[1]", "mesh_claim", "mesh_triangulate", "move_vertices"})
+        EXPECT_TRUE(passes.contains(pass)) << pass << " in " << passes.dump();
+    EXPECT_GT(passes["fuse_depth[1]"]["median"].get<double>(), 0.0);
+    // The fuse stage is the one pass and its barrier: the pass cannot take longer than the stage.
+    EXPECT_LE(passes["fuse_depth[1]"]["median"].get<double>(), stages["fuse"]["median"].get<double>() * 1.0001);
+    double passSum = 0, stageSum = 0;
+    for (const auto& [name, s] : passes.items()) passSum += s["median"].get<double>();
+    for (const char* stage : {"allocate", "fuse", "mesh_mark", "mesh_claim", "mesh_update", "mesh_triangulate", "mesh_gc"})
+        stageSum += stages[stage]["median"].get<double>();
+    EXPECT_GT(passSum, 0.5 * stageSum) << "the passes are most of the frame";
+    EXPECT_TRUE(triangleSet(readPly(out / "passes.ply")) == triangleSet(mesh));
+    r = runCli("fuse " + smallSequence().string() + " -o " + (out / "x.ply").string() + " --pass-times --no-stage-times");
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_NE(r.err.find("--pass-times"), std::string::npos) << r.err;
     fs::remove_all(out);
 }
 
