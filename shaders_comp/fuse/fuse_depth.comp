@@ -117,6 +117,7 @@ void main() {
         if (volumeRefines() && subgroupOr(maskChange) != 0u) toggleTsdfMasks(block, maskChange);
     }
     ADD_COUNTER(updatedVoxels, updated);
-    ADD_COUNTER(observationsDropped, dropped);
-    ADD_COUNTER(fusedBlocks, fused);
+    // Rare or once per block: an atomic where they occur rather than a subgroup sum in every subgroup.
+    if (dropped != 0u) atomicAdd(counters.observationsDropped, dropped);
+    if (fused != 0u) atomicAdd(counters.fusedBlocks, fused);
 }
