@@ -111,7 +111,8 @@ VKM_CONST BINDING_MESH_SIGNS = 34u;     // MESH_SIGN_WORDS uint per block: with 
 // axis holds a vertex (claim sets it, GC clears it; cube_mesh.glsl). The vertex update visits only these bits.
 VKM_CONST BINDING_OWNED_SLOTS = 35u;
 VKM_CONST BINDING_FRAME_POSE = 36u;    // FramePoseGpu: the frame's camera pose as the passes read it
-VKM_CONST BINDING_COUNT = 37u;
+VKM_CONST BINDING_CORNER_FLIPS = 37u;  // MASK_WORDS uint per block: corners whose sign or observed state fusion flipped (frame_lists.glsl)
+VKM_CONST BINDING_COUNT = 38u;
 VKM_CONST MASK_WORDS = 16u;            // VOXELS_PER_BLOCK / 32
 VKM_CONST MASK_ALL_CUBES = 0xFFFFFFFFu; // a retype-mask word with each of its 32 cubes listed
 // Per block, MESH_SIGN_WORDS uint at BINDING_MESH_SIGNS (with refinement; frame_lists.glsl), MASK_WORDS each, one bit

@@ -9,14 +9,14 @@
 #include "structure/frame.glsl"
 #include "structure/block_store.glsl"
 #include "structure/frame_lists.glsl"
-#include "structure/retype_marks.glsl"
 #include "structure/depth_input.glsl"
 #include "structure/voxel_color.glsl"
 
 layout(local_size_x = WG_BLOCK) in;
 layout(constant_id = 0) const uint FUSE_DIRECTION = FUSE_BY_FRAME;   // shared_layout.h
 
-// Corners whose sign or observed state flips mark the cubes around them (markCornerRetype, structure/retype_marks.glsl).
+// Corners whose sign or observed state flips are recorded (recordCornerFlips, structure/frame_lists.glsl) for
+// decide_mesh_signs to mark the cubes around them.
 
 void main() {
     uint entry = touched[gl_WorkGroupID.x];   // the same for the whole workgroup
@@ -108,11 +108,8 @@ void main() {
             // A fresh block's corners that this frame gave no colour still hold a previous owner's: cleared.
             if (volumeKeepsColor() && (colorChanged || fresh)) voxelColor[v] = newColor;
         }
-        if (params.incrementalMesh != 0u) {
-            for (uint k = 0u; k < VOXELS_PER_INVOCATION && flipped != 0u; ++k) {
-                if ((flipped & (1u << k)) != 0u) markCornerRetype(block, gl_LocalInvocationIndex + k * WG_BLOCK);
-            }
-        }
+        // Uniform over the subgroup (most subgroups flip no corner: skipped with one subgroup op).
+        if (params.incrementalMesh != 0u && subgroupOr(flipped) != 0u) recordCornerFlips(block, flipped);
         // Uniform over the subgroup (most subgroups' corners change no mask bit: skipped with one subgroup op).
         if (volumeRefines() && subgroupOr(maskChange) != 0u) toggleTsdfMasks(block, maskChange);
     }

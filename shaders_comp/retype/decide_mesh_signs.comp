@@ -1,12 +1,16 @@
 #version 460
-// Incremental mesh with refinement (docs/REFINEMENT.md): re-decides the meshing sign of every corner of the dirty
-// blocks, before the retype list is collected, from the masks of the TSDF that fusion keeps (raw sign, near,
-// observed: no sdf or weight is read). One invocation per mask word of each dirty block (its 32 corners: 4 rows
-// along x of one z layer); the word's window is a few shifts and ors of the mask words of the block and of its
-// neighbours (from the neighbour cache), and only the corners that may flip are decided bit by bit
-// (swDecideWord, retype/sign_window.h, the same function as refinedCornerInside in src/core/refinement.cpp).
-// Where a sign changed, the word is stored and the 8 cubes around each changed corner are marked for retyping:
-// in this block or, for corners on its low faces, in the blocks behind.
+// Incremental mesh: marks the cubes whose type may change around the corners of the dirty blocks that changed,
+// before the retype list is collected. One invocation per mask word of each dirty block (its 32 corners: 4 rows
+// along x of one z layer):
+//  - the corners fusion flipped (sign or observed state: cornerFlips, structure/frame_lists.glsl), taken and
+//    cleared;
+//  - with refinement (docs/REFINEMENT.md), the corners whose meshing sign changed: every corner's is re-decided
+//    from the masks of the TSDF that fusion keeps (raw sign, near, observed: no sdf or weight is read); the word's
+//    window is a few shifts and ors of the mask words of the block and of its neighbours (from the neighbour
+//    cache), and only the corners that may flip are decided bit by bit (swDecideWord, retype/sign_window.h, the
+//    same function as refinedCornerInside in src/core/refinement.cpp), and a changed word is stored.
+// The 8 cubes around each such corner are marked for retyping: in this block or, for corners on its low faces, in
+// the blocks behind.
 #extension GL_GOOGLE_include_directive : require
 #include "structure/frame.glsl"
 #include "structure/frame_lists.glsl"
@@ -29,11 +33,16 @@ void main() {
     uint evaluated = 0u;
     if (i < counters.dirtyCount * MASK_WORDS) {
         uint block = dirtyList[i / MASK_WORDS], word = i % MASK_WORDS;
-        uint signs = swDecideWord(block, word, evaluated);
-        uint at = block * MESH_SIGN_WORDS + word;
-        uint changed = signs ^ meshSigns[at];
+        uint changed = cornerFlips[block * MASK_WORDS + word];
+        if (changed != 0u) cornerFlips[block * MASK_WORDS + word] = 0u;
+        if (volumeRefines()) {
+            uint signs = swDecideWord(block, word, evaluated);
+            uint at = block * MESH_SIGN_WORDS + word;
+            uint signChanged = signs ^ meshSigns[at];
+            if (signChanged != 0u) meshSigns[at] = signs;   // this invocation's word only
+            changed |= signChanged;
+        }
         if (changed != 0u) {
-            meshSigns[at] = signs;   // this invocation's word only
             // The cubes corner - o, o in {0,1}^3: one row along y lower (oy), one column along x lower (ox: corners
             // at x = 0 reach x = 7 of the block at -x), one layer lower (oz: layer 0 reaches layer 7 at -z).
             uint z = word / 2u, rh = word % 2u;

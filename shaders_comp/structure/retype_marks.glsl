@@ -2,8 +2,9 @@
 // change MC type: their bits are set in their block's retype mask, and the mesh passes retype only those
 // cubes (docs/MESH.md). Cubes at -x/-y/-z of the block's low faces belong to the blocks behind, looked up
 // here, per corner: few corners flip, and a workgroup-wide table would cost a barrier (expensive on
-// lavapipe). Used by fusion and by block recycling (which zeroes or decays weights). With refinement, the
-// cubes whose type changes with a corner's meshing sign are marked by decide_mesh_signs.
+// lavapipe). Used by block recycling (which zeroes or decays weights). Fusion records its flipped corners instead
+// (cornerFlips, frame_lists.glsl) and decide_mesh_signs marks the cubes around them, with those around the corners
+// whose meshing sign changed (refinement).
 #ifndef VKMESH_RETYPE_MARKS_GLSL
 #define VKMESH_RETYPE_MARKS_GLSL
 #include "structure/block_hash.glsl"

@@ -61,7 +61,8 @@ TEST_F(GpuTest, RefinementIsOnByDefault) {
 }
 
 // A frame reports its pass count (FrameReport::dispatches, printed by gpubench): the same for every steady
-// frame of a volume, more with the incremental mesh than without, more again with refinement's sign passes.
+// frame of a volume, more with the incremental mesh than without, and the same with refinement (its signs are
+// decided in decide_mesh_signs, which marks the cubes around the corners fusion flipped either way).
 TEST_F(GpuTest, FramesCountTheirDispatches) {
     auto dispatches = [&](gpu::MeshMode mode, bool refine) {
         gpu::GpuVolumeConfig config = meshConfig(refine);
@@ -77,7 +78,7 @@ TEST_F(GpuTest, FramesCountTheirDispatches) {
     const uint32_t refined = dispatches(gpu::MeshMode::Incremental, true);
     EXPECT_GE(baseline, 5u);   // allocation's four passes and fusion at least
     EXPECT_GT(incremental, baseline + 5u);
-    EXPECT_GT(refined, incremental);
+    EXPECT_EQ(refined, incremental);
     std::printf("dispatches per frame: baseline %u, incremental %u, refined %u\n", baseline, incremental, refined);
 }
 

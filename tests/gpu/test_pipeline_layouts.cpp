@@ -38,11 +38,13 @@ TEST(PipelineLayouts, ReflectionFindsWhatAShaderUsesAndNothingElse) {
     EXPECT_EQ(plan[0].type, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER);
     EXPECT_EQ(plan[1].binding, gpu::BINDING_COUNTERS);
     EXPECT_EQ(plan[1].type, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER);
-    // fuse_depth reads the depth image and writes the TSDF; it never touches the mesh heaps.
+    // fuse_depth reads the depth image and writes the TSDF and the corners it flipped; it never touches the mesh
+    // heaps, nor the cubes' retype masks (decide_mesh_signs marks the cubes around the flipped corners).
     const auto fuse = vk::reflectBindings(shaders::all().at("fuse_depth"), "fuse_depth");
     EXPECT_TRUE(uses(fuse, gpu::BINDING_DEPTH));
     EXPECT_TRUE(uses(fuse, gpu::BINDING_VOXEL_SDF));
-    EXPECT_TRUE(uses(fuse, gpu::BINDING_RETYPE_MASK));
+    EXPECT_TRUE(uses(fuse, gpu::BINDING_CORNER_FLIPS));
+    EXPECT_FALSE(uses(fuse, gpu::BINDING_RETYPE_MASK));
     EXPECT_FALSE(uses(fuse, gpu::BINDING_VERTICES));
     EXPECT_FALSE(uses(fuse, gpu::BINDING_CHUNK_TRIANGLES));
 }

@@ -18,8 +18,7 @@ void RetypeStage::recordMeshSigns(VkCommandBuffer cmd, const FramePush& push, co
     vk::memoryBarrier(cmd);
     cacheNeighbors_.dispatchIndirect(cmd, &push, counters.buffer(), offsetof(Counters, collectDispatch));
     vk::memoryBarrier(cmd);
-    if (!refines_) return;
-    if (fromTsdf) {
+    if (refines_ && fromTsdf) {
         buildMasks_.dispatchIndirect(cmd, &push, counters.buffer(), offsetof(Counters, collectDispatch));
         vk::memoryBarrier(cmd);
     }

@@ -1,7 +1,7 @@
 // Stage: the cubes to retype (shaders_comp/retype/). Sizes the dispatches over the dirty blocks (plan_mesh),
-// caches each dirty block's neighbour blocks (cache_neighbors); with refinement re-decides the meshing signs of
-// every corner of the dirty blocks from the masks of the TSDF, one invocation per mask word, and marks the cubes
-// around those that changed (decide_mesh_signs); then moves the retype-mask bits of the dirty blocks into the
+// caches each dirty block's neighbour blocks (cache_neighbors); marks the cubes around the corners fusion flipped
+// and, with refinement, re-decides the meshing signs of every corner of the dirty blocks from the masks of the
+// TSDF and marks the cubes around those that changed, one invocation per mask word (decide_mesh_signs); then moves the retype-mask bits of the dirty blocks into the
 // retype list, as many as fit (collect_retype; the rest stay set for the next pass and are counted in
 // retypeDeferred), and sizes the passes over the list (plan_retype).
 //   reads  dirty list, hash, retype masks, mesh signs (and TSDF masks)
@@ -17,7 +17,8 @@ class RetypeStage {
 public:
     RetypeStage(const vk::Context& context, const vk::BindingTable& table);
     void record(VkCommandBuffer cmd, const FramePush& push, const CounterBuffer& counters) const;
-    // Up to the meshing signs (plan_mesh to decide_mesh_signs): the signs of every corner of the dirty blocks.
+    // Up to the meshing signs (plan_mesh to decide_mesh_signs): the cubes around flipped corners marked, and with
+    // refinement the signs of every corner of the dirty blocks.
     // Marks what changed, as record() does. `fromTsdf` (after a map is loaded): first sets the dirty blocks'
     // masks of the TSDF from the TSDF (build_tsdf_masks).
     void recordMeshSigns(VkCommandBuffer cmd, const FramePush& push, const CounterBuffer& counters, bool fromTsdf = false) const;

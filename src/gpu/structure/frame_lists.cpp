@@ -19,9 +19,11 @@ FrameLists::FrameLists(const vk::Context& context, const vk::BindingTable& table
     moved_ = makeStorage(context, table, BINDING_MOVED_VERTICES, VkDeviceSize(c.vertices) * 4, "moved vertices");
     neighbors_ = makeStorage(context, table, BINDING_BLOCK_NEIGHBORS, VkDeviceSize(c.blocks) * NEIGHBORS_PER_BLOCK * 4, "block neighbours");
     meshSigns_ = makeStorage(context, table, BINDING_MESH_SIGNS, VkDeviceSize(c.blocks) * MESH_SIGN_WORDS * 4, "mesh signs");
+    cornerFlips_ = makeStorage(context, table, BINDING_CORNER_FLIPS, VkDeviceSize(c.blocks) * MASK_WORDS * 4, "corner flips");
     vk::CommandRecorder recorder(context);
     VkCommandBuffer cmd = recorder.begin();
     vkCmdFillBuffer(cmd, meshSigns_.handle(), 0, VK_WHOLE_SIZE, 0);   // zero TSDF, zero masks
+    vkCmdFillBuffer(cmd, cornerFlips_.handle(), 0, VK_WHOLE_SIZE, 0);
     recordReset(cmd);
     recorder.submitAndWait();
 }
@@ -48,6 +50,7 @@ void FrameLists::grow(const FrameListCapacities& wanted) {
         growStorage(cmd, context_, table_, BINDING_MESH_STAMPS, meshStamps_, VkDeviceSize(c.blocks) * 4, 0, retired);
         growStorage(cmd, context_, table_, BINDING_RETYPE_MASK, retypeMask_, VkDeviceSize(c.blocks) * MASK_WORDS * 4, 0, retired);
         growStorage(cmd, context_, table_, BINDING_MESH_SIGNS, meshSigns_, VkDeviceSize(c.blocks) * MESH_SIGN_WORDS * 4, 0, retired);
+        growStorage(cmd, context_, table_, BINDING_CORNER_FLIPS, cornerFlips_, VkDeviceSize(c.blocks) * MASK_WORDS * 4, 0, retired);
         vk::memoryBarrier(cmd);
         recorder.submitAndWait();
         blockList_ = makeStorage(context_, table_, BINDING_BLOCK_LIST, VkDeviceSize(c.blocks) * 4, "block list");

@@ -9,6 +9,8 @@
 //   garbage      GC candidate vertices and released chunks (claim, triangulate -> mesh_gc);
 //   moved        the edge slots of the vertices whose corners may have changed (list_moved_vertices -> move_vertices);
 //   neighbours   each dirty block's 26 neighbour blocks (cache_neighbors -> the mesh passes' cubeRef);
+//   corner flips one bit per corner whose sign or observed state fusion flipped (fuse -> decide_mesh_signs,
+//                which marks the cubes around them and clears the words);
 //   mesh signs   with refinement, one bit per corner: inside for meshing (decide_mesh_signs -> claim,
 //                triangulate), persistent and derived from the TSDF alone (docs/REFINEMENT.md); and the masks of
 //                the TSDF it is decided from: raw sign, near, observed (fuse, recycling, map load -> decide_mesh_signs).
@@ -47,14 +49,16 @@ public:
     // The live block list (blockList), as collect_blocks would write it: what the hash re-insertion reads.
     void uploadBlockList(const std::vector<uint32_t>& blocks);
     void pools(std::vector<PoolInfo>& out) const {
-        listPools(out, {&touched_, &blockList_, &meshStamps_, &dirtyList_, &retypeMask_, &retypeList_, &garbage_, &moved_, &neighbors_, &meshSigns_});
+        listPools(out, {&touched_, &blockList_, &meshStamps_, &dirtyList_, &retypeMask_, &retypeList_, &garbage_, &moved_, &neighbors_, &meshSigns_,
+                        &cornerFlips_});
     }
 
 private:
     const vk::Context& context_;
     const vk::BindingTable& table_;
     FrameListCapacities capacities_;
-    vk::Buffer touched_, blockList_, meshStamps_, dirtyList_, retypeMask_, retypeList_, garbage_, moved_, neighbors_, meshSigns_;
+    vk::Buffer touched_, blockList_, meshStamps_, dirtyList_, retypeMask_, retypeList_, garbage_, moved_, neighbors_, meshSigns_,
+        cornerFlips_;
 };
 
 }  // namespace vkmesh::gpu
