@@ -132,8 +132,9 @@ void StageTimer::mark(VkCommandBuffer cmd, const std::string& stageThatEnded) {
 
 void StageTimer::markPass(VkCommandBuffer cmd, const std::string& passThatEnded) {
     if (names_.empty()) return;   // before the first stage mark (the start) there is nothing to measure from
+    const size_t before = names_.size();
     mark(cmd, passThatEnded);
-    if (isPass_.size() == names_.size()) isPass_.back() = true;
+    if (names_.size() > before) isPass_.back() = true;   // (nothing recorded when disabled or full)
 }
 
 std::vector<uint64_t> StageTimer::ticks() const {

@@ -1,11 +1,11 @@
 // Stage: the cubes to retype (shaders_comp/retype/). Sizes the dispatches over the dirty blocks (plan_mesh),
 // caches each dirty block's neighbour blocks (cache_neighbors); marks the cubes around the corners fusion flipped
 // and, with refinement, re-decides the meshing signs of every corner of the dirty blocks from the masks of the
-// TSDF and marks the cubes around those that changed, one invocation per mask word (decide_mesh_signs); then moves the retype-mask bits of the dirty blocks into the
-// retype list, as many as fit (collect_retype; the rest stay set for the next pass and are counted in
-// retypeDeferred), and sizes the passes over the list (plan_retype).
-//   reads  dirty list, hash, retype masks, mesh signs (and TSDF masks)
-//   writes block neighbours, mesh signs, retype list, masks (bits taken and set), dispatch arguments
+// TSDF and marks the cubes around those that changed, one invocation per mask word (decide_mesh_signs); then
+// moves the retype-mask bits of the dirty blocks into the retype list, as many as fit (collect_retype; the rest
+// stay set for the next pass and are counted in retypeDeferred), and sizes the passes over the list (plan_retype).
+//   reads  dirty list, hash, retype masks, corner flips, mesh signs (and TSDF masks)
+//   writes block neighbours, mesh signs, retype list, masks and corner flips (bits taken and set), dispatch arguments
 #pragma once
 
 #include "gpu/structure/counter_buffer.h"
