@@ -18,7 +18,7 @@ Run addDevicesCommand(CLI::App& app) {
         }
         for (const auto& d : devices) {
             std::cout << d.index << ": " << d.name << " (" << d.type << ", Vulkan " << d.apiVersion << ", " << d.driver << ")"
-                      << (d.suitable ? "; block hash: " + d.hashPath : "  NOT USABLE: " + d.whyNot) << "\n";
+                      << (d.suitable ? "; block hash: " + d.hashPath + (d.unifiedMemory ? "; unified memory" : "") : "  NOT USABLE: " + d.whyNot) << "\n";
         }
         return 0;
     };

@@ -580,6 +580,7 @@ int runFuse(const FuseArgs& args) {
                         {"frames_available", dataset->size()}};
     if (!dataset->description().empty()) stats["dataset"]["recording"] = dataset->description();
     stats["device"] = context.info().name;
+    stats["unified_memory"] = context.unifiedMemory();   // the frame's images written in place, no staging copy
     stats["int64_atomics"] = context.int64Atomics();   // the block hash's path (docs/HASH.md)
     stats["mode"] = vo.mode;
     stats["refine"] = vo.refine;

@@ -11,6 +11,8 @@
 #        (docs/HASH.md): every compute shader runs in its @hash32 build and the 64-bit features are not
 #        enabled, so the validation layer reports any shader that still uses a 64-bit type. Same tests, same
 #        expectations as the main run.
+#      - ... and unifiedMemory: the host writes a frame's images into a staging buffer that a copy takes to the
+#        device, as on a discrete GPU, where the main run writes them in place (docs/PORTABILITY.md).
 #  (b) GPU-assisted validation (the Khronos layer instruments every shader and checks each buffer access and
 #      descriptor at run time) on a subset of the GPU tests that dispatches every compute shader of
 #      shaders_comp/; under GPU-AV a test runs 3-5x slower on lavapipe, and the first ones to use a shader ~60x
@@ -40,8 +42,8 @@ if [[ $parts == all || $parts == 4lane ]]; then
     echo "portability: LP_NATIVE_VECTOR_WIDTH=128 gives subgroupSize '${size}', not 4: the 4-lane run would test nothing" >&2
     exit 1
   fi
-  echo "portability: GPU tests with 4-lane subgroups (LP_NATIVE_VECTOR_WIDTH=128, subgroupSize 4) on the 32-bit hash path"
-  (cd build && LP_NATIVE_VECTOR_WIDTH=128 VKMESH_PRETEND_MISSING=shaderBufferInt64Atomics,shaderInt64 \
+  echo "portability: GPU tests with 4-lane subgroups (LP_NATIVE_VECTOR_WIDTH=128, subgroupSize 4) on the 32-bit hash path, inputs staged"
+  (cd build && LP_NATIVE_VECTOR_WIDTH=128 VKMESH_PRETEND_MISSING=shaderBufferInt64Atomics,shaderInt64,unifiedMemory \
      VKMESH_VALIDATION=1 ctest -L '^gpu$' --output-on-failure -j"$jobs")
   echo "portability: 4-lane, 32-bit-hash run passed after $((SECONDS - start)) s"
 fi

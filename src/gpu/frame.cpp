@@ -150,6 +150,7 @@ void GpuVolume::recordInputCopy(VkCommandBuffer cmd, bool withColor) {
     const VkDeviceSize pixelBytes = VkDeviceSize(config_.imageWidth) * config_.imageHeight * 4;
     const FrameInput& in = inFlight_->input;
     if (!inFlight_->fromGpu) {
+        if (!depthStaging_.handle()) return;   // the host wrote depth_ itself (unified memory)
         VkBufferCopy region{0, 0, withColor ? 2 * pixelBytes : pixelBytes};
         vkCmdCopyBuffer(cmd, depthStaging_.handle(), depth_.handle(), 1, &region);
         return;
@@ -258,17 +259,17 @@ void GpuVolume::submitFrame(const FrameInput& input, uint64_t timelineValue) {
         if (frame.withColor && (color->width != w || color->height != h || color->rgb.size() != size_t(color->width) * color->height * 3))
             throw Error("colour image is " + sizeText(color->width, color->height) + " but the depth image is " + sizeText(w, h) +
                         " (colour must be registered to depth)");
-        std::memcpy(depthStaging_.mapped(), depth.meters.data(), depth.meters.size() * sizeof(float));
+        std::memcpy(hostInput(), depth.meters.data(), depth.meters.size() * sizeof(float));
         if (frame.withColor) {
             // RGBA8 words after the depth samples; alpha 255: every pixel of the image has a colour.
-            auto* words = static_cast<uint32_t*>(depthStaging_.mapped()) + depth.meters.size();
+            auto* words = static_cast<uint32_t*>(hostInput()) + depth.meters.size();
             const uint8_t* rgb = color->rgb.data();
             for (size_t i = 0; i < depth.meters.size(); ++i, rgb += 3)
                 words[i] = uint32_t(rgb[0]) | uint32_t(rgb[1]) << 8 | uint32_t(rgb[2]) << 16 | 0xFF000000u;
         }
     }
     frame.input = input;
-    frame.input.depth = nullptr;   // the host images are in the staging buffer now
+    frame.input.depth = nullptr;   // the host images are in the staging buffer (or depth_) now
     frame.input.color = nullptr;
     frame.timelineValue = timelineValue;
 

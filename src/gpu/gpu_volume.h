@@ -381,7 +381,10 @@ private:
     BlockStore store_;
     CubeMesh mesh_;
     FrameLists lists_;
+    // depth_ is what the shaders read; depthStaging_ is what the host writes a frame's images into, absent on a
+    // device with unified memory, where the host writes depth_ itself (hostInput()).
     vk::Buffer depth_, depthStaging_, mcTables_;
+    void* hostInput() const { return depthStaging_.handle() ? depthStaging_.mapped() : depth_.mapped(); }
     // FramePoseGpu (BINDING_FRAME_POSE), written at the start of every frame; a frame whose pose the GPU computed
     // copies it back (did the GPU skip the frame?).
     vk::Buffer framePose_, framePoseReadback_;

@@ -23,6 +23,9 @@ Buffer::Buffer(const Context& context, VkDeviceSize size, VkBufferUsageFlags usa
         case MemoryUse::Upload:
             required = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
             break;
+        case MemoryUse::DeviceMapped:
+            required = VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT | VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+            break;
         case MemoryUse::Readback:
             required = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT;
             preferred = VK_MEMORY_PROPERTY_HOST_CACHED_BIT;

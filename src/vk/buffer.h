@@ -15,6 +15,8 @@ enum class MemoryUse {
     Device,    // device-local: the data structure, written and read by shaders
     Upload,    // host-visible, coherent: per-frame inputs written by the host
     Readback,  // host-visible, cached when possible: small results read by the host
+    DeviceMapped,  // device-local AND host-visible, coherent: per-frame inputs written by the host where shaders
+                   // read them, on a device with unified memory (Context::unifiedMemory)
 };
 
 class Buffer {

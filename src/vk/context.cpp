@@ -108,7 +108,7 @@ std::optional<uint32_t> computeQueueFamily(VkPhysicalDevice device) {
     return std::nullopt;
 }
 
-constexpr const char* kPretendableFeatures[] = {"shaderInt64", "shaderBufferInt64Atomics"};
+constexpr const char* kPretendableFeatures[] = {"shaderInt64", "shaderBufferInt64Atomics", "unifiedMemory"};
 
 bool pretendMissing(const std::vector<std::string>& missing, const char* feature) {
     return std::find(missing.begin(), missing.end(), feature) != missing.end();
@@ -166,6 +166,17 @@ DeviceInfo describe(VkPhysicalDevice device, uint32_t index) {
         };
         atLeast(l.maxPerStageDescriptorStorageBuffers, 16, "maxPerStageDescriptorStorageBuffers");
         atLeast(l.maxComputeWorkGroupInvocations, 256, "maxComputeWorkGroupInvocations");
+    }
+    // A discrete GPU may also offer a device-local type the host can map (a PCIe BAR); the host's writes would
+    // then cross the bus uncached, so only a device sharing the host's memory writes its inputs in place.
+    if ((props.deviceType == VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU || props.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU) &&
+        !pretendMissing(pretended, "unifiedMemory")) {
+        VkPhysicalDeviceMemoryProperties memory{};
+        vkGetPhysicalDeviceMemoryProperties(device, &memory);
+        const VkMemoryPropertyFlags mapped = VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT | VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT |
+                                             VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+        for (uint32_t i = 0; i < memory.memoryTypeCount; ++i)
+            if ((memory.memoryTypes[i].propertyFlags & mapped) == mapped) info.unifiedMemory = true;
     }
     info.suitable = missing.empty();
     for (size_t i = 0; i < missing.size(); ++i) info.whyNot += (i ? ", " : "missing ") + missing[i];

@@ -29,6 +29,10 @@ struct DeviceInfo {
     // shaderBufferInt64Atomics (and VKMESH_PRETEND_MISSING names neither), else 32-bit atomics only.
     bool int64Atomics = false;
     std::string hashPath;     // "64-bit atomics" or "32-bit atomics (no ...)", for `vkmesh devices`
+    // Unified memory: an integrated GPU or a CPU device (lavapipe) with a device-local memory type the host can
+    // map coherently. The host then writes a frame's images where the shaders read them, with no staging
+    // buffer and no copy (VKMESH_PRETEND_MISSING=unifiedMemory takes the staging path, as on a discrete GPU).
+    bool unifiedMemory = false;
 };
 
 // The Vulkan feature names that VKMESH_PRETEND_MISSING (a comma list) may name: vkmesh then behaves as on
@@ -86,6 +90,8 @@ public:
     bool validationEnabled() const { return validation_; }
     // Whether the block hash uses 64-bit atomics on this device (else its 32-bit path; docs/HASH.md).
     bool int64Atomics() const { return info_.int64Atomics; }
+    // Whether per-frame inputs go straight into device-local, host-mapped memory (DeviceInfo::unifiedMemory).
+    bool unifiedMemory() const { return info_.unifiedMemory; }
 
     // Memory type with all `required` flags (and `preferred` ones when possible); throws if none.
     uint32_t findMemoryType(uint32_t typeBits, VkMemoryPropertyFlags required, VkMemoryPropertyFlags preferred = 0) const;

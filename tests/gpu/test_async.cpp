@@ -5,8 +5,10 @@
 // synchronisation validation) on: any message fails.
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <cstring>
 #include <map>
+#include <memory>
 #include <tuple>
 #include <string>
 #include <vector>
@@ -294,6 +296,56 @@ TEST_F(GpuTest, GpuBufferAndImageInputGiveTheHostInputsMesh) {
         for (const auto& [position, color] : want) colored += (color >> 24) != 0;
         EXPECT_GT(colored, want.size() / 2) << "the frames' colours reached the mesh";
     }
+}
+
+// The host's images written in place (a device with unified memory: lavapipe, integrated GPUs) or through a
+// staging buffer and a copy (a discrete GPU; VKMESH_PRETEND_MISSING=unifiedMemory here) give the same mesh,
+// colours included, blocking and asynchronously. The suite runs on both paths: the portability job pretends
+// unified memory away.
+TEST_F(GpuTest, HostImagesInPlaceOrStagedGiveTheSameMesh) {
+    const bool fixtureUnified = context().unifiedMemory();
+    const char* env = std::getenv("VKMESH_PRETEND_MISSING");
+    const std::string saved = env ? env : "";
+    if (fixtureUnified) setenv("VKMESH_PRETEND_MISSING", "unifiedMemory", 1);
+    else unsetenv("VKMESH_PRETEND_MISSING");
+    auto other = std::make_unique<vk::Context>(vk::ContextOptions{-1, true});
+    if (env) setenv("VKMESH_PRETEND_MISSING", saved.c_str(), 1);
+    else unsetenv("VKMESH_PRETEND_MISSING");
+    if (!fixtureUnified && !other->unifiedMemory()) GTEST_SKIP() << "this device has no unified memory";
+    ASSERT_NE(other->unifiedMemory(), fixtureUnified) << "VKMESH_PRETEND_MISSING=unifiedMemory changes the input path";
+    vk::Context& inPlaceContext = fixtureUnified ? context() : *other;
+    vk::Context& stagedContext = fixtureUnified ? *other : context();
+
+    const auto frames = roomFrames(5);
+    {
+        gpu::GpuVolume inPlace(inPlaceContext, roomConfig(true)), staged(stagedContext, roomConfig(true));
+        auto hasStaging = [](const gpu::GpuVolume& v) {
+            for (const auto& pool : v.pools())
+                if (pool.name == "depth staging" && pool.bytes > 0) return true;
+            return false;
+        };
+        EXPECT_FALSE(hasStaging(inPlace));
+        EXPECT_TRUE(hasStaging(staged));
+        for (size_t i = 0; i < frames.size(); ++i) {
+            const Frame& f = frames[i];
+            staged.integrate(f.depth, &f.color, f.intrinsics, f.pose);
+            // Asynchronously: the host writes the next frame's images into the buffer the last frame read.
+            inPlace.submitFrame(gpu::FrameInput::fromHost(f.depth, &f.color, f.intrinsics, f.pose), i + 1);
+            inPlace.finishFrame();
+        }
+        const gpu::ExportedMesh want = staged.exportMesh(), got = inPlace.exportMesh();
+        ASSERT_GT(want.triangles.size(), 0u);
+        ASSERT_EQ(got.vertices.size(), want.vertices.size());
+        EXPECT_EQ(mismatches(toMesh(got), toMesh(want)), 0u);
+        auto colorsByPosition = [](const gpu::ExportedMesh& m) {
+            std::map<std::tuple<float, float, float>, uint32_t> out;
+            for (const gpu::Vertex& v : m.vertices) out[{v.px, v.py, v.pz}] = v.color;
+            return out;
+        };
+        EXPECT_EQ(colorsByPosition(got), colorsByPosition(want)) << "vertex colours";
+    }
+    const auto messages = other->takeValidationMessages();
+    EXPECT_TRUE(messages.empty()) << messages.size() << " validation messages, first: " << messages.front();
 }
 
 // The Reconstructor's asynchronous form on an application's device: reports one call late, the same mesh
