@@ -46,6 +46,7 @@ struct VolumeOptions {
     float maxWeight = VolumeParams{}.maxWeight;
     float minWeight = gpu::GpuVolumeConfig{}.minMeshWeight;
     int allocStride = VolumeParams{}.allocationStride;
+    bool allocTiles = VolumeParams{}.allocationTiles;
     bool refine = gpu::GpuVolumeConfig{}.refine;
     float refineEps = gpu::GpuVolumeConfig{}.refineEpsilonVoxels;
     bool lockFree = gpu::GpuVolumeConfig{}.lockFree;
@@ -66,7 +67,7 @@ struct VolumeOptions {
     // --starve-weight).
     void addCommon(CLI::App* cmd);
     // The rest (fuse): --mode, --refine, --refine-eps, --lock-free, --vertices, --chunks, --hash-slots,
-    // --trunc, --max-weight, --min-weight, --alloc-stride, --no-color, --color-mode, --color-recency.
+    // --trunc, --max-weight, --min-weight, --alloc-stride, --alloc-tiles, --no-color, --color-mode, --color-recency.
     void addTuning(CLI::App* cmd);
 
     bool incremental() const { return mode != "baseline"; }

@@ -104,6 +104,7 @@ void takeMapSettings(const CLI::App& cmd, const gpu::GpuVolumeConfig& map, gpu::
     if (!given("--max-weight")) c.params.maxWeight = map.params.maxWeight;
     if (!given("--min-weight")) c.minMeshWeight = map.minMeshWeight;
     if (!given("--alloc-stride")) c.params.allocationStride = map.params.allocationStride;
+    if (!given("--alloc-tiles")) c.params.allocationTiles = map.params.allocationTiles;
     if (!given("--mode")) c.meshMode = map.meshMode;
     if (!given("--refine")) c.refine = map.refine;
     if (!given("--refine-eps")) c.refineEpsilonVoxels = map.refineEpsilonVoxels;
@@ -590,6 +591,7 @@ int runFuse(const FuseArgs& args) {
     stats["voxel_size"] = vo.voxel;
     stats["truncation_m"] = config.params.truncation();
     stats["allocation_stride"] = vo.allocStride;
+    stats["allocation_tiles"] = config.params.allocationTiles;
     stats["max_depth"] = args.data.maxDepth;
     stats["blocks"] = {{"in_use", k.blocksInUse}, {"capacity", volume.config().blockCapacity},
                        {"hash_capacity", volume.config().hashCapacity}, {"hash_entries", k.hashEntries},

@@ -560,6 +560,7 @@ public:
         d["voxel_size"] = shortest(c.params.voxelSize);
         d["truncation_m"] = shortest(c.params.truncation());
         d["allocation_stride"] = c.params.allocationStride;
+        d["allocation_tiles"] = c.params.allocationTiles;
         d["max_depth"] = shortest(c.params.maxDepth);
         d["refine"] = c.refine;
         d["lock_free"] = c.lockFree;
@@ -775,7 +776,7 @@ std::unique_ptr<PyReconstructor> makeReconstructor(float voxelSize, float trunca
                                                    bool lockFree, const Capacities& capacities, bool growCapacities, float keepRadius,
                                                    bool recycle, long long recycleAfterFrames, float starveWeight, bool validation,
                                                    float trackColorWeight, const std::string& trackSolve, int trackDownsample,
-                                                   int trackModelReuse, const CorrectionSettings& correction) {
+                                                   int trackModelReuse, const CorrectionSettings& correction, bool allocationTiles) {
     ReconstructorOptions o;
     correction.applyTo(o);
     gpu::GpuVolumeConfig& c = o.volume;
@@ -786,6 +787,7 @@ std::unique_ptr<PyReconstructor> makeReconstructor(float voxelSize, float trunca
     if (maxWeight != VolumeParams{}.maxWeight)
         PyErr_WarnEx(PyExc_DeprecationWarning, "max_weight is deprecated and has no effect: the TSDF keeps exact sums so that frames can be taken out again", 1);
     c.params.allocationStride = allocationStride;
+    c.params.allocationTiles = allocationTiles;
     c.params.colorFusion = parseColorMode(colorMode);
     c.params.colorRecency = colorRecency;
     c.minMeshWeight = minWeight;
@@ -983,6 +985,8 @@ Keyword arguments (all optional):
   max_weight            deprecated, no effect (a DeprecationWarning): the TSDF keeps exact sums (--max-weight)
   min_weight            a cube is meshed when its 8 corners have this weight (--min-weight; 1)
   allocation_stride     allocate blocks from every Nth pixel (--alloc-stride; 2)
+  allocation_tiles      claim the blocks around the plane of a tile of 8 x 8 sampled pixels where one fits instead of
+                        walking every sampled pixel's band (--alloc-tiles; False)
   refine, refine_epsilon_voxels   Hamming-distance refinement of cube types (--refine, --refine-eps)
   lock_free             the paper's lock-free vertex claims (--lock-free; same mesh)
   block_capacity, hash_capacity, touched_capacity, vertex_capacity, chunk_capacity, retype_capacity,
@@ -1018,14 +1022,15 @@ Bad settings raise ValueError; no usable device or a capacity that does not fit 
                          long long deltaRecordCapacity, bool growCapacities, double keepRadius, bool recycle,
                          long long recycleAfterFrames, double starveWeight, bool validation, double trackColorWeight,
                          const std::string& trackSolve, int trackDownsample, int trackModelReuse, bool keepFrames,
-                         long long correctionsPerFrame, double framesBudgetMb, const std::string& framesSpill, bool loopClosure) {
+                         long long correctionsPerFrame, double framesBudgetMb, const std::string& framesSpill, bool loopClosure,
+                         bool allocationTiles) {
                  return makeReconstructor(voxelSize, truncationVoxels, maxDepth, device, colorMode, colorRecency, trackDeltas,
                                           maxWeight, minWeight, allocationStride, refine, refineEpsilonVoxels, lockFree,
                                           {blockCapacity, hashCapacity, touchedCapacity, vertexCapacity, chunkCapacity,
                                            retypeCapacity, deltaRecordCapacity},
                                           growCapacities, keepRadius, recycle, recycleAfterFrames, starveWeight, validation,
                                           float(trackColorWeight), trackSolve, trackDownsample, trackModelReuse,
-                                          {keepFrames, loopClosure, correctionsPerFrame, framesBudgetMb, framesSpill});
+                                          {keepFrames, loopClosure, correctionsPerFrame, framesBudgetMb, framesSpill}, allocationTiles);
              }),
              py::kw_only(), "voxel_size"_a = shortest(dp.voxelSize), "truncation_voxels"_a = shortest(dp.truncVoxels),
              // `vkmesh fuse --max-depth` defaults to 4 m (host/cli_options.h, DatasetArgs), not VolumeParams' 5 m.
@@ -1042,7 +1047,7 @@ Bad settings raise ValueError; no usable device or a capacity that does not fit 
              "track_downsample"_a = gpu::TrackerOptions{}.downsample,
              "track_model_reuse"_a = gpu::TrackerOptions{}.modelReuseFrames, "keep_frames"_a = false,
              "corrections_per_frame"_a = ReconstructorOptions{}.correctionsPerFrame, "frames_budget_mb"_a = 1024.0, "frames_spill"_a = "",
-             "loop_closure"_a = false)
+             "loop_closure"_a = false, "allocation_tiles"_a = dp.allocationTiles)
         .def("integrate", &PyReconstructor::integrate, "depth"_a, "intrinsics"_a, "pose"_a = py::none(), "depth_scale"_a = 5000.0,
              "color"_a = py::none(), R"doc(
 Fuses one frame and updates the mesh; returns when the GPU has finished it.
@@ -1095,7 +1100,7 @@ in order to an empty mesh gives mesh().
 )doc")
         .def("stats", &PyReconstructor::stats, R"doc(
 Counts, capacities and memory as a dict, with the keys `vkmesh fuse --stats` uses for the same things:
-device, int64_atomics, frames, voxel_size, truncation_m, allocation_stride, max_depth, color, capacities,
+device, int64_atomics, frames, voxel_size, truncation_m, allocation_stride, allocation_tiles, max_depth, color, capacities,
 recycling, and after the first frame blocks, heaps, gpu_pool_bytes, gpu_bytes_total and last_frame (its
 GPU milliseconds per stage, counts, capacity warnings and growth); with keep_frames, frame_store (frames,
 compressed bytes in memory and on disk, bytes_per_frame, pending_corrections).

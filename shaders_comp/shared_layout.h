@@ -9,10 +9,12 @@
 namespace vkmesh::gpu {
 using uint = uint32_t;
 #define VKM_CONST inline constexpr uint32_t
+#define VKM_CONST_FLOAT inline constexpr float
 #define VKM_VEC4(name) alignas(16) float name[4]
 #define VKM_ROWS3(name) alignas(16) float name[3][4]
 #else
 #define VKM_CONST const uint
+#define VKM_CONST_FLOAT const float
 #define VKM_VEC4(name) vec4 name
 #define VKM_ROWS3(name) vec4 name[3]
 #endif
@@ -62,6 +64,18 @@ VKM_CONST RAY_MAX_BLOCKS = 32u;
 VKM_CONST WG_PIXELS_X = 8u;                // allocate_blocks: one invocation per column of
 VKM_CONST WG_PIXELS_Y = 8u;                //   ALLOC_COLUMN sampled pixels (every allocationStride-th)
 VKM_CONST ALLOC_COLUMN = 16u;
+VKM_CONST ALLOC_TILE = 8u;                 // allocate_tiles: one invocation per tile of ALLOC_TILE x ALLOC_TILE
+                                           //   sampled pixels, WG_PIXELS_X x WG_PIXELS_Y tiles per workgroup
+// When allocate_tiles leaves a tile to the pixels' band walks (allocate_blocks): fewer valid depths than this,
+VKM_CONST ALLOC_TILE_MIN_VALID = 48u;
+// a depth farther from the tile's plane than this share of the truncation (on the synthetic room, noisy, 3 cm:
+// 0.5 covers ~75 % of the tiles and allocates ~5 % more blocks than the walks; 1.0 covers more tiles but
+// allocates ~9 % more, and fusion pays for every block; 0.25 covers ~30 %),
+VKM_CONST_FLOAT ALLOC_TILE_MAX_RESIDUAL = 0.5f;
+// or a slab whose bounding box holds more blocks than this.
+VKM_CONST ALLOC_TILE_MAX_BLOCKS = 48u;
+// Blocks: a block within this of the slab is claimed, which covers the rounding of the band walks' float arithmetic.
+VKM_CONST_FLOAT ALLOC_SLAB_MARGIN = 1e-3f;
 VKM_CONST WG_LIST = 64u;                   // one invocation per list entry (assign, collect)
 VKM_CONST WG_BLOCK = 128u;                 // fuse / mesh: one workgroup per block, 4 voxels per invocation
 VKM_CONST VOXELS_PER_INVOCATION = 4u;      // VOXELS_PER_BLOCK / WG_BLOCK
@@ -112,7 +126,8 @@ VKM_CONST BINDING_MESH_SIGNS = 34u;     // MESH_SIGN_WORDS uint per block: with 
 VKM_CONST BINDING_OWNED_SLOTS = 35u;
 VKM_CONST BINDING_FRAME_POSE = 36u;    // FramePoseGpu: the frame's camera pose as the passes read it
 VKM_CONST BINDING_CORNER_FLIPS = 37u;  // MASK_WORDS uint per block: corners whose sign or observed state fusion flipped (frame_lists.glsl)
-VKM_CONST BINDING_COUNT = 38u;
+VKM_CONST BINDING_ALLOC_TILES = 38u;   // uint per allocation tile: 1 when allocate_tiles claimed its slab (frame_lists.glsl)
+VKM_CONST BINDING_COUNT = 39u;
 VKM_CONST MASK_WORDS = 16u;            // VOXELS_PER_BLOCK / 32
 VKM_CONST MASK_ALL_CUBES = 0xFFFFFFFFu; // a retype-mask word with each of its 32 cubes listed
 // Per block, MESH_SIGN_WORDS uint at BINDING_MESH_SIGNS (with refinement; frame_lists.glsl), MASK_WORDS each, one bit
@@ -174,7 +189,8 @@ struct VolumeParamsGpu {
     uint colorMode;         // COLOR_MODE_*: how fusion folds a pixel's colour into a corner's
     float colorRecency;     // COLOR_MODE_RECENT: the new colour's share, in (0, 1]
     float sdfMetresPerStep; // truncation / SDF_STEPS_PER_TRUNCATION (exact: a power-of-two division)
-    uint pad0, pad1, pad2;
+    uint allocationTiles;   // 1: allocation claims the slab around a tile's plane where one fits (allocate_tiles)
+    uint pad1, pad2;
 };
 // A TSDF corner (docs/ARCHITECTURE.md, "Exact fusion"): the sum of its observations' truncated distances, each
 // rounded to a step of truncation / SDF_STEPS_PER_TRUNCATION (an int), and their count (a float holding a

@@ -83,6 +83,7 @@ struct Options {
     bool correct = false;      // after each run, every frame re-fused at a moved pose (docs/CORRECTION.md)
     bool quick = false;
     bool passTimes = false;    // a timestamp after every pass as well
+    bool allocTiles = false;   // allocation by tiles (VolumeParams::allocationTiles, vkmesh fuse --alloc-tiles)
     std::string jsonPath;
 };
 
@@ -198,7 +199,7 @@ struct VoxelRun {
     size_t observationsDropped = 0;
 };
 
-vkmesh::gpu::GpuVolumeConfig volumeConfig(double voxel, bool publish, bool passTimes) {
+vkmesh::gpu::GpuVolumeConfig volumeConfig(double voxel, bool publish, bool passTimes, bool allocTiles) {
     // The library's defaults are `vkmesh fuse`'s (host/cli_options.h takes them from GpuVolumeConfig); colour
     // fusion defaults to the running average, which fuse keeps for input with colour.
     vkmesh::gpu::GpuVolumeConfig config;
@@ -208,6 +209,7 @@ vkmesh::gpu::GpuVolumeConfig volumeConfig(double voxel, bool publish, bool passT
     config.imageHeight = kHeight;
     config.publishMesh = publish;
     config.timePasses = passTimes;
+    config.params.allocationTiles = allocTiles;
     return config;
 }
 
@@ -218,8 +220,8 @@ vkmesh::gpu::GpuVolumeConfig volumeConfig(double voxel, bool publish, bool passT
 // With `correct`, after the sequence every fused frame is re-fused as Reconstructor::correct does it: taken out at
 // the pose it was fused at and fused again at that pose moved by 1 cm and 0.5 degrees.
 void fuseSequence(const vkmesh::vk::Context& context, const std::vector<Frame>& rendered, size_t count, double voxel,
-                  bool publish, bool track, bool trackSolveOnGpu, bool correct, bool passTimes, VoxelRun* run) {
-    vkmesh::gpu::GpuVolume volume(context, volumeConfig(voxel, publish || track, passTimes));
+                  bool publish, bool track, bool trackSolveOnGpu, bool correct, bool passTimes, bool allocTiles, VoxelRun* run) {
+    vkmesh::gpu::GpuVolume volume(context, volumeConfig(voxel, publish || track, passTimes, allocTiles));
     const Intrinsics intrinsics = vkmesh::synth::kinectIntrinsics(kWidth, kHeight);
     std::optional<vkmesh::gpu::PoseTracker> tracker;
     if (track) {
@@ -520,9 +522,9 @@ int run(Options o, const CLI::App& cli) {
 
     if (o.warmup > 0) {   // raises the GPU's clocks and fills the driver's caches before anything is timed
         std::fprintf(stderr, "warm-up: %zu untimed frames at %s\n", o.warmup, cm(o.voxels.front()).c_str());
-        fuseSequence(context, rendered, o.warmup, o.voxels.front(), o.publish, o.track, o.trackSolve == "gpu", false, o.passTimes, nullptr);
+        fuseSequence(context, rendered, o.warmup, o.voxels.front(), o.publish, o.track, o.trackSolve == "gpu", false, o.passTimes, o.allocTiles, nullptr);
         if (o.track && o.trackSolve == "both")   // the other mode's pipelines and caches too
-            fuseSequence(context, rendered, std::min<size_t>(o.warmup, 10), o.voxels.front(), o.publish, true, true, false, o.passTimes, nullptr);
+            fuseSequence(context, rendered, std::min<size_t>(o.warmup, 10), o.voxels.front(), o.publish, true, true, false, o.passTimes, o.allocTiles, nullptr);
     }
     std::vector<VoxelRun> runs;
     // Written after every voxel size, so that a run stopped part way (run.sh's --timeout) leaves what it measured.
@@ -547,7 +549,7 @@ int run(Options o, const CLI::App& cli) {
                     {"scene", {{"name", "synthetic room (vkmesh synth defaults)"}, {"path", "orbit"},
                                {"loop_frames", o.loopFrames}, {"width", kWidth}, {"height", kHeight},
                                {"max_depth", kMaxDepth}, {"color", true}, {"render_s", renderSeconds}}},
-                    {"pipeline", {{"mode", "incremental"}, {"color_fusion", "average"}, {"publish_mesh", o.publish}, {"track", o.track}, {"track_solve", o.trackSolve}, {"correct", o.correct}, {"pass_times", o.passTimes}}},
+                    {"pipeline", {{"mode", "incremental"}, {"color_fusion", "average"}, {"publish_mesh", o.publish}, {"track", o.track}, {"track_solve", o.trackSolve}, {"correct", o.correct}, {"pass_times", o.passTimes}, {"alloc_tiles", o.allocTiles}}},
                     {"frames_per_run", o.frames},
                     {"repeat", o.repeat},
                     {"warmup_frames", o.warmup},
@@ -574,7 +576,7 @@ int run(Options o, const CLI::App& cli) {
             for (size_t rep = 0; rep < o.repeat; ++rep) {
                 std::fprintf(stderr, "fusing %zu frames at %s%s (%zu/%zu)...\n", o.frames, cm(voxel).c_str(),
                              solve.empty() ? "" : (", tracking solved on the " + solve).c_str(), rep + 1, o.repeat);
-                fuseSequence(context, rendered, o.frames, voxel, o.publish, o.track, solve == "gpu", o.correct, o.passTimes, &r);
+                fuseSequence(context, rendered, o.frames, voxel, o.publish, o.track, solve == "gpu", o.correct, o.passTimes, o.allocTiles, &r);
             }
             r.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
             printRun(r, o.repeat);
@@ -637,6 +639,9 @@ int main(int argc, char** argv) {
                  "after each run, re-fuse every frame as a pose correction does (de-integrated at its pose, fused again 1 cm "
                  "and 0.5 degrees away; docs/CORRECTION.md) and report the cost against fusing a frame");
     cli.add_option("--json", o.jsonPath, "write the results as JSON to this file");
+    cli.add_flag("--alloc-tiles", o.allocTiles,
+                 "allocation by tiles (vkmesh fuse --alloc-tiles): a plane's slab per tile of 8 x 8 sampled pixels where one "
+                 "fits, the other pixels' band walks (on lavapipe a few percent of the frame either way: what does a GPU say?)");
     cli.add_flag("--pass-times", o.passTimes,
                  "also a GPU timestamp after every pass (compute dispatch): the GPU ms of each pass by shader name, printed "
                  "after the stages and in the JSON (gpu_ms_per_pass)");

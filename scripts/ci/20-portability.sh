@@ -53,6 +53,7 @@ if [[ $parts == all || $parts == gpu-av ]]; then
   # Together these dispatch every compute shader (checked below); each is also the test of one area:
   gpu_av_tests=(
     GpuTest.FusedTsdfMatchesReference                          # allocation + fusion against the CPU reference
+    PixelStride/AllocationTest.MatchesReferenceAndCountersConserve/Stride1Tiles  # allocation by tiles (allocate_tiles)
     GpuTest.BaselineMeshMatchesReference                       # baseline marching cubes (mesh_baseline)
     Refinement/IncrementalTest.IncrementalMeshEqualsRebuildFromScratch/true  # incremental mesh, mark-all-dirty rebuild, export
     GpuTest.VertexColoursMatchReferenceMesherAndRebuild        # colour: fused corner colours, vertex colours

@@ -1,5 +1,6 @@
 #version 460
-// Stage 1 of a frame (paper §V.A): every valid pixel walks the blocks that its truncation band crosses
+// Stage 1 of a frame (paper §V.A): every valid pixel (of every allocationStride-th row and column, and only in
+// the tiles allocate_tiles did not cover) walks the blocks that its truncation band crosses
 // (a 3D DDA in block units from depth d - trunc to d + trunc along the pixel's ray), inserts their keys
 // into the spatial hash, and appends each block touched for the first time this frame to the touched
 // list. Blocks get pool memory in the next stage (assign_blocks): here a key is only claimed. A frame being
@@ -15,60 +16,7 @@
 layout(local_size_x = WG_PIXELS_X, local_size_y = WG_PIXELS_Y) in;
 layout(constant_id = 0) const uint ALLOCATE_DIRECTION = FUSE_BY_FRAME;   // shared_layout.h, FUSE_INTEGRATE
 
-uint requests = 0u, found = 0u, inserted = 0u, full = 0u, outOfRange = 0u, outsideRadius = 0u, repeated = 0u;
-
-// Claims `cell`'s key without waiting on anyone (structure/block_hash.glsl). Returns the slot, or
-// NO_BLOCK if none was free within the probe bound.
-uint insertKey(ivec3 cell) {
-    if (ALLOCATE_DIRECTION == FUSE_BY_FRAME ? framePose.deintegrate != 0u : ALLOCATE_DIRECTION == FUSE_DEINTEGRATE) {
-        uint slot = findSlot(cell);
-        if (slot != NO_BLOCK) ++found;
-        return slot;
-    }
-    bool isNew;
-    uint slot = hashInsertKey(cell, isNew);
-    if (slot == NO_BLOCK) ++full;
-    else if (isNew) ++inserted;
-    else ++found;
-    return slot;
-}
-
-void touchBlock(ivec3 cell) {
-    uint slot = insertKey(cell);
-    if (slot == NO_BLOCK) return;
-    // The first invocation to stamp the slot with this frame's number lists it, so each block appears
-    // once in the touched list however many pixels see it.
-    if (hashStamps[slot] != frame.frameNumber &&
-        atomicExchange(hashStamps[slot], frame.frameNumber) != frame.frameNumber) {
-        uint at = atomicAdd(counters.touchedCount, 1u);
-        if (at < params.touchedCapacity) touched[at] = slot;
-    }
-}
-
-// The blocks this invocation touched last, most recent first. Neighbouring pixels' bands cross mostly the same
-// blocks, so one invocation walking a column of pixels finds most of its visits here and touches the hash (a
-// scattered read costing ~6-8 ns on lavapipe, twice) only for the others. Eight named variables rather than an
-// array: llvmpipe keeps an array indexed at run time in scratch memory. The first cell is one no band reaches.
-ivec3 recent0 = ivec3(0x7FFFFFFF), recent1 = recent0, recent2 = recent0, recent3 = recent0,
-      recent4 = recent0, recent5 = recent0, recent6 = recent0, recent7 = recent0;
-
-void visitBlock(ivec3 cell) {
-    ++requests;
-    // Counted per visit, like the per-pixel reference: a block out of range or beyond the keep radius is never
-    // looked up, so checking it again costs no scattered read.
-    if (!blockCoordInRange(cell)) { ++outOfRange; return; }
-    // Bounded maps: blocks beyond the keep radius are not allocated (the recycling passes free those
-    // the camera has left behind), so the map stays a ball around the camera.
-    if (blockOutsideKeepRadius(cell)) { ++outsideRadius; return; }
-    if (cell == recent0 || cell == recent1 || cell == recent2 || cell == recent3 ||
-        cell == recent4 || cell == recent5 || cell == recent6 || cell == recent7) {
-        ++repeated;
-        return;
-    }
-    recent7 = recent6; recent6 = recent5; recent5 = recent4; recent4 = recent3;
-    recent3 = recent2; recent2 = recent1; recent1 = recent0; recent0 = cell;
-    touchBlock(cell);
-}
+#include "allocate/block_visits.glsl"
 
 // Walks the band of one sampled pixel.
 void walkPixel(uvec2 pixel, uvec2 size, inout uint valid, inout uint truncated) {
@@ -125,11 +73,21 @@ void main() {
         // This invocation's column of ALLOC_COLUMN sampled pixels, top down: consecutive pixels are neighbours
         // and share most blocks, while the lanes of a subgroup read neighbouring pixels of one row (on lavapipe
         // a column is 0.67 x the allocation time of the same A/B against 0.80 x for a 4 x 4 tile walked back
-        // and forth, with 30 % more hash requests).
+        // and forth, with 30 % more hash requests). The column spans two allocation tiles; the rows of a tile
+        // whose slab allocate_tiles claimed are skipped, by a loop with no row to run (llvmpipe would run the
+        // body of an `if` under a mask).
         uvec2 firstSample = gl_GlobalInvocationID.xy * uvec2(1u, ALLOC_COLUMN);
-        for (uint row = 0u; row < ALLOC_COLUMN; ++row) {
-            uvec2 pixel = (firstSample + uvec2(0u, row)) * params.allocationStride;
-            if (all(lessThan(pixel, size))) walkPixel(pixel, size, valid, truncated);
+        uvec2 samples = (size + params.allocationStride - 1u) / params.allocationStride;
+        uint tilesX = (samples.x + ALLOC_TILE - 1u) / ALLOC_TILE;
+        for (uint part = 0u; part < ALLOC_COLUMN / ALLOC_TILE; ++part) {
+            uvec2 partFirst = firstSample + uvec2(0u, part * ALLOC_TILE);
+            bool covered = params.allocationTiles != 0u && all(lessThan(partFirst, samples)) &&
+                           tileCovered[(partFirst.y / ALLOC_TILE) * tilesX + partFirst.x / ALLOC_TILE] != 0u;
+            uint rows = covered ? 0u : ALLOC_TILE;
+            for (uint row = 0u; row < rows; ++row) {
+                uvec2 pixel = (partFirst + uvec2(0u, row)) * params.allocationStride;
+                if (all(lessThan(pixel, size))) walkPixel(pixel, size, valid, truncated);
+            }
         }
     }
     ADD_COUNTER(validPixels, valid);

@@ -41,6 +41,9 @@ layout(std430, set = 0, binding = BINDING_MESH_SIGNS) coherent buffer MeshSigns 
 // marking 8 cubes per corner there, with up to 7 hash probes for a corner on a block's low faces (fusion
 // 0.35 ms of ~4.5 on the synthetic room). Empty between frames.
 layout(std430, set = 0, binding = BINDING_CORNER_FLIPS) coherent buffer CornerFlips { uint cornerFlips[]; };
+// A word per allocation tile: 1 when allocate_tiles claimed the blocks of its slab, so allocate_blocks skips its
+// pixels. Written for every tile each frame before allocate_blocks reads it.
+layout(std430, set = 0, binding = BINDING_ALLOC_TILES) buffer AllocTiles { uint tileCovered[]; };
 
 uint meshSignWord(uint block, uint local) { return block * MESH_SIGN_WORDS + local / 32u; }
 uint tsdfMaskWord(uint block, uint mask, uint local) { return block * MESH_SIGN_WORDS + mask + local / 32u; }

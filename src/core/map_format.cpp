@@ -50,7 +50,7 @@ void writeSettings(Writer& w, const Settings& s) {
     w.u32(s.allocationStride), w.f32(s.minMeshWeight), w.u32(s.incrementalMesh), w.u32(s.refine), w.f32(s.refineEpsilonVoxels);
     w.u32(s.lockFree), w.u32(s.vertexUpdate), w.f32(s.keepRadius), w.u32(s.recycle), w.u32(s.recycleAfterFrames);
     w.f32(s.starveWeight), w.f32(s.hashRebuildTombstoneFraction), w.u32(s.imageWidth), w.u32(s.imageHeight);
-    w.u32(s.growCapacities), w.u32(s.touchedFollowsPool), w.u32(s.colorMode), w.f32(s.colorRecency), w.u32(0);
+    w.u32(s.growCapacities), w.u32(s.touchedFollowsPool), w.u32(s.colorMode), w.f32(s.colorRecency), w.u32(s.allocationTiles);
 }
 
 void writeFreeStack(Writer& w, uint32_t t, const FreeStack& f) {
@@ -287,7 +287,9 @@ MapData parse(std::string_view bytes, const std::string& name) {
         auto f = [&](int i) { float v; std::memcpy(&v, p + 4 * i, 4); return v; };
         Settings& s = map.settings;
         s = {f(0), f(1), f(2), f(3), f(4), u(5), f(6), u(7), u(8), f(9), u(10), u(11), f(12), u(13), u(14), f(15), f(16),
-             u(17), u(18), u(19), u(20), u(21), f(22)};
+             u(17), u(18), u(19), u(20), u(21), f(22), u(23)};
+        if (s.allocationTiles > 1)
+            r.fail("allocation mode " + std::to_string(s.allocationTiles) + " is not 0 (pixel by pixel) or 1 (by tiles)");
         if (s.colorMode > 2) r.fail("colour mode " + std::to_string(s.colorMode) + " is not 0 (off), 1 (average) or 2 (recent)");
         if (s.colorMode != 0 && !(s.colorRecency > 0 && s.colorRecency <= 1))
             r.fail("colour recency " + std::to_string(s.colorRecency) + " is outside (0, 1]");

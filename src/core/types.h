@@ -61,6 +61,12 @@ struct VolumeParams {
     // every pixel. 1 follows the paper (every valid pixel); Open3D's VoxelBlockGrid uses 4. 2 costs a
     // quarter of 1 and changes under 0.1 % of the baseline triangles on the real datasets (docs/RESULTS.md).
     int allocationStride = 2;
+    // Allocation by tiles (shaders_comp/allocate/allocate_tiles.comp; `fuse --alloc-tiles`): where a plane fits a
+    // tile of 8 x 8 sampled pixels, the blocks of the slab around it are claimed at once, a superset of what the
+    // tile's band walks claim; the other tiles' pixels walk their bands. Off by default: on lavapipe it saves
+    // allocation time on the synthetic room and TUM but not on ICL-NUIM, and the extra blocks (+4-6 %) cost
+    // fusion about what it saves (docs/RESULTS.md). false: every sampled pixel walks its band.
+    bool allocationTiles = false;
     // Colour: frames that come with a colour image fold it into the corners they update (same weights);
     // frames without one fuse depth only. Off allocates no colour (4 bytes per corner less).
     ColorFusion colorFusion = ColorFusion::Average;

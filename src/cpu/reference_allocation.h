@@ -1,6 +1,8 @@
-// The CPU reference of block allocation (shaders_comp/allocate/allocate_blocks.comp, paper §V.A): every valid pixel
-// (of every allocationStride-th row and column) walks the blocks its truncation band crosses, a 3D DDA in
-// block units from depth d - trunc to d + trunc along the pixel's ray, with the shader's float operations.
+// The CPU reference of block allocation (shaders_comp/allocate/, paper §V.A): with VolumeParams::allocationTiles,
+// every tile of 8 x 8 sampled pixels whose depths a plane fits claims the blocks of the slab around it
+// (allocate_tiles.comp); every other valid pixel (of every allocationStride-th row and column) walks the blocks its
+// truncation band crosses, a 3D DDA in block units from depth d - trunc to d + trunc along the pixel's ray
+// (allocate_blocks.comp). The shaders' float operations.
 #pragma once
 
 #include <Eigen/Core>
@@ -9,6 +11,7 @@
 #include <functional>
 #include <vector>
 
+#include "core/camera.h"
 #include "core/types.h"
 #include "cpu/reference_block.h"
 #include "cpu/reference_hash.h"
@@ -18,6 +21,13 @@ namespace vkmesh::cpu {
 // The Amanatides & Woo walk of allocate_blocks.comp from a to b (block units), calling visit for every
 // block it enters, a's first. Returns false when the walk was cut at RAY_MAX_BLOCKS blocks.
 bool walkBand(const Eigen::Vector3f& a, const Eigen::Vector3f& b, const std::function<void(const BlockCoord&)>& visit);
+
+// allocate_tiles.comp for the tile whose first and last samples are (firstX, firstY) and (lastX, lastY) (pixels):
+// where a plane fits the tile's valid depths, calls visit for every block the slab around it may cross (a
+// superset of the blocks its samples' band walks visit), adds the valid samples to *validSamples and returns
+// true; else visits nothing and returns false (the samples walk their bands). The shader's float operations.
+bool walkTileSlab(const DepthImage& depth, const gpu::FramePush& push, const VolumeParams& params, int firstX, int firstY,
+                  int lastX, int lastY, const std::function<void(const BlockCoord&)>& visit, uint32_t* validSamples);
 
 // What the allocation stage counted; the fields mean the same as the GPU's Counters of the same names.
 struct AllocationStats {
@@ -31,7 +41,8 @@ struct AllocationStats {
     uint32_t blocksFound = 0, blocksInserted = 0, hashFull = 0;
 };
 
-// The distinct blocks the frame's bands cross, in first-visit order (pixels in raster order), leaving out
+// The distinct blocks the frame's tiles and bands cross, in first-visit order (covered tiles, then the other pixels,
+// each in raster order), leaving out
 // blocks beyond the key range and beyond keepRadius (> 0) from the camera. With `hash`, every visit inserts
 // its key there (allocate_blocks.comp's insertKey) and stamps the slot with frameNumber, and a block whose
 // key finds no slot (hash full) is not touched.

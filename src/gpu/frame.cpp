@@ -55,7 +55,8 @@ void GpuVolume::recordFrame(VkCommandBuffer cmd, const FramePush& push, bool reb
     // (host)   depth upload         staging                                   depth image; per-frame counters cleared
     // pose     (host) or recordPose  [camera tracking: depth, mesh]             frame pose (skip: every pass below idles)
     // rehash   (tombstones > 1/8)   block list, hash                          hash (no tombstones), block coords.w
-    // allocate allocate_blocks      depth, hash                               hash keys, stamps, touched list
+    // allocate allocate_tiles       depth, hash                               hash keys, stamps, touched list, tiles
+    //          allocate_blocks      depth, hash, tiles                        hash keys, stamps, touched list
     //          plan_frame           touchedCount                              assign/block dispatch
     //          assign_blocks        touched list, free list, hash             hash values, block coords, touched list
     //          commit_allocation    allocRequests                             free list top, pool counts
@@ -89,7 +90,8 @@ void GpuVolume::recordFrame(VkCommandBuffer cmd, const FramePush& push, bool reb
         recordRebuildHash(cmd, push);
         timer_.mark(cmd, "rehash");
     }
-    allocate_.record(cmd, push, counters_.buffer(), uint32_t(config_.params.allocationStride), inFlight_->input.deintegrate);
+    allocate_.record(cmd, push, counters_.buffer(), uint32_t(config_.params.allocationStride), config_.params.allocationTiles,
+                     inFlight_->input.deintegrate);
     deferFrame_.dispatch(cmd, &push, 1);
     vk::memoryBarrier(cmd);
     timer_.mark(cmd, "allocate");

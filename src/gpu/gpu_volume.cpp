@@ -101,6 +101,7 @@ VolumeParamsGpu initialParams(const GpuVolumeConfig& c) {
     gp.touchedCapacity = c.touchedCapacity;
     gp.meshVertexCapacity = c.meshVertexCapacity;
     gp.allocationStride = uint32_t(c.params.allocationStride);
+    gp.allocationTiles = c.params.allocationTiles ? 1u : 0u;
     gp.vertexCapacity = c.vertexCapacity;
     gp.chunkCapacity = c.chunkCapacity;
     gp.retypeCapacity = c.retypeCapacity;
@@ -165,6 +166,13 @@ GpuVolume::GpuVolume(const vk::Context& context, const GpuVolumeConfig& config)
         depth_ = makeStorage(context, table_, BINDING_DEPTH, inputBytes, "depth image");   // name kept: a --stats key
         depthStaging_ = vk::Buffer(context, inputBytes, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, vk::MemoryUse::Upload, "depth staging");
     }
+    // A word per allocation tile (allocate_tiles, shared_layout.h ALLOC_TILE), rewritten every frame.
+    const auto tilesAlong = [&](int pixelsAlong) {
+        const uint32_t stride = uint32_t(c.params.allocationStride), samples = (uint32_t(pixelsAlong) + stride - 1) / stride;
+        return VkDeviceSize((samples + ALLOC_TILE - 1) / ALLOC_TILE);
+    };
+    allocTiles_ = makeStorage(context, table_, BINDING_ALLOC_TILES,
+                              std::max<VkDeviceSize>(1, tilesAlong(c.imageWidth) * tilesAlong(c.imageHeight)) * 4, "allocation tiles");
     mcTables_ = vk::Buffer(context, MC_TABLE_WORDS * 4, VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, vk::MemoryUse::Device, "marching cubes tables");
     table_.bind(BINDING_MC_TABLES, mcTables_);
     framePose_ = vk::Buffer(context, sizeof(FramePoseGpu),
@@ -379,7 +387,7 @@ std::vector<PoolInfo> GpuVolume::pools() const {
     store_.pools(out);
     mesh_.pools(out);
     lists_.pools(out);
-    listPools(out, {&depth_, &depthStaging_, &mcTables_});
+    listPools(out, {&depth_, &depthStaging_, &allocTiles_, &mcTables_});
     // Listed with no bytes where the host writes depth_ in place: --stats keeps the key users' scripts read.
     if (!depthStaging_.handle()) out.push_back({"depth staging", 0});
     baselineMesh_.pools(out);

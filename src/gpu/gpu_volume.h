@@ -384,6 +384,7 @@ private:
     // depth_ is what the shaders read; depthStaging_ is what the host writes a frame's images into, absent on a
     // device with unified memory, where the host writes depth_ itself (hostInput()).
     vk::Buffer depth_, depthStaging_, mcTables_;
+    vk::Buffer allocTiles_;   // BINDING_ALLOC_TILES: which allocation tiles allocate_tiles covered this frame
     void* hostInput() const { return depthStaging_.handle() ? depthStaging_.mapped() : depth_.mapped(); }
     // FramePoseGpu (BINDING_FRAME_POSE), written at the start of every frame; a frame whose pose the GPU computed
     // copies it back (did the GPU skip the frame?).

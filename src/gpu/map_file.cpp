@@ -29,7 +29,7 @@ map::MapData GpuVolume::saveMap() const {
                   c.meshMode == MeshMode::Incremental ? 1u : 0u, c.refine ? 1u : 0u, c.refineEpsilonVoxels, c.lockFree ? 1u : 0u,
                   c.vertexUpdate, c.keepRadius, c.recycle ? 1u : 0u, c.recycleAfterFrames, c.starveWeight,
                   c.hashRebuildTombstoneFraction, uint32_t(c.imageWidth), uint32_t(c.imageHeight), c.growCapacities ? 1u : 0u,
-                  touchedFollowsPool_ ? 1u : 0u, uint32_t(p.colorFusion), p.colorRecency};
+                  touchedFollowsPool_ ? 1u : 0u, uint32_t(p.colorFusion), p.colorRecency, p.allocationTiles ? 1u : 0u};
     m.capacities = {c.blockCapacity, c.hashCapacity, c.touchedCapacity, c.retypeCapacity, c.vertexCapacity, c.chunkCapacity};
     m.frameNumber = frameNumber_;
     m.framesIntegrated = framesIntegrated_;
@@ -68,6 +68,7 @@ GpuVolumeConfig GpuVolume::mapConfig(const map::MapData& m) {
     c.params.minDepth = s.minDepth;
     c.params.maxDepth = s.maxDepth;
     c.params.allocationStride = int(s.allocationStride);
+    c.params.allocationTiles = s.allocationTiles != 0;
     c.params.colorFusion = ColorFusion(s.colorMode);
     c.params.colorRecency = s.colorRecency;
     c.minMeshWeight = s.minMeshWeight;
@@ -110,6 +111,7 @@ void checkSettings(const GpuVolumeConfig& want, const GpuVolumeConfig& map, cons
         {"max weight", "--max-weight", map.params.maxWeight, want.params.maxWeight},
         {"min mesh weight", "--min-weight", map.minMeshWeight, want.minMeshWeight},
         {"allocation stride", "--alloc-stride", double(map.params.allocationStride), double(want.params.allocationStride)},
+        {"allocation by tiles (1) or pixel by pixel (0)", "--alloc-tiles", double(map.params.allocationTiles), double(want.params.allocationTiles)},
         {"mesh mode (1 = incremental)", "--mode", double(map.meshMode == MeshMode::Incremental), double(want.meshMode == MeshMode::Incremental)},
         {"refinement", "--refine", double(map.refine), double(want.refine)},
         {"refinement epsilon", "--refine-eps", map.refine ? map.refineEpsilonVoxels : 0.0, map.refine ? want.refineEpsilonVoxels : 0.0},

@@ -104,6 +104,18 @@ TEST(MapFormat, RoundTripKeepsEverything) {
     EXPECT_EQ(map::serialize(r), bytes);   // and writes back byte for byte
 }
 
+// The settings' last word, reserved (0) before allocation by tiles: maps written then read as allocated pixel by
+// pixel, a map allocated by tiles says so, and any other value is refused.
+TEST(MapFormat, AllocationModeReadsZeroAsPixelByPixel) {
+    map::MapData m = smallMap();
+    EXPECT_EQ(map::parse(map::serialize(m), "old.vkmap").settings.allocationTiles, 0u) << "a map written before tiles";
+    m.settings.allocationTiles = 1;
+    EXPECT_EQ(map::parse(map::serialize(m), "tiles.vkmap").settings.allocationTiles, 1u);
+    m.settings.allocationTiles = 2;
+    const std::string e = errorOf(map::serialize(m));
+    EXPECT_NE(e.find("allocation mode 2"), std::string::npos) << e;
+}
+
 TEST(MapFormat, FreeStacksKeepOnlyTheHoles) {
     // Capacity 8: never used 7..4 at the bottom, then 1 and 3 freed.
     const std::vector<uint32_t> entries = {7, 6, 5, 4, 1, 3};

@@ -16,6 +16,7 @@
 #include "cpu/reference_mesher.h"
 #include "cpu/reference_recycling.h"
 #include "cpu/reference_volume.h"
+#include "synth/synthetic_scene.h"
 #include "test_support.h"
 
 namespace vkmesh {
@@ -70,6 +71,108 @@ TEST(ReferenceAllocation, BandWalkStepsToFaceNeighboursAndStopsAtTheBound) {
     std::vector<BlockCoord> cells;
     EXPECT_FALSE(cpu::walkBand({0.5f, 0.5f, 0.5f}, {40.5f, 0.5f, 0.5f}, [&](const BlockCoord& c) { cells.push_back(c); }));
     EXPECT_EQ(cells.size(), gpu::RAY_MAX_BLOCKS);
+}
+
+// Allocation by tiles claims a superset of what the sampled pixels' band walks claim (allocate_tiles.comp's
+// argument), on noisy depth of the synthetic room (tilted walls, floor, furniture: depth edges) seen from several
+// poses, at the default stride and at stride 1, and covers most tiles there.
+TEST(ReferenceAllocation, TileSlabsCoverThePixelsBands) {
+    const synth::SyntheticScene room = synth::SyntheticScene::defaultRoom();
+    const Intrinsics intrinsics = synth::kinectIntrinsics(320, 240);
+    const auto poses = synth::cameraPath(12);
+    size_t tilesCovered = 0, tilesWithDepth = 0, framesChecked = 0;
+    for (int stride : {2, 1}) {
+        VolumeParams perPixel;
+        perPixel.voxelSize = 0.03f;
+        perPixel.maxDepth = 4.0f;
+        perPixel.allocationStride = stride;
+        perPixel.allocationTiles = false;
+        VolumeParams byTiles = perPixel;
+        byTiles.allocationTiles = true;
+        for (size_t i = 0; i < poses.size(); i += 3) {
+            synth::RenderOptions noisy;
+            noisy.noise = true;
+            noisy.seed = uint32_t(7 + i);
+            const DepthImage depth = room.renderDepth(intrinsics, poses[i], noisy);
+            cpu::AllocationStats walked, tiled;
+            const auto bands = cpu::touchedBlocks(depth, intrinsics, poses[i], perPixel, 0.0f, &walked);
+            const auto slabs = cpu::touchedBlocks(depth, intrinsics, poses[i], byTiles, 0.0f, &tiled);
+            const std::set<BlockCoord> claimed(slabs.begin(), slabs.end());
+            size_t missing = 0;
+            for (const BlockCoord& c : bands) missing += claimed.count(c) == 0;
+            EXPECT_EQ(missing, 0u) << "stride " << stride << ", frame " << i << ": blocks a band crosses that no slab claims";
+            EXPECT_EQ(tiled.validPixels, walked.validPixels) << "every valid sample counted once, in a slab or a walk";
+            EXPECT_LT(tiled.blockRequests, walked.blockRequests / 2) << "the slabs visit far fewer blocks than the walks";
+            EXPECT_LT(slabs.size(), bands.size() * 5 / 4) << "the slabs add a few blocks, not many";
+            ++framesChecked;
+            // Which tiles a plane covered, straight from walkTileSlab.
+            const gpu::FramePush push = makeFramePush(intrinsics, poses[i], byTiles, 1);
+            const int side = int(gpu::ALLOC_TILE) * stride;
+            for (int y = 0; y < depth.height; y += side)
+                for (int x = 0; x < depth.width; x += side) {
+                    const int lastX = std::min(x + side - stride, (depth.width - 1) / stride * stride);
+                    const int lastY = std::min(y + side - stride, (depth.height - 1) / stride * stride);
+                    bool anyDepth = false;
+                    for (int v = y; v <= lastY; v += stride)
+                        for (int u = x; u <= lastX; u += stride) anyDepth = anyDepth || depth.at(u, v) > 0.0f;
+                    if (!anyDepth) continue;
+                    ++tilesWithDepth;
+                    tilesCovered += cpu::walkTileSlab(depth, push, byTiles, x, y, lastX, lastY, [](const BlockCoord&) {}, nullptr);
+                }
+        }
+    }
+    EXPECT_EQ(framesChecked, 8u);
+    EXPECT_GT(tilesCovered, tilesWithDepth / 2) << tilesCovered << " of " << tilesWithDepth << " tiles covered by a plane";
+}
+
+// A tile across a depth edge, with too few depths, or seen edge-on is left to its pixels' walks; a tilted plane is
+// covered, and its slab claims the blocks its bands cross.
+TEST(ReferenceAllocation, TileSlabsLeaveEdgesAndHolesToThePixels) {
+    VolumeParams params = smallVoxels();
+    params.voxelSize = 0.03f;
+    const Intrinsics intrinsics{100.0f, 100.0f, 64.0f, 64.0f, 128, 128};
+    const gpu::FramePush push = makeFramePush(intrinsics, Pose::Identity(), params, 1);
+    auto covered = [&](const DepthImage& depth, int x, int y) {
+        return cpu::walkTileSlab(depth, push, params, x, y, x + 7, y + 7, [](const BlockCoord&) {}, nullptr);
+    };
+    // A plane tilted 60 degrees about the y axis: z = 1.5 + tan(60) x.
+    DepthImage tilted{128, 128, std::vector<float>(128 * 128)};
+    for (int y = 0; y < 128; ++y)
+        for (int x = 0; x < 128; ++x) {
+            const float ray = (float(x) - 64.0f) / 100.0f;
+            tilted.meters[size_t(y) * 128 + x] = 1.5f / (1.0f - std::tan(1.0472f) * ray * 0.5f);
+        }
+    EXPECT_TRUE(covered(tilted, 40, 40));
+    VolumeParams perPixel = params;
+    perPixel.allocationTiles = false;
+    const auto bands = cpu::touchedBlocks(tilted, intrinsics, Pose::Identity(), perPixel, 0.0f);
+    const auto slabs = cpu::touchedBlocks(tilted, intrinsics, Pose::Identity(), params, 0.0f);
+    const std::set<BlockCoord> claimed(slabs.begin(), slabs.end());
+    for (const BlockCoord& c : bands) EXPECT_EQ(claimed.count(c), 1u) << c[0] << "," << c[1] << "," << c[2];
+    // The same with a negative focal length (ICL-NUIM's fy): the tile's rays are ordered, not assumed increasing.
+    const Intrinsics flipped{100.0f, -100.0f, 64.0f, 64.0f, 128, 128};
+    EXPECT_TRUE(cpu::walkTileSlab(tilted, makeFramePush(flipped, Pose::Identity(), params, 1), params, 40, 40, 47, 47,
+                                  [](const BlockCoord&) {}, nullptr));
+    const auto flippedBands = cpu::touchedBlocks(tilted, flipped, Pose::Identity(), perPixel, 0.0f);
+    const auto flippedSlabs = cpu::touchedBlocks(tilted, flipped, Pose::Identity(), params, 0.0f);
+    const std::set<BlockCoord> flippedClaimed(flippedSlabs.begin(), flippedSlabs.end());
+    for (const BlockCoord& c : flippedBands) EXPECT_EQ(flippedClaimed.count(c), 1u) << c[0] << "," << c[1] << "," << c[2];
+    // A step from 1 m to 2 m through the tile.
+    DepthImage step{128, 128, std::vector<float>(128 * 128, 1.0f)};
+    for (int y = 0; y < 128; ++y)
+        for (int x = 44; x < 128; ++x) step.meters[size_t(y) * 128 + x] = 2.0f;
+    EXPECT_TRUE(covered(step, 24, 40));
+    EXPECT_FALSE(covered(step, 40, 40)) << "the tile across the edge";
+    // Holes: a third of the tile without depth.
+    DepthImage holes{128, 128, std::vector<float>(128 * 128, 1.0f)};
+    for (int y = 40; y < 48; ++y)
+        for (int x = 40; x < 43; ++x) holes.meters[size_t(y) * 128 + x] = 0.0f;
+    EXPECT_FALSE(covered(holes, 40, 40)) << "fewer than " << gpu::ALLOC_TILE_MIN_VALID << " valid depths";
+    // A wall seen edge-on, the plane x = 0.3 m (camera frame) along the optical axis: no z = a x + b y + g fits it.
+    DepthImage edgeOn{128, 128, std::vector<float>(128 * 128, 0.0f)};
+    for (int y = 0; y < 128; ++y)
+        for (int x = 100; x < 128; ++x) edgeOn.meters[size_t(y) * 128 + x] = 0.3f / ((float(x) - 64.0f) / 100.0f);
+    EXPECT_FALSE(covered(edgeOn, 100, 40));
 }
 
 TEST(ReferenceAllocation, TouchedBlocksInsertIntoTheHashOnceAndStampIt) {

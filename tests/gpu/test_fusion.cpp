@@ -1,12 +1,16 @@
 // GPU allocation, fusion and baseline mesh against the CPU reference, on synthetic scenes.
 #include <gtest/gtest.h>
 
+#include <tuple>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <map>
 #include <set>
+#include <string>
 
+#include "cpu/reference_allocation.h"
 #include "cpu/reference_volume.h"
 #include "gpu/gpu_volume.h"
 #include "gpu_fixture.h"
@@ -77,11 +81,15 @@ size_t compareTsdf(const BlockMap& gpu, const cpu::ReferenceVolume& cpu, float t
     return differing;
 }
 
-class AllocationTest : public GpuTest, public ::testing::WithParamInterface<int> {};
+// (pixel stride, allocation by tiles)
+class AllocationTest : public GpuTest, public ::testing::WithParamInterface<std::tuple<int, bool>> {};
 
 TEST_P(AllocationTest, MatchesReferenceAndCountersConserve) {
     auto config = smallConfig();
-    config.params.allocationStride = GetParam();
+    config.params.allocationStride = std::get<0>(GetParam());
+    config.params.allocationTiles = std::get<1>(GetParam());
+    VolumeParams perPixel = config.params;
+    perPixel.allocationTiles = false;
     gpu::GpuVolume volume(context(), config);
     cpu::ReferenceVolume reference(config.params);
     Intrinsics intr = synth::kinectIntrinsics(kWidth, kHeight);
@@ -105,6 +113,14 @@ TEST_P(AllocationTest, MatchesReferenceAndCountersConserve) {
         EXPECT_EQ(k.poolExhausted, 0u);
         EXPECT_EQ(k.fusedBlocks, k.touchedCount);
         EXPECT_EQ(k.updatedVoxels, stats.updatedVoxels);
+        if (config.params.allocationTiles) {
+            // Tiles covered by a plane: no block of the pixels' walks missing and, at stride 1, fewer visits (at
+            // stride 4 a tile spans 32 x 32 pixels of this small image, and few planes fit).
+            cpu::AllocationStats walked;
+            const auto bands = cpu::touchedBlocks(f.depth, intr, f.pose, perPixel, 0.0f, &walked);
+            if (config.params.allocationStride == 1) EXPECT_LT(k.blockRequests, walked.blockRequests * 3 / 4);
+            EXPECT_GE(k.touchedCount, bands.size());
+        }
         distinct += k.blocksInserted;
         EXPECT_EQ(k.blocksInUse, distinct);
         EXPECT_EQ(k.freeTop + k.blocksInUse, volume.config().blockCapacity);
@@ -115,7 +131,9 @@ TEST_P(AllocationTest, MatchesReferenceAndCountersConserve) {
     EXPECT_EQ(compareTsdf(gpuBlocks, reference, 1e-6f), 0u);
 }
 
-INSTANTIATE_TEST_SUITE_P(PixelStride, AllocationTest, ::testing::Values(1, 4));
+INSTANTIATE_TEST_SUITE_P(PixelStride, AllocationTest, ::testing::Combine(::testing::Values(1, 4), ::testing::Bool()), [](const auto& info) {
+    return "Stride" + std::to_string(std::get<0>(info.param)) + (std::get<1>(info.param) ? "Tiles" : "");
+});
 
 TEST_F(GpuTest, FusedTsdfMatchesReference) {
     gpu::GpuVolume volume(context(), smallConfig());
@@ -220,9 +238,11 @@ TEST_F(GpuTest, HashFullIsCountedNeverSilent) {
 }
 
 TEST_F(GpuTest, HeavyContentionInsertsEachKeyOnce) {
-    // A wall 0.4 m in front of the camera: all 19,200 pixels walk into the same few blocks at once.
+    // A wall 0.4 m in front of the camera: all 19,200 pixels walk into the same few blocks at once (pixel by pixel:
+    // tiles would claim the wall's blocks once per tile).
     auto config = smallConfig(0.05f);
     config.params.allocationStride = 1;
+    config.params.allocationTiles = false;
     gpu::GpuVolume volume(context(), config);
     cpu::ReferenceVolume reference(config.params);
     Intrinsics intr = synth::kinectIntrinsics(kWidth, kHeight);

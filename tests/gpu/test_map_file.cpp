@@ -245,6 +245,17 @@ TEST_F(GpuTest, MapsThatCannotBeLoadedAreClearErrors) {
     EXPECT_NE(e.find("voxel size"), std::string::npos) << e;
     EXPECT_NE(e.find("--voxel"), std::string::npos) << e;
 
+    // A map keeps its allocation mode (de-integrating its frames repeats their allocation): a map allocated by
+    // tiles says so in its config, and a config that would walk pixel by pixel is refused, naming the option. Maps
+    // written before allocation by tiles hold 0 there: pixel by pixel.
+    map::MapData byTiles = good;
+    byTiles.settings.allocationTiles = 1;
+    EXPECT_FALSE(config.params.allocationTiles);
+    EXPECT_TRUE(gpu::GpuVolume::mapConfig(byTiles).params.allocationTiles);
+    e = loadError(context(), byTiles, config);
+    EXPECT_NE(e.find("allocation by tiles"), std::string::npos) << e;
+    EXPECT_NE(e.find("--alloc-tiles"), std::string::npos) << e;
+
     map::MapData huge = good;   // capacities no device has
     huge.capacities.blocks = 1u << 30;
     e = loadError(context(), huge, gpu::GpuVolume::mapConfig(huge));

@@ -36,7 +36,7 @@ def test_defaults_are_the_clis(cli_fused):
     # the shortest decimal that reads back as the same float32 (0.03).
     def same(a, b):
         return np.float32(a) == np.float32(b) if isinstance(a, float) else a == b
-    for key in ("voxel_size", "truncation_m", "allocation_stride", "max_depth", "refine", "lock_free"):
+    for key in ("voxel_size", "truncation_m", "allocation_stride", "allocation_tiles", "max_depth", "refine", "lock_free"):
         assert same(mine[key], stats[key]), key
     assert mine["color"]["mode"] == stats["color"]["mode"] == "average"
     assert same(mine["color"]["recency"], stats["color"]["recency"])
