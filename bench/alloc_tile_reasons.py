@@ -4,13 +4,14 @@
 An approximation of shaders_comp/allocate/allocate_tiles.comp's decisions (numpy's least squares in doubles instead
 of the shader's float moments; the bound on the slab's block box, which needs the pose, is not checked): for each
 tile of 8 x 8 samples of every 2nd pixel, the first reason that applies:
-  no depth        no valid depth at all (nothing to walk either)
+  no depth        no valid depth at all: covered, with nothing to claim (nothing to walk either)
   < 48 valid      fewer than ALLOC_TILE_MIN_VALID valid depths
-  D <= 0          1 - a x' - b y' <= 0 at a sample: the fitted plane z = a x + b y + g does not meet every ray of
-                  the tile at a positive g / D with g > 0 (the shader's slab needs D > 0)
+  D sign          D = 1 - a x' - b y' does not take g's sign at every sample: the fitted plane z = a x + b y + g
+                  does not meet every ray of the tile in front of the camera (g / D > 0); a plane with g < 0
+                  and D < 0 on every ray is covered like one with g > 0 and D > 0
   residual        a depth farther than ALLOC_TILE_MAX_RESIDUAL x the truncation from the plane (split by whether
                   most depths fit it: an edge; or not: noise or a curved surface)
-  covered         the slab is claimed
+  covered         the slab is claimed (`covered, g < 0` where the plane's g is negative)
 
 Usage (Debian's interpreter, which has python3-open3d for the PNG reader):
   /usr/bin/python3 bench/alloc_tile_reasons.py DATASET FX FY TRUNCATION_M DEPTH_PNG...
@@ -46,15 +47,15 @@ def reasons_for(depth, fx, fy, cx, cy, truncation, counts):
             design = np.stack([rx * dv, ry * dv, np.ones(len(dv))], 1)
             (a, b, g), *_ = np.linalg.lstsq(design, dv, rcond=None)
             D = 1 - a * rx - b * ry
-            if (D <= 0).any():
-                counts["D <= 0"] += 1
+            if (np.sign(g) * D <= 0).any():
+                counts["D sign"] += 1
                 continue
             residual = np.abs(dv - g / D)
             if residual.max() > MAX_RESIDUAL * truncation:
                 edge = np.median(residual) < 0.1 * truncation
                 counts["residual (an edge)" if edge else "residual (noise or curved)"] += 1
                 continue
-            counts["covered"] += 1
+            counts["covered" if g > 0 else "covered, g < 0"] += 1
 
 
 def main():

@@ -3,8 +3,8 @@
 // of ALLOC_TILE x ALLOC_TILE sampled pixels fits a plane to the tile's depths and, where the plane fits, claims every
 // block that the slab around it may cross, a superset of the blocks the tile's pixels' band walks would visit
 // (allocate_blocks), for a fraction of the walks' cost. A tile the plane does not fit (a depth edge, too few valid
-// depths, a surface seen edge-on) is left to allocate_blocks, which walks its pixels one by one. tileCovered[tile]
-// says which (rewritten every frame). One invocation per tile, not a workgroup: on lavapipe a workgroup per tile
+// depths, a surface seen edge-on) is left to allocate_blocks, which walks its pixels one by one; a tile without
+// any valid depth is covered, as it has nothing to walk. tileCovered[tile] says which (rewritten every frame). One invocation per tile, not a workgroup: on lavapipe a workgroup per tile
 // with subgroup and shared-memory sums took 5.5 ms a frame on the synthetic room, this 0.6.
 //
 // Why the slab covers the bands: a sampled pixel with depth d in [minDepth, maxDepth] walks its ray (x', y', 1)
@@ -71,6 +71,7 @@ bool walkSlab(uvec2 first, uvec2 last, uvec2 size, inout uint valid) {
             sxx += p.x * p.x; sxy += p.x * p.y; syy += p.y * p.y; sxz += p.x * p.z; syz += p.y * p.z;
         }
     }
+    if (n == 0u) return true;   // nothing for the pixels to walk either: the tile's rows are skipped
     if (n < ALLOC_TILE_MIN_VALID) return false;
     precise vec3 mean = s1 / float(n);
     sxx -= s1.x * mean.x; sxy -= s1.x * mean.y; syy -= s1.y * mean.y; sxz -= s1.x * mean.z; syz -= s1.y * mean.z;
@@ -81,6 +82,10 @@ bool walkSlab(uvec2 first, uvec2 last, uvec2 size, inout uint valid) {
     precise float b = (syz * sxx - sxz * sxy) / det;
     mean += origin0;
     precise float g = mean.z - a * mean.x - b * mean.y;
+    // The plane lies in front of the camera on a ray where g / D > 0: D takes g's sign (s) on every ray of a tile
+    // it fits. With g < 0 (a plane whose extension crosses the optical axis behind the camera, as a wall seen
+    // obliquely) the argument above holds with sD = |D| in place of D.
+    bool positive = g > 0.0;
     // The largest residual along the rays.
     precise float r = 0.0;
     for (uint j = 0u; j < ALLOC_TILE * ALLOC_TILE; ++j) {
@@ -91,7 +96,7 @@ bool walkSlab(uvec2 first, uvec2 last, uvec2 size, inout uint valid) {
             vec2 ray = rayOf(pixel);
             precise float D = 1.0 - a * ray.x - b * ray.y;
             precise float residual = abs(d - g / D);
-            r = max(r, D > 0.0 ? residual : 1e30);
+            r = max(r, (positive ? D : -D) > 0.0 ? residual : 1e30);
         }
     }
     if (!(r <= ALLOC_TILE_MAX_RESIDUAL * params.truncation)) return false;
@@ -100,10 +105,13 @@ bool walkSlab(uvec2 first, uvec2 last, uvec2 size, inout uint valid) {
     vec2 rayFirst = rayOf(first), rayLast = rayOf(last);
     vec2 r00 = min(rayFirst, rayLast), r11 = max(rayFirst, rayLast), r10 = vec2(r11.x, r00.y), r01 = vec2(r00.x, r11.y);
     precise vec4 D = vec4(1.0) - a * vec4(r00.x, r10.x, r11.x, r01.x) - b * vec4(r00.y, r10.y, r11.y, r01.y);
-    if (!all(greaterThan(D, vec4(0.0)))) return false;
-    precise float m = (params.truncation + r) * max(max(D.x, D.y), max(D.z, D.w)) * 1.0001 + 1e-5;
-    precise float nearOffset = g - m, farOffset = g + m;
-    if (!(nearOffset > 0.0)) return false;   // the near plane would pass behind the camera
+    vec4 sD = positive ? D : -D;
+    if (!all(greaterThan(sD, vec4(0.0)))) return false;
+    precise float m = (params.truncation + r) * max(max(sD.x, sD.y), max(sD.z, sD.w)) * 1.0001 + 1e-5;
+    // The slab's planes z - a x - b y = g -+ m; along the rays the first lies nearer the camera where g > 0, the
+    // second where g < 0, and that one must still meet the rays in front of it.
+    precise float lowOffset = g - m, highOffset = g + m;
+    if (!((positive ? lowOffset : -highOffset) > 0.0)) return false;
     // The slab's 8 corners in world block units: their box bounds the blocks to test.
     float blockSize = params.voxelSize * float(BLOCK_SIDE);
     precise vec3 origin = transformPoint(framePose.cameraToWorld, vec3(0.0));
@@ -111,21 +119,21 @@ bool walkSlab(uvec2 first, uvec2 last, uvec2 size, inout uint valid) {
     [[unroll]] for (uint k = 0u; k < 4u; ++k) {
         vec2 ray = k == 0u ? r00 : k == 1u ? r10 : k == 2u ? r11 : r01;
         float Dk = k == 0u ? D.x : k == 1u ? D.y : k == 2u ? D.z : D.w;
-        precise float nearZ = nearOffset / Dk, farZ = farOffset / Dk;
-        precise vec3 nearP = transformPoint(framePose.cameraToWorld, vec3(ray, 1.0) * nearZ) / blockSize;
-        precise vec3 farP = transformPoint(framePose.cameraToWorld, vec3(ray, 1.0) * farZ) / blockSize;
-        lo = min(lo, min(nearP, farP));
-        hi = max(hi, max(nearP, farP));
+        precise float lowZ = lowOffset / Dk, highZ = highOffset / Dk;
+        precise vec3 lowP = transformPoint(framePose.cameraToWorld, vec3(ray, 1.0) * lowZ) / blockSize;
+        precise vec3 highP = transformPoint(framePose.cameraToWorld, vec3(ray, 1.0) * highZ) / blockSize;
+        lo = min(lo, min(lowP, highP));
+        hi = max(hi, max(lowP, highP));
     }
     ivec3 c0 = ivec3(floor(lo - ALLOC_SLAB_MARGIN)), c1 = ivec3(floor(hi + ALLOC_SLAB_MARGIN));
     ivec3 extent = c1 - c0 + 1;
     uint cells = uint(extent.x * extent.y * extent.z);
     if (cells > ALLOC_TILE_MAX_BLOCKS) return false;
-    // The six planes, inside = positive side: the slab's two (normal (-a, -b, 1) in the camera frame) and the
+    // The six planes, inside = positive side: the slab's two (normal -+(-a, -b, 1) in the camera frame) and the
     // pyramid's four sides (through the camera centre, normals towards the tile's rays).
     vec3 slabN = vec3(-a, -b, 1.0);
-    vec4 nearPlane = planeToBlocks(slabN, nearOffset, origin, blockSize);
-    vec4 farPlane = planeToBlocks(-slabN, -farOffset, origin, blockSize);
+    vec4 lowPlane = planeToBlocks(slabN, lowOffset, origin, blockSize);
+    vec4 highPlane = planeToBlocks(-slabN, -highOffset, origin, blockSize);
     vec4 side0 = planeToBlocks(sideNormal(r00, r10), 0.0, origin, blockSize);   // y / z >= r00.y
     vec4 side1 = planeToBlocks(sideNormal(r10, r11), 0.0, origin, blockSize);   // x / z <= r11.x
     vec4 side2 = planeToBlocks(sideNormal(r11, r01), 0.0, origin, blockSize);   // y / z <= r11.y
@@ -135,7 +143,7 @@ bool walkSlab(uvec2 first, uvec2 last, uvec2 size, inout uint valid) {
     for (uint i = 0u; i < cells; ++i) {
         ivec3 cell = c0 + ivec3(i % ex, (i / ex) % ey, i / (ex * ey));
         vec3 c = vec3(cell);
-        if (boxOutside(c, nearPlane.xyz, nearPlane.w) || boxOutside(c, farPlane.xyz, farPlane.w) ||
+        if (boxOutside(c, lowPlane.xyz, lowPlane.w) || boxOutside(c, highPlane.xyz, highPlane.w) ||
             boxOutside(c, side0.xyz, side0.w) || boxOutside(c, side1.xyz, side1.w) ||
             boxOutside(c, side2.xyz, side2.w) || boxOutside(c, side3.xyz, side3.w)) continue;
         visitBlock(cell);

@@ -92,6 +92,7 @@ bool walkTileSlab(const DepthImage& depth, const gpu::FramePush& push, const Vol
         s1 = Eigen::Vector3f(s1.x() + p.x(), s1.y() + p.y(), s1.z() + p.z());
         sxx += p.x() * p.x(), sxy += p.x() * p.y(), syy += p.y() * p.y(), sxz += p.x() * p.z(), syz += p.y() * p.z();
     }
+    if (n == 0) return true;   // nothing for the pixels to walk either
     if (n < gpu::ALLOC_TILE_MIN_VALID) return false;
     Eigen::Vector3f mean(s1.x() / float(n), s1.y() / float(n), s1.z() / float(n));
     sxx -= s1.x() * mean.x(), sxy -= s1.x() * mean.y(), syy -= s1.y() * mean.y(), sxz -= s1.x() * mean.z(), syz -= s1.y() * mean.z();
@@ -102,6 +103,7 @@ bool walkTileSlab(const DepthImage& depth, const gpu::FramePush& push, const Vol
     const float b = (syz * sxx - sxz * sxy) / det;
     mean = Eigen::Vector3f(mean.x() + origin0.x(), mean.y() + origin0.y(), mean.z() + origin0.z());
     const float g = mean.z() - a * mean.x() - b * mean.y();
+    const bool positive = g > 0.0f;   // D takes g's sign on every ray of a tile the plane fits
     float r = 0.0f;
     for (uint32_t j = 0; j < side * side; ++j) {
         int x, y;
@@ -111,7 +113,7 @@ bool walkTileSlab(const DepthImage& depth, const gpu::FramePush& push, const Vol
         const Eigen::Vector2f ray = rayOf(x, y, fx, fy, cx, cy);
         const float D = 1.0f - a * ray.x() - b * ray.y();
         const float residual = std::abs(d - g / D);
-        r = std::max(r, D > 0.0f ? residual : 1e30f);
+        r = std::max(r, (positive ? D : -D) > 0.0f ? residual : 1e30f);
     }
     const float truncation = params.truncation();
     if (!(r <= gpu::ALLOC_TILE_MAX_RESIDUAL * truncation)) return false;
@@ -120,26 +122,27 @@ bool walkTileSlab(const DepthImage& depth, const gpu::FramePush& push, const Vol
     const Eigen::Vector2f r11(std::max(rayFirst.x(), rayLast.x()), std::max(rayFirst.y(), rayLast.y()));
     const Eigen::Vector2f r10(r11.x(), r00.y()), r01(r00.x(), r11.y());
     const Eigen::Vector2f corner[4] = {r00, r10, r11, r01};
-    float D[4], maxD = 0.0f;
+    float D[4], sD[4];
     for (int k = 0; k < 4; ++k) {
         D[k] = 1.0f - a * corner[k].x() - b * corner[k].y();
-        if (!(D[k] > 0.0f)) return false;
+        sD[k] = positive ? D[k] : -D[k];
+        if (!(sD[k] > 0.0f)) return false;
     }
-    maxD = std::max(std::max(D[0], D[1]), std::max(D[2], D[3]));
+    const float maxD = std::max(std::max(sD[0], sD[1]), std::max(sD[2], sD[3]));
     const float m = (truncation + r) * maxD * 1.0001f + 1e-5f;
-    const float nearOffset = g - m, farOffset = g + m;
-    if (!(nearOffset > 0.0f)) return false;
+    const float lowOffset = g - m, highOffset = g + m;
+    if (!((positive ? lowOffset : -highOffset) > 0.0f)) return false;
     const float blockSize = params.voxelSize * float(gpu::BLOCK_SIDE);
     const Eigen::Vector3f origin = transformRows(push.cameraToWorld, Eigen::Vector3f(0.0f, 0.0f, 0.0f));
     Eigen::Vector3f lo(1e30f, 1e30f, 1e30f), hi(-1e30f, -1e30f, -1e30f);
     for (int k = 0; k < 4; ++k) {
-        const float nearZ = nearOffset / D[k], farZ = farOffset / D[k];
-        const Eigen::Vector3f nearW = transformRows(push.cameraToWorld, Eigen::Vector3f(corner[k].x() * nearZ, corner[k].y() * nearZ, 1.0f * nearZ));
-        const Eigen::Vector3f farW = transformRows(push.cameraToWorld, Eigen::Vector3f(corner[k].x() * farZ, corner[k].y() * farZ, 1.0f * farZ));
+        const float lowZ = lowOffset / D[k], highZ = highOffset / D[k];
+        const Eigen::Vector3f lowW = transformRows(push.cameraToWorld, Eigen::Vector3f(corner[k].x() * lowZ, corner[k].y() * lowZ, 1.0f * lowZ));
+        const Eigen::Vector3f highW = transformRows(push.cameraToWorld, Eigen::Vector3f(corner[k].x() * highZ, corner[k].y() * highZ, 1.0f * highZ));
         for (int i = 0; i < 3; ++i) {
-            const float nearP = nearW[i] / blockSize, farP = farW[i] / blockSize;
-            lo[i] = std::min(lo[i], std::min(nearP, farP));
-            hi[i] = std::max(hi[i], std::max(nearP, farP));
+            const float lowP = lowW[i] / blockSize, highP = highW[i] / blockSize;
+            lo[i] = std::min(lo[i], std::min(lowP, highP));
+            hi[i] = std::max(hi[i], std::max(lowP, highP));
         }
     }
     int c0[3], c1[3], extent[3];
@@ -152,8 +155,8 @@ bool walkTileSlab(const DepthImage& depth, const gpu::FramePush& push, const Vol
     if (cells > gpu::ALLOC_TILE_MAX_BLOCKS) return false;
     const Eigen::Vector3f slabN(-a, -b, 1.0f);
     const Eigen::Vector4f planes[6] = {
-        planeToBlocks(push.cameraToWorld, slabN, nearOffset, origin, blockSize),
-        planeToBlocks(push.cameraToWorld, -slabN, -farOffset, origin, blockSize),
+        planeToBlocks(push.cameraToWorld, slabN, lowOffset, origin, blockSize),
+        planeToBlocks(push.cameraToWorld, -slabN, -highOffset, origin, blockSize),
         planeToBlocks(push.cameraToWorld, sideNormal(r00, r10), 0.0f, origin, blockSize),
         planeToBlocks(push.cameraToWorld, sideNormal(r10, r11), 0.0f, origin, blockSize),
         planeToBlocks(push.cameraToWorld, sideNormal(r11, r01), 0.0f, origin, blockSize),

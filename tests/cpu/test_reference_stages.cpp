@@ -168,11 +168,56 @@ TEST(ReferenceAllocation, TileSlabsLeaveEdgesAndHolesToThePixels) {
     for (int y = 40; y < 48; ++y)
         for (int x = 40; x < 43; ++x) holes.meters[size_t(y) * 128 + x] = 0.0f;
     EXPECT_FALSE(covered(holes, 40, 40)) << "fewer than " << gpu::ALLOC_TILE_MIN_VALID << " valid depths";
+    // A tile without any depth has nothing for its pixels to walk either: covered, and nothing claimed.
+    for (int y = 40; y < 48; ++y)
+        for (int x = 40; x < 48; ++x) holes.meters[size_t(y) * 128 + x] = 0.0f;
+    size_t claimedByEmpty = 0;
+    EXPECT_TRUE(cpu::walkTileSlab(holes, push, params, 40, 40, 47, 47, [&](const BlockCoord&) { ++claimedByEmpty; }, nullptr));
+    EXPECT_EQ(claimedByEmpty, 0u);
+    perPixel = params;
+    perPixel.allocationTiles = false;
+    cpu::AllocationStats walkedHoles, tiledHoles;
+    const auto holeBands = cpu::touchedBlocks(holes, intrinsics, Pose::Identity(), perPixel, 0.0f, &walkedHoles);
+    const auto holeSlabs = cpu::touchedBlocks(holes, intrinsics, Pose::Identity(), params, 0.0f, &tiledHoles);
+    const std::set<BlockCoord> holeClaimed(holeSlabs.begin(), holeSlabs.end());
+    for (const BlockCoord& c : holeBands) EXPECT_EQ(holeClaimed.count(c), 1u) << c[0] << "," << c[1] << "," << c[2];
+    EXPECT_EQ(tiledHoles.validPixels, walkedHoles.validPixels);
     // A wall seen edge-on, the plane x = 0.3 m (camera frame) along the optical axis: no z = a x + b y + g fits it.
     DepthImage edgeOn{128, 128, std::vector<float>(128 * 128, 0.0f)};
     for (int y = 0; y < 128; ++y)
         for (int x = 100; x < 128; ++x) edgeOn.meters[size_t(y) * 128 + x] = 0.3f / ((float(x) - 64.0f) / 100.0f);
     EXPECT_FALSE(covered(edgeOn, 100, 40));
+}
+
+// A plane whose extension crosses the optical axis behind the camera (z = a x + g with g < 0: a wall seen
+// obliquely, at the side of the image) meets the tile's rays where D = 1 - a x' < 0; the slab's argument holds with
+// |D|, so such a tile is covered too, and claims every block its pixels' bands cross.
+TEST(ReferenceAllocation, TileSlabsCoverPlanesCrossingTheAxisBehindTheCamera) {
+    VolumeParams params = smallVoxels();
+    params.voxelSize = 0.03f;
+    const float a = 3.0f, g = -0.5f;
+    for (const float fy : {100.0f, -100.0f}) {
+        const Intrinsics intrinsics{100.0f, fy, 64.0f, 64.0f, 128, 128};
+        DepthImage oblique{128, 128, std::vector<float>(128 * 128, 0.0f)};
+        for (int y = 0; y < 128; ++y)
+            for (int x = 104; x < 128; ++x) {   // x' > 0.4, where 1 - a x' < 0 and the plane lies in front
+                const float ray = (float(x) - 64.0f) / 100.0f;
+                oblique.meters[size_t(y) * 128 + x] = g / (1.0f - a * ray);
+            }
+        const gpu::FramePush push = makeFramePush(intrinsics, Pose::Identity(), params, 1);
+        size_t claimed = 0;
+        EXPECT_TRUE(cpu::walkTileSlab(oblique, push, params, 112, 40, 119, 47, [&](const BlockCoord&) { ++claimed; }, nullptr))
+            << "fy " << fy;
+        EXPECT_GT(claimed, 0u);
+        VolumeParams perPixel = params;
+        perPixel.allocationTiles = false;
+        const auto bands = cpu::touchedBlocks(oblique, intrinsics, Pose::Identity(), perPixel, 0.0f);
+        const auto slabs = cpu::touchedBlocks(oblique, intrinsics, Pose::Identity(), params, 0.0f);
+        const std::set<BlockCoord> claimedSet(slabs.begin(), slabs.end());
+        size_t missing = 0;
+        for (const BlockCoord& c : bands) missing += claimedSet.count(c) == 0;
+        EXPECT_EQ(missing, 0u) << "fy " << fy;
+    }
 }
 
 TEST(ReferenceAllocation, TouchedBlocksInsertIntoTheHashOnceAndStampIt) {

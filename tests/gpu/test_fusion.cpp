@@ -135,6 +135,58 @@ INSTANTIATE_TEST_SUITE_P(PixelStride, AllocationTest, ::testing::Combine(::testi
     return "Stride" + std::to_string(std::get<0>(info.param)) + (std::get<1>(info.param) ? "Tiles" : "");
 });
 
+// A wall seen obliquely at the image's right side, z = a x + g (camera frame) with g < 0: its extension crosses
+// the optical axis behind the camera, so D = 1 - a x' < 0 on every ray that meets it, and the rest of the image
+// has no depth. allocate_tiles covers both kinds of tile (a plane with g < 0 by |D|, a tile without depth with
+// nothing to walk) and must decide them, and claim the same blocks, as the CPU twin.
+TEST_F(GpuTest, AllocationByTilesCoversObliqueWallsAndEmptyTilesLikeTheReference) {
+    auto config = smallConfig();
+    config.params.allocationStride = 1;
+    config.params.allocationTiles = true;
+    const Intrinsics intr = synth::kinectIntrinsics(kWidth, kHeight);
+    const float a = 10.0f, g = -2.5f;
+    DepthImage oblique{kWidth, kHeight, std::vector<float>(size_t(kWidth) * kHeight, 0.0f)};
+    for (int y = 0; y < kHeight; ++y)
+        for (int x = 0; x < kWidth; ++x) {
+            const float ray = (float(x) - intr.cx) / intr.fx;
+            if (ray > 0.28f) oblique.meters[size_t(y) * kWidth + x] = g / (1.0f - a * ray);   // 1.4 .. 0.5 m
+        }
+    const Pose pose = roomFrames(1, false).front().pose;
+    // The CPU twin covers some of the wall's tiles with a plane (g < 0) and every tile without depth.
+    const gpu::FramePush push = makeFramePush(intr, pose, config.params, 1);
+    size_t wallTiles = 0, wallCovered = 0, emptyTiles = 0, emptyCovered = 0;
+    for (int y = 0; y + 7 < kHeight; y += 8)
+        for (int x = 0; x + 7 < kWidth; x += 8) {
+            size_t claimed = 0;
+            const bool covered = cpu::walkTileSlab(oblique, push, config.params, x, y, x + 7, y + 7, [&](const cpu::BlockCoord&) { ++claimed; }, nullptr);
+            const bool wall = oblique.at(x, y) > 0.0f && oblique.at(x + 7, y) > 0.0f;
+            const bool empty = oblique.at(x + 7, y) == 0.0f;
+            wallTiles += wall, wallCovered += wall && covered && claimed > 0;
+            emptyTiles += empty, emptyCovered += empty && covered && claimed == 0;
+        }
+    ASSERT_GT(wallTiles, 0u);
+    EXPECT_GT(wallCovered, wallTiles / 2) << wallCovered << " of " << wallTiles << " tiles of the oblique wall covered";
+    EXPECT_EQ(emptyCovered, emptyTiles);
+    gpu::GpuVolume volume(context(), config);
+    cpu::ReferenceVolume reference(config.params);
+    const gpu::FrameReport report = volume.integrate(oblique, intr, pose);
+    const cpu::ReferenceFrameStats stats = reference.integrate(oblique, intr, pose);
+    EXPECT_TRUE(report.warnings.empty()) << report.warnings.front();
+    EXPECT_EQ(report.counters.validPixels, stats.validPixels);
+    EXPECT_EQ(report.counters.blockRequests, stats.blockRequests);
+    EXPECT_EQ(report.counters.touchedCount, stats.touchedCount);
+    EXPECT_EQ(report.counters.updatedVoxels, stats.updatedVoxels);
+    VolumeParams perPixel = config.params;
+    perPixel.allocationTiles = false;
+    cpu::AllocationStats walked;
+    const auto bands = cpu::touchedBlocks(oblique, intr, pose, perPixel, 0.0f, &walked);
+    EXPECT_LT(report.counters.blockRequests, walked.blockRequests / 2);
+    BlockMap gpuBlocks = byCoord(volume.downloadBlocks());
+    EXPECT_EQ(gpuBlocks.size(), reference.blocks().size());
+    for (const auto& c : bands) EXPECT_EQ(gpuBlocks.count(c), 1u) << c[0] << "," << c[1] << "," << c[2];
+    EXPECT_EQ(compareTsdf(gpuBlocks, reference, 1e-6f), 0u);
+}
+
 TEST_F(GpuTest, FusedTsdfMatchesReference) {
     gpu::GpuVolume volume(context(), smallConfig());
     cpu::ReferenceVolume reference(smallConfig().params);
