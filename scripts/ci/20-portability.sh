@@ -54,6 +54,7 @@ if [[ $parts == all || $parts == gpu-av ]]; then
   gpu_av_tests=(
     GpuTest.FusedTsdfMatchesReference                          # allocation + fusion against the CPU reference
     PixelStride/AllocationTest.MatchesReferenceAndCountersConserve/Stride1Tiles  # allocation by tiles (allocate_tiles)
+    GpuTest.AllocationByTilesCoversObliqueWallsAndEmptyTilesLikeTheReference  # tiles: planes with g < 0, empty tiles
     GpuTest.BaselineMeshMatchesReference                       # baseline marching cubes (mesh_baseline)
     Refinement/IncrementalTest.IncrementalMeshEqualsRebuildFromScratch/true  # incremental mesh, mark-all-dirty rebuild, export
     GpuTest.VertexColoursMatchReferenceMesherAndRebuild        # colour: fused corner colours, vertex colours

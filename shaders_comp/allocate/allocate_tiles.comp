@@ -4,16 +4,18 @@
 // block that the slab around it may cross, a superset of the blocks the tile's pixels' band walks would visit
 // (allocate_blocks), for a fraction of the walks' cost. A tile the plane does not fit (a depth edge, too few valid
 // depths, a surface seen edge-on) is left to allocate_blocks, which walks its pixels one by one; a tile without
-// any valid depth is covered, as it has nothing to walk. tileCovered[tile] says which (rewritten every frame). One invocation per tile, not a workgroup: on lavapipe a workgroup per tile
-// with subgroup and shared-memory sums took 5.5 ms a frame on the synthetic room, this 0.6.
+// any valid depth is covered, as it has nothing to walk. tileCovered[tile] says which (rewritten every frame). One
+// invocation per tile, not a workgroup: on lavapipe a workgroup per tile with subgroup and shared-memory sums took
+// 5.5 ms a frame on the synthetic room, this 0.6.
 //
 // Why the slab covers the bands: a sampled pixel with depth d in [minDepth, maxDepth] walks its ray (x', y', 1)
 // (camera frame) from z = d - trunc to d + trunc. The plane z = a x + b y + g (camera frame, least squares over
 // the tile's valid samples) meets that ray at z_p = g / D with D = 1 - a x' - b y', and |d - z_p| <= r, the
 // largest residual over the tile, so the band lies in z_p +- (trunc + r). Along the ray, the planes
-// z - a x - b y = g +- m lie at (g +- m) / D, so with m >= (trunc + r) D for every ray of the tile (D is linear in
-// x', y': its largest value is at a corner of the box of the tile's rays) every band lies between them, and inside
-// the pyramid of that box. A block is claimed unless it lies wholly outside one of those six planes.
+// z - a x - b y = g +- m lie at (g +- m) / D = z_p +- m / D, so with m >= (trunc + r) |D| for every ray of the
+// tile (D is linear in x', y' and of one sign over the tile: its largest |D| is at a corner of the box of the
+// tile's rays) every band lies between them, and inside the pyramid of that box. A block is claimed unless it lies
+// wholly outside one of those six planes.
 #extension GL_GOOGLE_include_directive : require
 #include "structure/frame.glsl"
 #include "structure/block_hash.glsl"
@@ -82,9 +84,9 @@ bool walkSlab(uvec2 first, uvec2 last, uvec2 size, inout uint valid) {
     precise float b = (syz * sxx - sxz * sxy) / det;
     mean += origin0;
     precise float g = mean.z - a * mean.x - b * mean.y;
-    // The plane lies in front of the camera on a ray where g / D > 0: D takes g's sign (s) on every ray of a tile
-    // it fits. With g < 0 (a plane whose extension crosses the optical axis behind the camera, as a wall seen
-    // obliquely) the argument above holds with sD = |D| in place of D.
+    // The plane lies in front of the camera on a ray where g / D > 0, so D must take g's sign on every ray of the
+    // tile. With g < 0 (a plane whose extension crosses the optical axis behind the camera: a wall seen obliquely)
+    // the argument above holds with |D| in place of D.
     bool positive = g > 0.0;
     // The largest residual along the rays.
     precise float r = 0.0;
