@@ -76,6 +76,12 @@ VKM_CONST_FLOAT ALLOC_TILE_MAX_RESIDUAL = 0.5f;
 VKM_CONST ALLOC_TILE_MAX_BLOCKS = 48u;
 // Blocks: a block within this of the slab is claimed, which covers the rounding of the band walks' float arithmetic.
 VKM_CONST_FLOAT ALLOC_SLAB_MARGIN = 1e-3f;
+// Which tiles a plane covers (VolumeParamsGpu::allocationTiles, VolumeParams::allocationTileRules, the map's
+// allocation mode): the first rules (maps written by the build of 2026-12-04 with --alloc-tiles) left planes with
+// g < 0 and tiles without depth to the pixels; the current ones cover both. A map keeps the rules its frames were
+// allocated with, since de-integrating a frame must claim the same blocks again.
+VKM_CONST ALLOC_TILE_RULES_FIRST = 1u;
+VKM_CONST ALLOC_TILE_RULES = 2u;
 VKM_CONST WG_LIST = 64u;                   // one invocation per list entry (assign, collect)
 VKM_CONST WG_BLOCK = 128u;                 // fuse / mesh: one workgroup per block, 4 voxels per invocation
 VKM_CONST VOXELS_PER_INVOCATION = 4u;      // VOXELS_PER_BLOCK / WG_BLOCK
@@ -189,7 +195,8 @@ struct VolumeParamsGpu {
     uint colorMode;         // COLOR_MODE_*: how fusion folds a pixel's colour into a corner's
     float colorRecency;     // COLOR_MODE_RECENT: the new colour's share, in (0, 1]
     float sdfMetresPerStep; // truncation / SDF_STEPS_PER_TRUNCATION (exact: a power-of-two division)
-    uint allocationTiles;   // 1: allocation claims the slab around a tile's plane where one fits (allocate_tiles)
+    uint allocationTiles;   // ALLOC_TILE_RULES_*: allocation claims the slab around a tile's plane where one fits
+                            // (allocate_tiles), with those rules; 0: every sampled pixel walks its band
     uint pad1, pad2;
 };
 // A TSDF corner (docs/ARCHITECTURE.md, "Exact fusion"): the sum of its observations' truncated distances, each

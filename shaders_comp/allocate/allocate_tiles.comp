@@ -73,7 +73,10 @@ bool walkSlab(uvec2 first, uvec2 last, uvec2 size, inout uint valid) {
             sxx += p.x * p.x; sxy += p.x * p.y; syy += p.y * p.y; sxz += p.x * p.z; syz += p.y * p.z;
         }
     }
-    if (n == 0u) return true;   // nothing for the pixels to walk either: the tile's rows are skipped
+    // The first rules (a map's frames allocated with them: shared_layout.h, ALLOC_TILE_RULES_FIRST) left tiles
+    // without depth and planes with g < 0 to the pixels.
+    bool firstRules = params.allocationTiles == ALLOC_TILE_RULES_FIRST;
+    if (n == 0u && !firstRules) return true;   // nothing for the pixels to walk either: the tile's rows are skipped
     if (n < ALLOC_TILE_MIN_VALID) return false;
     precise vec3 mean = s1 / float(n);
     sxx -= s1.x * mean.x; sxy -= s1.x * mean.y; syy -= s1.y * mean.y; sxz -= s1.x * mean.z; syz -= s1.y * mean.z;
@@ -87,7 +90,7 @@ bool walkSlab(uvec2 first, uvec2 last, uvec2 size, inout uint valid) {
     // The plane lies in front of the camera on a ray where g / D > 0, so D must take g's sign on every ray of the
     // tile. With g < 0 (a plane whose extension crosses the optical axis behind the camera: a wall seen obliquely)
     // the argument above holds with |D| in place of D.
-    bool positive = g > 0.0;
+    bool positive = g > 0.0 || firstRules;
     // The largest residual along the rays.
     precise float r = 0.0;
     for (uint j = 0u; j < ALLOC_TILE * ALLOC_TILE; ++j) {

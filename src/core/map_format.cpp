@@ -288,8 +288,9 @@ MapData parse(std::string_view bytes, const std::string& name) {
         Settings& s = map.settings;
         s = {f(0), f(1), f(2), f(3), f(4), u(5), f(6), u(7), u(8), f(9), u(10), u(11), f(12), u(13), u(14), f(15), f(16),
              u(17), u(18), u(19), u(20), u(21), f(22), u(23)};
-        if (s.allocationTiles > 1)
-            r.fail("allocation mode " + std::to_string(s.allocationTiles) + " is not 0 (pixel by pixel) or 1 (by tiles)");
+        if (s.allocationTiles > 2)
+            r.fail("allocation mode " + std::to_string(s.allocationTiles) +
+                   " is not 0 (pixel by pixel), 1 or 2 (by tiles, with the first or the current rules)");
         if (s.colorMode > 2) r.fail("colour mode " + std::to_string(s.colorMode) + " is not 0 (off), 1 (average) or 2 (recent)");
         if (s.colorMode != 0 && !(s.colorRecency > 0 && s.colorRecency <= 1))
             r.fail("colour recency " + std::to_string(s.colorRecency) + " is outside (0, 1]");

@@ -63,7 +63,8 @@ struct Settings {
     uint32_t growCapacities = 1, touchedFollowsPool = 1;
     uint32_t colorMode = 0;          // ColorFusion: 0 off, 1 average, 2 recent (docs/COLOR.md)
     float colorRecency = 0.2f;
-    // 1: allocation by tiles (VolumeParams::allocationTiles). Maps written before it hold 0 in this (then reserved)
+    // Allocation by tiles (VolumeParams::allocationTiles) with rules 1 or 2 (its allocationTileRules, shared_layout.h
+    // ALLOC_TILE_RULES); 0: pixel by pixel. Maps written before allocation by tiles hold 0 in this (then reserved)
     // word: they were allocated pixel by pixel, which de-integrating their frames again must repeat.
     uint32_t allocationTiles = 0;
 };

@@ -67,6 +67,10 @@ struct VolumeParams {
     // allocation time on the synthetic room and TUM but not on ICL-NUIM, and the extra blocks (+4-6 %) cost
     // fusion about what it saves (docs/RESULTS.md). false: every sampled pixel walks its band.
     bool allocationTiles = false;
+    // Which rules decide the tiles a plane covers (shared_layout.h, ALLOC_TILE_RULES): the current ones (2) for a new
+    // volume; a loaded map's own (1 for maps written with the first rules), so that its frames de-integrate from the
+    // blocks they were fused into. Not a user setting.
+    int allocationTileRules = 2;
     // Colour: frames that come with a colour image fold it into the corners they update (same weights);
     // frames without one fuse depth only. Off allocates no colour (4 bytes per corner less).
     ColorFusion colorFusion = ColorFusion::Average;

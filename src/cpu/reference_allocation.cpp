@@ -92,7 +92,8 @@ bool walkTileSlab(const DepthImage& depth, const gpu::FramePush& push, const Vol
         s1 = Eigen::Vector3f(s1.x() + p.x(), s1.y() + p.y(), s1.z() + p.z());
         sxx += p.x() * p.x(), sxy += p.x() * p.y(), syy += p.y() * p.y(), sxz += p.x() * p.z(), syz += p.y() * p.z();
     }
-    if (n == 0) return true;   // nothing for the pixels to walk either
+    const bool firstRules = params.allocationTileRules == int(gpu::ALLOC_TILE_RULES_FIRST);
+    if (n == 0 && !firstRules) return true;   // nothing for the pixels to walk either
     if (n < gpu::ALLOC_TILE_MIN_VALID) return false;
     Eigen::Vector3f mean(s1.x() / float(n), s1.y() / float(n), s1.z() / float(n));
     sxx -= s1.x() * mean.x(), sxy -= s1.x() * mean.y(), syy -= s1.y() * mean.y(), sxz -= s1.x() * mean.z(), syz -= s1.y() * mean.z();
@@ -103,7 +104,7 @@ bool walkTileSlab(const DepthImage& depth, const gpu::FramePush& push, const Vol
     const float b = (syz * sxx - sxz * sxy) / det;
     mean = Eigen::Vector3f(mean.x() + origin0.x(), mean.y() + origin0.y(), mean.z() + origin0.z());
     const float g = mean.z() - a * mean.x() - b * mean.y();
-    const bool positive = g > 0.0f;   // D takes g's sign on every ray of a tile the plane fits
+    const bool positive = g > 0.0f || firstRules;   // D takes g's sign on every ray of a tile the plane fits
     float r = 0.0f;
     for (uint32_t j = 0; j < side * side; ++j) {
         int x, y;

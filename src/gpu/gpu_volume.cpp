@@ -40,6 +40,9 @@ void validateConfig(const GpuVolumeConfig& c) {
         throw Error("depth range [" + std::to_string(p.minDepth) + ", " + std::to_string(p.maxDepth) + "] m is empty");
     if (p.allocationStride < 1 || p.allocationStride > 64)
         throw Error("allocation stride " + std::to_string(p.allocationStride) + " must be in [1, 64]");
+    if (p.allocationTileRules != int(ALLOC_TILE_RULES_FIRST) && p.allocationTileRules != int(ALLOC_TILE_RULES))
+        throw Error("allocation tile rules " + std::to_string(p.allocationTileRules) + " are not " +
+                    std::to_string(ALLOC_TILE_RULES_FIRST) + " or " + std::to_string(ALLOC_TILE_RULES));
     if (c.blockCapacity == 0 || c.blockCapacity > (1u << 30)) throw Error("block capacity must be in [1, 2^30]");
     if (p.colorFusion != ColorFusion::Off && p.colorFusion != ColorFusion::Average && p.colorFusion != ColorFusion::Recent)
         throw Error("colour fusion mode " + std::to_string(uint32_t(p.colorFusion)) + " is not one of off, average, recent");
@@ -101,7 +104,7 @@ VolumeParamsGpu initialParams(const GpuVolumeConfig& c) {
     gp.touchedCapacity = c.touchedCapacity;
     gp.meshVertexCapacity = c.meshVertexCapacity;
     gp.allocationStride = uint32_t(c.params.allocationStride);
-    gp.allocationTiles = c.params.allocationTiles ? 1u : 0u;
+    gp.allocationTiles = c.params.allocationTiles ? uint32_t(c.params.allocationTileRules) : 0u;
     gp.vertexCapacity = c.vertexCapacity;
     gp.chunkCapacity = c.chunkCapacity;
     gp.retypeCapacity = c.retypeCapacity;

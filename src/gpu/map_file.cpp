@@ -29,7 +29,8 @@ map::MapData GpuVolume::saveMap() const {
                   c.meshMode == MeshMode::Incremental ? 1u : 0u, c.refine ? 1u : 0u, c.refineEpsilonVoxels, c.lockFree ? 1u : 0u,
                   c.vertexUpdate, c.keepRadius, c.recycle ? 1u : 0u, c.recycleAfterFrames, c.starveWeight,
                   c.hashRebuildTombstoneFraction, uint32_t(c.imageWidth), uint32_t(c.imageHeight), c.growCapacities ? 1u : 0u,
-                  touchedFollowsPool_ ? 1u : 0u, uint32_t(p.colorFusion), p.colorRecency, p.allocationTiles ? 1u : 0u};
+                  touchedFollowsPool_ ? 1u : 0u, uint32_t(p.colorFusion), p.colorRecency,
+                  p.allocationTiles ? uint32_t(p.allocationTileRules) : 0u};
     m.capacities = {c.blockCapacity, c.hashCapacity, c.touchedCapacity, c.retypeCapacity, c.vertexCapacity, c.chunkCapacity};
     m.frameNumber = frameNumber_;
     m.framesIntegrated = framesIntegrated_;
@@ -69,6 +70,7 @@ GpuVolumeConfig GpuVolume::mapConfig(const map::MapData& m) {
     c.params.maxDepth = s.maxDepth;
     c.params.allocationStride = int(s.allocationStride);
     c.params.allocationTiles = s.allocationTiles != 0;
+    if (s.allocationTiles != 0) c.params.allocationTileRules = int(s.allocationTiles);
     c.params.colorFusion = ColorFusion(s.colorMode);
     c.params.colorRecency = s.colorRecency;
     c.minMeshWeight = s.minMeshWeight;
@@ -145,6 +147,7 @@ std::unique_ptr<GpuVolume> GpuVolume::load(const vk::Context& context, const map
         if (!known.count(a.tag)) throw Error(name + ": the map has a per-block section '" + map::tagName(a.tag) + "' this build does not know");
     // Capacities: the larger of the map's and the caller's (a map loads into a bigger configuration).
     GpuVolumeConfig c = config;
+    c.params.allocationTileRules = saved.params.allocationTileRules;   // the rules its frames were allocated with
     c.blockCapacity = std::max(c.blockCapacity, saved.blockCapacity);
     const uint32_t hashSlots = c.hashCapacity ? c.hashCapacity : nextPowerOfTwo(std::max(2u * c.blockCapacity, 1024u));
     c.hashCapacity = std::max(hashSlots, saved.hashCapacity);

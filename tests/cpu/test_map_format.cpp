@@ -109,11 +109,13 @@ TEST(MapFormat, RoundTripKeepsEverything) {
 TEST(MapFormat, AllocationModeReadsZeroAsPixelByPixel) {
     map::MapData m = smallMap();
     EXPECT_EQ(map::parse(map::serialize(m), "old.vkmap").settings.allocationTiles, 0u) << "a map written before tiles";
-    m.settings.allocationTiles = 1;
+    m.settings.allocationTiles = 1;   // by tiles, the first rules
     EXPECT_EQ(map::parse(map::serialize(m), "tiles.vkmap").settings.allocationTiles, 1u);
-    m.settings.allocationTiles = 2;
+    m.settings.allocationTiles = 2;   // by tiles, the current rules
+    EXPECT_EQ(map::parse(map::serialize(m), "tiles.vkmap").settings.allocationTiles, 2u);
+    m.settings.allocationTiles = 3;
     const std::string e = errorOf(map::serialize(m));
-    EXPECT_NE(e.find("allocation mode 2"), std::string::npos) << e;
+    EXPECT_NE(e.find("allocation mode 3"), std::string::npos) << e;
 }
 
 TEST(MapFormat, FreeStacksKeepOnlyTheHoles) {

@@ -174,6 +174,9 @@ TEST(ReferenceAllocation, TileSlabsLeaveEdgesAndHolesToThePixels) {
     size_t claimedByEmpty = 0;
     EXPECT_TRUE(cpu::walkTileSlab(holes, push, params, 40, 40, 47, 47, [&](const BlockCoord&) { ++claimedByEmpty; }, nullptr));
     EXPECT_EQ(claimedByEmpty, 0u);
+    VolumeParams firstRules = params;   // a map of the first rules left it to the pixels
+    firstRules.allocationTileRules = int(gpu::ALLOC_TILE_RULES_FIRST);
+    EXPECT_FALSE(cpu::walkTileSlab(holes, push, firstRules, 40, 40, 47, 47, [](const BlockCoord&) {}, nullptr));
     perPixel = params;
     perPixel.allocationTiles = false;
     cpu::AllocationStats walkedHoles, tiledHoles;
@@ -209,6 +212,9 @@ TEST(ReferenceAllocation, TileSlabsCoverPlanesCrossingTheAxisBehindTheCamera) {
         EXPECT_TRUE(cpu::walkTileSlab(oblique, push, params, 112, 40, 119, 47, [&](const BlockCoord&) { ++claimed; }, nullptr))
             << "fy " << fy;
         EXPECT_GT(claimed, 0u);
+        VolumeParams firstRules = params;   // a map of the first rules left it to the pixels
+        firstRules.allocationTileRules = int(gpu::ALLOC_TILE_RULES_FIRST);
+        EXPECT_FALSE(cpu::walkTileSlab(oblique, push, firstRules, 112, 40, 119, 47, [](const BlockCoord&) {}, nullptr));
         VolumeParams perPixel = params;
         perPixel.allocationTiles = false;
         const auto bands = cpu::touchedBlocks(oblique, intrinsics, Pose::Identity(), perPixel, 0.0f);

@@ -138,11 +138,9 @@ INSTANTIATE_TEST_SUITE_P(PixelStride, AllocationTest, ::testing::Combine(::testi
 // A wall seen obliquely at the image's right side, z = a x + g (camera frame) with g < 0: its extension crosses
 // the optical axis behind the camera, so D = 1 - a x' < 0 on every ray that meets it, and the rest of the image
 // has no depth. allocate_tiles covers both kinds of tile (a plane with g < 0 by |D|, a tile without depth with
-// nothing to walk) and must decide them, and claim the same blocks, as the CPU twin.
+// nothing to walk) and must decide them, and claim the same blocks, as the CPU twin; with the first rules (a map
+// written by the build that introduced tiles) it leaves both to the pixels, as that build did.
 TEST_F(GpuTest, AllocationByTilesCoversObliqueWallsAndEmptyTilesLikeTheReference) {
-    auto config = smallConfig();
-    config.params.allocationStride = 1;
-    config.params.allocationTiles = true;
     const Intrinsics intr = synth::kinectIntrinsics(kWidth, kHeight);
     const float a = 10.0f, g = -2.5f;
     DepthImage oblique{kWidth, kHeight, std::vector<float>(size_t(kWidth) * kHeight, 0.0f)};
@@ -152,39 +150,54 @@ TEST_F(GpuTest, AllocationByTilesCoversObliqueWallsAndEmptyTilesLikeTheReference
             if (ray > 0.28f) oblique.meters[size_t(y) * kWidth + x] = g / (1.0f - a * ray);   // 1.4 .. 0.5 m
         }
     const Pose pose = roomFrames(1, false).front().pose;
-    // The CPU twin covers some of the wall's tiles with a plane (g < 0) and every tile without depth.
-    const gpu::FramePush push = makeFramePush(intr, pose, config.params, 1);
-    size_t wallTiles = 0, wallCovered = 0, emptyTiles = 0, emptyCovered = 0;
-    for (int y = 0; y + 7 < kHeight; y += 8)
-        for (int x = 0; x + 7 < kWidth; x += 8) {
-            size_t claimed = 0;
-            const bool covered = cpu::walkTileSlab(oblique, push, config.params, x, y, x + 7, y + 7, [&](const cpu::BlockCoord&) { ++claimed; }, nullptr);
-            const bool wall = oblique.at(x, y) > 0.0f && oblique.at(x + 7, y) > 0.0f;
-            const bool empty = oblique.at(x + 7, y) == 0.0f;
-            wallTiles += wall, wallCovered += wall && covered && claimed > 0;
-            emptyTiles += empty, emptyCovered += empty && covered && claimed == 0;
+    for (const uint32_t rules : {gpu::ALLOC_TILE_RULES, gpu::ALLOC_TILE_RULES_FIRST}) {
+        SCOPED_TRACE("tile rules " + std::to_string(rules));
+        auto config = smallConfig();
+        config.params.allocationStride = 1;
+        config.params.allocationTiles = true;
+        config.params.allocationTileRules = int(rules);
+        // The CPU twin covers some of the wall's tiles with a plane (g < 0) and every tile without depth; with the
+        // first rules, none of either.
+        const gpu::FramePush push = makeFramePush(intr, pose, config.params, 1);
+        size_t wallTiles = 0, wallCovered = 0, emptyTiles = 0, emptyCovered = 0;
+        for (int y = 0; y + 7 < kHeight; y += 8)
+            for (int x = 0; x + 7 < kWidth; x += 8) {
+                size_t claimed = 0;
+                const bool covered = cpu::walkTileSlab(oblique, push, config.params, x, y, x + 7, y + 7,
+                                                       [&](const cpu::BlockCoord&) { ++claimed; }, nullptr);
+                const bool wall = oblique.at(x, y) > 0.0f && oblique.at(x + 7, y) > 0.0f;
+                const bool empty = oblique.at(x + 7, y) == 0.0f;
+                wallTiles += wall, wallCovered += wall && covered && claimed > 0;
+                emptyTiles += empty, emptyCovered += empty && covered && claimed == 0;
+            }
+        ASSERT_GT(wallTiles, 0u);
+        if (rules == gpu::ALLOC_TILE_RULES) {
+            EXPECT_GT(wallCovered, wallTiles / 2) << wallCovered << " of " << wallTiles << " wall tiles covered";
+            EXPECT_EQ(emptyCovered, emptyTiles);
+        } else {
+            EXPECT_EQ(wallCovered, 0u);
+            EXPECT_EQ(emptyCovered, 0u);
         }
-    ASSERT_GT(wallTiles, 0u);
-    EXPECT_GT(wallCovered, wallTiles / 2) << wallCovered << " of " << wallTiles << " tiles of the oblique wall covered";
-    EXPECT_EQ(emptyCovered, emptyTiles);
-    gpu::GpuVolume volume(context(), config);
-    cpu::ReferenceVolume reference(config.params);
-    const gpu::FrameReport report = volume.integrate(oblique, intr, pose);
-    const cpu::ReferenceFrameStats stats = reference.integrate(oblique, intr, pose);
-    EXPECT_TRUE(report.warnings.empty()) << report.warnings.front();
-    EXPECT_EQ(report.counters.validPixels, stats.validPixels);
-    EXPECT_EQ(report.counters.blockRequests, stats.blockRequests);
-    EXPECT_EQ(report.counters.touchedCount, stats.touchedCount);
-    EXPECT_EQ(report.counters.updatedVoxels, stats.updatedVoxels);
-    VolumeParams perPixel = config.params;
-    perPixel.allocationTiles = false;
-    cpu::AllocationStats walked;
-    const auto bands = cpu::touchedBlocks(oblique, intr, pose, perPixel, 0.0f, &walked);
-    EXPECT_LT(report.counters.blockRequests, walked.blockRequests / 2);
-    BlockMap gpuBlocks = byCoord(volume.downloadBlocks());
-    EXPECT_EQ(gpuBlocks.size(), reference.blocks().size());
-    for (const auto& c : bands) EXPECT_EQ(gpuBlocks.count(c), 1u) << c[0] << "," << c[1] << "," << c[2];
-    EXPECT_EQ(compareTsdf(gpuBlocks, reference, 1e-6f), 0u);
+        gpu::GpuVolume volume(context(), config);
+        cpu::ReferenceVolume reference(config.params);
+        const gpu::FrameReport report = volume.integrate(oblique, intr, pose);
+        const cpu::ReferenceFrameStats stats = reference.integrate(oblique, intr, pose);
+        EXPECT_TRUE(report.warnings.empty()) << report.warnings.front();
+        EXPECT_EQ(report.counters.validPixels, stats.validPixels);
+        EXPECT_EQ(report.counters.blockRequests, stats.blockRequests);
+        EXPECT_EQ(report.counters.touchedCount, stats.touchedCount);
+        EXPECT_EQ(report.counters.updatedVoxels, stats.updatedVoxels);
+        VolumeParams perPixel = config.params;
+        perPixel.allocationTiles = false;
+        cpu::AllocationStats walked;
+        const auto bands = cpu::touchedBlocks(oblique, intr, pose, perPixel, 0.0f, &walked);
+        if (rules == gpu::ALLOC_TILE_RULES) EXPECT_LT(report.counters.blockRequests, walked.blockRequests / 2);
+        else EXPECT_EQ(report.counters.blockRequests, walked.blockRequests) << "every tile walked by its pixels";
+        BlockMap gpuBlocks = byCoord(volume.downloadBlocks());
+        EXPECT_EQ(gpuBlocks.size(), reference.blocks().size());
+        for (const auto& c : bands) EXPECT_EQ(gpuBlocks.count(c), 1u) << c[0] << "," << c[1] << "," << c[2];
+        EXPECT_EQ(compareTsdf(gpuBlocks, reference, 1e-6f), 0u);
+    }
 }
 
 TEST_F(GpuTest, FusedTsdfMatchesReference) {

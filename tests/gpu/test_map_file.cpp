@@ -255,6 +255,18 @@ TEST_F(GpuTest, MapsThatCannotBeLoadedAreClearErrors) {
     e = loadError(context(), byTiles, config);
     EXPECT_NE(e.find("allocation by tiles"), std::string::npos) << e;
     EXPECT_NE(e.find("--alloc-tiles"), std::string::npos) << e;
+    // ... and the rules that decided its tiles: a map of the first rules (1: planes with g < 0 and tiles without
+    // depth left to the pixels) keeps them, whatever the configuration asks for, and saves them again; a map of the
+    // current rules (2) has those.
+    gpu::GpuVolumeConfig tilesConfig = gpu::GpuVolume::mapConfig(byTiles);
+    EXPECT_EQ(tilesConfig.params.allocationTileRules, int(gpu::ALLOC_TILE_RULES_FIRST));
+    tilesConfig.params.allocationTileRules = int(gpu::ALLOC_TILE_RULES);
+    const auto firstRules = gpu::GpuVolume::load(context(), byTiles, tilesConfig, "first.vkmap");
+    EXPECT_EQ(firstRules->config().params.allocationTileRules, int(gpu::ALLOC_TILE_RULES_FIRST));
+    EXPECT_EQ(firstRules->saveMap().settings.allocationTiles, gpu::ALLOC_TILE_RULES_FIRST);
+    map::MapData currentRules = good;
+    currentRules.settings.allocationTiles = gpu::ALLOC_TILE_RULES;
+    EXPECT_EQ(gpu::GpuVolume::mapConfig(currentRules).params.allocationTileRules, int(gpu::ALLOC_TILE_RULES));
 
     map::MapData huge = good;   // capacities no device has
     huge.capacities.blocks = 1u << 30;
