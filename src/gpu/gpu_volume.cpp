@@ -29,6 +29,8 @@ std::vector<uint32_t> packMarchingCubesTables() {
     return words;
 }
 
+static_assert(VolumeParams{}.allocationTileRules == int(ALLOC_TILE_RULES), "a new volume decides its tiles by the current rules");
+
 void validateConfig(const GpuVolumeConfig& c) {
     const VolumeParams& p = c.params;
     if (!(p.voxelSize >= 0.001f && p.voxelSize <= 1.0f))
