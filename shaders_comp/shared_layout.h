@@ -136,14 +136,19 @@ VKM_CONST BINDING_ALLOC_TILES = 38u;   // uint per allocation tile: 1 when alloc
 VKM_CONST BINDING_COUNT = 39u;
 VKM_CONST MASK_WORDS = 16u;            // VOXELS_PER_BLOCK / 32
 VKM_CONST MASK_ALL_CUBES = 0xFFFFFFFFu; // a retype-mask word with each of its 32 cubes listed
-// Per block, MESH_SIGN_WORDS uint at BINDING_MESH_SIGNS (with refinement; frame_lists.glsl), MASK_WORDS each, one bit
-// per corner (bit `local % 32` of word `local / 32`): the meshing signs (decide_mesh_signs), then three masks of
+// Per block, MESH_SIGN_WORDS uint at BINDING_MESH_SIGNS (with refinement; frame_lists.glsl): four masks with one bit
+// per corner (bit `local % 32` of mask word `local / 32`), the meshing signs (decide_mesh_signs) and three masks of
 // the TSDF that fusion and recycling keep exact (docs/REFINEMENT.md): sdf < 0; observed and |sdf| < refineEpsilon;
-// observed (weight >= minMeshWeight). All zero for a free block (whose TSDF is zero).
+// observed (weight >= minMeshWeight). Grouped by mask word: the four words of mask word w are the uvec4 at uint
+// block * MESH_SIGN_WORDS + MESH_SIGN_GROUP * w, so that one load reads a corner row's raw and observed bits
+// (decide_mesh_signs' windows) or its meshing signs and observed bits (a cube's type). All zero for a free block
+// (whose TSDF is zero).
 VKM_CONST MESH_SIGN_WORDS = 64u;
-VKM_CONST MESH_SIGN_RAW = 16u;         // word offsets within a block's MESH_SIGN_WORDS
-VKM_CONST MESH_SIGN_NEAR = 32u;
-VKM_CONST MESH_SIGN_OBSERVED = 48u;
+VKM_CONST MESH_SIGN_GROUP = 4u;        // uint per mask word, one of each mask
+VKM_CONST MESH_SIGN_MESHING = 0u;      // uint offsets within a group
+VKM_CONST MESH_SIGN_RAW = 1u;
+VKM_CONST MESH_SIGN_NEAR = 2u;
+VKM_CONST MESH_SIGN_OBSERVED = 3u;
 VKM_CONST OWNED_SLOT_WORDS = 48u;      // per block: 3 axes x MASK_WORDS, one bit per edge slot (BINDING_OWNED_SLOTS)
 // list_moved_vertices reads this many owned-slot words of one axis per invocation (commit_vertices sizes its
 // dispatch with it): OWNED_SLOT_WORDS / OWNED_WORDS_PER_INVOCATION invocations per dirty block.
@@ -310,7 +315,7 @@ struct Counters {
     uint recycleDeferred;       // empty blocks not freed because they still owned mesh state (retried next frame)
     uint hashRebuilt;           // 1 when the hash table was rebuilt (tombstones dropped) at the start of the frame
     uint rehashLost;            // live blocks the rebuild could not re-insert within HASH_MAX_PROBES (must be 0)
-    uint frameDeferred;         // 1 when defer_frame found an overflowed capacity (deferOnOverflow): the frame fused nothing
+    uint frameDeferred;         // 1 when commit_allocation found an overflowed capacity (deferOnOverflow): the frame fused nothing
     uint meshPending;           // 1 when the mesh passes left cubes for a follow-up pass (commit_free, deferOnOverflow)
     // Corner updates fusion could not apply exactly: an observation of a corner already holding SDF_MAX_COUNT,
     // or a de-integration of a corner holding none (a map that does not hold the frame). Must stay 0.

@@ -6,7 +6,7 @@
 layout(local_size_x = 1) in;
 
 void main() {
-    // A deferred frame (defer_frame) runs no whole-volume pass: recycling must not decay or free twice.
+    // A deferred frame (frame/defer_frame.glsl) runs no whole-volume pass: recycling must not decay or free twice.
     counters.listDispatch[0] = counters.frameDeferred != 0u ? 0u : counters.liveBlockCount;
     counters.listDispatch[1] = 1u;
     counters.listDispatch[2] = 1u;

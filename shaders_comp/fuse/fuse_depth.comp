@@ -36,20 +36,29 @@ void main() {
         vec4 worldToCamera[3] = framePose.worldToCamera;   // read once, not per corner
         uint flipped = 0u;   // which of this invocation's corners flipped (marked after the loop, which stays lean)
         uint maskChange = 0u;    // with refinement: bits 3k..3k+2, how corner k's TSDF masks change (tsdfMaskBits)
+        // The invocation's 4 corners (x to x + 3 of a row), read with one load per array and written with one store
+        // (cornerOfInvocation, block_store.glsl). A block handed out this frame may hold a previous owner's values:
+        // start from nothing.
+        uint quad = cornerQuadOfInvocation(block);
+        ivec4 oldSums = fresh ? ivec4(0) : voxelSdfSum4[quad];
+        vec4 oldWeights = fresh ? vec4(0.0) : voxelWeight4[quad];
+        uvec4 oldColors = volumeKeepsColor() && !fresh ? voxelColor4[quad] : uvec4(0u);
+        ivec4 newSums = oldSums;
+        vec4 newWeights = oldWeights;
+        uvec4 newColors = oldColors;
+        bool colorsChanged = false;
         [[unroll]] for (uint k = 0u; k < VOXELS_PER_INVOCATION; ++k) {
-            uint local = gl_LocalInvocationIndex + k * WG_BLOCK;
+            uint local = cornerOfInvocation(k);
             uvec3 l = uvec3(local % BLOCK_SIDE, (local / BLOCK_SIDE) % BLOCK_SIDE, local / (BLOCK_SIDE * BLOCK_SIDE));
-            uint v = block * VOXELS_PER_BLOCK + local;
-            // A block handed out this frame may hold a previous owner's values: start from nothing.
-            int oldSum = fresh ? 0 : voxelSdfSum[v];
-            float oldWeight = fresh ? 0.0 : voxelWeight[v];
+            int oldSum = oldSums[k];
+            float oldWeight = oldWeights[k];
             int newSum = oldSum;
             float newWeight = oldWeight;
             // The distances before and after, computed only for a corner this frame changes (the others keep
             // theirs, flip nothing and change no mask): a division each, which the lean loop should not pay for all.
             float oldSdf = 0.0, newSdf = 0.0;
             bool changed = false;
-            // The corner's colour word when this frame changes it; every colour store is the one below the loop
+            // The corner's colour word when this frame changes it; every colour store is the one after the loop
             // (llvmpipe turns each store site under divergent control flow into a per-lane scatter of its own).
             uint newColor = 0u;
             bool colorChanged = false;
@@ -81,7 +90,7 @@ void main() {
                         }
                         uint rgba = withColor ? colorAt(pixel, size.x * size.y) : 0u;
                         if (applies && (rgba >> 24) != 0u) {
-                            uint oldColor = fresh ? 0u : voxelColor[v];
+                            uint oldColor = oldColors[k];   // (0 in a fresh block)
                             uvec3 rgb = uvec3(rgba, rgba >> 8, rgba >> 16) & 0xFFu;
                             newColor = !removing ? foldVoxelColor(oldColor, oldWeight, newSdf, rgb, origin + ivec3(l))
                                      : newWeight == 0.0 ? 0u : unfoldVoxelColor(oldColor, oldWeight, newSdf, rgb, origin + ivec3(l));
@@ -101,13 +110,17 @@ void main() {
             // With refinement the masks of the TSDF that decide_mesh_signs reads (a fresh block's are zero, as are
             // the old values it starts from).
             if (volumeRefines() && changed) maskChange |= (tsdfMaskBits(oldSdf, oldWeight) ^ tsdfMaskBits(newSdf, newWeight)) << (3u * k);
-            if (fresh || newWeight != oldWeight || newSum != oldSum) {
-                voxelSdfSum[v] = newSum;
-                voxelWeight[v] = newWeight;
-            }
-            // A fresh block's corners that this frame gave no colour still hold a previous owner's: cleared.
-            if (volumeKeepsColor() && (colorChanged || fresh)) voxelColor[v] = newColor;
+            newSums[k] = newSum;
+            newWeights[k] = newWeight;
+            if (colorChanged) newColors[k] = newColor;
+            colorsChanged = colorsChanged || colorChanged;
         }
+        if (fresh || newSums != oldSums || newWeights != oldWeights) {
+            voxelSdfSum4[quad] = newSums;
+            voxelWeight4[quad] = newWeights;
+        }
+        // A fresh block's corners that this frame gave no colour still hold a previous owner's: cleared (0).
+        if (volumeKeepsColor() && (colorsChanged || fresh)) voxelColor4[quad] = newColors;
         // Uniform over the subgroup (most subgroups flip no corner: skipped with one subgroup op).
         if (params.incrementalMesh != 0u && subgroupOr(flipped) != 0u) recordCornerFlips(block, flipped);
         // Uniform over the subgroup (most subgroups' corners change no mask bit: skipped with one subgroup op).

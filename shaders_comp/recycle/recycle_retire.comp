@@ -24,8 +24,7 @@ void main() {
     uint flipped = 0u;
     uint maskChange = 0u;   // with refinement: bits 3k..3k+2, how corner k's TSDF masks change (tsdfMaskBits)
     [[unroll]] for (uint k = 0u; k < VOXELS_PER_INVOCATION; ++k) {
-        uint local = gl_LocalInvocationIndex + k * WG_BLOCK;
-        uint v = block * VOXELS_PER_BLOCK + local;
+        uint v = block * VOXELS_PER_BLOCK + cornerOfInvocation(k);   // (the corners' nibbles: toggleTsdfMasks)
         float oldWeight = voxelWeight[v];
         precise float newWeight = retire ? 0.0 : max(oldWeight - params.starveWeight, 0.0);
         if (newWeight == oldWeight) continue;
@@ -42,7 +41,7 @@ void main() {
     if (volumeRefines() && subgroupOr(maskChange) != 0u) toggleTsdfMasks(block, maskChange);   // uniform over the subgroup
     if (params.incrementalMesh != 0u) {
         for (uint k = 0u; k < VOXELS_PER_INVOCATION && flipped != 0u; ++k)
-            if ((flipped & (1u << k)) != 0u) markCornerRetype(block, gl_LocalInvocationIndex + k * WG_BLOCK);
+            if ((flipped & (1u << k)) != 0u) markCornerRetype(block, cornerOfInvocation(k));
         // One invocation per subgroup that saw a flip lists the dirty blocks; the stamp lists each once.
         if (subgroupOr(flipped) != 0u && subgroupElect()) {
             // With refinement the meshing signs of corners in the blocks at +-1 read these corners, as in mark_dirty.

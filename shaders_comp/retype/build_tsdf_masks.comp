@@ -22,7 +22,7 @@ void main() {
         near |= ((bits >> 1) & 1u) << b;
         seen |= ((bits >> 2) & 1u) << b;
     }
-    uint at = block * MESH_SIGN_WORDS + word;
+    uint at = block * MESH_SIGN_WORDS + MESH_SIGN_GROUP * word;
     meshSigns[at + MESH_SIGN_RAW] = raw;
     meshSigns[at + MESH_SIGN_NEAR] = near;
     meshSigns[at + MESH_SIGN_OBSERVED] = seen;

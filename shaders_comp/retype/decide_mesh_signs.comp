@@ -15,7 +15,7 @@
 #include "structure/frame.glsl"
 #include "structure/frame_lists.glsl"
 
-#define SIGN_WINDOW_MASK(b, m, layer, rowHalf) ((b) == NO_BLOCK ? 0u : meshSigns[(b) * MESH_SIGN_WORDS + (m) + 2u * (layer) + (rowHalf)])
+#define SIGN_WINDOW_WORDS(b, layer, rowHalf) ((b) == NO_BLOCK ? uvec4(0u) : meshSignGroups[(b) * MASK_WORDS + 2u * (layer) + (rowHalf)])
 #define SIGN_WINDOW_NEIGHBOR(b, ox, oy, oz) cachedNeighbor(b, ivec3(ox, oy, oz))
 #include "retype/sign_window.h"
 
@@ -36,10 +36,10 @@ void main() {
         uint changed = cornerFlips[block * MASK_WORDS + word];
         if (changed != 0u) cornerFlips[block * MASK_WORDS + word] = 0u;
         if (volumeRefines()) {
-            uint signs = swDecideWord(block, word, evaluated);
-            uint at = block * MESH_SIGN_WORDS + word;
-            uint signChanged = signs ^ meshSigns[at];
-            if (signChanged != 0u) meshSigns[at] = signs;   // this invocation's word only
+            uvec4 own = meshSignGroups[block * MASK_WORDS + word];   // its meshing signs and masks
+            uint signs = swDecideWord(block, word, own, evaluated);
+            uint signChanged = signs ^ own[MESH_SIGN_MESHING];
+            if (signChanged != 0u) meshSigns[block * MESH_SIGN_WORDS + MESH_SIGN_GROUP * word + MESH_SIGN_MESHING] = signs;   // this invocation's word only
             changed |= signChanged;
         }
         if (changed != 0u) {

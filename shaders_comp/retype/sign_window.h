@@ -7,12 +7,16 @@
 //     the adjacent word's or the y-neighbour's row, a layer at 0 or 7 the z-neighbour's);
 //   - a corner may flip only when it is near (observed, |d| < epsilon), at most 2 of its 6 edge neighbours share
 //     its raw sign (bit-sliced, all 32 at once, from 7 mask words) and its 27 corners are observed;
+//   - the window of the corners left is read once for the raw and the observed masks: a mask word's four words are
+//     one group (MESH_SIGN_GROUP, shared_layout.h), read as one uvec4, and on llvmpipe a uvec4 load per lane costs
+//     what a uint load does. The observed window, which took 27 loads of its own after the decision, is now free
+//     (decide_mesh_signs 1.04 -> 0.84 ms on the synthetic room), so it goes first (the AND of 27 shifted words);
 //   - each remaining corner is decided from its 27 window bits (pure ALU: cube types by shifts, regular
-//     distances by xor and bitCount), and only where one would flip is the observed window checked (the AND of 27
-//     shifted words).
+//     distances by xor and bitCount).
 // Shared by the GPU (decide_mesh_signs.comp) and its CPU twin (refinedSignWord, src/core/refinement.cpp, unit-tested
 // against refinedCornerInside), so the two cannot drift apart. The includer defines how words are read:
-//   SIGN_WINDOW_MASK(b, m, layer, rowHalf)  word 2 layer + rowHalf of mask m (MESH_SIGN_*) of block b, 0 if b == NO_BLOCK
+//   SIGN_WINDOW_WORDS(b, layer, rowHalf)  the group of word 2 layer + rowHalf of block b (SwQuad: the meshing signs,
+//                                         raw, near, observed; MESH_SIGN_*), all 0 if b == NO_BLOCK
 //   SIGN_WINDOW_NEIGHBOR(b, ox, oy, oz)  the block at offset (ox, oy, oz) in {-1, 0, 1}^3 from b (b itself at 0)
 #ifndef VKMESH_SIGN_WINDOW_H
 #define VKMESH_SIGN_WINDOW_H
@@ -28,10 +32,28 @@ inline int findLSB(uint x) { return x == 0u ? -1 : std::countr_zero(x); }
 #define SW_FN inline
 #define SW_OUT(T) T&
 #define SW_UNROLL
+// GLSL's uvec4 and uvec2, as far as the windows use them: a group of a mask word's words, and a (raw, observed) pair
+// that the shifts and masks below act on component by component.
+struct SwQuad {
+    uint x, y, z, w;
+};
+struct SwPair {
+    uint x, y;
+};
+inline SwPair operator&(SwPair a, uint b) { return {a.x & b, a.y & b}; }
+inline SwPair operator|(SwPair a, SwPair b) { return {a.x | b.x, a.y | b.y}; }
+inline SwPair operator<<(SwPair a, uint n) { return {a.x << n, a.y << n}; }
+inline SwPair operator>>(SwPair a, uint n) { return {a.x >> n, a.y >> n}; }
+inline SwPair swRawObserved(SwQuad q) { return {q.y, q.w}; }
+#define SW_PAIR_ZERO SwPair{0u, 0u}
 #else
 #define SW_FN
 #define SW_OUT(T) out T
 #define SW_UNROLL [[unroll]]   // llvmpipe does not unroll short fixed loops itself (frame.glsl)
+#define SwQuad uvec4
+#define SwPair uvec2
+SwPair swRawObserved(SwQuad q) { return q.yw; }
+#define SW_PAIR_ZERO uvec2(0u)
 #endif
 
 // A word of 4 rows with every corner replaced by its neighbour at dx along x: `left` and `right` are the same
@@ -41,43 +63,48 @@ SW_FN uint swShiftX(uint here, uint left, uint right, int dx) {
     if (dx < 0) return ((here << 1) & 0xFEFEFEFEu) | ((left >> 7) & 0x01010101u);
     return here;
 }
+SW_FN SwPair swShiftX(SwPair here, SwPair left, SwPair right, int dx) {   // the same, for a (raw, observed) pair
+    if (dx > 0) return ((here >> 1u) & 0x7F7F7F7Fu) | ((right & 0x01010101u) << 7u);
+    if (dx < 0) return ((here << 1u) & 0xFEFEFEFEu) | ((left >> 7u) & 0x01010101u);
+    return here;
+}
 
-// Rows 4 rh .. 4 rh + 3 of layer `layer` of mask m in block b, shifted by dy = -1 (down), 0 (mid), +1 (up): the
+// Rows 4 rh .. 4 rh + 3 of layer `layer` of the raw and observed masks of block b, shifted by dy = -1 (down), 0 (mid), +1 (up): the
 // row below / above comes from the block's other word or, past the block's side, from block `by` (the
 // y-neighbour of b on that side: -y when rh = 0, +y when rh = 1). Only the bits of `need` are read by the caller:
 // the row below is loaded only for a bit in row 0, the row above only for one in row 3, nothing without a bit (on
 // llvmpipe a load that a lane skips is a load saved, and the windows' loads are most of the decision's cost).
-SW_FN void swColumnRows(uint b, uint by, uint m, uint layer, uint rh, uint need, SW_OUT(uint) down, SW_OUT(uint) mid, SW_OUT(uint) up) {
+SW_FN void swColumnRows(uint b, uint by, uint layer, uint rh, uint need, SW_OUT(SwPair) down, SW_OUT(SwPair) mid, SW_OUT(SwPair) up) {
     bool needBelow = (need & 0xFFu) != 0u, needAbove = (need & 0xFF000000u) != 0u;
-    uint rows = need != 0u ? SIGN_WINDOW_MASK(b, m, layer, rh) : 0u;
-    uint other = (rh == 0u ? needAbove : needBelow) ? SIGN_WINDOW_MASK(b, m, layer, 1u - rh) : 0u;
-    uint beyond = (rh == 0u ? needBelow : needAbove) ? SIGN_WINDOW_MASK(by, m, layer, 1u - rh) : 0u;
-    uint below = rh == 0u ? beyond >> 24 : other >> 24;
-    uint above = rh == 0u ? other & 0xFFu : beyond & 0xFFu;
-    down = (rows << 8) | below;
+    SwPair rows = need != 0u ? swRawObserved(SIGN_WINDOW_WORDS(b, layer, rh)) : SW_PAIR_ZERO;
+    SwPair other = (rh == 0u ? needAbove : needBelow) ? swRawObserved(SIGN_WINDOW_WORDS(b, layer, 1u - rh)) : SW_PAIR_ZERO;
+    SwPair beyond = (rh == 0u ? needBelow : needAbove) ? swRawObserved(SIGN_WINDOW_WORDS(by, layer, 1u - rh)) : SW_PAIR_ZERO;
+    SwPair below = rh == 0u ? beyond >> 24u : other >> 24u;
+    SwPair above = rh == 0u ? other & 0xFFu : beyond & 0xFFu;
+    down = (rows << 8u) | below;
     mid = rows;
-    up = (rows >> 8) | (above << 24);
+    up = (rows >> 8u) | (above << 24u);
 }
 
-// The 9 shifted words of layer dz of the window, mask m: w[(dx + 1) + 3 (dy + 1)] = mask at corner + (dx, dy, dz)
+// The 9 shifted (raw, observed) pairs of layer dz of the window: w[(dx + 1) + 3 (dy + 1)] = masks at corner + (dx, dy, dz)
 // for the 32 corners of word (z, rh) of `block`, exact at the bits of `need` (elsewhere they may be 0): the columns
 // of the blocks at -x / +x are read only for a bit at x = 0 / x = 7, a y-neighbour only for a bit in the row next
 // to it (the window of a word's few candidates: retype 1.87 -> 1.76 ms on the synthetic room).
-SW_FN void swLayer(uint block, uint m, uint z, uint rh, int dz, uint need, SW_OUT(uint) w0, SW_OUT(uint) w1, SW_OUT(uint) w2,
-                   SW_OUT(uint) w3, SW_OUT(uint) w4, SW_OUT(uint) w5, SW_OUT(uint) w6, SW_OUT(uint) w7, SW_OUT(uint) w8) {
+SW_FN void swLayer(uint block, uint z, uint rh, int dz, uint need, SW_OUT(SwPair) w0, SW_OUT(SwPair) w1, SW_OUT(SwPair) w2,
+                   SW_OUT(SwPair) w3, SW_OUT(SwPair) w4, SW_OUT(SwPair) w5, SW_OUT(SwPair) w6, SW_OUT(SwPair) w7, SW_OUT(SwPair) w8) {
     int zz = int(z) + dz;
     int oz = zz < 0 ? -1 : (zz > 7 ? 1 : 0);
     uint layer = uint(zz - 8 * oz);
     int oy = rh == 0u ? -1 : 1;
     uint needL = need & 0x01010101u, needR = need & 0x80808080u;
     uint edgeRow = rh == 0u ? 0x000000FFu : 0xFF000000u;   // the row whose dy step leaves the block
-    uint dL, mL, uL, d0, m0, u0, dR, mR, uR;
+    SwPair dL, mL, uL, d0, m0, u0, dR, mR, uR;
     swColumnRows(needL != 0u ? SIGN_WINDOW_NEIGHBOR(block, -1, 0, oz) : NO_BLOCK,
-                 (needL & edgeRow) != 0u ? SIGN_WINDOW_NEIGHBOR(block, -1, oy, oz) : NO_BLOCK, m, layer, rh, needL, dL, mL, uL);
+                 (needL & edgeRow) != 0u ? SIGN_WINDOW_NEIGHBOR(block, -1, oy, oz) : NO_BLOCK, layer, rh, needL, dL, mL, uL);
     swColumnRows(oz == 0 ? block : SIGN_WINDOW_NEIGHBOR(block, 0, 0, oz),
-                 (need & edgeRow) != 0u ? SIGN_WINDOW_NEIGHBOR(block, 0, oy, oz) : NO_BLOCK, m, layer, rh, need, d0, m0, u0);
+                 (need & edgeRow) != 0u ? SIGN_WINDOW_NEIGHBOR(block, 0, oy, oz) : NO_BLOCK, layer, rh, need, d0, m0, u0);
     swColumnRows(needR != 0u ? SIGN_WINDOW_NEIGHBOR(block, 1, 0, oz) : NO_BLOCK,
-                 (needR & edgeRow) != 0u ? SIGN_WINDOW_NEIGHBOR(block, 1, oy, oz) : NO_BLOCK, m, layer, rh, needR, dR, mR, uR);
+                 (needR & edgeRow) != 0u ? SIGN_WINDOW_NEIGHBOR(block, 1, oy, oz) : NO_BLOCK, layer, rh, needR, dR, mR, uR);
     w0 = swShiftX(d0, dL, dR, -1);
     w1 = d0;
     w2 = swShiftX(d0, dL, dR, 1);
@@ -132,63 +159,58 @@ SW_FN bool swFlips(uint win) {
     return flip < keep && bitCount(sameSign) <= 2;
 }
 
-// The meshing signs of word `word` of `block` (bit i: corner 32 word + i inside for meshing). `evaluated`: the
-// corners whose window had to be decided bit by bit (the others kept their raw sign by the masks alone).
-SW_FN uint swDecideWord(uint block, uint word, SW_OUT(uint) evaluated) {
+// The meshing signs of word `word` of `block` (bit i: corner 32 word + i inside for meshing), given the word's group
+// `own` (SIGN_WINDOW_WORDS). `evaluated`: the corners whose window had to be decided bit by bit (the others kept
+// their raw sign by the masks alone).
+SW_FN uint swDecideWord(uint block, uint word, SwQuad own, SW_OUT(uint) evaluated) {
     uint z = word / 2u, rh = word % 2u;
-    uint raw = SIGN_WINDOW_MASK(block, MESH_SIGN_RAW, z, rh);
-    uint cand = SIGN_WINDOW_MASK(block, MESH_SIGN_NEAR, z, rh);
+    uint raw = own.y;
+    uint cand = own.z;   // near
     evaluated = 0u;
     if (cand == 0u) return raw;
     // Rule 3 first, from the 6 edge neighbours' words only (7 mask words): at most 2 of them share the sign. On a
     // surface a near corner has 4 or 5 (its layer's neighbours and one across), so this removes most of them.
     {
         int oy = rh == 0u ? -1 : 1;
-        uint mL = SIGN_WINDOW_MASK(SIGN_WINDOW_NEIGHBOR(block, -1, 0, 0), MESH_SIGN_RAW, z, rh);
-        uint mR = SIGN_WINDOW_MASK(SIGN_WINDOW_NEIGHBOR(block, 1, 0, 0), MESH_SIGN_RAW, z, rh);
-        uint other = SIGN_WINDOW_MASK(block, MESH_SIGN_RAW, z, 1u - rh);
-        uint beyond = SIGN_WINDOW_MASK(SIGN_WINDOW_NEIGHBOR(block, 0, oy, 0), MESH_SIGN_RAW, z, 1u - rh);
+        uint mL = SIGN_WINDOW_WORDS(SIGN_WINDOW_NEIGHBOR(block, -1, 0, 0), z, rh).y;
+        uint mR = SIGN_WINDOW_WORDS(SIGN_WINDOW_NEIGHBOR(block, 1, 0, 0), z, rh).y;
+        uint other = SIGN_WINDOW_WORDS(block, z, 1u - rh).y;
+        uint beyond = SIGN_WINDOW_WORDS(SIGN_WINDOW_NEIGHBOR(block, 0, oy, 0), z, 1u - rh).y;
         uint below = rh == 0u ? beyond >> 24 : other >> 24;
         uint above = rh == 0u ? other & 0xFFu : beyond & 0xFFu;
-        uint zm = z == 0u ? SIGN_WINDOW_MASK(SIGN_WINDOW_NEIGHBOR(block, 0, 0, -1), MESH_SIGN_RAW, 7u, rh)
-                          : SIGN_WINDOW_MASK(block, MESH_SIGN_RAW, z - 1u, rh);
-        uint zp = z == 7u ? SIGN_WINDOW_MASK(SIGN_WINDOW_NEIGHBOR(block, 0, 0, 1), MESH_SIGN_RAW, 0u, rh)
-                          : SIGN_WINDOW_MASK(block, MESH_SIGN_RAW, z + 1u, rh);
+        uint zm = z == 0u ? SIGN_WINDOW_WORDS(SIGN_WINDOW_NEIGHBOR(block, 0, 0, -1), 7u, rh).y : SIGN_WINDOW_WORDS(block, z - 1u, rh).y;
+        uint zp = z == 7u ? SIGN_WINDOW_WORDS(SIGN_WINDOW_NEIGHBOR(block, 0, 0, 1), 0u, rh).y : SIGN_WINDOW_WORDS(block, z + 1u, rh).y;
         cand &= swAtMostTwo(~(swShiftX(raw, mL, mR, -1) ^ raw), ~(swShiftX(raw, mL, mR, 1) ^ raw), ~(((raw << 8) | below) ^ raw),
                             ~(((raw >> 8) | (above << 24)) ^ raw), ~(zm ^ raw), ~(zp ^ raw));
     }
     if (cand == 0u) return raw;
-    uint s0, s1, s2, s3, s4, s5, s6, s7, s8, s9, s10, s11, s12, s13, s14, s15, s16, s17, s18, s19, s20, s21, s22, s23, s24,
-        s25, s26;
-    swLayer(block, MESH_SIGN_RAW, z, rh, -1, cand, s0, s1, s2, s3, s4, s5, s6, s7, s8);
-    swLayer(block, MESH_SIGN_RAW, z, rh, 0, cand, s9, s10, s11, s12, s13, s14, s15, s16, s17);
-    swLayer(block, MESH_SIGN_RAW, z, rh, 1, cand, s18, s19, s20, s21, s22, s23, s24, s25, s26);
+    // The window of the raw and the observed masks at once (pN.x raw, pN.y observed, at corner + offset N).
+    SwPair p0, p1, p2, p3, p4, p5, p6, p7, p8, p9, p10, p11, p12, p13, p14, p15, p16, p17, p18, p19, p20, p21, p22, p23,
+        p24, p25, p26;
+    swLayer(block, z, rh, -1, cand, p0, p1, p2, p3, p4, p5, p6, p7, p8);
+    swLayer(block, z, rh, 0, cand, p9, p10, p11, p12, p13, p14, p15, p16, p17);
+    swLayer(block, z, rh, 1, cand, p18, p19, p20, p21, p22, p23, p24, p25, p26);
+    // The observed rule first, as it costs no load of its own: a flip needs the corner's 27 corners observed (the AND
+    // of the 27 shifted words of the observed mask, exact at the candidates).
+    cand &= p0.y & p1.y & p2.y & p3.y & p4.y & p5.y & p6.y & p7.y & p8.y & p9.y & p10.y & p11.y & p12.y & p13.y &
+            p14.y & p15.y & p16.y & p17.y & p18.y & p19.y & p20.y & p21.y & p22.y & p23.y & p24.y & p25.y &
+            p26.y;
     uint flips = 0u;
     for (uint k = 0u; k < 32u && cand != 0u; ++k) {   // over the candidates (at most 32)
         uint b = uint(findLSB(cand));
         cand &= cand - 1u;
-        uint win = ((s0 >> b) & 1u) | (((s1 >> b) & 1u) << 1u) | (((s2 >> b) & 1u) << 2u) | (((s3 >> b) & 1u) << 3u) |
-                   (((s4 >> b) & 1u) << 4u) | (((s5 >> b) & 1u) << 5u) | (((s6 >> b) & 1u) << 6u) | (((s7 >> b) & 1u) << 7u) |
-                   (((s8 >> b) & 1u) << 8u) | (((s9 >> b) & 1u) << 9u) | (((s10 >> b) & 1u) << 10u) | (((s11 >> b) & 1u) << 11u) |
-                   (((s12 >> b) & 1u) << 12u) | (((s13 >> b) & 1u) << 13u) | (((s14 >> b) & 1u) << 14u) |
-                   (((s15 >> b) & 1u) << 15u) | (((s16 >> b) & 1u) << 16u) | (((s17 >> b) & 1u) << 17u) |
-                   (((s18 >> b) & 1u) << 18u) | (((s19 >> b) & 1u) << 19u) | (((s20 >> b) & 1u) << 20u) |
-                   (((s21 >> b) & 1u) << 21u) | (((s22 >> b) & 1u) << 22u) | (((s23 >> b) & 1u) << 23u) |
-                   (((s24 >> b) & 1u) << 24u) | (((s25 >> b) & 1u) << 25u) | (((s26 >> b) & 1u) << 26u);
+        uint win = ((p0.x >> b) & 1u) | (((p1.x >> b) & 1u) << 1u) | (((p2.x >> b) & 1u) << 2u) |
+                   (((p3.x >> b) & 1u) << 3u) | (((p4.x >> b) & 1u) << 4u) | (((p5.x >> b) & 1u) << 5u) |
+                   (((p6.x >> b) & 1u) << 6u) | (((p7.x >> b) & 1u) << 7u) | (((p8.x >> b) & 1u) << 8u) |
+                   (((p9.x >> b) & 1u) << 9u) | (((p10.x >> b) & 1u) << 10u) | (((p11.x >> b) & 1u) << 11u) |
+                   (((p12.x >> b) & 1u) << 12u) | (((p13.x >> b) & 1u) << 13u) | (((p14.x >> b) & 1u) << 14u) |
+                   (((p15.x >> b) & 1u) << 15u) | (((p16.x >> b) & 1u) << 16u) | (((p17.x >> b) & 1u) << 17u) |
+                   (((p18.x >> b) & 1u) << 18u) | (((p19.x >> b) & 1u) << 19u) | (((p20.x >> b) & 1u) << 20u) |
+                   (((p21.x >> b) & 1u) << 21u) | (((p22.x >> b) & 1u) << 22u) | (((p23.x >> b) & 1u) << 23u) |
+                   (((p24.x >> b) & 1u) << 24u) | (((p25.x >> b) & 1u) << 25u) | (((p26.x >> b) & 1u) << 26u);
         ++evaluated;
         if (swFlips(win)) flips |= 1u << b;
     }
-    // The observed rule last: a flip needs the corner's 27 corners observed (the AND of the 27 shifted words of the observed
-    // mask). It comes after the pure-ALU rules because its 27 loads are most of the word's cost (0.9 of the pass's
-    // 1.7 ms for both windows on the synthetic room) and most words have no flip left to check.
-    if (flips == 0u) return raw;
-    uint o0, o1, o2, o3, o4, o5, o6, o7, o8, o9, o10, o11, o12, o13, o14, o15, o16, o17, o18, o19, o20, o21, o22, o23, o24,
-        o25, o26;
-    swLayer(block, MESH_SIGN_OBSERVED, z, rh, -1, flips, o0, o1, o2, o3, o4, o5, o6, o7, o8);
-    swLayer(block, MESH_SIGN_OBSERVED, z, rh, 0, flips, o9, o10, o11, o12, o13, o14, o15, o16, o17);
-    swLayer(block, MESH_SIGN_OBSERVED, z, rh, 1, flips, o18, o19, o20, o21, o22, o23, o24, o25, o26);
-    flips &= o0 & o1 & o2 & o3 & o4 & o5 & o6 & o7 & o8 & o9 & o10 & o11 & o12 & o13 & o14 & o15 & o16 & o17 & o18 & o19 &
-             o20 & o21 & o22 & o23 & o24 & o25 & o26;
     return raw ^ flips;
 }
 

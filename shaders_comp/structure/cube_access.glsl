@@ -77,6 +77,9 @@ float cornerValue(float d[8], uint c) {
 
 // The 8 corner values of a cube (present[c]: the corner's block exists) and its MC type; `observed` is
 // false (type 0) unless every corner's block exists and every corner has weight >= minMeshWeight.
+// (Reading a row's two corners as one four-corner element, block_store.glsl, where both lie in it took
+// move_vertices 1.31 -> 1.59 ms on the synthetic room: the selects of the components and the fourth corner's own
+// reads cost more than the loads they save.)
 uint loadCube(CubeRef r, out float d[8], out bool present[8], out bool observed) {
     uint type = 0u;
     observed = true;
@@ -165,7 +168,8 @@ uint listedCubeType(CubeRef r) {
         uint nb = blockHolding(r, r.cube + uvec3(0u, row & 1u, row >> 1), local);
         if (nb == NO_BLOCK) return 0u;
         uint at = localOfCube(local), bit = at % 32u;
-        uint signs = meshSigns[meshSignWord(nb, at)], seen = meshSigns[tsdfMaskWord(nb, MESH_SIGN_OBSERVED, at)];
+        uvec4 group = meshSignGroups[meshSignGroup(nb, at)];   // one load for both
+        uint signs = group[MESH_SIGN_MESHING], seen = group[MESH_SIGN_OBSERVED];
         uint pair = (signs >> bit) & 1u, seenPair = (seen >> bit) & 1u;
         if (local.x + 1u < BLOCK_SIDE) {   // the dx = 1 corner is the next bit of the same words
             pair |= ((signs >> (bit + 1u)) & 1u) << 1;
@@ -174,8 +178,9 @@ uint listedCubeType(CubeRef r) {
             uint nx = blockHolding(r, r.cube + uvec3(1u, row & 1u, row >> 1), local);
             if (nx == NO_BLOCK) return 0u;
             uint ax = localOfCube(local);
-            pair |= ((meshSigns[meshSignWord(nx, ax)] >> (ax % 32u)) & 1u) << 1;
-            seenPair |= ((meshSigns[tsdfMaskWord(nx, MESH_SIGN_OBSERVED, ax)] >> (ax % 32u)) & 1u) << 1;
+            uvec4 next = meshSignGroups[meshSignGroup(nx, ax)];
+            pair |= ((next[MESH_SIGN_MESHING] >> (ax % 32u)) & 1u) << 1;
+            seenPair |= ((next[MESH_SIGN_OBSERVED] >> (ax % 32u)) & 1u) << 1;
         }
         if (seenPair != 3u) return 0u;
         type |= pair << (2u * row);

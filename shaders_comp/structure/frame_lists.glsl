@@ -27,13 +27,15 @@ layout(std430, set = 0, binding = BINDING_MOVED_VERTICES) buffer MovedVertices {
 // cube_access.glsl), and their pipelines need no hash buffers.
 layout(std430, set = 0, binding = BINDING_BLOCK_NEIGHBORS) buffer BlockNeighbors { uint blockNeighbors[]; };
 
-// With refinement (docs/REFINEMENT.md), per block MESH_SIGN_WORDS words (shared_layout.h). The first MASK_WORDS:
-// bit `local` set when the corner is inside for meshing; decide_mesh_signs keeps them (for every corner of the dirty
-// blocks, before the retype list is collected), claim and triangulate type a cube from its 8 corners' bits. Then
-// the masks of the TSDF (MESH_SIGN_RAW, _NEAR, _OBSERVED) that fusion, recycling and map loading keep exact and
-// decide_mesh_signs reads instead of the TSDF. Persistent: a corner's sign only changes when the TSDF within one
-// corner of it does.
+// With refinement (docs/REFINEMENT.md), per block MESH_SIGN_WORDS words (shared_layout.h), a group of 4 per mask
+// word: the meshing signs (MESH_SIGN_MESHING, bit set when the corner is inside for meshing: decide_mesh_signs keeps
+// them for every corner of the dirty blocks, before the retype list is collected; claim and triangulate type a cube
+// from its 8 corners' bits), then the masks of the TSDF (MESH_SIGN_RAW, _NEAR, _OBSERVED) that fusion, recycling and
+// map loading keep exact and decide_mesh_signs reads instead of the TSDF. Persistent: a corner's sign only changes
+// when the TSDF within one corner of it does. Two views of one buffer: words, and a group as one uvec4 load (which
+// on llvmpipe costs what a uint load does).
 layout(std430, set = 0, binding = BINDING_MESH_SIGNS) coherent buffer MeshSigns { uint meshSigns[]; };
+layout(std430, set = 0, binding = BINDING_MESH_SIGNS) coherent buffer MeshSignGroups { uvec4 meshSignGroups[]; };
 
 // Per block MASK_WORDS words, bit `local`: the corner's sign or observed state flipped in fusion (fuse_depth), so
 // the 8 cubes around it may change type. decide_mesh_signs marks them, word by word with shifts and the neighbour
@@ -45,8 +47,8 @@ layout(std430, set = 0, binding = BINDING_CORNER_FLIPS) coherent buffer CornerFl
 // pixels. Written for every tile each frame before allocate_blocks reads it.
 layout(std430, set = 0, binding = BINDING_ALLOC_TILES) buffer AllocTiles { uint tileCovered[]; };
 
-uint meshSignWord(uint block, uint local) { return block * MESH_SIGN_WORDS + local / 32u; }
-uint tsdfMaskWord(uint block, uint mask, uint local) { return block * MESH_SIGN_WORDS + mask + local / 32u; }
+uint meshSignGroup(uint block, uint local) { return block * MASK_WORDS + local / 32u; }   // index into meshSignGroups
+uint tsdfMaskWord(uint block, uint mask, uint local) { return block * MESH_SIGN_WORDS + MESH_SIGN_GROUP * (local / 32u) + mask; }
 
 
 // The TSDF mask bits of one corner: bit 0 sdf < 0, bit 1 observed and |sdf| < refineEpsilon, bit 2 observed.
@@ -55,62 +57,60 @@ uint tsdfMaskBits(float sdf, float weight) {
     return uint(sdf < 0.0) | (uint(observed && abs(sdf) < params.refineEpsilon) << 1) | (uint(observed) << 2);
 }
 
-// Toggles the TSDF mask bits that changed in a workgroup-per-block pass (fuse_depth, recycle_retire: invocation
-// `lid` holds corners lid + k WG_BLOCK, k < VOXELS_PER_INVOCATION): `change` bit 3 k + m is mask m (raw, near,
-// observed) of its corner k. Called by every invocation of the subgroup (uniform control flow). Where the subgroup
-// is S <= 32 consecutive invocations starting at a multiple of S (as on lavapipe, S = 8), its corners k fill S
-// consecutive bits of one word: the 12 (k, m) bit fields are packed 32 / S to a word, so the subgroup needs
-// 12 S / 32 subgroupOr (3 for S = 8) and one atomicXor per changed word; otherwise one atomic per changed bit.
+// The bits of a workgroup-per-block pass's corners (fuse_depth, recycle_retire) packed into mask words. Invocation lid
+// holds corners 4 lid .. 4 lid + 3 (cornerOfInvocation, block_store.glsl; VOXELS_PER_INVOCATION = 4), so its bits
+// of one mask are a nibble at bit 4 (lid % 8) of word lid / 8. Where the subgroup is S consecutive invocations
+// starting at a multiple of S (as on lavapipe, S = 8), it fills ceil(S / 8) words, one subgroupOr each (elsewhere
+// each invocation writes its own nibble). Called by every invocation of the subgroup (uniform control flow).
+bool subgroupPacksCorners() {
+    uint lid = gl_LocalInvocationIndex, lo = subgroupMin(lid), hi = subgroupMax(lid);
+    return hi - lo == gl_SubgroupSize - 1u && lo % gl_SubgroupSize == 0u;
+}
+uint cornerNibbleShift() { return 4u * (gl_LocalInvocationIndex % 8u); }
+// Word w of the subgroup's words (subgroupPacksCorners): the nibbles of its invocations 8 w .. 8 w + 7.
+uint subgroupCornerWord(uint nibble, uint w) {
+    uint rel = gl_LocalInvocationIndex - subgroupMin(gl_LocalInvocationIndex);
+    return subgroupOr(rel / 8u == w ? nibble << cornerNibbleShift() : 0u);
+}
+// The first corner of word w of the subgroup's words.
+uint subgroupCornerWordStart(uint w) { return (subgroupMin(gl_LocalInvocationIndex) + 8u * w) * VOXELS_PER_INVOCATION; }
+// Bit k of mask m of `bits`, where bit 3 k + m is mask m (raw, near, observed) of corner k.
+uint cornerNibble(uint bits, uint m) {
+    return ((bits >> m) & 1u) | ((bits >> (m + 2u)) & 2u) | ((bits >> (m + 4u)) & 4u) | ((bits >> (m + 6u)) & 8u);
+}
+
+// Toggles the TSDF mask bits that changed: `change` bit 3 k + m is mask m (raw, near, observed) of the invocation's
+// corner k. One subgroupOr per mask and word, one atomicXor per changed word (3 and at most 3 for S = 8).
 void toggleTsdfMasks(uint block, uint change) {
-    const uint combos = 3u * VOXELS_PER_INVOCATION;
-    uint lid = gl_LocalInvocationIndex, size = gl_SubgroupSize;
-    uint lo = subgroupMin(lid), hi = subgroupMax(lid);
-    if (size <= 32u && hi - lo == size - 1u && lo % size == 0u) {   // uniform over the subgroup
-        uint fields = 32u / size, rel = lid - lo, fieldMask = size == 32u ? 0xFFFFFFFFu : (1u << size) - 1u;
-        for (uint first = 0u; first < combos; first += fields) {
-            uint v = 0u;
-            for (uint f = 0u; f < fields && first + f < combos; ++f) v |= ((change >> (first + f)) & 1u) << (size * f + rel);
-            v = subgroupOr(v);
-            if (v != 0u && subgroupElect()) {
-                for (uint f = 0u; f < fields && first + f < combos; ++f) {
-                    uint bits = (v >> (size * f)) & fieldMask, c = first + f;
-                    if (bits != 0u) atomicXor(meshSigns[tsdfMaskWord(block, MESH_SIGN_RAW + MASK_WORDS * (c % 3u), lo + (c / 3u) * WG_BLOCK)], bits << (lo % 32u));
-                }
+    if (subgroupPacksCorners()) {   // uniform over the subgroup
+        uint words = (gl_SubgroupSize + 7u) / 8u;
+        for (uint m = 0u; m < 3u; ++m) {
+            uint nibble = cornerNibble(change, m);
+            for (uint w = 0u; w < words; ++w) {
+                uint v = subgroupCornerWord(nibble, w);
+                if (v != 0u && subgroupElect()) atomicXor(meshSigns[tsdfMaskWord(block, MESH_SIGN_RAW + m, subgroupCornerWordStart(w))], v);
             }
         }
         return;
     }
-    for (uint c = 0u; c < combos; ++c) {
-        uint local = lid + (c / 3u) * WG_BLOCK;
-        if (((change >> c) & 1u) != 0u) atomicXor(meshSigns[tsdfMaskWord(block, MESH_SIGN_RAW + MASK_WORDS * (c % 3u), local)], 1u << (local % 32u));
+    for (uint m = 0u; m < 3u; ++m) {
+        uint nibble = cornerNibble(change, m);
+        if (nibble != 0u) atomicXor(meshSigns[tsdfMaskWord(block, MESH_SIGN_RAW + m, gl_LocalInvocationIndex * VOXELS_PER_INVOCATION)], nibble << cornerNibbleShift());
     }
 }
 
-// Records the corners of a workgroup-per-block pass's invocation that flipped (`flipped` bit k: corner
-// lid + k WG_BLOCK) in the block's corner-flip words, packed as toggleTsdfMasks packs its bits: one subgroupOr and
-// one atomicOr per word with a flip. Called by every invocation of the subgroup (uniform control flow).
+// Records the invocation's corners that flipped (`flipped` bit k: corner k) in the block's corner-flip words, packed
+// as toggleTsdfMasks packs its bits: one subgroupOr and one atomicOr per word with a flip.
 void recordCornerFlips(uint block, uint flipped) {
-    uint lid = gl_LocalInvocationIndex, size = gl_SubgroupSize;
-    uint lo = subgroupMin(lid), hi = subgroupMax(lid);
-    if (size <= 32u && hi - lo == size - 1u && lo % size == 0u) {   // uniform over the subgroup
-        uint fields = 32u / size, rel = lid - lo, fieldMask = size == 32u ? 0xFFFFFFFFu : (1u << size) - 1u;
-        for (uint first = 0u; first < VOXELS_PER_INVOCATION; first += fields) {
-            uint v = 0u;
-            for (uint f = 0u; f < fields && first + f < VOXELS_PER_INVOCATION; ++f) v |= ((flipped >> (first + f)) & 1u) << (size * f + rel);
-            v = subgroupOr(v);
-            if (v != 0u && subgroupElect()) {
-                for (uint f = 0u; f < fields && first + f < VOXELS_PER_INVOCATION; ++f) {
-                    uint bits = (v >> (size * f)) & fieldMask, local = lo + (first + f) * WG_BLOCK;
-                    if (bits != 0u) atomicOr(cornerFlips[block * MASK_WORDS + local / 32u], bits << (local % 32u));
-                }
-            }
+    if (subgroupPacksCorners()) {   // uniform over the subgroup
+        uint words = (gl_SubgroupSize + 7u) / 8u;
+        for (uint w = 0u; w < words; ++w) {
+            uint v = subgroupCornerWord(flipped, w);
+            if (v != 0u && subgroupElect()) atomicOr(cornerFlips[block * MASK_WORDS + subgroupCornerWordStart(w) / 32u], v);
         }
         return;
     }
-    for (uint k = 0u; k < VOXELS_PER_INVOCATION; ++k) {
-        uint local = lid + k * WG_BLOCK;
-        if (((flipped >> k) & 1u) != 0u) atomicOr(cornerFlips[block * MASK_WORDS + local / 32u], 1u << (local % 32u));
-    }
+    if (flipped != 0u) atomicOr(cornerFlips[block * MASK_WORDS + gl_LocalInvocationIndex * VOXELS_PER_INVOCATION / 32u], flipped << cornerNibbleShift());
 }
 
 // ---- dirty blocks -----------------------------------------------------------------------------------------

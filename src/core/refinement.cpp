@@ -108,16 +108,12 @@ int refinedCubeType(const float d[kWindowSize], const bool observed[kWindowSize]
 
 // ---- decide_mesh_signs' word decision on the host: the shared code of shaders_comp/retype/sign_window.h ------------
 namespace vkmesh::gpu {
+struct SwQuad;   // sign_window.h
 namespace {
 // The block neighbourhood being decided; "block indices" are indices into it (the centre is 13).
 thread_local const std::array<const TsdfMasks*, 27>* tlSignBlocks = nullptr;
 
-uint32_t hostSignMask(uint32_t b, uint32_t m, uint32_t layer, uint32_t rowHalf) {
-    if (b == NO_BLOCK) return 0u;
-    const TsdfMasks& t = *(*tlSignBlocks)[b];
-    const std::array<uint32_t, 16>& a = m == MESH_SIGN_RAW ? t.raw : (m == MESH_SIGN_NEAR ? t.near : t.observed);
-    return a[2 * layer + rowHalf];
-}
+SwQuad hostSignWords(uint32_t b, uint32_t layer, uint32_t rowHalf);   // below
 
 uint32_t hostSignNeighbor(int ox, int oy, int oz) {
     const int i = cornerWindowIndex(ox, oy, oz);
@@ -126,11 +122,24 @@ uint32_t hostSignNeighbor(int ox, int oy, int oz) {
 }  // namespace
 }  // namespace vkmesh::gpu
 
-#define SIGN_WINDOW_MASK(b, m, layer, rowHalf) hostSignMask(b, m, layer, rowHalf)
+#define SIGN_WINDOW_WORDS(b, layer, rowHalf) hostSignWords(b, layer, rowHalf)
 #define SIGN_WINDOW_NEIGHBOR(b, ox, oy, oz) hostSignNeighbor(ox, oy, oz)
 #include "retype/sign_window.h"
-#undef SIGN_WINDOW_MASK
+#undef SIGN_WINDOW_WORDS
 #undef SIGN_WINDOW_NEIGHBOR
+
+namespace vkmesh::gpu {
+namespace {
+// A mask word's group as the GPU reads it (shared_layout.h, MESH_SIGN_GROUP): the meshing signs (not read by the
+// decision: 0), raw, near, observed.
+SwQuad hostSignWords(uint32_t b, uint32_t layer, uint32_t rowHalf) {
+    if (b == NO_BLOCK) return {0u, 0u, 0u, 0u};
+    const TsdfMasks& t = *(*tlSignBlocks)[b];
+    const uint32_t w = 2 * layer + rowHalf;
+    return {0u, t.raw[w], t.near[w], t.observed[w]};
+}
+}  // namespace
+}  // namespace vkmesh::gpu
 
 namespace vkmesh {
 
@@ -149,7 +158,8 @@ TsdfMasks tsdfMasks(const float sdf[512], const float weight[512], float minMesh
 uint32_t refinedSignWord(const std::array<const TsdfMasks*, 27>& blocks, uint32_t word, uint32_t* evaluated) {
     gpu::tlSignBlocks = &blocks;
     uint32_t n = 0;
-    const uint32_t signs = gpu::swDecideWord(uint32_t(cornerWindowIndex(0, 0, 0)), word, n);
+    const uint32_t centre = uint32_t(cornerWindowIndex(0, 0, 0));
+    const uint32_t signs = gpu::swDecideWord(centre, word, gpu::hostSignWords(centre, word / 2, word % 2), n);
     gpu::tlSignBlocks = nullptr;
     if (evaluated) *evaluated = n;
     return signs;

@@ -59,8 +59,8 @@ void GpuVolume::recordFrame(VkCommandBuffer cmd, const FramePush& push, bool reb
     //          allocate_blocks      depth, hash, tiles                        hash keys, stamps, touched list
     //          plan_frame           touchedCount                              assign/block dispatch
     //          assign_blocks        touched list, free list, hash             hash values, block coords, touched list
-    //          commit_allocation    allocRequests                             free list top, pool counts
-    //          defer_frame          overflow counts                           frameDeferred, emptied dispatches
+    //          commit_allocation    allocRequests, overflow counts            free list top, pool counts; deferral:
+    //                                                                         frameDeferred, emptied dispatches
     // fuse     fuse_depth           touched list, depth, block coords         TSDF, retype masks
     // mesh     mark_dirty           touched list, hash                        dirty list, mesh stamps
     //          (block list)         hash                                      live-block list  [recycling, pending]
@@ -92,8 +92,6 @@ void GpuVolume::recordFrame(VkCommandBuffer cmd, const FramePush& push, bool reb
     }
     allocate_.record(cmd, push, counters_.buffer(), uint32_t(config_.params.allocationStride), config_.params.allocationTiles,
                      inFlight_->input.deintegrate);
-    deferFrame_.dispatch(cmd, &push, 1);
-    vk::memoryBarrier(cmd);
     timer_.mark(cmd, "allocate");
     fuse_.record(cmd, push, counters_, inFlight_->input.deintegrate);
     timer_.mark(cmd, "fuse");

@@ -139,7 +139,6 @@ GpuVolume::GpuVolume(const vk::Context& context, const GpuVolumeConfig& config)
       mesh_(context, table_, config_.blockCapacity, config_.vertexCapacity, config_.chunkCapacity, counters_),
       lists_(context, table_, listCapacities(config_)),
       allocate_(context, table_),
-      deferFrame_(context, table_, "defer_frame"),
       fuse_(context, table_),
       blockList_(context, table_),
       baselineMesh_(context, table_, params_),

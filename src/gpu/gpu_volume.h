@@ -390,7 +390,6 @@ private:
     // copies it back (did the GPU skip the frame?).
     vk::Buffer framePose_, framePoseReadback_;
     AllocateBlocksStage allocate_;
-    vk::ComputePipeline deferFrame_;
     FuseDepthStage fuse_;
     BlockListStage blockList_;
     BaselineMeshStage baselineMesh_;

@@ -91,8 +91,13 @@ std::vector<ShaderBinding> reflectBindings(std::span<const uint32_t> spirv, cons
         out.push_back(b);
     }
     std::sort(out.begin(), out.end(), [](const ShaderBinding& a, const ShaderBinding& b) { return a.binding < b.binding; });
+    // One buffer may be declared more than once, as views of different types (frame_lists.glsl's mesh signs): one
+    // descriptor, so the declarations must agree on its type.
     for (size_t i = 1; i < out.size(); ++i)
-        if (out[i].binding == out[i - 1].binding) throw fail("binding " + std::to_string(out[i].binding) + " declared twice");
+        if (out[i].binding == out[i - 1].binding && out[i].type != out[i - 1].type)
+            throw fail("binding " + std::to_string(out[i].binding) + " declared twice with different descriptor types");
+    out.erase(std::unique(out.begin(), out.end(), [](const ShaderBinding& a, const ShaderBinding& b) { return a.binding == b.binding; }),
+              out.end());
     return out;
 }
 

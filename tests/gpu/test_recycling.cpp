@@ -238,9 +238,9 @@ TEST_F(GpuTest, RefinementMasksAndSignsFollowTheTsdfThroughRecyclingAndGrowth) {
             masks[{b.coord.x(), b.coord.y(), b.coord.z()}] = m;
             const uint32_t* w = &words[size_t(b.index) * gpu::MESH_SIGN_WORDS];
             for (uint32_t k = 0; k < gpu::MASK_WORDS; ++k) {
-                ASSERT_EQ(w[gpu::MESH_SIGN_RAW + k], m.raw[k]) << "frame " << i << " block " << b.index << " word " << k;
-                ASSERT_EQ(w[gpu::MESH_SIGN_NEAR + k], m.near[k]) << "frame " << i << " block " << b.index << " word " << k;
-                ASSERT_EQ(w[gpu::MESH_SIGN_OBSERVED + k], m.observed[k]) << "frame " << i << " block " << b.index << " word " << k;
+                ASSERT_EQ(w[gpu::MESH_SIGN_GROUP * k + gpu::MESH_SIGN_RAW], m.raw[k]) << "frame " << i << " block " << b.index << " word " << k;
+                ASSERT_EQ(w[gpu::MESH_SIGN_GROUP * k + gpu::MESH_SIGN_NEAR], m.near[k]) << "frame " << i << " block " << b.index << " word " << k;
+                ASSERT_EQ(w[gpu::MESH_SIGN_GROUP * k + gpu::MESH_SIGN_OBSERVED], m.observed[k]) << "frame " << i << " block " << b.index << " word " << k;
             }
         }
         for (size_t b = 0; b < live.size(); ++b) {
@@ -255,7 +255,7 @@ TEST_F(GpuTest, RefinementMasksAndSignsFollowTheTsdfThroughRecyclingAndGrowth) {
             }
             for (uint32_t k = 0; k < gpu::MASK_WORDS; ++k) {
                 const uint32_t expected = refinedSignWord(around, k);
-                ASSERT_EQ(words[size_t(b.index) * gpu::MESH_SIGN_WORDS + k], expected) << "frame " << i << " block " << b.index << " word " << k;
+                ASSERT_EQ(words[size_t(b.index) * gpu::MESH_SIGN_WORDS + gpu::MESH_SIGN_GROUP * k + gpu::MESH_SIGN_MESHING], expected) << "frame " << i << " block " << b.index << " word " << k;
                 flips += uint64_t(std::popcount(expected ^ masks[{b.coord.x(), b.coord.y(), b.coord.z()}].raw[k]));
             }
             ++checkedBlocks;

@@ -8,6 +8,8 @@
 #include <sys/wait.h>
 
 #include <atomic>
+#include <mutex>
+#include <vector>
 #include <fstream>
 #include <sstream>
 #include <cmath>
@@ -37,12 +39,37 @@ std::string lavapipeCannotDraw() {
            "a Mesa bug, reproduced without vkmesh in docs/repro/lavapipe_width128 (docs/PORTABILITY.md)";
 }
 
+namespace {
+// The folders makeTempDir made in this test program, removed when it exits with every test passed: a run of the
+// suite left ~3 GB of them in the temporary folder (recorded sequences, maps, meshes), which piled up over a day's
+// runs. Kept after a failure (ctest runs each test in a program of its own, so only the failed test's), or when
+// VKMESH_KEEP_TEST_DIRS is set, for inspection. Destroyed before GoogleTest's UnitTest, which was made first.
+struct TempDirs {
+    std::mutex mutex;
+    std::vector<std::filesystem::path> dirs;
+    ~TempDirs() {
+        if (std::getenv("VKMESH_KEEP_TEST_DIRS") || !::testing::UnitTest::GetInstance()->Passed()) return;
+        for (const std::filesystem::path& dir : dirs) {
+            std::error_code ignored;   // (a test that removed its folder itself)
+            std::filesystem::remove_all(dir, ignored);
+        }
+    }
+};
+TempDirs& tempDirs() {
+    static TempDirs dirs;
+    return dirs;
+}
+}  // namespace
+
 std::filesystem::path makeTempDir(const std::string& tag) {
     static std::atomic<int> counter{0};
     auto dir = std::filesystem::temp_directory_path() /
                ("vkmesh_test_" + tag + "_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
     std::filesystem::remove_all(dir);
     std::filesystem::create_directories(dir);
+    TempDirs& made = tempDirs();
+    std::lock_guard lock(made.mutex);
+    made.dirs.push_back(dir);
     return dir;
 }
 

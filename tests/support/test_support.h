@@ -25,7 +25,8 @@ std::optional<std::filesystem::path> sharedDatasetsDir();
 // docs/repro/lavapipe_width128/ (docs/PORTABILITY.md). The tests that draw GTEST_SKIP with this reason.
 std::string lavapipeCannotDraw();
 
-// A fresh empty temporary folder for one test, removed by the caller or left for inspection.
+// A fresh empty temporary folder for one test, removed when the test program exits with every test passed (kept
+// after a failure, or with VKMESH_KEEP_TEST_DIRS set, for inspection).
 std::filesystem::path makeTempDir(const std::string& tag);
 
 // Runs the vkmesh program with `args` (a shell-quoted string); returns its exit code and what it printed.
