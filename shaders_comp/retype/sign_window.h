@@ -74,11 +74,16 @@ SW_FN SwPair swShiftX(SwPair here, SwPair left, SwPair right, int dx) {   // the
 // y-neighbour of b on that side: -y when rh = 0, +y when rh = 1). Only the bits of `need` are read by the caller:
 // the row below is loaded only for a bit in row 0, the row above only for one in row 3, nothing without a bit (on
 // llvmpipe a load that a lane skips is a load saved, and the windows' loads are most of the decision's cost).
-SW_FN void swColumnRows(uint b, uint by, uint layer, uint rh, uint need, SW_OUT(SwPair) down, SW_OUT(SwPair) mid, SW_OUT(SwPair) up) {
+// `have` bit 0, 1, 2: the rows, the other word and the word beyond were read already (rowsIn, otherIn, beyondIn:
+// the words rule 3 read) and are not read again.
+SW_FN void swColumnRows(uint b, uint by, uint layer, uint rh, uint need, uint have, SwPair rowsIn, SwPair otherIn, SwPair beyondIn,
+                        SW_OUT(SwPair) down, SW_OUT(SwPair) mid, SW_OUT(SwPair) up) {
     bool needBelow = (need & 0xFFu) != 0u, needAbove = (need & 0xFF000000u) != 0u;
-    SwPair rows = need != 0u ? swRawObserved(SIGN_WINDOW_WORDS(b, layer, rh)) : SW_PAIR_ZERO;
-    SwPair other = (rh == 0u ? needAbove : needBelow) ? swRawObserved(SIGN_WINDOW_WORDS(b, layer, 1u - rh)) : SW_PAIR_ZERO;
-    SwPair beyond = (rh == 0u ? needBelow : needAbove) ? swRawObserved(SIGN_WINDOW_WORDS(by, layer, 1u - rh)) : SW_PAIR_ZERO;
+    SwPair rows = (have & 1u) != 0u ? rowsIn : (need != 0u ? swRawObserved(SIGN_WINDOW_WORDS(b, layer, rh)) : SW_PAIR_ZERO);
+    SwPair other = (have & 2u) != 0u ? otherIn
+                   : ((rh == 0u ? needAbove : needBelow) ? swRawObserved(SIGN_WINDOW_WORDS(b, layer, 1u - rh)) : SW_PAIR_ZERO);
+    SwPair beyond = (have & 4u) != 0u ? beyondIn
+                    : ((rh == 0u ? needBelow : needAbove) ? swRawObserved(SIGN_WINDOW_WORDS(by, layer, 1u - rh)) : SW_PAIR_ZERO);
     SwPair below = rh == 0u ? beyond >> 24u : other >> 24u;
     SwPair above = rh == 0u ? other & 0xFFu : beyond & 0xFFu;
     down = (rows << 8u) | below;
@@ -89,22 +94,32 @@ SW_FN void swColumnRows(uint b, uint by, uint layer, uint rh, uint need, SW_OUT(
 // The 9 shifted (raw, observed) pairs of layer dz of the window: w[(dx + 1) + 3 (dy + 1)] = masks at corner + (dx, dy, dz)
 // for the 32 corners of word (z, rh) of `block`, exact at the bits of `need` (elsewhere they may be 0): the columns
 // of the blocks at -x / +x are read only for a bit at x = 0 / x = 7, a y-neighbour only for a bit in the row next
-// to it (the window of a word's few candidates: retype 1.87 -> 1.76 ms on the synthetic room).
-SW_FN void swLayer(uint block, uint z, uint rh, int dz, uint need, SW_OUT(SwPair) w0, SW_OUT(SwPair) w1, SW_OUT(SwPair) w2,
-                   SW_OUT(SwPair) w3, SW_OUT(SwPair) w4, SW_OUT(SwPair) w5, SW_OUT(SwPair) w6, SW_OUT(SwPair) w7, SW_OUT(SwPair) w8) {
+// to it (the window of a word's few candidates: retype 1.87 -> 1.76 ms on the synthetic room). `have` bits 0-2: the
+// middle column's rows, other word and word beyond were read already (swColumnRows); bits 3, 4: the rows of the
+// -x / +x column (rowsL, rowsR).
+SW_FN void swLayer(uint block, uint z, uint rh, int dz, uint need, uint have, SwPair rowsMid, SwPair otherMid, SwPair beyondMid,
+                   SwPair rowsL, SwPair rowsR, SW_OUT(SwPair) w0, SW_OUT(SwPair) w1, SW_OUT(SwPair) w2, SW_OUT(SwPair) w3,
+                   SW_OUT(SwPair) w4, SW_OUT(SwPair) w5, SW_OUT(SwPair) w6, SW_OUT(SwPair) w7, SW_OUT(SwPair) w8) {
     int zz = int(z) + dz;
     int oz = zz < 0 ? -1 : (zz > 7 ? 1 : 0);
     uint layer = uint(zz - 8 * oz);
     int oy = rh == 0u ? -1 : 1;
     uint needL = need & 0x01010101u, needR = need & 0x80808080u;
     uint edgeRow = rh == 0u ? 0x000000FFu : 0xFF000000u;   // the row whose dy step leaves the block
+    uint otherRow = rh == 0u ? 0xFF000000u : 0x000000FFu;  // the row whose dy step reaches the block's other word
+    // A column's block is looked up only for a word still to be read.
+    uint lookL = (have & 8u) != 0u ? needL & otherRow : needL, lookR = (have & 16u) != 0u ? needR & otherRow : needR;
+    uint lookMid = (have & 1u) != 0u ? ((have & 2u) != 0u ? 0u : need & otherRow) : need;
     SwPair dL, mL, uL, d0, m0, u0, dR, mR, uR;
-    swColumnRows(needL != 0u ? SIGN_WINDOW_NEIGHBOR(block, -1, 0, oz) : NO_BLOCK,
-                 (needL & edgeRow) != 0u ? SIGN_WINDOW_NEIGHBOR(block, -1, oy, oz) : NO_BLOCK, layer, rh, needL, dL, mL, uL);
-    swColumnRows(oz == 0 ? block : SIGN_WINDOW_NEIGHBOR(block, 0, 0, oz),
-                 (need & edgeRow) != 0u ? SIGN_WINDOW_NEIGHBOR(block, 0, oy, oz) : NO_BLOCK, layer, rh, need, d0, m0, u0);
-    swColumnRows(needR != 0u ? SIGN_WINDOW_NEIGHBOR(block, 1, 0, oz) : NO_BLOCK,
-                 (needR & edgeRow) != 0u ? SIGN_WINDOW_NEIGHBOR(block, 1, oy, oz) : NO_BLOCK, layer, rh, needR, dR, mR, uR);
+    swColumnRows(lookL != 0u ? SIGN_WINDOW_NEIGHBOR(block, -1, 0, oz) : NO_BLOCK,
+                 (needL & edgeRow) != 0u ? SIGN_WINDOW_NEIGHBOR(block, -1, oy, oz) : NO_BLOCK, layer, rh, needL, (have >> 3) & 1u,
+                 rowsL, SW_PAIR_ZERO, SW_PAIR_ZERO, dL, mL, uL);
+    swColumnRows(oz == 0 ? block : (lookMid != 0u ? SIGN_WINDOW_NEIGHBOR(block, 0, 0, oz) : NO_BLOCK),
+                 (need & edgeRow) != 0u && (have & 4u) == 0u ? SIGN_WINDOW_NEIGHBOR(block, 0, oy, oz) : NO_BLOCK, layer, rh, need,
+                 have & 7u, rowsMid, otherMid, beyondMid, d0, m0, u0);
+    swColumnRows(lookR != 0u ? SIGN_WINDOW_NEIGHBOR(block, 1, 0, oz) : NO_BLOCK,
+                 (needR & edgeRow) != 0u ? SIGN_WINDOW_NEIGHBOR(block, 1, oy, oz) : NO_BLOCK, layer, rh, needR, (have >> 4) & 1u,
+                 rowsR, SW_PAIR_ZERO, SW_PAIR_ZERO, dR, mR, uR);
     w0 = swShiftX(d0, dL, dR, -1);
     w1 = d0;
     w2 = swShiftX(d0, dL, dR, 1);
@@ -170,26 +185,28 @@ SW_FN uint swDecideWord(uint block, uint word, SwQuad own, SW_OUT(uint) evaluate
     if (cand == 0u) return raw;
     // Rule 3 first, from the 6 edge neighbours' words only (7 mask words): at most 2 of them share the sign. On a
     // surface a near corner has 4 or 5 (its layer's neighbours and one across), so this removes most of them.
+    // Its words are the window's too (kept with their observed words, not read again below).
+    int oy = rh == 0u ? -1 : 1;
+    SwPair left = swRawObserved(SIGN_WINDOW_WORDS(SIGN_WINDOW_NEIGHBOR(block, -1, 0, 0), z, rh));
+    SwPair right = swRawObserved(SIGN_WINDOW_WORDS(SIGN_WINDOW_NEIGHBOR(block, 1, 0, 0), z, rh));
+    SwPair other = swRawObserved(SIGN_WINDOW_WORDS(block, z, 1u - rh));
+    SwPair beyond = swRawObserved(SIGN_WINDOW_WORDS(SIGN_WINDOW_NEIGHBOR(block, 0, oy, 0), z, 1u - rh));
+    SwPair lower = swRawObserved(z == 0u ? SIGN_WINDOW_WORDS(SIGN_WINDOW_NEIGHBOR(block, 0, 0, -1), 7u, rh) : SIGN_WINDOW_WORDS(block, z - 1u, rh));
+    SwPair upper = swRawObserved(z == 7u ? SIGN_WINDOW_WORDS(SIGN_WINDOW_NEIGHBOR(block, 0, 0, 1), 0u, rh) : SIGN_WINDOW_WORDS(block, z + 1u, rh));
     {
-        int oy = rh == 0u ? -1 : 1;
-        uint mL = SIGN_WINDOW_WORDS(SIGN_WINDOW_NEIGHBOR(block, -1, 0, 0), z, rh).y;
-        uint mR = SIGN_WINDOW_WORDS(SIGN_WINDOW_NEIGHBOR(block, 1, 0, 0), z, rh).y;
-        uint other = SIGN_WINDOW_WORDS(block, z, 1u - rh).y;
-        uint beyond = SIGN_WINDOW_WORDS(SIGN_WINDOW_NEIGHBOR(block, 0, oy, 0), z, 1u - rh).y;
-        uint below = rh == 0u ? beyond >> 24 : other >> 24;
-        uint above = rh == 0u ? other & 0xFFu : beyond & 0xFFu;
-        uint zm = z == 0u ? SIGN_WINDOW_WORDS(SIGN_WINDOW_NEIGHBOR(block, 0, 0, -1), 7u, rh).y : SIGN_WINDOW_WORDS(block, z - 1u, rh).y;
-        uint zp = z == 7u ? SIGN_WINDOW_WORDS(SIGN_WINDOW_NEIGHBOR(block, 0, 0, 1), 0u, rh).y : SIGN_WINDOW_WORDS(block, z + 1u, rh).y;
-        cand &= swAtMostTwo(~(swShiftX(raw, mL, mR, -1) ^ raw), ~(swShiftX(raw, mL, mR, 1) ^ raw), ~(((raw << 8) | below) ^ raw),
-                            ~(((raw >> 8) | (above << 24)) ^ raw), ~(zm ^ raw), ~(zp ^ raw));
+        uint below = rh == 0u ? beyond.x >> 24 : other.x >> 24;
+        uint above = rh == 0u ? other.x & 0xFFu : beyond.x & 0xFFu;
+        cand &= swAtMostTwo(~(swShiftX(raw, left.x, right.x, -1) ^ raw), ~(swShiftX(raw, left.x, right.x, 1) ^ raw),
+                            ~(((raw << 8) | below) ^ raw), ~(((raw >> 8) | (above << 24)) ^ raw), ~(lower.x ^ raw), ~(upper.x ^ raw));
     }
     if (cand == 0u) return raw;
     // The window of the raw and the observed masks at once (pN.x raw, pN.y observed, at corner + offset N).
     SwPair p0, p1, p2, p3, p4, p5, p6, p7, p8, p9, p10, p11, p12, p13, p14, p15, p16, p17, p18, p19, p20, p21, p22, p23,
         p24, p25, p26;
-    swLayer(block, z, rh, -1, cand, p0, p1, p2, p3, p4, p5, p6, p7, p8);
-    swLayer(block, z, rh, 0, cand, p9, p10, p11, p12, p13, p14, p15, p16, p17);
-    swLayer(block, z, rh, 1, cand, p18, p19, p20, p21, p22, p23, p24, p25, p26);
+    swLayer(block, z, rh, -1, cand, 1u, lower, SW_PAIR_ZERO, SW_PAIR_ZERO, SW_PAIR_ZERO, SW_PAIR_ZERO, p0, p1, p2, p3, p4, p5, p6, p7, p8);
+    swLayer(block, z, rh, 0, cand, 31u, swRawObserved(own), other, beyond, left, right, p9, p10, p11, p12, p13, p14, p15, p16, p17);
+    swLayer(block, z, rh, 1, cand, 1u, upper, SW_PAIR_ZERO, SW_PAIR_ZERO, SW_PAIR_ZERO, SW_PAIR_ZERO, p18, p19, p20, p21, p22, p23, p24,
+            p25, p26);
     // The observed rule first, as it costs no load of its own: a flip needs the corner's 27 corners observed (the AND
     // of the 27 shifted words of the observed mask, exact at the candidates).
     cand &= p0.y & p1.y & p2.y & p3.y & p4.y & p5.y & p6.y & p7.y & p8.y & p9.y & p10.y & p11.y & p12.y & p13.y &
