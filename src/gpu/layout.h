@@ -30,6 +30,9 @@ static_assert(uint32_t(ColorFusion::Off) == COLOR_MODE_OFF && uint32_t(ColorFusi
               uint32_t(ColorFusion::Recent) == COLOR_MODE_RECENT);
 static_assert(VOXELS_PER_BLOCK == BLOCK_SIDE * BLOCK_SIDE * BLOCK_SIDE);
 static_assert(VOXELS_PER_INVOCATION * WG_BLOCK == VOXELS_PER_BLOCK);
+// A fusion invocation's corners are one four-corner element of the voxel arrays and one nibble of a mask word
+// (cornerOfInvocation, block_store.glsl; toggleTsdfMasks, frame_lists.glsl).
+static_assert(VOXELS_PER_INVOCATION == 4 && BLOCK_SIDE % VOXELS_PER_INVOCATION == 0);
 static_assert(sizeof(TrackPush) == 96, "tracking push constants: at most 128 bytes, all lavapipe guarantees");
 static_assert(sizeof(TrackParamsGpu) == 192 && offsetof(TrackParamsGpu, modelWorldToCamera) == 48 &&
                   offsetof(TrackParamsGpu, pixelsPerInvocation) == 96 && offsetof(TrackParamsGpu, lastTrackedCameraToWorld) == 112 &&
