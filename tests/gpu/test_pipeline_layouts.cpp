@@ -47,6 +47,13 @@ TEST(PipelineLayouts, ReflectionFindsWhatAShaderUsesAndNothingElse) {
     EXPECT_FALSE(uses(fuse, gpu::BINDING_RETYPE_MASK));
     EXPECT_FALSE(uses(fuse, gpu::BINDING_VERTICES));
     EXPECT_FALSE(uses(fuse, gpu::BINDING_CHUNK_TRIANGLES));
+    // A buffer read through views of two types (fuse_depth's four-corner views of the voxel arrays,
+    // decide_mesh_signs' groups of the mesh-sign words) is one descriptor, listed once.
+    const auto decide = vk::reflectBindings(shaders::all().at("decide_mesh_signs"), "decide_mesh_signs");
+    for (const auto* bindings : {&fuse, &decide})
+        for (size_t i = 1; i < bindings->size(); ++i) EXPECT_NE((*bindings)[i].binding, (*bindings)[i - 1].binding);
+    EXPECT_TRUE(uses(fuse, gpu::BINDING_VOXEL_WEIGHT));
+    EXPECT_TRUE(uses(decide, gpu::BINDING_MESH_SIGNS));
 }
 
 TEST(PipelineLayouts, MalformedSpirvIsAClearError) {
