@@ -82,8 +82,13 @@ void VolumeOptions::addTuning(CLI::App* cmd) {
                     "allocate blocks from every Nth pixel in x and y (1 = every pixel, as the paper; Open3D uses 4)")
         ->check(CLI::Range(1, 64));
     cmd->add_flag("--alloc-tiles", allocTiles,
-                  "allocation by tiles: claim the blocks around the plane of a tile of 8 x 8 sampled pixels where one fits, "
-                  "instead of walking each pixel's truncation band (a few percent more blocks, less allocation work)");
+                  "allocation by tiles (the default): claim the blocks around the plane of a tile of 8 x 8 sampled pixels "
+                  "where one fits, instead of walking each pixel's truncation band (a few percent more blocks, less "
+                  "allocation work)");
+    cmd->add_flag("--alloc-pixels", allocPixels,
+                  "allocation pixel by pixel: every sampled pixel walks its truncation band (the default before "
+                  "2026-12-05; maps fused that way keep it)")
+        ->excludes("--alloc-tiles");
     cmd->add_flag("--no-color", noColor, "fuse depth only, even when the dataset has colour images (4 bytes per cube less)");
     cmd->add_option("--color-mode", colorMode,
                     "average: running average of the colour with the TSDF's weights (default); recent: exponential "
@@ -100,7 +105,7 @@ gpu::GpuVolumeConfig VolumeOptions::toConfig(float maxDepth, int width, int heig
     config.params.maxWeight = maxWeight;
     config.params.maxDepth = maxDepth;
     config.params.allocationStride = allocStride;
-    config.params.allocationTiles = allocTiles;
+    config.params.allocationTiles = allocTiles && !allocPixels;
     config.minMeshWeight = minWeight;
     config.meshMode = incremental() ? gpu::MeshMode::Incremental : gpu::MeshMode::Baseline;
     config.refine = refine;

@@ -47,6 +47,7 @@ struct VolumeOptions {
     float minWeight = gpu::GpuVolumeConfig{}.minMeshWeight;
     int allocStride = VolumeParams{}.allocationStride;
     bool allocTiles = VolumeParams{}.allocationTiles;
+    bool allocPixels = false;   // --alloc-pixels: allocTiles off
     bool refine = gpu::GpuVolumeConfig{}.refine;
     float refineEps = gpu::GpuVolumeConfig{}.refineEpsilonVoxels;
     bool lockFree = gpu::GpuVolumeConfig{}.lockFree;
@@ -67,7 +68,7 @@ struct VolumeOptions {
     // --starve-weight).
     void addCommon(CLI::App* cmd);
     // The rest (fuse): --mode, --refine, --refine-eps, --lock-free, --vertices, --chunks, --hash-slots,
-    // --trunc, --max-weight, --min-weight, --alloc-stride, --alloc-tiles, --no-color, --color-mode, --color-recency.
+    // --trunc, --max-weight, --min-weight, --alloc-stride, --alloc-tiles, --alloc-pixels, --no-color, --color-mode, --color-recency.
     void addTuning(CLI::App* cmd);
 
     bool incremental() const { return mode != "baseline"; }

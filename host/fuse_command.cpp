@@ -104,7 +104,7 @@ void takeMapSettings(const CLI::App& cmd, const gpu::GpuVolumeConfig& map, gpu::
     if (!given("--max-weight")) c.params.maxWeight = map.params.maxWeight;
     if (!given("--min-weight")) c.minMeshWeight = map.minMeshWeight;
     if (!given("--alloc-stride")) c.params.allocationStride = map.params.allocationStride;
-    if (!given("--alloc-tiles")) c.params.allocationTiles = map.params.allocationTiles;
+    if (!given("--alloc-tiles") && !given("--alloc-pixels")) c.params.allocationTiles = map.params.allocationTiles;
     if (!given("--mode")) c.meshMode = map.meshMode;
     if (!given("--refine")) c.refine = map.refine;
     if (!given("--refine-eps")) c.refineEpsilonVoxels = map.refineEpsilonVoxels;
@@ -217,7 +217,9 @@ int runFuse(const FuseArgs& args) {
         throw Error("--render-every, --deltas and --serve need --mode incremental (the baseline keeps no mesh between frames)");
     if (rendering && args.renderDir.empty()) throw Error("--render-every needs --render-dir");
     config.publishMesh = rendering || args.track;   // tracking draws the mesh fused so far
-    config.timeStages = !args.noStageTimes;
+    // GPU timestamps only where something reads them (issue 33, step 5: ~0.3-0.5 ms a frame on lavapipe): --stats,
+    // --pass-times, the progress line and the viewer; `fuse -q` without --stats times nothing (its summary says so).
+    config.timeStages = !args.noStageTimes && (!args.quiet || !args.statsPath.empty() || args.passTimes || serving);
     if (args.passTimes && args.noStageTimes) throw Error("--pass-times times the passes inside the stages: it cannot go with --no-stage-times");
     config.timePasses = args.passTimes;
     config.trackDeltas = !args.deltasPath.empty() || serving;
@@ -759,8 +761,8 @@ int runFuse(const FuseArgs& args) {
               << mesh.positions.size() << " vertices (baseline " << baselineVertices << "), " << mesh.triangles.size()
               << " triangles -> " << out.string() << "\n"
               << (simplified ? "  " + describe(*simplified) + "\n" : "");
-    if (args.noStageTimes)
-        std::cout << "  per frame (median, GPU stages not timed): ";
+    if (!config.timeStages)
+        std::cout << "  per frame (median, GPU stages not timed" << (args.noStageTimes ? "" : ": -q without --stats") << "): ";
     else
         std::cout << "  GPU per frame (median): allocate " << median("allocate") << " ms, fuse " << median("fuse") << " ms, mesh "
                   << median("mesh_total") << " ms; ";
@@ -836,8 +838,8 @@ Run addFuseCommand(CLI::App& app) {
     args->device.add(cmd);
     cmd->add_flag("-q,--quiet", args->quiet, "no progress line");
     cmd->add_flag("--no-stage-times", args->noStageTimes,
-                  "record no GPU timestamps between stages (~0.3 ms per frame on lavapipe); the summary and --stats then "
-                  "have no GPU stage times, only wall times");
+                  "record no GPU timestamps between stages (~0.3-0.5 ms per frame on lavapipe); the summary and --stats then "
+                  "have no GPU stage times, only wall times (-q without --stats records none either)");
     cmd->add_flag("--pass-times", args->passTimes,
                   "also a GPU timestamp after every pass (compute dispatch) of a frame: --stats gains gpu_ms_per_pass, each "
                   "pass's time per frame by shader name (each timestamp costs ~50 us on lavapipe: for profiling)");

@@ -986,7 +986,7 @@ Keyword arguments (all optional):
   min_weight            a cube is meshed when its 8 corners have this weight (--min-weight; 1)
   allocation_stride     allocate blocks from every Nth pixel (--alloc-stride; 2)
   allocation_tiles      claim the blocks around the plane of a tile of 8 x 8 sampled pixels where one fits instead of
-                        walking every sampled pixel's band (--alloc-tiles; False)
+                        walking every sampled pixel's band (--alloc-tiles / --alloc-pixels; True)
   refine, refine_epsilon_voxels   Hamming-distance refinement of cube types (--refine, --refine-eps)
   lock_free             the paper's lock-free vertex claims (--lock-free; same mesh)
   block_capacity, hash_capacity, touched_capacity, vertex_capacity, chunk_capacity, retype_capacity,

@@ -83,7 +83,8 @@ struct Options {
     bool correct = false;      // after each run, every frame re-fused at a moved pose (docs/CORRECTION.md)
     bool quick = false;
     bool passTimes = false;    // a timestamp after every pass as well
-    bool allocTiles = false;   // allocation by tiles (VolumeParams::allocationTiles, vkmesh fuse --alloc-tiles)
+    bool allocTiles = vkmesh::VolumeParams{}.allocationTiles;   // allocation by tiles (VolumeParams::allocationTiles)
+    bool allocPixels = false;                                    // --alloc-pixels: allocTiles off
     std::string jsonPath;
 };
 
@@ -640,14 +641,19 @@ int main(int argc, char** argv) {
                  "and 0.5 degrees away; docs/CORRECTION.md) and report the cost against fusing a frame");
     cli.add_option("--json", o.jsonPath, "write the results as JSON to this file");
     cli.add_flag("--alloc-tiles", o.allocTiles,
-                 "allocation by tiles (vkmesh fuse --alloc-tiles): a plane's slab per tile of 8 x 8 sampled pixels where one "
-                 "fits, the other pixels' band walks (on lavapipe a few percent of the frame either way: what does a GPU say?)");
+                 "allocation by tiles (the default, vkmesh fuse --alloc-tiles): a plane's slab per tile of 8 x 8 sampled pixels "
+                 "where one fits, the other pixels' band walks");
+    cli.add_flag("--alloc-pixels", o.allocPixels,
+                 "allocation pixel by pixel (vkmesh fuse --alloc-pixels): every sampled pixel walks its band (on lavapipe "
+                 "2-8 % slower a frame than tiles: what does a GPU say?)")
+        ->excludes("--alloc-tiles");
     cli.add_flag("--pass-times", o.passTimes,
                  "also a GPU timestamp after every pass (compute dispatch): the GPU ms of each pass by shader name, printed "
                  "after the stages and in the JSON (gpu_ms_per_pass)");
     cli.add_flag("--quick", o.quick, "smoke run for a CPU device (lavapipe): 3 frames per voxel size, no warm-up, "
                                      "unless --frames / --warmup say otherwise");
     CLI11_PARSE(cli, argc, argv);
+    if (o.allocPixels) o.allocTiles = false;
     // Line by line, so that the table and the progress on stderr stay in order in run.sh's gpubench.txt.
     std::setvbuf(stdout, nullptr, _IOLBF, 0);
     try {

@@ -113,7 +113,7 @@ void checkSettings(const GpuVolumeConfig& want, const GpuVolumeConfig& map, cons
         {"max weight", "--max-weight", map.params.maxWeight, want.params.maxWeight},
         {"min mesh weight", "--min-weight", map.minMeshWeight, want.minMeshWeight},
         {"allocation stride", "--alloc-stride", double(map.params.allocationStride), double(want.params.allocationStride)},
-        {"allocation by tiles (1) or pixel by pixel (0)", "--alloc-tiles", double(map.params.allocationTiles), double(want.params.allocationTiles)},
+        {"allocation by tiles (1) or pixel by pixel (0)", "--alloc-tiles, --alloc-pixels", double(map.params.allocationTiles), double(want.params.allocationTiles)},
         {"mesh mode (1 = incremental)", "--mode", double(map.meshMode == MeshMode::Incremental), double(want.meshMode == MeshMode::Incremental)},
         {"refinement", "--refine", double(map.refine), double(want.refine)},
         {"refinement epsilon", "--refine-eps", map.refine ? map.refineEpsilonVoxels : 0.0, map.refine ? want.refineEpsilonVoxels : 0.0},

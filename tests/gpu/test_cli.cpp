@@ -108,6 +108,10 @@ TEST(Cli, FuseWritesMeshAndStats) {
     stats = nlohmann::json::parse(readText(out / "untimed.json"));
     EXPECT_TRUE(stats["gpu_ms_per_frame"].empty()) << stats["gpu_ms_per_frame"].dump();
     EXPECT_GT(stats["wall_ms_per_frame"]["median"].get<double>(), 0.0);
+    // -q without --stats: nothing reads the stage times, so none are recorded (the summary says so).
+    r = runCli("fuse " + smallSequence().string() + " -o " + (out / "quiet.ply").string() + " --voxel 0.04 -q");
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_NE(r.out.find("GPU stages not timed: -q without --stats"), std::string::npos) << r.out;
     // Compared as sets of triangles by their corner positions (the export's order is not fixed).
     auto triangleSet = [](const Mesh& m) {
         std::set<std::array<float, 9>> set;
@@ -122,6 +126,7 @@ TEST(Cli, FuseWritesMeshAndStats) {
     const Mesh untimed = readPly(out / "untimed.ply");
     EXPECT_EQ(untimed.triangles.size(), mesh.triangles.size());
     EXPECT_TRUE(triangleSet(untimed) == triangleSet(mesh));
+    EXPECT_TRUE(triangleSet(readPly(out / "quiet.ply")) == triangleSet(mesh));
 
     // --pass-times: each pass's time by shader name beside the stage times, which still span their passes; the
     // same mesh. Without stage times there is nothing to time the passes against.
@@ -464,6 +469,21 @@ TEST(Cli, SaveLoadAndFirstFrameResumeTheRun) {
     CliRun voxel = runCli("fuse " + seq + " --load " + map + " --first-frame 3 -o " + (out / "x.ply").string() + " --voxel 0.04 -q");
     EXPECT_EQ(voxel.exitCode, 2);
     EXPECT_NE(voxel.err.find(map + ": the map was fused with voxel size"), std::string::npos) << voxel.err;
+    // The allocation mode is the map's too: a map fused pixel by pixel (--alloc-pixels, the default before tiles)
+    // continues pixel by pixel without the option and refuses tiles, naming the options.
+    const std::string pixelMap = (out / "pixels.vkmap").string();
+    CliRun pixels = runCli("fuse " + seq + " --frames 3 -o " + (out / "x.ply").string() + " --voxel 0.05 --alloc-pixels --save " +
+                           pixelMap + " -q");
+    ASSERT_EQ(pixels.exitCode, 0) << pixels.err;
+    CliRun pixelsRest = runCli("fuse " + seq + " --load " + pixelMap + " --first-frame 3 -o " + (out / "x.ply").string() + " -q");
+    EXPECT_EQ(pixelsRest.exitCode, 0) << pixelsRest.err;
+    CliRun tilesOnPixels = runCli("fuse " + seq + " --load " + pixelMap + " --first-frame 3 --alloc-tiles -o " +
+                                  (out / "x.ply").string() + " -q");
+    EXPECT_EQ(tilesOnPixels.exitCode, 2);
+    EXPECT_NE(tilesOnPixels.err.find("--alloc-tiles, --alloc-pixels"), std::string::npos) << tilesOnPixels.err;
+    CliRun both = runCli("fuse " + seq + " --alloc-tiles --alloc-pixels -o " + (out / "x.ply").string() + " -q");
+    EXPECT_NE(both.exitCode, 0);
+    EXPECT_NE(both.err.find("--alloc-pixels"), std::string::npos) << both.err;
     test::writeBytes(out / "garbage.vkmap", "not a map at all, just some bytes");
     CliRun garbage = runCli("export " + (out / "garbage.vkmap").string() + " -o " + (out / "x.ply").string());
     EXPECT_EQ(garbage.exitCode, 2);

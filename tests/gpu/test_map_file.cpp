@@ -248,11 +248,19 @@ TEST_F(GpuTest, MapsThatCannotBeLoadedAreClearErrors) {
     // A map keeps its allocation mode (de-integrating its frames repeats their allocation): a map allocated by
     // tiles says so in its config, and a config that would walk pixel by pixel is refused, naming the option. Maps
     // written before allocation by tiles hold 0 there: pixel by pixel.
+    // Tiles are the default (since 2026-12-05), so a new map holds them and an old map's pixels must be asked for.
+    EXPECT_TRUE(config.params.allocationTiles);
+    map::MapData byPixels = good;
+    byPixels.settings.allocationTiles = 0;
+    const gpu::GpuVolumeConfig pixelConfig = gpu::GpuVolume::mapConfig(byPixels);
+    EXPECT_FALSE(pixelConfig.params.allocationTiles);
+    e = loadError(context(), byPixels, config);
+    EXPECT_NE(e.find("allocation by tiles"), std::string::npos) << e;
+    EXPECT_NE(e.find("--alloc-pixels"), std::string::npos) << e;
     map::MapData byTiles = good;
     byTiles.settings.allocationTiles = 1;
-    EXPECT_FALSE(config.params.allocationTiles);
     EXPECT_TRUE(gpu::GpuVolume::mapConfig(byTiles).params.allocationTiles);
-    e = loadError(context(), byTiles, config);
+    e = loadError(context(), byTiles, pixelConfig);
     EXPECT_NE(e.find("allocation by tiles"), std::string::npos) << e;
     EXPECT_NE(e.find("--alloc-tiles"), std::string::npos) << e;
     // ... and the rules that decided its tiles: a map of the first rules (1: planes with g < 0 and tiles without
