@@ -120,7 +120,9 @@ VKM_CONST BINDING_EXPORT_VERTICES = 25u; // Vertex: the compacted mesh's vertice
 VKM_CONST BINDING_EXPORT_INDICES = 26u;  // uint: the compacted mesh's triangles
 VKM_CONST BINDING_VERTEX_REMAP = 27u;    // uint per vertex: its index in the compacted mesh
 VKM_CONST BINDING_RETYPE_MASK = 28u;   // 16 uint per block: cubes that may change MC type (a corner flipped)
-VKM_CONST BINDING_RETYPE_LIST = 29u;   // uint list of this frame's retype candidates: block * 512 + cube
+VKM_CONST BINDING_RETYPE_LIST = 29u;   // uint list of this frame's retype candidates: block * 512 + cube, then their types
+// Words per entry of the retype list: the cube, and the type mesh_claim classified it as (read by mesh_triangulate).
+VKM_CONST RETYPE_LIST_WORDS_PER_CUBE = 2u;
 VKM_CONST BINDING_EDGE_VERTEX_Y = 30u; // ... +y edge (one array per axis keeps each under 128 MiB for 65,536 blocks)
 VKM_CONST BINDING_EDGE_VERTEX_Z = 31u; // ... +z edge
 VKM_CONST BINDING_MOVED_VERTICES = 32u; // uint list of the edge slots whose vertices move_vertices moves this mesh pass

@@ -1,6 +1,6 @@
 #version 460
-// Incremental mesh, pass 1 (paper §V.C): every cube of the retype list computes its new (refined) MC type
-// and, for each edge the type needs, makes sure the edge's owner slot holds a vertex.
+// Incremental mesh, pass 1 (paper §V.C): every cube of the retype list computes its new (refined) MC type, keeps it
+// in the list for mesh_triangulate, and, for each edge the type needs, makes sure the edge's owner slot holds a vertex.
 //  - Lock-based (default, PARITY_CLASS = 4): the slot is claimed with one atomicCompSwap(EMPTY -> CLAIMED);
 //    the winner takes a vertex from the heap's free stack and stores its index; losers do not wait:
 //    triangles read the slot in the next pass.
@@ -44,7 +44,9 @@ void main() {
         uint p = (r.cube.x & 1u) | ((r.cube.y & 1u) << 1) | ((r.cube.z & 1u) << 2);   // block origins are even
         if (min(p, 7u - p) != PARITY_CLASS) return;
     }
-    uint mask = edgeMaskOf(listedCubeType(r));
+    uint type = listedCubeType(r);
+    setListedType(i, type);   // classified once: triangulate builds this type (each entry is in one parity class)
+    uint mask = edgeMaskOf(type);
     for (uint n = 0u; n < 12u && mask != 0u; ++n) {   // over the set bits only
         uint e = findLSB(mask);
         mask &= mask - 1u;

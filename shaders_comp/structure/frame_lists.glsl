@@ -17,7 +17,12 @@ const uint MESH_STAMP_MOVES = 1u;        // ... and its vertices move
 layout(std430, set = 0, binding = BINDING_MESH_STAMPS) coherent buffer MeshStamps { uint meshStamps[]; };
 layout(std430, set = 0, binding = BINDING_DIRTY_LIST) buffer DirtyList { uint dirtyList[]; };
 layout(std430, set = 0, binding = BINDING_RETYPE_MASK) coherent buffer RetypeMask { uint retypeMask[]; };
+// The retype list (collect_retype): params.retypeCapacity cubes (block * 512 + local, NO_BLOCK for an entry left
+// unused), then for each entry the MC type mesh_claim built it with, which mesh_triangulate reads instead of
+// classifying the cube again (RETYPE_LIST_WORDS_PER_CUBE).
 layout(std430, set = 0, binding = BINDING_RETYPE_LIST) buffer RetypeList { uint retypeList[]; };
+void setListedType(uint entry, uint type) { retypeList[params.retypeCapacity + entry] = type; }
+uint listedType(uint entry) { return retypeList[params.retypeCapacity + entry]; }
 layout(std430, set = 0, binding = BINDING_GARBAGE) buffer Garbage { uint garbage[]; };
 layout(std430, set = 0, binding = BINDING_MOVED_VERTICES) buffer MovedVertices { uint movedVertices[]; };
 // Per block, NEIGHBORS_PER_BLOCK entries: the block index at each offset in {-1, 0, 1}^3 from it (NO_BLOCK when

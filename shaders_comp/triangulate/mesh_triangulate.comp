@@ -1,5 +1,6 @@
 #version 460
-// Incremental mesh, pass 3 (paper §V.D, §V.E): every cube of the retype list
+// Incremental mesh, pass 3 (paper §V.D, §V.E): every cube of the retype list, with the type mesh_claim classified
+// it as (setListedType: the cube's mask words and neighbours are not read again),
 //  - keeps its triangles if its MC type did not change (temporal consistency);
 //  - otherwise releases them (refcount - 1 on their vertices; a vertex reaching 0 becomes a GC candidate)
 //    and builds the new type's triangles from the edge slots claimed in pass 1 (+1 each).
@@ -23,12 +24,13 @@ void listCandidate(uint v) {
     if (c < params.vertexCapacity) setGcCandidate(c, v);
 }
 
-void retype(uint id) {
-    CubeRef r = cubeRef(id / VOXELS_PER_BLOCK, id % VOXELS_PER_BLOCK);
+// Entry `entry` of the retype list, cube `id`.
+void retype(uint entry, uint id) {
     uint state = cubeState[id];
     uint oldType = state & CUBE_TYPE_MASK;
-    uint type = listedCubeType(r);
+    uint type = listedType(entry);   // mesh_claim's classification (nothing it reads changes in between)
     if (type == oldType && (state & CUBE_INCOMPLETE) == 0u) return;
+    CubeRef r = cubeRef(id / VOXELS_PER_BLOCK, id % VOXELS_PER_BLOCK);   // the edges' blocks, for a cube that changes
     ++retyped;
     uint chunk = state >> CUBE_CHUNK_SHIFT;   // chunk index + 1, 0 = none
 
@@ -97,7 +99,7 @@ void retype(uint id) {
 
 void main() {
     uint i = gl_GlobalInvocationID.x;
-    if (i < min(counters.retypeCount, params.retypeCapacity) && retypeList[i] != NO_BLOCK) retype(retypeList[i]);
+    if (i < min(counters.retypeCount, params.retypeCapacity) && retypeList[i] != NO_BLOCK) retype(i, retypeList[i]);
     ADD_COUNTER(trianglesCreated, created);
     ADD_COUNTER(trianglesReleased, released);
     ADD_COUNTER(trianglesInvalid, invalid);

@@ -14,7 +14,7 @@ FrameLists::FrameLists(const vk::Context& context, const vk::BindingTable& table
     meshStamps_ = makeStorage(context, table, BINDING_MESH_STAMPS, VkDeviceSize(c.blocks) * 4, "mesh stamps");
     dirtyList_ = makeStorage(context, table, BINDING_DIRTY_LIST, VkDeviceSize(c.blocks) * 4, "dirty list");
     retypeMask_ = makeStorage(context, table, BINDING_RETYPE_MASK, VkDeviceSize(c.blocks) * MASK_WORDS * 4, "retype masks");
-    retypeList_ = makeStorage(context, table, BINDING_RETYPE_LIST, VkDeviceSize(c.retype) * 4, "retype list");
+    retypeList_ = makeStorage(context, table, BINDING_RETYPE_LIST, VkDeviceSize(c.retype) * RETYPE_LIST_WORDS_PER_CUBE * 4, "retype list");
     garbage_ = makeStorage(context, table, BINDING_GARBAGE, garbageBytes(c), "garbage lists");
     moved_ = makeStorage(context, table, BINDING_MOVED_VERTICES, VkDeviceSize(c.vertices) * 4, "moved vertices");
     neighbors_ = makeStorage(context, table, BINDING_BLOCK_NEIGHBORS, VkDeviceSize(c.blocks) * NEIGHBORS_PER_BLOCK * 4, "block neighbours");
@@ -58,7 +58,7 @@ void FrameLists::grow(const FrameListCapacities& wanted) {
         neighbors_ = makeStorage(context_, table_, BINDING_BLOCK_NEIGHBORS, VkDeviceSize(c.blocks) * NEIGHBORS_PER_BLOCK * 4, "block neighbours");
     }
     if (c.touched > capacities_.touched) touched_ = makeStorage(context_, table_, BINDING_TOUCHED, VkDeviceSize(c.touched) * 4, "touched list");
-    if (c.retype > capacities_.retype) retypeList_ = makeStorage(context_, table_, BINDING_RETYPE_LIST, VkDeviceSize(c.retype) * 4, "retype list");
+    if (c.retype > capacities_.retype) retypeList_ = makeStorage(context_, table_, BINDING_RETYPE_LIST, VkDeviceSize(c.retype) * RETYPE_LIST_WORDS_PER_CUBE * 4, "retype list");
     if (garbageBytes(c) > garbageBytes(capacities_)) garbage_ = makeStorage(context_, table_, BINDING_GARBAGE, garbageBytes(c), "garbage lists");
     if (c.vertices > capacities_.vertices)
         moved_ = makeStorage(context_, table_, BINDING_MOVED_VERTICES, VkDeviceSize(c.vertices) * 4, "moved vertices");
