@@ -61,7 +61,7 @@ void checkCapacities(const GpuVolumeConfig& c, uint64_t maxBufferBytes, uint64_t
         planned.push_back({"owned slot masks", 4ull * OWNED_SLOT_WORDS, c.blockCapacity, "blockCapacity (--blocks)"});
         planned.push_back({"vertex heap", sizeof(Vertex), c.vertexCapacity, "vertexCapacity (--vertices)"});
         planned.push_back({"triangle chunks", 4ull * CHUNK_WORDS, c.chunkCapacity, "chunkCapacity (--chunks)"});
-        planned.push_back({"retype list", 4, c.retypeCapacity, "retypeCapacity"});
+        planned.push_back({"retype list", 4ull * RETYPE_LIST_WORDS_PER_CUBE, c.retypeCapacity, "retypeCapacity"});
         if (c.trackDeltas) {
             planned.push_back({"vertex heap shadow", sizeof(Vertex), c.vertexCapacity, "vertexCapacity (--vertices)"});
             planned.push_back({"triangle chunk shadow", 4ull * CHUNK_WORDS, c.chunkCapacity, "chunkCapacity (--chunks)"});
@@ -174,7 +174,8 @@ void GpuVolume::growTouched(uint32_t entries, FrameReport& report) {
 }
 
 void GpuVolume::growRetypeList(uint32_t entries, FrameReport& report) {
-    const uint32_t maxEntries = uint32_t(std::min<uint64_t>(context_.maxStorageBufferRange() / 4, uint64_t(config_.blockCapacity) * VOXELS_PER_BLOCK));
+    const uint32_t maxEntries = uint32_t(std::min<uint64_t>(context_.maxStorageBufferRange() / (4ull * RETYPE_LIST_WORDS_PER_CUBE),
+                                                            uint64_t(config_.blockCapacity) * VOXELS_PER_BLOCK));
     entries = std::min(entries, maxEntries);
     if (entries <= config_.retypeCapacity) return;
     const uint32_t old = config_.retypeCapacity;
