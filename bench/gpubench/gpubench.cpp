@@ -645,7 +645,7 @@ int main(int argc, char** argv) {
                  "where one fits, the other pixels' band walks");
     cli.add_flag("--alloc-pixels", o.allocPixels,
                  "allocation pixel by pixel (vkmesh fuse --alloc-pixels): every sampled pixel walks its band (on lavapipe "
-                 "2-8 % slower a frame than tiles: what does a GPU say?)")
+                 "up to ~10 % slower a frame than tiles: what does a GPU say?)")
         ->excludes("--alloc-tiles");
     cli.add_flag("--pass-times", o.passTimes,
                  "also a GPU timestamp after every pass (compute dispatch): the GPU ms of each pass by shader name, printed "

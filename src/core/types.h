@@ -64,9 +64,9 @@ struct VolumeParams {
     // Allocation by tiles (shaders_comp/allocate/allocate_tiles.comp; the default since 2026-12-05, `fuse
     // --alloc-pixels` turns it off): where a plane fits a tile of 8 x 8 sampled pixels, the blocks of the slab around
     // it are claimed at once, a superset of what the tile's band walks claim; the other tiles' pixels walk their
-    // bands. On lavapipe it is 2-8 % faster a frame than walking every sampled pixel (the extra blocks, +4-8 %, cost
-    // fusion less than the walks they save); the mesh's accuracy and completeness against ground truth are the same
-    // (docs/RESULTS.md). false: every sampled pixel walks its band (maps written before tiles keep that).
+    // bands. On lavapipe a frame is 1-11 % faster than walking every sampled pixel on the synthetic room and TUM, and
+    // even on ICL-NUIM (the extra blocks, +4-8 %, cost fusion about what the walks they save cost); the mesh's
+    // accuracy and completeness against ground truth are the same (docs/RESULTS.md). false: every sampled pixel walks its band (maps written before tiles keep that).
     bool allocationTiles = true;
     // Which rules decide the tiles a plane covers (shared_layout.h, ALLOC_TILE_RULES): the current ones (2) for a new
     // volume; a loaded map's own (1 for maps written with the first rules), so that its frames de-integrate from the
