@@ -58,21 +58,14 @@ vec3 sideNormal(vec2 e, vec2 f) {
 bool walkSlab(uvec2 first, uvec2 last, uvec2 size, inout uint valid) {
     // Least squares z = a x + b y + g (camera frame) over the tile's valid samples, from moments about the first
     // sample's point (any plane would do for the cover: the residual below is measured from the plane found).
-    // The tile's depths are read once, here, and kept for the residual below (both loops written out, so that
-    // `depths` is indexed by constants: registers, not per-lane scratch memory).
-    float depths[ALLOC_TILE * ALLOC_TILE];
-    [[unroll]] for (uint j = 0u; j < ALLOC_TILE * ALLOC_TILE; ++j) {
-        uvec2 pixel = first + uvec2(j % ALLOC_TILE, j / ALLOC_TILE) * params.allocationStride;
-        uvec2 at = min(pixel, last);   // a load in the image for every lane; samples past the tile's last are ignored
-        depths[j] = depthAt(at.y * size.x + at.x);
-    }
-    precise vec3 origin0 = vec3(rayOf(first), 1.0) * depths[0];
+    precise vec3 origin0 = vec3(rayOf(first), 1.0) * depthAt(first.y * size.x + first.x);
     uint n = 0u;
     precise vec3 s1 = vec3(0.0);
     precise float sxx = 0.0, sxy = 0.0, syy = 0.0, sxz = 0.0, syz = 0.0;
-    [[unroll]] for (uint j = 0u; j < ALLOC_TILE * ALLOC_TILE; ++j) {
+    for (uint j = 0u; j < ALLOC_TILE * ALLOC_TILE; ++j) {
         uvec2 pixel = first + uvec2(j % ALLOC_TILE, j / ALLOC_TILE) * params.allocationStride;
-        float d = depths[j];
+        uvec2 at = min(pixel, last);   // a load in the image for every lane; samples past the tile's last are ignored
+        float d = depthAt(at.y * size.x + at.x);
         if (all(lessThanEqual(pixel, last)) && d >= frame.minDepth && d <= frame.maxDepth) {
             ++n;
             precise vec3 p = vec3(rayOf(pixel) * d, d) - origin0;
@@ -100,9 +93,10 @@ bool walkSlab(uvec2 first, uvec2 last, uvec2 size, inout uint valid) {
     bool positive = g > 0.0 || firstRules;
     // The largest residual along the rays.
     precise float r = 0.0;
-    [[unroll]] for (uint j = 0u; j < ALLOC_TILE * ALLOC_TILE; ++j) {
+    for (uint j = 0u; j < ALLOC_TILE * ALLOC_TILE; ++j) {
         uvec2 pixel = first + uvec2(j % ALLOC_TILE, j / ALLOC_TILE) * params.allocationStride;
-        float d = depths[j];
+        uvec2 at = min(pixel, last);
+        float d = depthAt(at.y * size.x + at.x);
         if (all(lessThanEqual(pixel, last)) && d >= frame.minDepth && d <= frame.maxDepth) {
             vec2 ray = rayOf(pixel);
             precise float D = 1.0 - a * ray.x - b * ray.y;
