@@ -120,9 +120,10 @@ VKM_CONST BINDING_EXPORT_VERTICES = 25u; // Vertex: the compacted mesh's vertice
 VKM_CONST BINDING_EXPORT_INDICES = 26u;  // uint: the compacted mesh's triangles
 VKM_CONST BINDING_VERTEX_REMAP = 27u;    // uint per vertex: its index in the compacted mesh
 VKM_CONST BINDING_RETYPE_MASK = 28u;   // 16 uint per block: cubes that may change MC type (a corner flipped)
-VKM_CONST BINDING_RETYPE_LIST = 29u;   // uint list of this frame's retype candidates: block * 512 + cube, then their types
-// Words per entry of the retype list: the cube, and the type mesh_claim classified it as (read by mesh_triangulate).
-VKM_CONST RETYPE_LIST_WORDS_PER_CUBE = 2u;
+VKM_CONST BINDING_RETYPE_LIST = 29u;   // uint list of this frame's retype candidates: block * 512 + cube, then the changed ones
+// Words per entry of the retype list: the cube, and room for it in the list of the cubes whose type changed, as
+// the cube and the type mesh_claim classified it as (mesh_triangulate runs over that list only).
+VKM_CONST RETYPE_LIST_WORDS_PER_CUBE = 3u;
 VKM_CONST BINDING_EDGE_VERTEX_Y = 30u; // ... +y edge (one array per axis keeps each under 128 MiB for 65,536 blocks)
 VKM_CONST BINDING_EDGE_VERTEX_Z = 31u; // ... +z edge
 VKM_CONST BINDING_MOVED_VERTICES = 32u; // uint list of the edge slots whose vertices move_vertices moves this mesh pass
@@ -275,8 +276,9 @@ struct Counters {
     uint blockDispatch[4];      // one workgroup per touched block
     uint listDispatch[4];       // over the live block list, one workgroup per block
     uint collectDispatch[4];    // over the dirty blocks' retype-mask words, WG_LIST per group
-    uint retypeDispatch[4];     // over the retype list, WG_LIST per group
-    uint vertexDispatch[4];     // (plan_move_vertices, after the listing) move_vertices: over the moved list
+    uint retypeDispatch[4];     // mesh_claim: over the retype list (raised by collect_retype as it lists); then
+                                // mesh_triangulate: over the changed cubes (commit_vertices)
+    uint vertexDispatch[4];     // move_vertices: over the moved list (raised by list_moved_vertices as it lists)
     uint ownedDispatch[4];      // list_moved_vertices (commit_vertices): over the dirty blocks' owned-slot masks
                                 // (6 invocations per block) and the vertices created so far, WG_LIST per group
     uint candidateDispatch[4];  // over the GC candidates, WG_LIST per group (commit_chunks, for free_vertices)
@@ -326,7 +328,10 @@ struct Counters {
     // (no hash request): blockRequests = blocksFound + blocksInserted + hashFull + outOfRange + outsideRadius
     // + blocksShared.
     uint blocksShared;
-    uint perFramePad1, perFramePad2;
+    // Listed cubes whose MC type changed (or that were left INCOMPLETE): mesh_claim lists them with their new type,
+    // and mesh_triangulate runs over them only (commit_vertices sizes its dispatch). At most retypeCount.
+    uint cubesChanged;
+    uint perFramePad2;
     // --- persistent across frames ---
     uint freeTop;               // blocks on the free list
     uint blocksInUse;           // blocks handed out of the pool

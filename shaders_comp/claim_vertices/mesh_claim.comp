@@ -1,6 +1,7 @@
 #version 460
-// Incremental mesh, pass 1 (paper §V.C): every cube of the retype list computes its new (refined) MC type, keeps it
-// in the list for mesh_triangulate, and, for each edge the type needs, makes sure the edge's owner slot holds a vertex.
+// Incremental mesh, pass 1 (paper §V.C): every cube of the retype list computes its new (refined) MC type, lists the
+// cube with it for mesh_triangulate where it changed (setChangedCube), and, for each edge the type needs, makes sure
+// the edge's owner slot holds a vertex.
 //  - Lock-based (default, PARITY_CLASS = 4): the slot is claimed with one atomicCompSwap(EMPTY -> CLAIMED);
 //    the winner takes a vertex from the heap's free stack and stores its index; losers do not wait:
 //    triangles read the slot in the next pass.
@@ -45,7 +46,13 @@ void main() {
         if (min(p, 7u - p) != PARITY_CLASS) return;
     }
     uint type = listedCubeType(r);
-    setListedType(i, type);   // classified once: triangulate builds this type (each entry is in one parity class)
+    uint state = cubeState[id];
+    // Classified once: triangulate builds this type, for the cubes listed here only (each entry is in one parity
+    // class). A cube keeping its type has its triangles, and vertices on all its edges: nothing to claim.
+    bool changed = type != (state & CUBE_TYPE_MASK) || (state & CUBE_INCOMPLETE) != 0u;
+    uint k = reserveChangedCubes(changed ? 1u : 0u);   // < retypeCount <= retypeCapacity
+    if (!changed) return;
+    setChangedCube(k, id, type);
     uint mask = edgeMaskOf(type);
     for (uint n = 0u; n < 12u && mask != 0u; ++n) {   // over the set bits only
         uint e = findLSB(mask);

@@ -1,7 +1,9 @@
 #version 460
 // Incremental mesh: turns the dirty blocks' retype masks (set by fuse_depth, decide_mesh_signs, and by
 // mesh_triangulate for INCOMPLETE cubes) into one list of cubes, and clears the bits it listed. One invocation
-// per mask word; bits that do not fit in the list stay set for the next pass (counted).
+// per mask word; bits that do not fit in the list stay set for the next pass (counted). Room in the list is reserved
+// with one atomic per subgroup, which also raises mesh_claim's dispatch (Counters::retypeDispatch, from 0 in
+// plan_mesh) to cover it: a pass of one invocation to size it cost a dispatch and a barrier.
 #extension GL_GOOGLE_include_directive : require
 #include "structure/frame.glsl"
 #include "structure/frame_lists.glsl"
@@ -14,9 +16,16 @@ void main() {
     uint block = dirtyList[i / MASK_WORDS];
     uint word = block * MASK_WORDS + i % MASK_WORDS;
     uint bits = retypeMask[word];
-    if (bits == 0u) return;
     uint n = bitCount(bits);
-    uint at = atomicAdd(counters.retypeCount, n);
+    uint offset = subgroupExclusiveAdd(n);
+    uint total = subgroupAdd(n);
+    uint base = 0u;
+    if (subgroupElect() && total != 0u) {
+        base = atomicAdd(counters.retypeCount, total);
+        atomicMax(counters.retypeDispatch[0], (min(base + total, params.retypeCapacity) + WG_LIST - 1u) / WG_LIST);
+    }
+    uint at = subgroupBroadcastFirst(base) + offset;
+    if (n == 0u) return;
     if (at + n > params.retypeCapacity) {
         atomicAdd(counters.retypeDeferred, n);
         // Entries of the list this word would have used stay unused: mark them so nobody reads garbage.

@@ -18,11 +18,26 @@ layout(std430, set = 0, binding = BINDING_MESH_STAMPS) coherent buffer MeshStamp
 layout(std430, set = 0, binding = BINDING_DIRTY_LIST) buffer DirtyList { uint dirtyList[]; };
 layout(std430, set = 0, binding = BINDING_RETYPE_MASK) coherent buffer RetypeMask { uint retypeMask[]; };
 // The retype list (collect_retype): params.retypeCapacity cubes (block * 512 + local, NO_BLOCK for an entry left
-// unused), then for each entry the MC type mesh_claim built it with, which mesh_triangulate reads instead of
-// classifying the cube again (RETYPE_LIST_WORDS_PER_CUBE).
+// unused), then the list of those whose type changed, counters.cubesChanged pairs of the cube and the MC type
+// mesh_claim classified it as (RETYPE_LIST_WORDS_PER_CUBE). mesh_triangulate runs over the changed cubes only and
+// builds the listed type without classifying the cube again. On llvmpipe a lane whose cube keeps its type costs
+// its 8-lane subgroup as much as one that changes (masked code runs), and ~60 % of the candidates keep theirs.
 layout(std430, set = 0, binding = BINDING_RETYPE_LIST) buffer RetypeList { uint retypeList[]; };
-void setListedType(uint entry, uint type) { retypeList[params.retypeCapacity + entry] = type; }
-uint listedType(uint entry) { return retypeList[params.retypeCapacity + entry]; }
+void setChangedCube(uint k, uint id, uint type) {
+    retypeList[params.retypeCapacity + 2u * k] = id;
+    retypeList[params.retypeCapacity + 2u * k + 1u] = type;
+}
+// Reserves `count` entries of the changed-cube list, one atomic per subgroup (as reserveMovedVertices below).
+uint reserveChangedCubes(uint count) {
+    uint offset = subgroupExclusiveAdd(count);
+    uint total = subgroupAdd(count);
+    uint base = 0u;
+    if (subgroupElect() && total != 0u) base = atomicAdd(counters.cubesChanged, total);
+    return subgroupBroadcastFirst(base) + offset;
+}
+uvec2 changedCube(uint k) {   // (cube, new type)
+    return uvec2(retypeList[params.retypeCapacity + 2u * k], retypeList[params.retypeCapacity + 2u * k + 1u]);
+}
 layout(std430, set = 0, binding = BINDING_GARBAGE) buffer Garbage { uint garbage[]; };
 layout(std430, set = 0, binding = BINDING_MOVED_VERTICES) buffer MovedVertices { uint movedVertices[]; };
 // Per block, NEIGHBORS_PER_BLOCK entries: the block index at each offset in {-1, 0, 1}^3 from it (NO_BLOCK when
@@ -145,12 +160,16 @@ void setReleasedChunk(uint i, uint chunk) { garbage[params.vertexCapacity + i] =
 
 // Reserves `count` entries of the moved-vertex list for this invocation, one atomic per subgroup; returns
 // the first. Called by every invocation of the subgroup (uniform control flow), with a count or 0. Entries
-// at or past params.vertexCapacity do not exist (never more: each vertex is listed once).
+// at or past params.vertexCapacity do not exist (never more: each vertex is listed once). The same atomic
+// subgroup raises move_vertices' dispatch (Counters::vertexDispatch, from 0 in commit_vertices) to cover them.
 uint reserveMovedVertices(uint count) {
     uint offset = subgroupExclusiveAdd(count);
     uint total = subgroupAdd(count);
     uint base = 0u;
-    if (subgroupElect() && total != 0u) base = atomicAdd(counters.movedCount, total);
+    if (subgroupElect() && total != 0u) {
+        base = atomicAdd(counters.movedCount, total);
+        atomicMax(counters.vertexDispatch[0], (min(base + total, params.vertexCapacity) + WG_LIST - 1u) / WG_LIST);
+    }
     return subgroupBroadcastFirst(base) + offset;
 }
 

@@ -1,8 +1,8 @@
 #version 460
-// Incremental mesh, pass 3 (paper §V.D, §V.E): every cube of the retype list, with the type mesh_claim classified
-// it as (setListedType: the cube's mask words and neighbours are not read again),
-//  - keeps its triangles if its MC type did not change (temporal consistency);
-//  - otherwise releases them (refcount - 1 on their vertices; a vertex reaching 0 becomes a GC candidate)
+// Incremental mesh, pass 3 (paper §V.D, §V.E): every cube of the retype list whose MC type changed, as mesh_claim
+// listed it with its new type (setChangedCube: the cube's mask words and neighbours are not read again; a cube that
+// keeps its type keeps its triangles, temporal consistency, and is not listed),
+//  - releases its triangles (refcount - 1 on their vertices; a vertex reaching 0 becomes a GC candidate)
 //    and builds the new type's triangles from the edge slots claimed in pass 1 (+1 each).
 // Triangles live in a chunk of 5 per cube; a cube gaining triangles pops a chunk (committed next pass), a
 // cube losing all of them lists its chunk for release (pushed back two passes later). A cube left
@@ -24,12 +24,10 @@ void listCandidate(uint v) {
     if (c < params.vertexCapacity) setGcCandidate(c, v);
 }
 
-// Entry `entry` of the retype list, cube `id`.
-void retype(uint entry, uint id) {
+// Cube `id`, whose type is now `type` (mesh_claim's classification: nothing it reads changes in between).
+void retype(uint id, uint type) {
     uint state = cubeState[id];
     uint oldType = state & CUBE_TYPE_MASK;
-    uint type = listedType(entry);   // mesh_claim's classification (nothing it reads changes in between)
-    if (type == oldType && (state & CUBE_INCOMPLETE) == 0u) return;
     CubeRef r = cubeRef(id / VOXELS_PER_BLOCK, id % VOXELS_PER_BLOCK);   // the edges' blocks, for a cube that changes
     ++retyped;
     uint chunk = state >> CUBE_CHUNK_SHIFT;   // chunk index + 1, 0 = none
@@ -99,7 +97,10 @@ void retype(uint entry, uint id) {
 
 void main() {
     uint i = gl_GlobalInvocationID.x;
-    if (i < min(counters.retypeCount, params.retypeCapacity) && retypeList[i] != NO_BLOCK) retype(i, retypeList[i]);
+    if (i < counters.cubesChanged) {
+        uvec2 cube = changedCube(i);
+        retype(cube.x, cube.y);
+    }
     ADD_COUNTER(trianglesCreated, created);
     ADD_COUNTER(trianglesReleased, released);
     ADD_COUNTER(trianglesInvalid, invalid);

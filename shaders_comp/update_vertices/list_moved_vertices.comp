@@ -37,7 +37,7 @@ void main() {
         uint slot = vertexOwner[gcCandidate(i - groups)];
         if (!blockMovesVertices(slot / (VOXELS_PER_BLOCK * 3u))) single = slot;
     }
-    uint at = reserveMovedVertices(single != EMPTY_SLOT ? 1u : count);   // uniform control flow
+    uint at = reserveMovedVertices(single != EMPTY_SLOT ? 1u : count);   // uniform control flow; sizes move_vertices
     if (single != EMPTY_SLOT) listMovedVertex(at, single);
     for (uint w = 0u; w < WORDS_PER_INVOCATION && count != 0u; ++w) {
         uint b = ownedSlots[base + w];

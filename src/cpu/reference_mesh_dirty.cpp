@@ -1,4 +1,4 @@
-// Dirty marking (docs/MESH.md; shaders_comp/mark_dirty/mark_dirty.comp, retype/collect_retype.comp, retype/plan_retype.comp): the
+// Dirty marking (docs/MESH.md; shaders_comp/mark_dirty/mark_dirty.comp, retype/collect_retype.comp): the
 // dirty blocks D of a frame, the cubes of D that claim and triangulate re-evaluate (the GPU's retype list),
 // and the (refined) type each of those cubes is to be built with.
 #include "cpu/reference_mesh_internal.h"

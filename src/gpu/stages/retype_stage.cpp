@@ -10,8 +10,7 @@ RetypeStage::RetypeStage(const vk::Context& context, const vk::BindingTable& tab
       cacheNeighbors_(context, table, "cache_neighbors"),
       buildMasks_(context, table, "build_tsdf_masks"),
       decideSigns_(context, table, "decide_mesh_signs"),
-      collect_(context, table, "collect_retype"),
-      planRetype_(context, table, "plan_retype") {}
+      collect_(context, table, "collect_retype") {}
 
 void RetypeStage::recordMeshSigns(VkCommandBuffer cmd, const FramePush& push, const CounterBuffer& counters, bool fromTsdf) const {
     plan_.dispatch(cmd, &push, 1);
@@ -29,8 +28,6 @@ void RetypeStage::recordMeshSigns(VkCommandBuffer cmd, const FramePush& push, co
 void RetypeStage::record(VkCommandBuffer cmd, const FramePush& push, const CounterBuffer& counters) const {
     recordMeshSigns(cmd, push, counters);
     collect_.dispatchIndirect(cmd, &push, counters.buffer(), offsetof(Counters, collectDispatch));
-    vk::memoryBarrier(cmd);
-    planRetype_.dispatch(cmd, &push, 1);
     vk::memoryBarrier(cmd);
 }
 

@@ -3,7 +3,7 @@
 // and, with refinement, re-decides the meshing signs of every corner of the dirty blocks from the masks of the
 // TSDF and marks the cubes around those that changed, one invocation per mask word (decide_mesh_signs); then
 // moves the retype-mask bits of the dirty blocks into the retype list, as many as fit (collect_retype; the rest
-// stay set for the next pass and are counted in retypeDeferred), and sizes the passes over the list (plan_retype).
+// stay set for the next pass and are counted in retypeDeferred), sizing mesh_claim's dispatch as it lists.
 //   reads  dirty list, hash, retype masks, corner flips, mesh signs (and TSDF masks)
 //   writes block neighbours, mesh signs, retype list, masks and corner flips (bits taken and set), dispatch arguments
 #pragma once
@@ -25,7 +25,7 @@ public:
 
 private:
     bool refines_;
-    vk::ComputePipeline plan_, cacheNeighbors_, buildMasks_, decideSigns_, collect_, planRetype_;
+    vk::ComputePipeline plan_, cacheNeighbors_, buildMasks_, decideSigns_, collect_;
 };
 
 }  // namespace vkmesh::gpu

@@ -6,13 +6,10 @@ namespace vkmesh::gpu {
 
 UpdateVerticesStage::UpdateVerticesStage(const vk::Context& context, const vk::BindingTable& table)
     : list_(context, table, "list_moved_vertices"),
-      plan_(context, table, "plan_move_vertices"),
       move_(context, table, "move_vertices") {}
 
 void UpdateVerticesStage::record(VkCommandBuffer cmd, const FramePush& push, const CounterBuffer& counters) const {
     list_.dispatchIndirect(cmd, &push, counters.buffer(), offsetof(Counters, ownedDispatch));
-    vk::memoryBarrier(cmd);
-    plan_.dispatch(cmd, &push, 1);
     vk::memoryBarrier(cmd);
     move_.dispatchIndirect(cmd, &push, counters.buffer(), offsetof(Counters, vertexDispatch));
     vk::memoryBarrier(cmd);
