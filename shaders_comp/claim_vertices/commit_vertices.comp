@@ -1,7 +1,9 @@
 #version 460
 // One invocation after mesh_claim: pops the vertices handed out from the heap's free stack, sizes mesh_triangulate's
-// dispatch to the cubes mesh_claim listed as changed (retypeDispatch: claim has used it), and list_moved_vertices' dispatch: 6 invocations per dirty block (8 owned-slot mask words each), then one per vertex
-// created so far (the GC candidates), so its cost follows the frame, never the size of the map.
+// dispatch to the cubes mesh_claim listed as changed (retypeDispatch: claim has used it), and sizes
+// list_moved_vertices' dispatch: 6 invocations per dirty block (8 owned-slot mask words each), then one per vertex
+// created so far (the GC candidates), so its cost follows the frame, never the size of the map. move_vertices'
+// dispatch starts at 0 for the listing to raise.
 #extension GL_GOOGLE_include_directive : require
 #include "structure/frame.glsl"
 
