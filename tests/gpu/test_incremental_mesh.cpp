@@ -296,6 +296,9 @@ TEST_P(CpuReferenceTest, MatchesCpuReferenceMesherFrameByFrame) {
         EXPECT_EQ(k.retypeCount, s.cubesListed) << "retype stage, frame " << frame;
         EXPECT_EQ(k.vertexAllocRequests - k.vertexExhausted, s.verticesAllocated) << "claim_vertices stage, frame " << frame;
         EXPECT_EQ(k.cubesRetyped, s.cubesRetyped) << "triangulate stage, frame " << frame;
+        // claim lists exactly the cubes whose type changed, and triangulate retypes each of them once.
+        EXPECT_EQ(k.cubesChanged, s.cubesRetyped) << "claim_vertices stage (changed cubes), frame " << frame;
+        EXPECT_LE(k.cubesChanged, k.retypeCount) << "frame " << frame;
         EXPECT_EQ(k.chunkAllocRequests - k.chunkExhausted, s.chunksAllocated) << "triangulate stage, frame " << frame;
         EXPECT_EQ(k.vertexPushes, s.verticesFreed) << "mesh_gc stage, frame " << frame;
         EXPECT_EQ(k.chunkPushes, s.chunksFreed) << "mesh_gc stage, frame " << frame;
