@@ -441,6 +441,7 @@ int runFuse(const FuseArgs& args) {
         perFrame["hash_requests"].push_back(report.counters.blockRequests - report.counters.blocksShared);
         perFrame["dirty_blocks"].push_back(report.counters.dirtyCount);
         perFrame["cubes_retyped"].push_back(report.counters.cubesRetyped);
+        perFrame["cubes_listed"].push_back(report.counters.retypeCount);   // the candidates claim classified
         perFrame["triangles_created"].push_back(report.counters.trianglesCreated);
         perFrame["vertices_moved"].push_back(report.counters.movedCount);
         hashFull += report.counters.hashFull;

@@ -45,6 +45,7 @@ inline SwPair operator|(SwPair a, SwPair b) { return {a.x | b.x, a.y | b.y}; }
 inline SwPair operator<<(SwPair a, uint n) { return {a.x << n, a.y << n}; }
 inline SwPair operator>>(SwPair a, uint n) { return {a.x >> n, a.y >> n}; }
 inline SwPair swRawObserved(SwQuad q) { return {q.y, q.w}; }
+inline SwPair swMeshingObserved(SwQuad q) { return {q.x, q.w}; }
 #define SW_PAIR_ZERO SwPair{0u, 0u}
 #else
 #define SW_FN
@@ -53,6 +54,7 @@ inline SwPair swRawObserved(SwQuad q) { return {q.y, q.w}; }
 #define SwQuad uvec4
 #define SwPair uvec2
 SwPair swRawObserved(SwQuad q) { return q.yw; }
+SwPair swMeshingObserved(SwQuad q) { return q.xw; }
 #define SW_PAIR_ZERO uvec2(0u)
 #endif
 
@@ -76,14 +78,16 @@ SW_FN SwPair swShiftX(SwPair here, SwPair left, SwPair right, int dx) {   // the
 // llvmpipe a load that a lane skips is a load saved, and the windows' loads are most of the decision's cost).
 // `have` bit 0, 1, 2: the rows, the other word and the word beyond were read already (rowsIn, otherIn, beyondIn:
 // the words rule 3 read) and are not read again.
+SW_FN SwPair swPick(SwQuad q, bool meshing) { return meshing ? swMeshingObserved(q) : swRawObserved(q); }
+
 SW_FN void swColumnRows(uint b, uint by, uint layer, uint rh, uint need, uint have, SwPair rowsIn, SwPair otherIn, SwPair beyondIn,
-                        SW_OUT(SwPair) down, SW_OUT(SwPair) mid, SW_OUT(SwPair) up) {
+                        bool meshing, SW_OUT(SwPair) down, SW_OUT(SwPair) mid, SW_OUT(SwPair) up) {
     bool needBelow = (need & 0xFFu) != 0u, needAbove = (need & 0xFF000000u) != 0u;
-    SwPair rows = (have & 1u) != 0u ? rowsIn : (need != 0u ? swRawObserved(SIGN_WINDOW_WORDS(b, layer, rh)) : SW_PAIR_ZERO);
+    SwPair rows = (have & 1u) != 0u ? rowsIn : (need != 0u ? swPick(SIGN_WINDOW_WORDS(b, layer, rh), meshing) : SW_PAIR_ZERO);
     SwPair other = (have & 2u) != 0u ? otherIn
-                   : ((rh == 0u ? needAbove : needBelow) ? swRawObserved(SIGN_WINDOW_WORDS(b, layer, 1u - rh)) : SW_PAIR_ZERO);
+                   : ((rh == 0u ? needAbove : needBelow) ? swPick(SIGN_WINDOW_WORDS(b, layer, 1u - rh), meshing) : SW_PAIR_ZERO);
     SwPair beyond = (have & 4u) != 0u ? beyondIn
-                    : ((rh == 0u ? needBelow : needAbove) ? swRawObserved(SIGN_WINDOW_WORDS(by, layer, 1u - rh)) : SW_PAIR_ZERO);
+                    : ((rh == 0u ? needBelow : needAbove) ? swPick(SIGN_WINDOW_WORDS(by, layer, 1u - rh), meshing) : SW_PAIR_ZERO);
     SwPair below = rh == 0u ? beyond >> 24u : other >> 24u;
     SwPair above = rh == 0u ? other & 0xFFu : beyond & 0xFFu;
     down = (rows << 8u) | below;
@@ -98,7 +102,7 @@ SW_FN void swColumnRows(uint b, uint by, uint layer, uint rh, uint need, uint ha
 // middle column's rows, other word and word beyond were read already (swColumnRows); bits 3, 4: the rows of the
 // -x / +x column (rowsL, rowsR).
 SW_FN void swLayer(uint block, uint z, uint rh, int dz, uint need, uint have, SwPair rowsMid, SwPair otherMid, SwPair beyondMid,
-                   SwPair rowsL, SwPair rowsR, SW_OUT(SwPair) w0, SW_OUT(SwPair) w1, SW_OUT(SwPair) w2, SW_OUT(SwPair) w3,
+                   SwPair rowsL, SwPair rowsR, bool meshing, SW_OUT(SwPair) w0, SW_OUT(SwPair) w1, SW_OUT(SwPair) w2, SW_OUT(SwPair) w3,
                    SW_OUT(SwPair) w4, SW_OUT(SwPair) w5, SW_OUT(SwPair) w6, SW_OUT(SwPair) w7, SW_OUT(SwPair) w8) {
     int zz = int(z) + dz;
     int oz = zz < 0 ? -1 : (zz > 7 ? 1 : 0);
@@ -113,13 +117,13 @@ SW_FN void swLayer(uint block, uint z, uint rh, int dz, uint need, uint have, Sw
     SwPair dL, mL, uL, d0, m0, u0, dR, mR, uR;
     swColumnRows(lookL != 0u ? SIGN_WINDOW_NEIGHBOR(block, -1, 0, oz) : NO_BLOCK,
                  (needL & edgeRow) != 0u ? SIGN_WINDOW_NEIGHBOR(block, -1, oy, oz) : NO_BLOCK, layer, rh, needL, (have >> 3) & 1u,
-                 rowsL, SW_PAIR_ZERO, SW_PAIR_ZERO, dL, mL, uL);
+                 rowsL, SW_PAIR_ZERO, SW_PAIR_ZERO, meshing, dL, mL, uL);
     swColumnRows(oz == 0 ? block : (lookMid != 0u ? SIGN_WINDOW_NEIGHBOR(block, 0, 0, oz) : NO_BLOCK),
                  (need & edgeRow) != 0u && (have & 4u) == 0u ? SIGN_WINDOW_NEIGHBOR(block, 0, oy, oz) : NO_BLOCK, layer, rh, need,
-                 have & 7u, rowsMid, otherMid, beyondMid, d0, m0, u0);
+                 have & 7u, rowsMid, otherMid, beyondMid, meshing, d0, m0, u0);
     swColumnRows(lookR != 0u ? SIGN_WINDOW_NEIGHBOR(block, 1, 0, oz) : NO_BLOCK,
                  (needR & edgeRow) != 0u ? SIGN_WINDOW_NEIGHBOR(block, 1, oy, oz) : NO_BLOCK, layer, rh, needR, (have >> 4) & 1u,
-                 rowsR, SW_PAIR_ZERO, SW_PAIR_ZERO, dR, mR, uR);
+                 rowsR, SW_PAIR_ZERO, SW_PAIR_ZERO, meshing, dR, mR, uR);
     w0 = swShiftX(d0, dL, dR, -1);
     w1 = d0;
     w2 = swShiftX(d0, dL, dR, 1);
@@ -176,23 +180,30 @@ SW_FN bool swFlips(uint win) {
 
 // The meshing signs of word `word` of `block` (bit i: corner 32 word + i inside for meshing), given the word's group
 // `own` (SIGN_WINDOW_WORDS). `evaluated`: the corners whose window had to be decided bit by bit (the others kept
-// their raw sign by the masks alone).
-SW_FN uint swDecideWord(uint block, uint word, SwQuad own, SW_OUT(uint) evaluated) {
+// their raw sign by the masks alone). `faces`: whether the groups of the word's 6 edge neighbours (rule 3's words:
+// the blocks at -x and +x, the other word of the layer, the y-neighbour's, the layers below and above) were read,
+// and then those groups, for a caller that needs them too (decide_mesh_signs' cube window).
+SW_FN uint swDecideWord(uint block, uint word, SwQuad own, SW_OUT(uint) evaluated, SW_OUT(bool) faces, SW_OUT(SwQuad) leftGroup,
+                        SW_OUT(SwQuad) rightGroup, SW_OUT(SwQuad) otherGroup, SW_OUT(SwQuad) beyondGroup, SW_OUT(SwQuad) lowerGroup,
+                        SW_OUT(SwQuad) upperGroup) {
     uint z = word / 2u, rh = word % 2u;
     uint raw = own.y;
     uint cand = own.z;   // near
     evaluated = 0u;
+    faces = cand != 0u;
     if (cand == 0u) return raw;
     // Rule 3 first, from the 6 edge neighbours' words only (7 mask words): at most 2 of them share the sign. On a
     // surface a near corner has 4 or 5 (its layer's neighbours and one across), so this removes most of them.
     // Its words are the window's too (kept with their observed words, not read again below).
     int oy = rh == 0u ? -1 : 1;
-    SwPair left = swRawObserved(SIGN_WINDOW_WORDS(SIGN_WINDOW_NEIGHBOR(block, -1, 0, 0), z, rh));
-    SwPair right = swRawObserved(SIGN_WINDOW_WORDS(SIGN_WINDOW_NEIGHBOR(block, 1, 0, 0), z, rh));
-    SwPair other = swRawObserved(SIGN_WINDOW_WORDS(block, z, 1u - rh));
-    SwPair beyond = swRawObserved(SIGN_WINDOW_WORDS(SIGN_WINDOW_NEIGHBOR(block, 0, oy, 0), z, 1u - rh));
-    SwPair lower = swRawObserved(z == 0u ? SIGN_WINDOW_WORDS(SIGN_WINDOW_NEIGHBOR(block, 0, 0, -1), 7u, rh) : SIGN_WINDOW_WORDS(block, z - 1u, rh));
-    SwPair upper = swRawObserved(z == 7u ? SIGN_WINDOW_WORDS(SIGN_WINDOW_NEIGHBOR(block, 0, 0, 1), 0u, rh) : SIGN_WINDOW_WORDS(block, z + 1u, rh));
+    leftGroup = SIGN_WINDOW_WORDS(SIGN_WINDOW_NEIGHBOR(block, -1, 0, 0), z, rh);
+    rightGroup = SIGN_WINDOW_WORDS(SIGN_WINDOW_NEIGHBOR(block, 1, 0, 0), z, rh);
+    otherGroup = SIGN_WINDOW_WORDS(block, z, 1u - rh);
+    beyondGroup = SIGN_WINDOW_WORDS(SIGN_WINDOW_NEIGHBOR(block, 0, oy, 0), z, 1u - rh);
+    lowerGroup = z == 0u ? SIGN_WINDOW_WORDS(SIGN_WINDOW_NEIGHBOR(block, 0, 0, -1), 7u, rh) : SIGN_WINDOW_WORDS(block, z - 1u, rh);
+    upperGroup = z == 7u ? SIGN_WINDOW_WORDS(SIGN_WINDOW_NEIGHBOR(block, 0, 0, 1), 0u, rh) : SIGN_WINDOW_WORDS(block, z + 1u, rh);
+    SwPair left = swRawObserved(leftGroup), right = swRawObserved(rightGroup), other = swRawObserved(otherGroup);
+    SwPair beyond = swRawObserved(beyondGroup), lower = swRawObserved(lowerGroup), upper = swRawObserved(upperGroup);
     {
         uint below = rh == 0u ? beyond.x >> 24 : other.x >> 24;
         uint above = rh == 0u ? other.x & 0xFFu : beyond.x & 0xFFu;
@@ -203,9 +214,9 @@ SW_FN uint swDecideWord(uint block, uint word, SwQuad own, SW_OUT(uint) evaluate
     // The window of the raw and the observed masks at once (pN.x raw, pN.y observed, at corner + offset N).
     SwPair p0, p1, p2, p3, p4, p5, p6, p7, p8, p9, p10, p11, p12, p13, p14, p15, p16, p17, p18, p19, p20, p21, p22, p23,
         p24, p25, p26;
-    swLayer(block, z, rh, -1, cand, 1u, lower, SW_PAIR_ZERO, SW_PAIR_ZERO, SW_PAIR_ZERO, SW_PAIR_ZERO, p0, p1, p2, p3, p4, p5, p6, p7, p8);
-    swLayer(block, z, rh, 0, cand, 31u, swRawObserved(own), other, beyond, left, right, p9, p10, p11, p12, p13, p14, p15, p16, p17);
-    swLayer(block, z, rh, 1, cand, 1u, upper, SW_PAIR_ZERO, SW_PAIR_ZERO, SW_PAIR_ZERO, SW_PAIR_ZERO, p18, p19, p20, p21, p22, p23, p24,
+    swLayer(block, z, rh, -1, cand, 1u, lower, SW_PAIR_ZERO, SW_PAIR_ZERO, SW_PAIR_ZERO, SW_PAIR_ZERO, false, p0, p1, p2, p3, p4, p5, p6, p7, p8);
+    swLayer(block, z, rh, 0, cand, 31u, swRawObserved(own), other, beyond, left, right, false, p9, p10, p11, p12, p13, p14, p15, p16, p17);
+    swLayer(block, z, rh, 1, cand, 1u, upper, SW_PAIR_ZERO, SW_PAIR_ZERO, SW_PAIR_ZERO, SW_PAIR_ZERO, false, p18, p19, p20, p21, p22, p23, p24,
             p25, p26);
     // The observed rule first, as it costs no load of its own: a flip needs the corner's 27 corners observed (the AND
     // of the 27 shifted words of the observed mask, exact at the candidates).
@@ -229,6 +240,12 @@ SW_FN uint swDecideWord(uint block, uint word, SwQuad own, SW_OUT(uint) evaluate
         if (swFlips(win)) flips |= 1u << b;
     }
     return raw ^ flips;
+}
+
+SW_FN uint swDecideWord(uint block, uint word, SwQuad own, SW_OUT(uint) evaluated) {
+    bool faces;
+    SwQuad l, r, o, b, lo, up;
+    return swDecideWord(block, word, own, evaluated, faces, l, r, o, b, lo, up);
 }
 
 #undef SW_FN

@@ -28,6 +28,17 @@ void readVolumeCorner(const ReferenceVolume& volume, float minMeshWeight, int x,
     observed = it->second.weight[v] >= minMeshWeight;
 }
 
+// Whether the 8 corners of the cube at global grid position (x, y, z) (its corner 0) are all observed.
+bool cubeObservedAt(const ReferenceVolume& volume, float minMeshWeight, int x, int y, int z) {
+    for (int o = 0; o < 8; ++o) {
+        float d = 0.0f;
+        bool observed = false;
+        readVolumeCorner(volume, minMeshWeight, x + (o & 1), y + ((o >> 1) & 1), z + ((o >> 2) & 1), d, observed);
+        if (!observed) return false;
+    }
+    return true;
+}
+
 }  // namespace
 
 std::vector<ReferenceMesher::DirtyBlock> ReferenceMesher::markDirty(const ReferenceVolume& volume,
@@ -50,29 +61,60 @@ std::vector<ReferenceMesher::DirtyBlock> ReferenceMesher::markDirty(const Refere
     stats.dirtyBlocks = uint32_t(dirty.size());
 
     // The cubes to re-evaluate (the GPU's retype list): all of D, or the cubes around the corners the last
-    // integrate() flipped (with refinement: around those whose observed state flipped, and around the corners
-    // whose meshing sign changed), and the INCOMPLETE cubes (the GPU sets their retype bit again). The other
-    // cubes of D keep their type: with none of their corners changed neither their MC type nor their refined
-    // type can change.
-    for (DirtyBlock& b : dirty) {
+    // integrate() flipped (with refinement: around those whose observed state flipped and around those whose meshing
+    // sign changed, where that can change the cube's type), and the INCOMPLETE cubes (the GPU sets their retype bit
+    // again). The other cubes of D keep their type: with none of their corners changed neither their MC type nor
+    // their refined type can change. With refinement a cube with a corner unobserved has type 0, as has one whose
+    // corners are all outside: an observed flip alone changes a type only where the cube has a corner inside for
+    // meshing, and in an integrated frame (weights only grow) neither kind of change alters a cube with a corner
+    // unobserved now, which had one before too (decide_mesh_signs.comp, cubeWindow).
+    std::vector<CubeMask> observedFlips(dirty.size());
+    for (size_t i = 0; i < dirty.size(); ++i) {
+        DirtyBlock& b = dirty[i];
         if (scope == RetypeScope::AllCubes) {
             b.retype.set();
         } else {
             const auto& marked = options_.refine ? volume.observedRetypeCubes() : volume.retypeCubes();
             auto it = marked.find(b.coord);
-            if (it != marked.end()) b.retype = it->second;
+            if (it != marked.end()) (options_.refine ? observedFlips[i] : b.retype) = it->second;
             for (uint32_t cube = 0; cube < VOXELS_PER_BLOCK; ++cube)
                 if (b.state->cubeState[cube] & gpu::CUBE_INCOMPLETE) b.retype.set(cube);
         }
     }
-    if (options_.refine) decideMeshSigns(volume, dirty);
+    if (options_.refine) {
+        decideMeshSigns(volume, dirty);
+        const int side = int(gpu::BLOCK_SIDE);
+        auto insideForMeshing = [&](int x, int y, int z) {
+            auto it = blocks_.find(BlockCoord{blockOf(x), blockOf(y), blockOf(z)});
+            if (it == blocks_.end()) return false;   // (a freed block's signs are reset: createBlockStates)
+            const BlockCoord& c = it->first;
+            return it->second.meshInside.test(localIndex(x - c[0] * side, y - c[1] * side, z - c[2] * side));
+        };
+        for (size_t i = 0; i < dirty.size(); ++i) {
+            for (uint32_t cube = 0; cube < VOXELS_PER_BLOCK; ++cube) {
+                if (!observedFlips[i].test(cube) || dirty[i].retype.test(cube)) continue;
+                const auto l = localCoords(cube);
+                const BlockCoord& c = dirty[i].coord;
+                const int x = c[0] * side + int(l[0]), y = c[1] * side + int(l[1]), z = c[2] * side + int(l[2]);
+                bool inside = false;
+                for (int o = 0; o < kCubeCorners && !inside; ++o) {
+                    const auto off = cornerOffset(o);
+                    inside = insideForMeshing(x + off[0], y + off[1], z + off[2]);
+                }
+                // Integrating, its flips gave observations: a cube with a corner unobserved now had one before too.
+                const bool observed = volume.lastDeintegrated() || cubeObservedAt(volume, minMeshWeight_, x, y, z);
+                if (inside && observed) dirty[i].retype.set(cube);
+            }
+        }
+    }
     for (const DirtyBlock& b : dirty) stats.cubesListed += uint32_t(b.retype.count());
     return dirty;
 }
 
 // The meshing signs (decide_mesh_signs.comp, which decides every corner of D from the masks of the TSDF): every
 // corner of D gets refinedCornerInside() of its 3x3x3 window; where that differs from the stored sign, the sign
-// is stored and the 8 cubes around the corner (corner - o, o in {0,1}^3) are listed. Those lie in D: a sign only changes with the TSDF within one corner of it, D holds every block
+// is stored and the 8 cubes around the corner (corner - o, o in {0,1}^3) are listed, in an integrated frame only
+// those whose corners are all observed (markDirty). Those lie in D: a sign only changes with the TSDF within one corner of it, D holds every block
 // within one block of a touched one, and every block is in D the frame it is created. (A mark outside D, which
 // would need a sign decided before its window's last change, the GPU keeps for a later frame; here it has
 // none to keep.)
@@ -95,6 +137,7 @@ void ReferenceMesher::decideMeshSigns(const ReferenceVolume& volume, std::vector
                 const int x = g[0] - (o & 1), y = g[1] - ((o >> 1) & 1), z = g[2] - ((o >> 2) & 1);
                 auto it = byCoord.find(BlockCoord{blockOf(x), blockOf(y), blockOf(z)});
                 if (it == byCoord.end()) continue;
+                if (!volume.lastDeintegrated() && !cubeObservedAt(volume, minMeshWeight_, x, y, z)) continue;   // type 0 before and after
                 const BlockCoord& c = it->first;
                 it->second->retype.set(localIndex(x - c[0] * side, y - c[1] * side, z - c[2] * side));
             }

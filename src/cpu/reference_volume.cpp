@@ -48,6 +48,7 @@ ReferenceFrameStats ReferenceVolume::integrate(const DepthImage& depth, const In
     const gpu::FramePush push = makeFramePush(intrinsics, cameraToWorld, params_, 1);
     lastFlipped_.clear();
     lastObservedFlipped_.clear();
+    lastDeintegrated_ = false;
     for (const BlockCoord& c : touched) {
         auto [it, inserted] = blocks_.try_emplace(c);
         if (inserted) ++stats.blocksInserted;
@@ -85,6 +86,7 @@ ReferenceFrameStats ReferenceVolume::deintegrate(const DepthImage& depth, const 
     const gpu::FramePush push = makeFramePush(intrinsics, cameraToWorld, params_, 1);
     lastFlipped_.clear();
     lastObservedFlipped_.clear();
+    lastDeintegrated_ = true;
     std::vector<BlockCoord> found;
     for (const BlockCoord& c : touched) {
         auto it = blocks_.find(c);

@@ -93,6 +93,9 @@ public:
     // The same for the corners whose observed state flipped: what fusion marks when the mesh is refined (a cube's
     // refined type follows its corners' meshing signs, whose changes the mesher finds itself).
     const std::map<BlockCoord, CubeMask>& observedRetypeCubes() const { return observedRetypeCubes_; }
+    // Whether the last call was deintegrate(): its observed flips are corners that lost their observation (an
+    // integrate() only adds weight, so its flips are corners that gained it).
+    bool lastDeintegrated() const { return lastDeintegrated_; }
     // Number of cubes in retypeCubes().
     size_t retypeCubeCount() const;
 
@@ -108,6 +111,7 @@ private:
     std::vector<BlockCoord> lastTouched_;
     std::vector<std::array<int, 3>> lastFlipped_, lastObservedFlipped_;
     std::map<BlockCoord, CubeMask> retypeCubes_, observedRetypeCubes_;
+    bool lastDeintegrated_ = false;
 };
 
 }  // namespace vkmesh::cpu
