@@ -13,8 +13,7 @@
 // the blocks behind): with refinement, only those whose type the change can alter (cubeWindow). A cube with a corner
 // that is not observed has type 0, as has one whose corners are all outside; most observed flips happen in free
 // space in front of the surface and most sign changes at the edge of what is observed, and the cubes around them
-// were most of the retype list, where mesh_claim classified them to find their type unchanged (the synthetic room:
-// ~12k candidates a frame for ~5k changed types, now ~5k for ~5k).
+// were most of the retype list, where mesh_claim classified them to find their type unchanged.
 #extension GL_GOOGLE_include_directive : require
 #include "structure/frame.glsl"
 #include "structure/frame_lists.glsl"
@@ -33,22 +32,26 @@ void markCubes(uint block, ivec3 offset, uint layer, uint rowHalf, uint bits) {
 }
 
 // For the word's corners at `need`, per cube offset o = (ox, oy, oz) (cube corner - o, index ox + 2 oy + 4 oz): x,
-// whether the cube has a corner inside for meshing; y, whether its 8 corners are all observed. From the 27 words of
-// the meshing and observed window (sign_window.h, exact at `need`; this word's own signs as just decided), reusing
-// the 6 edge neighbours' groups where the sign decision read them (`faces`). A neighbour word decided in this
-// dispatch may be read before or after its store: only its changed corners differ, and every cube around a changed
-// corner is marked by that corner's own invocation, so the marks do not depend on the order.
-void cubeWindow(uint block, uint word, uint signs, uint observed, uint need, bool faces, uvec4 left, uvec4 right, uvec4 other,
-                uvec4 beyond, uvec4 lower, uvec4 upper, out uvec2 w[8]) {
+// whether the cube has a corner that may be inside for meshing (raw sign inside, or near: only a near corner's
+// meshing sign differs from its raw one); y, whether its 8 corners are all observed. From the 27 words of the raw,
+// near and observed masks around the word (sign_window.h, exact at `need`), reusing the 6 edge neighbours' groups
+// where the sign decision read them (`faces`). Fusion wrote these masks; nothing in this dispatch changes them, so
+// the marks do not depend on the order in which the words are decided (the meshing signs themselves would).
+uvec2 mayBeInsideObserved(uvec4 group) { return uvec2(group[MESH_SIGN_RAW] | group[MESH_SIGN_NEAR], group[MESH_SIGN_OBSERVED]); }
+
+void cubeWindow(uint block, uint word, uvec4 own, uint need, bool faces, uvec4 left, uvec4 right, uvec4 other, uvec4 beyond,
+                uvec4 lower, uvec4 upper, out uvec2 w[8]) {
     uint z = word / 2u, rh = word % 2u;
     uvec2 p0, p1, p2, p3, p4, p5, p6, p7, p8, p9, p10, p11, p12, p13, p14, p15, p16, p17, p18, p19, p20, p21, p22, p23,
         p24, p25, p26;
     const uvec2 none = uvec2(0u);
     uint have = faces ? 1u : 0u;
-    swLayer(block, z, rh, -1, need, have, lower.xw, none, none, none, none, true, p0, p1, p2, p3, p4, p5, p6, p7, p8);
-    swLayer(block, z, rh, 0, need, faces ? 31u : 1u, uvec2(signs, observed), other.xw, beyond.xw, left.xw, right.xw, true, p9, p10,
-            p11, p12, p13, p14, p15, p16, p17);
-    swLayer(block, z, rh, 1, need, have, upper.xw, none, none, none, none, true, p18, p19, p20, p21, p22, p23, p24, p25, p26);
+    swLayer(block, z, rh, -1, need, have, mayBeInsideObserved(lower), none, none, none, none, true, p0, p1, p2, p3, p4, p5, p6, p7,
+            p8);
+    swLayer(block, z, rh, 0, need, faces ? 31u : 1u, mayBeInsideObserved(own), mayBeInsideObserved(other), mayBeInsideObserved(beyond),
+            mayBeInsideObserved(left), mayBeInsideObserved(right), true, p9, p10, p11, p12, p13, p14, p15, p16, p17);
+    swLayer(block, z, rh, 1, need, have, mayBeInsideObserved(upper), none, none, none, none, true, p18, p19, p20, p21, p22, p23, p24,
+            p25, p26);
     // Per layer (a: dz = -1, b: 0, c: +1), the 2 x 2 corners of cube offset (ox, oy): dx in {-ox, 1 - ox}, dy likewise.
     uvec2 a00 = uvec2(p4.x | p5.x | p7.x | p8.x, p4.y & p5.y & p7.y & p8.y), a10 = uvec2(p3.x | p4.x | p6.x | p7.x, p3.y & p4.y & p6.y & p7.y),
           a01 = uvec2(p1.x | p2.x | p4.x | p5.x, p1.y & p2.y & p4.y & p5.y), a11 = uvec2(p0.x | p1.x | p3.x | p4.x, p0.y & p1.y & p3.y & p4.y);
@@ -88,20 +91,21 @@ void main() {
             uint signs = swDecideWord(block, word, own, evaluated, faces, left, right, other, beyond, lower, upper);
             uint signChanged = signs ^ own[MESH_SIGN_MESHING];
             if (signChanged != 0u) meshSigns[block * MESH_SIGN_WORDS + MESH_SIGN_GROUP * word + MESH_SIGN_MESHING] = signs;   // this invocation's word only
-            // Which of the cubes around the changed corners may change type (cubeWindow): around a corner whose meshing
-            // sign changed, those whose corners are all observed; around a corner whose observed state alone flipped,
-            // those that also have a corner inside for meshing. Integrating, weights only grow: a cube with a corner
-            // unobserved now had one before, and type 0 then and now. De-integrating, observations go: every cube
-            // around a sign change, and every one with a corner inside around an observed flip.
+            // Which of the cubes around the changed corners may change type (cubeWindow): around a corner whose observed
+            // state alone flipped, those with a corner that may be inside for meshing. And where no observation can be
+            // taken away this frame (fusion only adds weight: not a de-integration, no recycling, whose starving and
+            // retiring lower weights after fusion), only those whose corners are all observed now: a cube with a corner
+            // unobserved now had one before, and type 0 then and now. (With recycling, requiring that made emptied
+            // blocks wait a frame to be freed in GpuTest.GrowthWithABoundedMapKeepsTheMapOfAmpleCapacities.)
             uint observedOnly = flips & ~signChanged;
             uint need = flips | signChanged;
             [[unroll]] for (uint o = 0u; o < 8u; ++o) k[o] = 0u;
             if (need != 0u) {
                 uvec2 w[8];
-                cubeWindow(block, word, signs, own[MESH_SIGN_OBSERVED], need, faces, left, right, other, beyond, lower, upper, w);
-                bool integrating = framePose.deintegrate == 0u;
+                cubeWindow(block, word, own, need, faces, left, right, other, beyond, lower, upper, w);
+                bool onlyGains = framePose.deintegrate == 0u && params.keepRadius <= 0.0 && params.starveAfterFrames == 0u;
                 [[unroll]] for (uint o = 0u; o < 8u; ++o)
-                    k[o] = (signChanged | (observedOnly & w[o].x)) & (integrating ? w[o].y : ~0u);
+                    k[o] = (signChanged | (observedOnly & w[o].x)) & (onlyGains ? w[o].y : ~0u);
             }
         }
         uint z = word / 2u, rh = word % 2u;

@@ -45,7 +45,8 @@ inline SwPair operator|(SwPair a, SwPair b) { return {a.x | b.x, a.y | b.y}; }
 inline SwPair operator<<(SwPair a, uint n) { return {a.x << n, a.y << n}; }
 inline SwPair operator>>(SwPair a, uint n) { return {a.x >> n, a.y >> n}; }
 inline SwPair swRawObserved(SwQuad q) { return {q.y, q.w}; }
-inline SwPair swMeshingObserved(SwQuad q) { return {q.x, q.w}; }
+// (raw sign or near, observed): a corner inside for meshing is one of these (only a near corner flips).
+inline SwPair swMayBeInsideObserved(SwQuad q) { return {q.y | q.z, q.w}; }
 #define SW_PAIR_ZERO SwPair{0u, 0u}
 #else
 #define SW_FN
@@ -54,7 +55,7 @@ inline SwPair swMeshingObserved(SwQuad q) { return {q.x, q.w}; }
 #define SwQuad uvec4
 #define SwPair uvec2
 SwPair swRawObserved(SwQuad q) { return q.yw; }
-SwPair swMeshingObserved(SwQuad q) { return q.xw; }
+SwPair swMayBeInsideObserved(SwQuad q) { return uvec2(q.y | q.z, q.w); }
 #define SW_PAIR_ZERO uvec2(0u)
 #endif
 
@@ -78,16 +79,16 @@ SW_FN SwPair swShiftX(SwPair here, SwPair left, SwPair right, int dx) {   // the
 // llvmpipe a load that a lane skips is a load saved, and the windows' loads are most of the decision's cost).
 // `have` bit 0, 1, 2: the rows, the other word and the word beyond were read already (rowsIn, otherIn, beyondIn:
 // the words rule 3 read) and are not read again.
-SW_FN SwPair swPick(SwQuad q, bool meshing) { return meshing ? swMeshingObserved(q) : swRawObserved(q); }
+SW_FN SwPair swPick(SwQuad q, bool mayBeInside) { return mayBeInside ? swMayBeInsideObserved(q) : swRawObserved(q); }
 
 SW_FN void swColumnRows(uint b, uint by, uint layer, uint rh, uint need, uint have, SwPair rowsIn, SwPair otherIn, SwPair beyondIn,
-                        bool meshing, SW_OUT(SwPair) down, SW_OUT(SwPair) mid, SW_OUT(SwPair) up) {
+                        bool mayBeInside, SW_OUT(SwPair) down, SW_OUT(SwPair) mid, SW_OUT(SwPair) up) {
     bool needBelow = (need & 0xFFu) != 0u, needAbove = (need & 0xFF000000u) != 0u;
-    SwPair rows = (have & 1u) != 0u ? rowsIn : (need != 0u ? swPick(SIGN_WINDOW_WORDS(b, layer, rh), meshing) : SW_PAIR_ZERO);
+    SwPair rows = (have & 1u) != 0u ? rowsIn : (need != 0u ? swPick(SIGN_WINDOW_WORDS(b, layer, rh), mayBeInside) : SW_PAIR_ZERO);
     SwPair other = (have & 2u) != 0u ? otherIn
-                   : ((rh == 0u ? needAbove : needBelow) ? swPick(SIGN_WINDOW_WORDS(b, layer, 1u - rh), meshing) : SW_PAIR_ZERO);
+                   : ((rh == 0u ? needAbove : needBelow) ? swPick(SIGN_WINDOW_WORDS(b, layer, 1u - rh), mayBeInside) : SW_PAIR_ZERO);
     SwPair beyond = (have & 4u) != 0u ? beyondIn
-                    : ((rh == 0u ? needBelow : needAbove) ? swPick(SIGN_WINDOW_WORDS(by, layer, 1u - rh), meshing) : SW_PAIR_ZERO);
+                    : ((rh == 0u ? needBelow : needAbove) ? swPick(SIGN_WINDOW_WORDS(by, layer, 1u - rh), mayBeInside) : SW_PAIR_ZERO);
     SwPair below = rh == 0u ? beyond >> 24u : other >> 24u;
     SwPair above = rh == 0u ? other & 0xFFu : beyond & 0xFFu;
     down = (rows << 8u) | below;
@@ -102,7 +103,7 @@ SW_FN void swColumnRows(uint b, uint by, uint layer, uint rh, uint need, uint ha
 // middle column's rows, other word and word beyond were read already (swColumnRows); bits 3, 4: the rows of the
 // -x / +x column (rowsL, rowsR).
 SW_FN void swLayer(uint block, uint z, uint rh, int dz, uint need, uint have, SwPair rowsMid, SwPair otherMid, SwPair beyondMid,
-                   SwPair rowsL, SwPair rowsR, bool meshing, SW_OUT(SwPair) w0, SW_OUT(SwPair) w1, SW_OUT(SwPair) w2, SW_OUT(SwPair) w3,
+                   SwPair rowsL, SwPair rowsR, bool mayBeInside, SW_OUT(SwPair) w0, SW_OUT(SwPair) w1, SW_OUT(SwPair) w2, SW_OUT(SwPair) w3,
                    SW_OUT(SwPair) w4, SW_OUT(SwPair) w5, SW_OUT(SwPair) w6, SW_OUT(SwPair) w7, SW_OUT(SwPair) w8) {
     int zz = int(z) + dz;
     int oz = zz < 0 ? -1 : (zz > 7 ? 1 : 0);
@@ -117,13 +118,13 @@ SW_FN void swLayer(uint block, uint z, uint rh, int dz, uint need, uint have, Sw
     SwPair dL, mL, uL, d0, m0, u0, dR, mR, uR;
     swColumnRows(lookL != 0u ? SIGN_WINDOW_NEIGHBOR(block, -1, 0, oz) : NO_BLOCK,
                  (needL & edgeRow) != 0u ? SIGN_WINDOW_NEIGHBOR(block, -1, oy, oz) : NO_BLOCK, layer, rh, needL, (have >> 3) & 1u,
-                 rowsL, SW_PAIR_ZERO, SW_PAIR_ZERO, meshing, dL, mL, uL);
+                 rowsL, SW_PAIR_ZERO, SW_PAIR_ZERO, mayBeInside, dL, mL, uL);
     swColumnRows(oz == 0 ? block : (lookMid != 0u ? SIGN_WINDOW_NEIGHBOR(block, 0, 0, oz) : NO_BLOCK),
                  (need & edgeRow) != 0u && (have & 4u) == 0u ? SIGN_WINDOW_NEIGHBOR(block, 0, oy, oz) : NO_BLOCK, layer, rh, need,
-                 have & 7u, rowsMid, otherMid, beyondMid, meshing, d0, m0, u0);
+                 have & 7u, rowsMid, otherMid, beyondMid, mayBeInside, d0, m0, u0);
     swColumnRows(lookR != 0u ? SIGN_WINDOW_NEIGHBOR(block, 1, 0, oz) : NO_BLOCK,
                  (needR & edgeRow) != 0u ? SIGN_WINDOW_NEIGHBOR(block, 1, oy, oz) : NO_BLOCK, layer, rh, needR, (have >> 4) & 1u,
-                 rowsR, SW_PAIR_ZERO, SW_PAIR_ZERO, meshing, dR, mR, uR);
+                 rowsR, SW_PAIR_ZERO, SW_PAIR_ZERO, mayBeInside, dR, mR, uR);
     w0 = swShiftX(d0, dL, dR, -1);
     w1 = d0;
     w2 = swShiftX(d0, dL, dR, 1);

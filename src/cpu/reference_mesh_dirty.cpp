@@ -3,6 +3,7 @@
 // and the (refined) type each of those cubes is to be built with.
 #include "cpu/reference_mesh_internal.h"
 
+#include <cmath>
 #include <set>
 
 #include "core/refinement.h"
@@ -65,9 +66,10 @@ std::vector<ReferenceMesher::DirtyBlock> ReferenceMesher::markDirty(const Refere
     // sign changed, where that can change the cube's type), and the INCOMPLETE cubes (the GPU sets their retype bit
     // again). The other cubes of D keep their type: with none of their corners changed neither their MC type nor
     // their refined type can change. With refinement a cube with a corner unobserved has type 0, as has one whose
-    // corners are all outside: an observed flip alone changes a type only where the cube has a corner inside for
-    // meshing, and in an integrated frame (weights only grow) neither kind of change alters a cube with a corner
-    // unobserved now, which had one before too (decide_mesh_signs.comp, cubeWindow).
+    // corners are all outside: an observed flip alone (its corner's meshing sign unchanged) changes a type only where
+    // the cube has a corner that may be inside for meshing (raw sign inside, or near), and where the last call only
+    // added weight (no de-integration, no recycling) neither kind of change alters a cube with a corner unobserved
+    // now, which had one before too (decide_mesh_signs.comp, cubeWindow).
     std::vector<CubeMask> observedFlips(dirty.size());
     for (size_t i = 0; i < dirty.size(); ++i) {
         DirtyBlock& b = dirty[i];
@@ -82,13 +84,20 @@ std::vector<ReferenceMesher::DirtyBlock> ReferenceMesher::markDirty(const Refere
         }
     }
     if (options_.refine) {
-        decideMeshSigns(volume, dirty);
+        const std::set<std::array<int, 3>> signChanged = decideMeshSigns(volume, dirty);
+        // The corners whose observed state alone flipped (not their meshing sign): the cubes around them are listed
+        // where they have a corner inside (those around a sign change, decideMeshSigns, where they are observed).
+        std::set<std::array<int, 3>> observedOnly;
+        for (const auto& c : volume.lastObservedFlipped())
+            if (!signChanged.count(c)) observedOnly.insert(c);
         const int side = int(gpu::BLOCK_SIDE);
-        auto insideForMeshing = [&](int x, int y, int z) {
-            auto it = blocks_.find(BlockCoord{blockOf(x), blockOf(y), blockOf(z)});
-            if (it == blocks_.end()) return false;   // (a freed block's signs are reset: createBlockStates)
-            const BlockCoord& c = it->first;
-            return it->second.meshInside.test(localIndex(x - c[0] * side, y - c[1] * side, z - c[2] * side));
+        // A corner that may be inside for meshing: its raw sign is, or it is near (only a near corner's meshing sign
+        // differs from its raw one): the GPU's masks of the TSDF, which no sign decision changes.
+        auto mayBeInside = [&](int x, int y, int z) {
+            float d = 0.0f;
+            bool observed = false;
+            readVolumeCorner(volume, minMeshWeight_, x, y, z, d, observed);
+            return d < 0.0f || (observed && std::fabs(d) < refineEpsilon_);
         };
         for (size_t i = 0; i < dirty.size(); ++i) {
             for (uint32_t cube = 0; cube < VOXELS_PER_BLOCK; ++cube) {
@@ -96,14 +105,14 @@ std::vector<ReferenceMesher::DirtyBlock> ReferenceMesher::markDirty(const Refere
                 const auto l = localCoords(cube);
                 const BlockCoord& c = dirty[i].coord;
                 const int x = c[0] * side + int(l[0]), y = c[1] * side + int(l[1]), z = c[2] * side + int(l[2]);
-                bool inside = false;
-                for (int o = 0; o < kCubeCorners && !inside; ++o) {
+                bool inside = false, aroundObservedOnly = false;
+                for (int o = 0; o < kCubeCorners; ++o) {
                     const auto off = cornerOffset(o);
-                    inside = insideForMeshing(x + off[0], y + off[1], z + off[2]);
+                    inside = inside || mayBeInside(x + off[0], y + off[1], z + off[2]);
+                    aroundObservedOnly = aroundObservedOnly || observedOnly.count({x + off[0], y + off[1], z + off[2]}) != 0;
                 }
-                // Integrating, its flips gave observations: a cube with a corner unobserved now had one before too.
-                const bool observed = volume.lastDeintegrated() || cubeObservedAt(volume, minMeshWeight_, x, y, z);
-                if (inside && observed) dirty[i].retype.set(cube);
+                const bool observed = volume.lastMayLoseObservations() || cubeObservedAt(volume, minMeshWeight_, x, y, z);
+                if (inside && aroundObservedOnly && observed) dirty[i].retype.set(cube);
             }
         }
     }
@@ -113,13 +122,14 @@ std::vector<ReferenceMesher::DirtyBlock> ReferenceMesher::markDirty(const Refere
 
 // The meshing signs (decide_mesh_signs.comp, which decides every corner of D from the masks of the TSDF): every
 // corner of D gets refinedCornerInside() of its 3x3x3 window; where that differs from the stored sign, the sign
-// is stored and the 8 cubes around the corner (corner - o, o in {0,1}^3) are listed, in an integrated frame only
-// those whose corners are all observed (markDirty). Those lie in D: a sign only changes with the TSDF within one corner of it, D holds every block
+// is stored and the 8 cubes around the corner (corner - o, o in {0,1}^3) are listed, where the last call only added
+// weight only those whose corners are all observed (markDirty). Those lie in D: a sign only changes with the TSDF within one corner of it, D holds every block
 // within one block of a touched one, and every block is in D the frame it is created. (A mark outside D, which
 // would need a sign decided before its window's last change, the GPU keeps for a later frame; here it has
 // none to keep.)
-void ReferenceMesher::decideMeshSigns(const ReferenceVolume& volume, std::vector<DirtyBlock>& dirty) const {
+std::set<std::array<int, 3>> ReferenceMesher::decideMeshSigns(const ReferenceVolume& volume, std::vector<DirtyBlock>& dirty) const {
     const int side = int(gpu::BLOCK_SIDE);
+    std::set<std::array<int, 3>> changed;
     std::map<BlockCoord, DirtyBlock*> byCoord;
     for (DirtyBlock& b : dirty) byCoord[b.coord] = &b;
     for (DirtyBlock& b : dirty) {
@@ -133,16 +143,18 @@ void ReferenceMesher::decideMeshSigns(const ReferenceVolume& volume, std::vector
             const bool inside = refinedCornerInside(d, observed, refineEpsilon_);
             if (inside == b.state->meshInside.test(local)) continue;
             b.state->meshInside.flip(local);
+            changed.insert({g[0], g[1], g[2]});
             for (int o = 0; o < 8; ++o) {
                 const int x = g[0] - (o & 1), y = g[1] - ((o >> 1) & 1), z = g[2] - ((o >> 2) & 1);
                 auto it = byCoord.find(BlockCoord{blockOf(x), blockOf(y), blockOf(z)});
                 if (it == byCoord.end()) continue;
-                if (!volume.lastDeintegrated() && !cubeObservedAt(volume, minMeshWeight_, x, y, z)) continue;   // type 0 before and after
+                if (!volume.lastMayLoseObservations() && !cubeObservedAt(volume, minMeshWeight_, x, y, z)) continue;   // type 0 before and after
                 const BlockCoord& c = it->first;
                 it->second->retype.set(localIndex(x - c[0] * side, y - c[1] * side, z - c[2] * side));
             }
         }
     }
+    return changed;
 }
 
 // New type of every listed cube: t = MC type of its corners if all 8 exist with weight >= minMeshWeight,

@@ -14,6 +14,7 @@
 #include <array>
 #include <cstdint>
 #include <map>
+#include <set>
 #include <optional>
 #include <string>
 #include <vector>
@@ -138,7 +139,8 @@ private:
     std::vector<DirtyBlock> markDirty(const ReferenceVolume& volume, const std::vector<BlockCoord>& touched,
                                       RetypeScope scope, MeshFrameStats& stats);
     // With refinement: re-decides every corner of D's meshing sign and marks the 8 cubes around each that changed.
-    void decideMeshSigns(const ReferenceVolume& volume, std::vector<DirtyBlock>& dirty) const;
+    // Returns the corners (global grid positions) whose meshing sign changed.
+    std::set<std::array<int, 3>> decideMeshSigns(const ReferenceVolume& volume, std::vector<DirtyBlock>& dirty) const;
     void chooseTypes(const ReferenceVolume& volume, std::vector<DirtyBlock>& dirty) const;
     // Claim (reference_mesh_claim.cpp).
     void claimVertices(std::vector<DirtyBlock>& dirty, MeshFrameStats& stats, uint32_t frameNumber);

@@ -93,9 +93,11 @@ public:
     // The same for the corners whose observed state flipped: what fusion marks when the mesh is refined (a cube's
     // refined type follows its corners' meshing signs, whose changes the mesher finds itself).
     const std::map<BlockCoord, CubeMask>& observedRetypeCubes() const { return observedRetypeCubes_; }
-    // Whether the last call was deintegrate(): its observed flips are corners that lost their observation (an
-    // integrate() only adds weight, so its flips are corners that gained it).
-    bool lastDeintegrated() const { return lastDeintegrated_; }
+    // Whether the last call may have taken observations away: a deintegrate(), or an integrate() with recycling
+    // (starving and retiring lower weights). Otherwise it only added weight: no corner stopped being observed.
+    bool lastMayLoseObservations() const { return lastDeintegrated_ || recycling_.enabled(); }
+    // The corners (global grid positions) whose observed state the last call flipped.
+    const std::vector<std::array<int, 3>>& lastObservedFlipped() const { return lastObservedFlipped_; }
     // Number of cubes in retypeCubes().
     size_t retypeCubeCount() const;
 

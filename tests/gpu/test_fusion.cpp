@@ -118,7 +118,9 @@ TEST_P(AllocationTest, MatchesReferenceAndCountersConserve) {
             // stride 4 a tile spans 32 x 32 pixels of this small image, and few planes fit).
             cpu::AllocationStats walked;
             const auto bands = cpu::touchedBlocks(f.depth, intr, f.pose, perPixel, 0.0f, &walked);
-            if (config.params.allocationStride == 1) EXPECT_LT(k.blockRequests, walked.blockRequests * 3 / 4);
+            if (config.params.allocationStride == 1) {
+                EXPECT_LT(k.blockRequests, walked.blockRequests * 3 / 4);
+            }
             EXPECT_GE(k.touchedCount, bands.size());
         }
         distinct += k.blocksInserted;
