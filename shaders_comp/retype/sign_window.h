@@ -72,15 +72,16 @@ SW_FN SwPair swShiftX(SwPair here, SwPair left, SwPair right, int dx) {   // the
     return here;
 }
 
+SW_FN SwPair swPick(SwQuad q, bool mayBeInside) { return mayBeInside ? swMayBeInsideObserved(q) : swRawObserved(q); }
+
 // Rows 4 rh .. 4 rh + 3 of layer `layer` of the raw and observed masks of block b, shifted by dy = -1 (down), 0 (mid), +1 (up): the
 // row below / above comes from the block's other word or, past the block's side, from block `by` (the
 // y-neighbour of b on that side: -y when rh = 0, +y when rh = 1). Only the bits of `need` are read by the caller:
 // the row below is loaded only for a bit in row 0, the row above only for one in row 3, nothing without a bit (on
 // llvmpipe a load that a lane skips is a load saved, and the windows' loads are most of the decision's cost).
 // `have` bit 0, 1, 2: the rows, the other word and the word beyond were read already (rowsIn, otherIn, beyondIn:
-// the words rule 3 read) and are not read again.
-SW_FN SwPair swPick(SwQuad q, bool mayBeInside) { return mayBeInside ? swMayBeInsideObserved(q) : swRawObserved(q); }
-
+// the words rule 3 read) and are not read again. `mayBeInside`: the pairs are (raw sign or near, observed) instead
+// of (raw sign, observed) (decide_mesh_signs' cube window).
 SW_FN void swColumnRows(uint b, uint by, uint layer, uint rh, uint need, uint have, SwPair rowsIn, SwPair otherIn, SwPair beyondIn,
                         bool mayBeInside, SW_OUT(SwPair) down, SW_OUT(SwPair) mid, SW_OUT(SwPair) up) {
     bool needBelow = (need & 0xFFu) != 0u, needAbove = (need & 0xFF000000u) != 0u;

@@ -86,7 +86,8 @@ std::vector<ReferenceMesher::DirtyBlock> ReferenceMesher::markDirty(const Refere
     if (options_.refine) {
         const std::set<std::array<int, 3>> signChanged = decideMeshSigns(volume, dirty);
         // The corners whose observed state alone flipped (not their meshing sign): the cubes around them are listed
-        // where they have a corner inside (those around a sign change, decideMeshSigns, where they are observed).
+        // where they have a corner that may be inside (and, where the call only added weight, all corners observed;
+        // those around a sign change: decideMeshSigns).
         std::set<std::array<int, 3>> observedOnly;
         for (const auto& c : volume.lastObservedFlipped())
             if (!signChanged.count(c)) observedOnly.insert(c);
