@@ -11,6 +11,6 @@ void main() {
     uint i = gl_GlobalInvocationID.x;
     if (i >= counters.liveBlockCount) return;
     uint b = blockList[i];
-    meshStamps[b] = 2u * frame.frameNumber + MESH_STAMP_MOVES;   // (markBlockDirty)
+    meshStamps[b] = 4u * frame.frameNumber + MESH_STAMP_MOVES;   // (markBlockDirty)
     dirtyList[atomicAdd(counters.dirtyCount, 1u)] = b;
 }

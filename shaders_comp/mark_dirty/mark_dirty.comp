@@ -1,7 +1,8 @@
 #version 460
 // Incremental mesh, pass 0 (docs/MESH.md): the dirty blocks of this frame are the touched blocks and the
-// existing blocks at T - o, o in {0,1}^3, whose border cubes read corners of T; all of them move their vertices
-// (markBlockDirty). One invocation per touched entry; the first to stamp a block with this frame's number lists it.
+// existing blocks at T - o, o in {0,1}^3, whose border cubes read corners of T: T moves all its vertices, the
+// others those of the border cubes (markBlockDirty, dirtyMarkAt). One invocation per touched entry; the first to
+// stamp a block with this frame's number lists it.
 #extension GL_GOOGLE_include_directive : require
 #include "structure/frame.glsl"
 #include "structure/block_hash.glsl"
@@ -26,6 +27,6 @@ void main() {
                                            : ivec3(o & 1u, (o >> 1) & 1u, (o >> 2) & 1u);
         uint b = offset == ivec3(0) ? block : findBlock(coord - offset);
         if (b == NO_BLOCK) continue;
-        markBlockDirty(b, all(greaterThanEqual(offset, ivec3(0))) ? MESH_STAMP_MOVES : MESH_STAMP_DIRTY);
+        markBlockDirty(b, dirtyMarkAt(offset));
     }
 }

@@ -52,7 +52,7 @@ void main() {
                                                    : ivec3(o & 1u, (o >> 1) & 1u, (o >> 2) & 1u);
                 uint b = offset == ivec3(0) ? block : findBlock(coord - offset);
                 if (b == NO_BLOCK) continue;
-                markBlockDirty(b, all(greaterThanEqual(offset, ivec3(0))) ? MESH_STAMP_MOVES : MESH_STAMP_DIRTY);
+                markBlockDirty(b, dirtyMarkAt(offset));
             }
         }
     }

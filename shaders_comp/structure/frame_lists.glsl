@@ -10,10 +10,12 @@
 
 layout(std430, set = 0, binding = BINDING_TOUCHED) buffer Touched { uint touched[]; };
 layout(std430, set = 0, binding = BINDING_BLOCK_LIST) buffer BlockList { uint blockList[]; };
-// Per block: 2 frame + MESH_STAMP_* for the frame in which the block was last dirty (markBlockDirty). Raised with
-// atomicMax, so the marks of one frame combine in any order.
-const uint MESH_STAMP_DIRTY = 0u;        // re-meshed (retype and claim)
-const uint MESH_STAMP_MOVES = 1u;        // ... and its vertices move
+// Per block: 4 frame + MESH_STAMP_* for the frame in which the block was last dirty (markBlockDirty). Raised with
+// atomicMax, so the marks of one frame combine in any order and the strongest stays. (A uint: 2^30 frames, over
+// 400 days at 30 frames a second.)
+const uint MESH_STAMP_DIRTY = 0u;         // re-meshed (retype and claim)
+const uint MESH_STAMP_READS_MOVED = 1u;   // ... and the vertices of its cubes that read a MOVES neighbour's corners move
+const uint MESH_STAMP_MOVES = 2u;         // ... and all its vertices move (its own corners changed)
 layout(std430, set = 0, binding = BINDING_MESH_STAMPS) coherent buffer MeshStamps { uint meshStamps[]; };
 layout(std430, set = 0, binding = BINDING_DIRTY_LIST) buffer DirtyList { uint dirtyList[]; };
 layout(std430, set = 0, binding = BINDING_RETYPE_MASK) coherent buffer RetypeMask { uint retypeMask[]; };
@@ -136,17 +138,25 @@ void recordCornerFlips(uint block, uint flipped) {
 // ---- dirty blocks -----------------------------------------------------------------------------------------
 // A block is dirty when a cube of it may change type: its corners or, through its border cubes, a neighbour's
 // changed. Its vertices move only when the corners their positions, normals and colours read changed: those of
-// the edge's owner cube, i.e. the block or the blocks at +o, o in {0,1}^3 (MESH_STAMP_MOVES). With refinement the
-// dirty blocks reach one block further (a corner's meshing sign reads the corners around it), and those extra
-// blocks only retype: list_moved_vertices skips them (a third of the dirty blocks on the synthetic room).
-bool blockDirty(uint block) { return (meshStamps[block] >> 1) == frame.frameNumber; }
-bool blockMovesVertices(uint block) { return meshStamps[block] == 2u * frame.frameNumber + MESH_STAMP_MOVES; }
+// the edge's owner cube, i.e. the block (MESH_STAMP_MOVES) or, for the cubes on its upper faces, the blocks at +o,
+// o in {0,1}^3 (MESH_STAMP_READS_MOVED: list_moved_vertices lists only the cubes on its upper faces, a third). With refinement the dirty blocks reach one block further (a corner's meshing sign reads the corners
+// around it), and those extra blocks only retype: list_moved_vertices skips them (a third of the dirty blocks on
+// the synthetic room).
+bool blockDirty(uint block) { return (meshStamps[block] >> 2) == frame.frameNumber; }
+bool blockMovesVertices(uint block) { return meshStamps[block] == 4u * frame.frameNumber + MESH_STAMP_MOVES; }
+bool blockReadsMovedCorners(uint block) { return meshStamps[block] == 4u * frame.frameNumber + MESH_STAMP_READS_MOVED; }
+
+// The mark a block at -offset of a block whose corners changed gets: offset 0 is the block itself; at o in
+// {0,1}^3 it owns edges whose cubes read the changed corners; the other offsets (refinement) only retype.
+uint dirtyMarkAt(ivec3 offset) {
+    return offset == ivec3(0) ? MESH_STAMP_MOVES : all(greaterThanEqual(offset, ivec3(0))) ? MESH_STAMP_READS_MOVED : MESH_STAMP_DIRTY;
+}
 
 // Marks `block` dirty this frame with `how` (MESH_STAMP_*); the first to mark it lists it.
 void markBlockDirty(uint block, uint how) {
-    uint stamp = 2u * frame.frameNumber + how;
+    uint stamp = 4u * frame.frameNumber + how;
     if (meshStamps[block] >= stamp) return;   // already marked so (a plain read first: most marks repeat)
-    if (atomicMax(meshStamps[block], stamp) < 2u * frame.frameNumber) dirtyList[atomicAdd(counters.dirtyCount, 1u)] = block;
+    if (atomicMax(meshStamps[block], stamp) < 4u * frame.frameNumber) dirtyList[atomicAdd(counters.dirtyCount, 1u)] = block;
 }
 
 uint neighborIndex(ivec3 offset) { return uint((offset.x + 1) + 3 * (offset.y + 1) + 9 * (offset.z + 1)); }
