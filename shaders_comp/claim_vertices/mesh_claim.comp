@@ -20,19 +20,14 @@ layout(local_size_x = WG_LIST) in;
 layout(constant_id = 0) const uint PARITY_CLASS = 4u;
 
 
-// Pops a vertex for `slot` (the caller owns the slot); returns EMPTY_SLOT when the heap is exhausted.
-uint allocateVertex(uint slot) {
-    uint rank = atomicAdd(counters.vertexAllocRequests, 1u);   // commit_vertices shrinks the stack next
-    if (rank >= counters.vertexFreeTop) return EMPTY_SLOT;     // counted by commit_vertices
-    uint v = vertexFree[counters.vertexFreeTop - 1u - rank];
+// Vertex `v` popped for `slot` (the caller owns the slot and stores v in it), a GC candidate at `candidate`.
+void initVertex(uint v, uint slot, uint candidate) {
     vertices[v].refcount = 0u;
     vertices[v].createdFrame = frame.frameNumber;
     vertices[v].color = 0u;                                    // until the vertex update gives it one
     vertexOwner[v] = slot;
-    markSlotOwned(slot);                                       // the caller stores v in the slot
-    uint c = atomicAdd(counters.candidateCount, 1u);
-    if (c < params.vertexCapacity) setGcCandidate(c, v);
-    return v;
+    markSlotOwned(slot);
+    if (candidate < params.vertexCapacity) setGcCandidate(candidate, v);
 }
 
 void main() {
@@ -53,16 +48,33 @@ void main() {
     uint k = reserveChangedCubes(changed ? 1u : 0u);   // < retypeCount <= retypeCapacity
     if (!changed) return;
     setChangedCube(k, id, type);
-    uint mask = edgeMaskOf(type);
+    // First the slots this cube must fill (bit e: edge e's slot was empty and is this invocation's now), then one
+    // reservation of vertices and GC candidates per subgroup for all of them (two contended atomics per subgroup
+    // instead of two per vertex), then the vertices. commit_vertices shrinks the free stack by the requests.
+    uint mask = edgeMaskOf(type), won = 0u;
     for (uint n = 0u; n < 12u && mask != 0u; ++n) {   // over the set bits only
         uint e = findLSB(mask);
         mask &= mask - 1u;
         uint slot = edgeSlot(r, e);
         if (slot == NO_BLOCK || edgeLoad(slot) != EMPTY_SLOT) continue;
-        if (PARITY_CLASS < 4u) {
-            edgeStore(slot, allocateVertex(slot));
-        } else if (edgeCompSwap(slot, EMPTY_SLOT, CLAIMED_SLOT) == EMPTY_SLOT) {
-            edgeStoreAtomic(slot, allocateVertex(slot));
+        if (PARITY_CLASS < 4u || edgeCompSwap(slot, EMPTY_SLOT, CLAIMED_SLOT) == EMPTY_SLOT) won |= 1u << e;
+    }
+    uint wanted = bitCount(won), rank, candidate;
+    RESERVE_COUNTER(vertexAllocRequests, wanted, rank);   // this invocation's ranks: rank .. rank + wanted - 1
+    uint top = counters.vertexFreeTop;
+    uint granted = rank >= top ? 0u : min(wanted, top - rank);   // the rest: the heap is exhausted (commit_vertices counts them)
+    RESERVE_COUNTER(candidateCount, granted, candidate);
+    for (uint n = 0u; n < 12u && won != 0u; ++n) {
+        uint e = findLSB(won);
+        won &= won - 1u;
+        uint slot = edgeSlot(r, e);
+        uint v = EMPTY_SLOT;
+        if (rank < top) {
+            v = vertexFree[top - 1u - rank];
+            initVertex(v, slot, candidate++);
         }
+        ++rank;
+        if (PARITY_CLASS < 4u) edgeStore(slot, v);
+        else edgeStoreAtomic(slot, v);
     }
 }

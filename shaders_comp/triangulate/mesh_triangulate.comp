@@ -31,6 +31,12 @@ void retype(uint id, uint type) {
     CubeRef r = cubeRef(id / VOXELS_PER_BLOCK, id % VOXELS_PER_BLOCK);   // the edges' blocks, for a cube that changes
     ++retyped;
     uint chunk = state >> CUBE_CHUNK_SHIFT;   // chunk index + 1, 0 = none
+    uint count = triangleCountOf(type);
+    // A chunk popped for a cube that gains triangles, or released by one that loses all of them: reserved per
+    // subgroup (RESERVE_COUNTER).
+    uint chunkRank, releaseAt;
+    RESERVE_COUNTER(chunkAllocRequests, count != 0u && chunk == 0u ? 1u : 0u, chunkRank);
+    RESERVE_COUNTER(releaseCount, count == 0u && chunk != 0u ? 1u : 0u, releaseAt);
 
     // Release the old triangles.
     if (chunk != 0u) {
@@ -47,21 +53,18 @@ void retype(uint id, uint type) {
 
     // Build the new ones.
     bool incomplete = false;
-    uint count = triangleCountOf(type);
     if (count == 0u) {
         if (chunk != 0u) {
             // Released chunks go back holding no triangle, so a chunk's words alone say which of its
             // triangles exist (the delta passes read them without the cube state).
             uint base = (chunk - 1u) * CHUNK_WORDS;
             for (uint t = 0u; t < TRIANGLES_PER_CHUNK; ++t) chunkTriangles[base + 3u * t] = INVALID_INDEX;
-            uint at = atomicAdd(counters.releaseCount, 1u);
-            if (at < params.chunkCapacity) setReleasedChunk(at, chunk - 1u);
+            if (releaseAt < params.chunkCapacity) setReleasedChunk(releaseAt, chunk - 1u);
             chunk = 0u;
         }
     } else {
         if (chunk == 0u) {
-            uint rank = atomicAdd(counters.chunkAllocRequests, 1u);
-            if (rank < counters.chunkFreeTop) chunk = chunkFree[counters.chunkFreeTop - 1u - rank] + 1u;
+            if (chunkRank < counters.chunkFreeTop) chunk = chunkFree[counters.chunkFreeTop - 1u - chunkRank] + 1u;
         }
         if (chunk == 0u) {
             incomplete = true;       // no chunk: counted by commit_chunks
