@@ -14,9 +14,12 @@ void main() {
     uint i = gl_GlobalInvocationID.x;
     if (i >= min(counters.candidateCount, params.vertexCapacity)) return;
     uint v = gcCandidate(i);
-    if (atomicCompSwap(vertices[v].refcount, 0u, DEAD_REFCOUNT) != 0u) return;
+    bool freed = atomicCompSwap(vertices[v].refcount, 0u, DEAD_REFCOUNT) == 0u;
+    uint pushed;
+    RESERVE_COUNTER(vertexPushes, freed ? 1u : 0u, pushed);   // one atomic per subgroup
+    if (!freed) return;
     uint slot = vertexOwner[v];
     edgeStore(slot, EMPTY_SLOT);
     markSlotEmpty(slot);
-    vertexFree[counters.vertexFreeTop + atomicAdd(counters.vertexPushes, 1u)] = v;
+    vertexFree[counters.vertexFreeTop + pushed] = v;
 }

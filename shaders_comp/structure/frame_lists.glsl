@@ -147,9 +147,14 @@ bool blockMovesVertices(uint block) { return meshStamps[block] == 4u * frame.fra
 bool blockReadsMovedCorners(uint block) { return meshStamps[block] == 4u * frame.frameNumber + MESH_STAMP_READS_MOVED; }
 
 // The mark a block at -offset of a block whose corners changed gets: offset 0 is the block itself; at o in
-// {0,1}^3 it owns edges whose cubes read the changed corners; the other offsets (refinement) only retype.
+// {0,1}^3 it owns edges whose cubes read the changed corners; the other offsets (refinement) only retype. With
+// recycling, corners of blocks that no pass marks change too (starving lowers an idle block's weights every frame,
+// which moves its distances by a rounding, without a flip that would mark it), so there a block at o in {0,1}^3
+// moves all its vertices, as before the upper-face rule (GpuTest.StarvationFreesIdleBlocksConsistently).
 uint dirtyMarkAt(ivec3 offset) {
-    return offset == ivec3(0) ? MESH_STAMP_MOVES : all(greaterThanEqual(offset, ivec3(0))) ? MESH_STAMP_READS_MOVED : MESH_STAMP_DIRTY;
+    bool recycling = params.keepRadius > 0.0 || params.starveAfterFrames != 0u;
+    return offset == ivec3(0) ? MESH_STAMP_MOVES
+         : all(greaterThanEqual(offset, ivec3(0))) ? (recycling ? MESH_STAMP_MOVES : MESH_STAMP_READS_MOVED) : MESH_STAMP_DIRTY;
 }
 
 // Marks `block` dirty this frame with `how` (MESH_STAMP_*); the first to mark it lists it.

@@ -19,11 +19,6 @@ layout(local_size_x = WG_LIST) in;
 
 uint created = 0u, released = 0u, invalid = 0u, retyped = 0u;
 
-void listCandidate(uint v) {
-    uint c = atomicAdd(counters.candidateCount, 1u);
-    if (c < params.vertexCapacity) setGcCandidate(c, v);
-}
-
 // Cube `id`, whose type is now `type` (mesh_claim's classification: nothing it reads changes in between).
 void retype(uint id, uint type) {
     uint state = cubeState[id];
@@ -38,17 +33,27 @@ void retype(uint id, uint type) {
     RESERVE_COUNTER(chunkAllocRequests, count != 0u && chunk == 0u ? 1u : 0u, chunkRank);
     RESERVE_COUNTER(releaseCount, count == 0u && chunk != 0u ? 1u : 0u, releaseAt);
 
-    // Release the old triangles.
+    // Release the old triangles. A vertex that loses its last triangle becomes a GC candidate: the chunk words of
+    // those (bit 3 t + j: corner j of triangle t) are listed after the loop, with one reservation per subgroup.
+    uint lastUses = 0u;
     if (chunk != 0u) {
         uint base = (chunk - 1u) * CHUNK_WORDS;
         for (uint t = 0u; t < triangleCountOf(oldType); ++t) {
             if (chunkTriangles[base + 3u * t] == INVALID_INDEX) continue;
             [[unroll]] for (uint j = 0u; j < 3u; ++j) {
                 uint v = chunkTriangles[base + 3u * t + j];
-                if (atomicAdd(vertices[v].refcount, 0xFFFFFFFFu) == 1u) listCandidate(v);
+                if (atomicAdd(vertices[v].refcount, 0xFFFFFFFFu) == 1u) lastUses |= 1u << (3u * t + j);
             }
             ++released;
         }
+    }
+    uint candidate;
+    RESERVE_COUNTER(candidateCount, bitCount(lastUses), candidate);
+    for (uint n = 0u; n < 3u * TRIANGLES_PER_CHUNK && lastUses != 0u; ++n) {
+        uint word = uint(findLSB(lastUses));
+        lastUses &= lastUses - 1u;
+        if (candidate < params.vertexCapacity) setGcCandidate(candidate, chunkTriangles[(chunk - 1u) * CHUNK_WORDS + word]);
+        ++candidate;
     }
 
     // Build the new ones.
