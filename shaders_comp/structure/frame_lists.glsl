@@ -139,9 +139,9 @@ void recordCornerFlips(uint block, uint flipped) {
 // A block is dirty when a cube of it may change type: its corners or, through its border cubes, a neighbour's
 // changed. Its vertices move only when the corners their positions, normals and colours read changed: those of
 // the edge's owner cube, i.e. the block (MESH_STAMP_MOVES) or, for the cubes on its upper faces, the blocks at +o,
-// o in {0,1}^3 (MESH_STAMP_READS_MOVED: list_moved_vertices lists only the cubes on its upper faces, a third). With refinement the dirty blocks reach one block further (a corner's meshing sign reads the corners
-// around it), and those extra blocks only retype: list_moved_vertices skips them (a third of the dirty blocks on
-// the synthetic room).
+// o in {0,1}^3 (MESH_STAMP_READS_MOVED: list_moved_vertices lists only the cubes on its upper faces, a third). With
+// refinement the dirty blocks reach one block further (a corner's meshing sign reads the corners around it), and
+// those extra blocks only retype: list_moved_vertices skips them (a third of the dirty blocks on the synthetic room).
 bool blockDirty(uint block) { return (meshStamps[block] >> 2) == frame.frameNumber; }
 bool blockMovesVertices(uint block) { return meshStamps[block] == 4u * frame.frameNumber + MESH_STAMP_MOVES; }
 bool blockReadsMovedCorners(uint block) { return meshStamps[block] == 4u * frame.frameNumber + MESH_STAMP_READS_MOVED; }
