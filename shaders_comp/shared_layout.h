@@ -83,6 +83,9 @@ VKM_CONST_FLOAT ALLOC_SLAB_MARGIN = 1e-3f;
 VKM_CONST ALLOC_TILE_RULES_FIRST = 1u;
 VKM_CONST ALLOC_TILE_RULES = 2u;
 VKM_CONST WG_LIST = 64u;                   // one invocation per list entry (assign, collect)
+// decide_mesh_signs: each invocation checks this many mask words of the dirty blocks for work, and a workgroup of
+// WG_LIST / DECIDE_WORDS_PER_INVOCATION invocations decides its WG_LIST words' active ones together (collectDispatch).
+VKM_CONST DECIDE_WORDS_PER_INVOCATION = 8u;
 VKM_CONST WG_BLOCK = 128u;                 // fuse / mesh: one workgroup per block, 4 voxels per invocation
 VKM_CONST VOXELS_PER_INVOCATION = 4u;      // VOXELS_PER_BLOCK / WG_BLOCK
 

@@ -1,7 +1,7 @@
 #version 460
 // Incremental mesh: marks the cubes whose type may change around the corners of the dirty blocks that changed,
-// before the retype list is collected. One invocation per mask word of each dirty block (its 32 corners: 4 rows
-// along x of one z layer):
+// before the retype list is collected. Each mask word of a dirty block (its 32 corners: 4 rows along x of one z layer)
+// that has work (main) is decided by one invocation of its workgroup:
 //  - the corners fusion flipped (sign or observed state: cornerFlips, structure/frame_lists.glsl), taken and
 //    cleared;
 //  - with refinement (docs/REFINEMENT.md), the corners whose meshing sign changed: every corner's is re-decided
@@ -22,7 +22,15 @@
 #define SIGN_WINDOW_NEIGHBOR(b, ox, oy, oz) cachedNeighbor(b, ivec3(ox, oy, oz))
 #include "retype/sign_window.h"
 
-layout(local_size_x = WG_LIST) in;
+layout(local_size_x = WG_LIST / DECIDE_WORDS_PER_INVOCATION) in;
+
+// The words of this workgroup's WG_LIST that have work (activeWords: dirty-word index; activeFlips: their flips),
+// listed by the invocations that checked them. Most words of the dirty blocks have none: on the synthetic room ~21 %
+// have near corners, flips or meshing signs that differ from the raw ones, and llvmpipe runs a body under a mask for
+// every lane whether it has work or not, so the decision costs per invocation that reaches it, not per word decided.
+shared uint activeWords[WG_LIST];
+shared uint activeFlips[WG_LIST];
+shared uint activeCount;
 
 // Sets the retype bits `bits` of word (layer, rowHalf) of the block at `offset` from `block` (if it exists).
 void markCubes(uint block, ivec3 offset, uint layer, uint rowHalf, uint bits) {
@@ -74,59 +82,99 @@ void cubeWindow(uint block, uint word, uvec4 own, uint need, bool faces, uvec4 l
     w[7] = uvec2(a11.x | b11.x, a11.y & b11.y);
 }
 
+// Decides word `word` of dirty block `block` and marks the cubes around its changed corners; `flips`: fusion's, taken.
+void decideWord(uint block, uint word, uint flips, inout uint evaluated) {
+    // The corners around which cube o = (ox, oy, oz) is marked (cube corner - o): without refinement, fusion's
+    // flips (sign or observed state) for every o.
+    uint k[8] = uint[8](flips, flips, flips, flips, flips, flips, flips, flips);
+    if (volumeRefines()) {
+        uvec4 own = meshSignGroups[block * MASK_WORDS + word];   // its meshing signs and masks
+        bool faces;
+        uvec4 left, right, other, beyond, lower, upper;
+        uint wordEvaluated;
+        uint signs = swDecideWord(block, word, own, wordEvaluated, faces, left, right, other, beyond, lower, upper);
+        evaluated += wordEvaluated;
+        uint signChanged = signs ^ own[MESH_SIGN_MESHING];
+        if (signChanged != 0u) meshSigns[block * MESH_SIGN_WORDS + MESH_SIGN_GROUP * word + MESH_SIGN_MESHING] = signs;   // this invocation's word only
+        // Which of the cubes around the changed corners may change type (cubeWindow): around a corner whose observed
+        // state alone flipped, those with a corner that may be inside for meshing. And where no observation can be
+        // taken away this frame (fusion only adds weight: not a de-integration, no recycling, whose starving and
+        // retiring lower weights after fusion), only those whose corners are all observed now: a cube with a corner
+        // unobserved now had one before, and type 0 then and now. (With recycling, requiring that made emptied
+        // blocks wait a frame to be freed in GpuTest.GrowthWithABoundedMapKeepsTheMapOfAmpleCapacities.)
+        uint observedOnly = flips & ~signChanged;
+        uint need = flips | signChanged;
+        [[unroll]] for (uint o = 0u; o < 8u; ++o) k[o] = 0u;
+        if (need != 0u) {
+            uvec2 w[8];
+            cubeWindow(block, word, own, need, faces, left, right, other, beyond, lower, upper, w);
+            bool onlyGains = framePose.deintegrate == 0u && params.keepRadius <= 0.0 && params.starveAfterFrames == 0u;
+            [[unroll]] for (uint o = 0u; o < 8u; ++o)
+                k[o] = (signChanged | (observedOnly & w[o].x)) & (onlyGains ? w[o].y : ~0u);
+        }
+    }
+    uint z = word / 2u, rh = word % 2u;
+    // The cubes corner - o, o in {0,1}^3: one row along y lower (oy), one column along x lower (ox: corners at
+    // x = 0 reach x = 7 of the block at -x), one layer lower (oz: layer 0 reaches layer 7 at -z).
+    [[unroll]] for (uint oz = 0u; oz < 2u; ++oz) {
+        int bz = oz == 1u && z == 0u ? -1 : 0;
+        uint layer = (z + BLOCK_SIDE - oz) % BLOCK_SIDE;
+        [[unroll]] for (uint ox = 0u; ox < 2u; ++ox) {
+            uint c0 = k[ox + 4u * oz], c1 = k[ox + 2u + 4u * oz];   // oy = 0, 1
+            uint same0 = ox == 1u ? (c0 >> 1) & 0x7F7F7F7Fu : c0, edge0 = ox == 1u ? (c0 & 0x01010101u) << 7 : 0u;
+            uint same1 = ox == 1u ? (c1 >> 1) & 0x7F7F7F7Fu : c1, edge1 = ox == 1u ? (c1 & 0x01010101u) << 7 : 0u;
+            // oy = 1: rows 1..3 of the word move down in it; its row 0 becomes row 3 of the other word (rh = 1)
+            // or row 7 of the block at -y (rh = 0).
+            markCubes(block, ivec3(0, 0, bz), layer, rh, same0 | (same1 >> 8));
+            markCubes(block, ivec3(-1, 0, bz), layer, rh, edge0 | (edge1 >> 8));
+            int by = rh == 0u ? -1 : 0;
+            markCubes(block, ivec3(0, by, bz), layer, 1u - rh, (same1 & 0xFFu) << 24);
+            markCubes(block, ivec3(-1, by, bz), layer, 1u - rh, (edge1 & 0xFFu) << 24);
+        }
+    }
+}
+
 void main() {
-    uint i = gl_GlobalInvocationID.x;
-    uint evaluated = 0u;
-    if (i < counters.dirtyCount * MASK_WORDS) {
-        uint block = dirtyList[i / MASK_WORDS], word = i % MASK_WORDS;
-        uint flips = cornerFlips[block * MASK_WORDS + word];
-        if (flips != 0u) cornerFlips[block * MASK_WORDS + word] = 0u;
-        // The corners around which cube o = (ox, oy, oz) is marked (cube corner - o): without refinement, fusion's
-        // flips (sign or observed state) for every o.
-        uint k[8] = uint[8](flips, flips, flips, flips, flips, flips, flips, flips);
-        if (volumeRefines()) {
-            uvec4 own = meshSignGroups[block * MASK_WORDS + word];   // its meshing signs and masks
-            bool faces;
-            uvec4 left, right, other, beyond, lower, upper;
-            uint signs = swDecideWord(block, word, own, evaluated, faces, left, right, other, beyond, lower, upper);
-            uint signChanged = signs ^ own[MESH_SIGN_MESHING];
-            if (signChanged != 0u) meshSigns[block * MESH_SIGN_WORDS + MESH_SIGN_GROUP * word + MESH_SIGN_MESHING] = signs;   // this invocation's word only
-            // Which of the cubes around the changed corners may change type (cubeWindow): around a corner whose observed
-            // state alone flipped, those with a corner that may be inside for meshing. And where no observation can be
-            // taken away this frame (fusion only adds weight: not a de-integration, no recycling, whose starving and
-            // retiring lower weights after fusion), only those whose corners are all observed now: a cube with a corner
-            // unobserved now had one before, and type 0 then and now. (With recycling, requiring that made emptied
-            // blocks wait a frame to be freed in GpuTest.GrowthWithABoundedMapKeepsTheMapOfAmpleCapacities.)
-            uint observedOnly = flips & ~signChanged;
-            uint need = flips | signChanged;
-            [[unroll]] for (uint o = 0u; o < 8u; ++o) k[o] = 0u;
-            if (need != 0u) {
-                uvec2 w[8];
-                cubeWindow(block, word, own, need, faces, left, right, other, beyond, lower, upper, w);
-                bool onlyGains = framePose.deintegrate == 0u && params.keepRadius <= 0.0 && params.starveAfterFrames == 0u;
-                [[unroll]] for (uint o = 0u; o < 8u; ++o)
-                    k[o] = (signChanged | (observedOnly & w[o].x)) & (onlyGains ? w[o].y : ~0u);
+    // Which of this invocation's words have work: fusion flipped a corner, or (with refinement) a corner is near, or
+    // a meshing sign differs from the raw one (a corner that was near and flipped, and is not now, takes its raw
+    // sign back). Any other word's signs stay raw and it marks nothing, so it is not decided.
+    if (gl_LocalInvocationIndex == 0u) activeCount = 0u;
+    barrier();
+    uint first = gl_GlobalInvocationID.x * DECIDE_WORDS_PER_INVOCATION;
+    uint words = counters.dirtyCount * MASK_WORDS;
+    uint withWork = 0u, flipsOf[DECIDE_WORDS_PER_INVOCATION];
+    [[unroll]] for (uint w = 0u; w < DECIDE_WORDS_PER_INVOCATION; ++w) {
+        flipsOf[w] = 0u;
+        if (first + w < words) {
+            uint at = dirtyList[(first + w) / MASK_WORDS] * MASK_WORDS + (first + w) % MASK_WORDS;
+            uint flips = cornerFlips[at];
+            if (flips != 0u) cornerFlips[at] = 0u;   // taken
+            flipsOf[w] = flips;
+            bool work = flips != 0u;
+            if (volumeRefines()) {
+                uvec4 group = meshSignGroups[at];
+                work = work || group[MESH_SIGN_NEAR] != 0u || group[MESH_SIGN_MESHING] != group[MESH_SIGN_RAW];
             }
+            if (work) withWork |= 1u << w;
         }
-        uint z = word / 2u, rh = word % 2u;
-        // The cubes corner - o, o in {0,1}^3: one row along y lower (oy), one column along x lower (ox: corners at
-        // x = 0 reach x = 7 of the block at -x), one layer lower (oz: layer 0 reaches layer 7 at -z).
-        [[unroll]] for (uint oz = 0u; oz < 2u; ++oz) {
-            int bz = oz == 1u && z == 0u ? -1 : 0;
-            uint layer = (z + BLOCK_SIDE - oz) % BLOCK_SIDE;
-            [[unroll]] for (uint ox = 0u; ox < 2u; ++ox) {
-                uint c0 = k[ox + 4u * oz], c1 = k[ox + 2u + 4u * oz];   // oy = 0, 1
-                uint same0 = ox == 1u ? (c0 >> 1) & 0x7F7F7F7Fu : c0, edge0 = ox == 1u ? (c0 & 0x01010101u) << 7 : 0u;
-                uint same1 = ox == 1u ? (c1 >> 1) & 0x7F7F7F7Fu : c1, edge1 = ox == 1u ? (c1 & 0x01010101u) << 7 : 0u;
-                // oy = 1: rows 1..3 of the word move down in it; its row 0 becomes row 3 of the other word (rh = 1)
-                // or row 7 of the block at -y (rh = 0).
-                markCubes(block, ivec3(0, 0, bz), layer, rh, same0 | (same1 >> 8));
-                markCubes(block, ivec3(-1, 0, bz), layer, rh, edge0 | (edge1 >> 8));
-                int by = rh == 0u ? -1 : 0;
-                markCubes(block, ivec3(0, by, bz), layer, 1u - rh, (same1 & 0xFFu) << 24);
-                markCubes(block, ivec3(-1, by, bz), layer, 1u - rh, (edge1 & 0xFFu) << 24);
-            }
+    }
+    // List them (one shared atomic per subgroup).
+    uint count = bitCount(withWork);
+    uint rank = subgroupExclusiveAdd(count), total = subgroupAdd(count), base = 0u;
+    if (subgroupElect()) base = atomicAdd(activeCount, total);
+    rank += subgroupBroadcastFirst(base);
+    [[unroll]] for (uint w = 0u; w < DECIDE_WORDS_PER_INVOCATION; ++w) {
+        if ((withWork & (1u << w)) != 0u) {
+            activeWords[rank] = first + w;
+            activeFlips[rank] = flipsOf[w];
+            ++rank;
         }
+    }
+    barrier();
+    uint listed = activeCount, evaluated = 0u;
+    for (uint n = gl_LocalInvocationIndex; n < listed; n += gl_WorkGroupSize.x) {   // at most DECIDE_WORDS_PER_INVOCATION times
+        uint index = activeWords[n];
+        decideWord(dirtyList[index / MASK_WORDS], index % MASK_WORDS, activeFlips[n], evaluated);
     }
     ADD_COUNTER(signCornerCount, evaluated);
 }
