@@ -275,10 +275,10 @@ struct Vertex {
 // Counters the GPU keeps; the host reads this struct back after every frame (it is small).
 // The first three groups are indirect-dispatch arguments (x, y, z) and must stay 16-byte aligned.
 struct Counters {
-    uint touchedListDispatch[4]; // over the touched list, WG_LIST per group (plan_frame): assign_blocks, mark_dirty
+    uint touchedListDispatch[4]; // over the touched list, WG_LIST per group (raised as it grows): assign_blocks, mark_dirty
     uint blockDispatch[4];      // one workgroup per touched block
     uint listDispatch[4];       // over the live block list, one workgroup per block
-    uint collectDispatch[4];    // over the dirty blocks' retype-mask words, WG_LIST per group
+    uint collectDispatch[4];    // over the dirty blocks' retype-mask words, WG_LIST per group (raised as they are listed)
     uint retypeDispatch[4];     // mesh_claim: over the retype list (raised by collect_retype as it lists); then
                                 // mesh_triangulate: over the changed cubes (commit_vertices)
     uint vertexDispatch[4];     // move_vertices: over the moved list (raised by list_moved_vertices as it lists)
@@ -363,7 +363,7 @@ struct Counters {
     uint movedCount;
     // With refinement, the corners whose meshing sign decide_mesh_signs decided from their 27-corner window this
     // mesh pass (near, at most 2 edge neighbours of their sign, window observed; every other corner takes its raw
-    // sign from the masks alone): reset by plan_mesh. Not reported; kept for tests and debugging. Also in the former padding; the struct stays a multiple of 16 bytes.
+    // sign from the masks alone): reset with the per-frame counters (CounterBuffer::recordClearFrame). Not reported; kept for tests and debugging. Also in the former padding; the struct stays a multiple of 16 bytes.
     uint signCornerCount;
 };
 VKM_CONST COUNTERS_PER_FRAME_OFFSET = 144u;  // byte offset of validPixels

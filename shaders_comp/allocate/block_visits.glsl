@@ -29,7 +29,14 @@ void touchBlock(ivec3 cell) {
     if (hashStamps[slot] != frame.frameNumber &&
         atomicExchange(hashStamps[slot], frame.frameNumber) != frame.frameNumber) {
         uint at = atomicAdd(counters.touchedCount, 1u);
-        if (at < params.touchedCapacity) touched[at] = slot;
+        if (at < params.touchedCapacity) {
+            touched[at] = slot;
+            // The dispatches over the touched list grow with it (from {0, 1, 1}: CounterBuffer::recordClearFrame),
+            // so no one-invocation pass has to size them after this one: assign_blocks and mark_dirty, WG_LIST
+            // entries per workgroup; fuse_depth, a workgroup per entry.
+            atomicMax(counters.touchedListDispatch[0], at / WG_LIST + 1u);
+            atomicMax(counters.blockDispatch[0], at + 1u);
+        }
     }
 }
 

@@ -12,5 +12,5 @@ void main() {
     if (i >= counters.liveBlockCount) return;
     uint b = blockList[i];
     meshStamps[b] = 4u * frame.frameNumber + MESH_STAMP_MOVES;   // (markBlockDirty)
-    dirtyList[atomicAdd(counters.dirtyCount, 1u)] = b;
+    listDirtyBlock(b);
 }

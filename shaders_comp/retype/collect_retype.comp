@@ -2,8 +2,9 @@
 // Incremental mesh: turns the dirty blocks' retype masks (set by fuse_depth, decide_mesh_signs, and by
 // mesh_triangulate for INCOMPLETE cubes) into one list of cubes, and clears the bits it listed. One invocation
 // per mask word; bits that do not fit in the list stay set for the next pass (counted). Room in the list is reserved
-// with one atomic per subgroup, which also raises mesh_claim's dispatch (Counters::retypeDispatch, from 0 in
-// plan_mesh) to cover it: a pass of one invocation to size it cost a dispatch and a barrier.
+// with one atomic per subgroup, which also raises mesh_claim's dispatch (Counters::retypeDispatch, from 0 at the
+// frame's start: CounterBuffer::recordClearFrame) to cover it: a pass of one invocation to size it cost a dispatch
+// and a barrier.
 #extension GL_GOOGLE_include_directive : require
 #include "structure/frame.glsl"
 #include "structure/frame_lists.glsl"

@@ -157,11 +157,20 @@ uint dirtyMarkAt(ivec3 offset) {
          : all(greaterThanEqual(offset, ivec3(0))) ? (recycling ? MESH_STAMP_MOVES : MESH_STAMP_READS_MOVED) : MESH_STAMP_DIRTY;
 }
 
+// Appends a block to the dirty list and raises the dispatch over the list's mask words (cache_neighbors to
+// collect_retype; from {0, 1, 1}: CounterBuffer::recordClearFrame) to cover it, so that no one-invocation pass has
+// to size it after the marking.
+void listDirtyBlock(uint block) {
+    uint at = atomicAdd(counters.dirtyCount, 1u);
+    dirtyList[at] = block;
+    atomicMax(counters.collectDispatch[0], ((at + 1u) * MASK_WORDS + WG_LIST - 1u) / WG_LIST);
+}
+
 // Marks `block` dirty this frame with `how` (MESH_STAMP_*); the first to mark it lists it.
 void markBlockDirty(uint block, uint how) {
     uint stamp = 4u * frame.frameNumber + how;
     if (meshStamps[block] >= stamp) return;   // already marked so (a plain read first: most marks repeat)
-    if (atomicMax(meshStamps[block], stamp) < 4u * frame.frameNumber) dirtyList[atomicAdd(counters.dirtyCount, 1u)] = block;
+    if (atomicMax(meshStamps[block], stamp) < 4u * frame.frameNumber) listDirtyBlock(block);
 }
 
 uint neighborIndex(ivec3 offset) { return uint((offset.x + 1) + 3 * (offset.y + 1) + 9 * (offset.z + 1)); }

@@ -57,9 +57,9 @@ void GpuVolume::recordFrame(VkCommandBuffer cmd, const FramePush& push, bool reb
     // (host)   depth upload         staging                                   depth image; per-frame counters cleared
     // pose     (host) or recordPose  [camera tracking: depth, mesh]             frame pose (skip: every pass below idles)
     // rehash   (tombstones > 1/8)   block list, hash                          hash (no tombstones), block coords.w
-    // allocate allocate_tiles       depth, hash                               hash keys, stamps, touched list, tiles
-    //          allocate_blocks      depth, hash, tiles                        hash keys, stamps, touched list
-    //          plan_frame           touchedCount                              assign/block dispatch
+    // allocate allocate_tiles       depth, hash                               hash keys, stamps, touched list, tiles,
+    //                                                                         assign/block dispatch
+    //          allocate_blocks      depth, hash, tiles                        the same but tiles
     //          assign_blocks        touched list, free list, hash             hash values, block coords, touched list
     //          commit_allocation    allocRequests, overflow counts            free list top, pool counts; deferral:
     //                                                                         frameDeferred, emptied dispatches

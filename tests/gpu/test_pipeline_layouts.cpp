@@ -30,9 +30,9 @@ TEST(PipelineLayouts, EveryShaderFitsTheStorageBufferBudget) {
 }
 
 TEST(PipelineLayouts, ReflectionFindsWhatAShaderUsesAndNothingElse) {
-    // plan_frame reads the touched count and writes dispatch sizes: counters and params only, although its
+    // commit_allocation moves the free list's top and decides a deferral: counters and params only, although its
     // headers declare more.
-    const auto plan = vk::reflectBindings(shaders::all().at("plan_frame"), "plan_frame");
+    const auto plan = vk::reflectBindings(shaders::all().at("commit_allocation"), "commit_allocation");
     ASSERT_EQ(plan.size(), 2u);
     EXPECT_EQ(plan[0].binding, gpu::BINDING_PARAMS);
     EXPECT_EQ(plan[0].type, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER);
@@ -64,7 +64,7 @@ TEST(PipelineLayouts, MalformedSpirvIsAClearError) {
     } catch (const Error& e) {
         EXPECT_NE(std::string(e.what()).find("junk"), std::string::npos);
     }
-    std::vector<uint32_t> truncated(shaders::all().at("plan_frame").begin(), shaders::all().at("plan_frame").end());
+    std::vector<uint32_t> truncated(shaders::all().at("commit_allocation").begin(), shaders::all().at("commit_allocation").end());
     truncated.resize(40);
     EXPECT_THROW(vk::reflectBindings(truncated, "truncated"), Error);
 }

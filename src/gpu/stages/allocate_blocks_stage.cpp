@@ -11,7 +11,6 @@ AllocateBlocksStage::AllocateBlocksStage(const vk::Context& context, const vk::B
       layout_(layout),
       allocate_(context, layout, "allocate_blocks", FUSE_INTEGRATE),
       allocateTiles_(context, layout, "allocate_tiles", FUSE_INTEGRATE),
-      plan_(context, layout, "plan_frame"),
       assign_(context, layout, "assign_blocks"),
       commit_(context, layout, "commit_allocation") {}
 
@@ -31,8 +30,6 @@ void AllocateBlocksStage::record(VkCommandBuffer cmd, const FramePush& push, con
         vk::memoryBarrier(cmd);
     }
     (deintegrate ? *findForDeintegration_ : allocate_).dispatch(cmd, &push, (width + WG_PIXELS_X - 1) / WG_PIXELS_X, (height + groupHeight - 1) / groupHeight);
-    vk::memoryBarrier(cmd);
-    plan_.dispatch(cmd, &push, 1);
     vk::memoryBarrier(cmd);
     assign_.dispatchIndirect(cmd, &push, counters, offsetof(Counters, touchedListDispatch));
     vk::memoryBarrier(cmd);

@@ -12,11 +12,12 @@ namespace vkmesh::gpu {
 
 // Tiles of pixels claim the blocks of the slab around the plane that fits their depths (allocate_tiles, where
 // VolumeParams::allocationTiles), the other pixels walk their truncation bands (allocate_blocks); both claim
-// block keys in the hash through structure/block_hash.glsl's hashInsertKey (either atomic path); the touched list
-// is sized (plan_frame), touched keys without memory get a block from the free list (assign_blocks), and the free
-// list is shrunk by what was handed out (commit_allocation). Five dispatches (four per pixel), because a free list
-// may not be read and shrunk in one. Reads the depth image; writes the hash, the touched list (hash slots, then block indices),
-// the block coordinates of new blocks and Counters::touchedListDispatch / blockDispatch (the fuse stage's).
+// block keys in the hash through structure/block_hash.glsl's hashInsertKey (either atomic path) and list the blocks
+// touched, raising the dispatches over the touched list as they go; touched keys without memory get a block from the
+// free list (assign_blocks), and the free list is shrunk by what was handed out (commit_allocation). Four dispatches
+// (three per pixel), because a free list may not be read and shrunk in one. Reads the depth image; writes the hash,
+// the touched list (hash slots, then block indices), the block coordinates of new blocks and
+// Counters::touchedListDispatch / blockDispatch (the fuse stage's).
 class AllocateBlocksStage {
 public:
     AllocateBlocksStage(const vk::Context& context, const vk::BindingTable& layout);
@@ -28,7 +29,7 @@ public:
 private:
     const vk::Context& context_;
     const vk::BindingTable& layout_;
-    vk::ComputePipeline allocate_, allocateTiles_, plan_, assign_, commit_;
+    vk::ComputePipeline allocate_, allocateTiles_, assign_, commit_;
     mutable std::unique_ptr<vk::ComputePipeline> findForDeintegration_, findTilesForDeintegration_;   // made when a frame first de-integrates
 };
 

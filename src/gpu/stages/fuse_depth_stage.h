@@ -13,8 +13,8 @@ namespace vkmesh::gpu {
 class FuseDepthStage {
 public:
     FuseDepthStage(const vk::Context& context, const vk::BindingTable& table);
-    // Over Counters::blockDispatch (one workgroup per touched block, sized by plan_frame). `deintegrate`: the
-    // frame's FramePoseGpu::deintegrate (each way has its own pipeline: shared_layout.h, FUSE_INTEGRATE).
+    // Over Counters::blockDispatch (one workgroup per touched block, sized by allocation as it lists). `deintegrate`:
+    // the frame's FramePoseGpu::deintegrate (each way has its own pipeline: shared_layout.h, FUSE_INTEGRATE).
     void record(VkCommandBuffer cmd, const FramePush& push, const CounterBuffer& counters, bool deintegrate) const;
 
 private:

@@ -6,15 +6,12 @@ namespace vkmesh::gpu {
 
 RetypeStage::RetypeStage(const vk::Context& context, const vk::BindingTable& table)
     : refines_((table.features() & VOLUME_FEATURE_REFINE) != 0),
-      plan_(context, table, "plan_mesh"),
       cacheNeighbors_(context, table, "cache_neighbors"),
       buildMasks_(context, table, "build_tsdf_masks"),
       decideSigns_(context, table, "decide_mesh_signs"),
       collect_(context, table, "collect_retype") {}
 
 void RetypeStage::recordMeshSigns(VkCommandBuffer cmd, const FramePush& push, const CounterBuffer& counters, bool fromTsdf) const {
-    plan_.dispatch(cmd, &push, 1);
-    vk::memoryBarrier(cmd);
     cacheNeighbors_.dispatchIndirect(cmd, &push, counters.buffer(), offsetof(Counters, collectDispatch));
     vk::memoryBarrier(cmd);
     if (refines_ && fromTsdf) {

@@ -1,5 +1,6 @@
 #include "gpu/structure/counter_buffer.h"
 
+#include <cstddef>
 #include <cstring>
 
 namespace vkmesh::gpu {
@@ -14,6 +15,16 @@ CounterBuffer::CounterBuffer(const vk::Context& context, const vk::BindingTable&
 
 void CounterBuffer::recordClearFrame(VkCommandBuffer cmd) const {
     vkCmdFillBuffer(cmd, buffer_.handle(), COUNTERS_PER_FRAME_OFFSET, COUNTERS_PER_FRAME_SIZE, 0);
+    // The dispatches that the passes raise as they list start empty (x 0, y and z 1): over the touched list
+    // (allocation: block_visits.glsl), over the dirty blocks' mask words (dirty marking: listDirtyBlock in
+    // frame_lists.glsl) and over the retype list (collect_retype). A one-invocation pass after each list sized them
+    // before; each cost a dispatch and a barrier. decide_mesh_signs' count of decided corners starts at 0 too.
+    static_assert(offsetof(Counters, blockDispatch) == offsetof(Counters, touchedListDispatch) + 4 * sizeof(uint32_t) &&
+                  offsetof(Counters, retypeDispatch) == offsetof(Counters, collectDispatch) + 4 * sizeof(uint32_t));
+    const uint32_t emptyDispatches[8] = {0, 1, 1, 0, 0, 1, 1, 0}, zero = 0;
+    vkCmdUpdateBuffer(cmd, buffer_.handle(), offsetof(Counters, touchedListDispatch), sizeof(emptyDispatches), emptyDispatches);
+    vkCmdUpdateBuffer(cmd, buffer_.handle(), offsetof(Counters, collectDispatch), sizeof(emptyDispatches), emptyDispatches);
+    vkCmdUpdateBuffer(cmd, buffer_.handle(), offsetof(Counters, signCornerCount), sizeof(zero), &zero);
     vk::memoryBarrier(cmd);
 }
 

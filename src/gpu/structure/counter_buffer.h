@@ -15,7 +15,8 @@ public:
     CounterBuffer(const vk::Context& context, const vk::BindingTable& table);
 
     const vk::Buffer& buffer() const { return buffer_; }
-    // Zeroes the per-frame counters (COUNTERS_PER_FRAME_*), then a barrier.
+    // Zeroes the per-frame counters (COUNTERS_PER_FRAME_*) and signCornerCount, and empties the dispatches that the
+    // passes raise as they list (x 0, y and z 1: touched list, dirty blocks' mask words, retype list), then a barrier.
     void recordClearFrame(VkCommandBuffer cmd) const;
     // Zeroes `count` consecutive uints starting at the field at `offset` (offsetof(Counters, ...)).
     void recordClear(VkCommandBuffer cmd, size_t offset, uint32_t count) const;
