@@ -1212,7 +1212,7 @@ the port is taken (naming it). stop_serving() or close() stops it.
     });
 
     m.def("_synth", [](const fs::path& out, size_t frames, int width, int height, bool noise, uint32_t seed, const std::string& path,
-                       double colorNoise, double exposureDrift) {
+                       double colorNoise, double exposureDrift, double gtSpacing) {
         synth::SequenceOptions o;
         o.frames = frames;
         o.width = width;
@@ -1223,6 +1223,7 @@ the port is taken (naming it). stop_serving() or close() stops it.
         o.path = path == "revisit" ? synth::PathKind::Revisit : synth::PathKind::Orbit;
         o.colorNoise = colorNoise;
         o.exposureDrift = exposureDrift;
+        o.gtPointSpacing = gtSpacing;
         py::gil_scoped_release release;
         synth::writeTumSequence(out, synth::SyntheticScene::defaultRoom(), o);
     });

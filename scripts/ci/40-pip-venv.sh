@@ -18,5 +18,17 @@ trap 'rm -rf "$venv"' EXIT
 # Imported from the venv, with the data files the wheel carries.
 (cd /tmp && "$venv/bin/python" -c "import vkmesh, os; assert vkmesh.__file__.startswith('$venv'), vkmesh.__file__; \
 assert os.path.isfile(os.path.join(os.environ['VKMESH_DATA_DIR'], 'cameras', 'tum_fr1', 'camera.json'))")
-VKMESH_VALIDATION=1 VKMESH_CLI="$PWD/build/vkmesh" PYTHONDONTWRITEBYTECODE=1 \
-  "$venv/bin/python" -m pytest -q -p no:cacheprovider --basetemp="$venv/pytest" tests/python
+# Two pytest runs side by side, one per core of the CI machine, each with its own temporary folder: test_tracking.py
+# and test_memory.py (the two longest files), and the rest, about as long. Both must pass.
+run_pytest() {
+  VKMESH_VALIDATION=1 VKMESH_CLI="$PWD/build/vkmesh" PYTHONDONTWRITEBYTECODE=1 \
+    "$venv/bin/python" -m pytest -q -p no:cacheprovider --basetemp="$venv/pytest-$1" "${@:2}"
+}
+long=(tests/python/test_tracking.py tests/python/test_memory.py)
+run_pytest long "${long[@]}" >"$venv/long.log" 2>&1 &
+long_run=$!
+status=0
+run_pytest rest tests/python "${long[@]/#/--ignore=}" || status=1
+wait "$long_run" || status=1
+cat "$venv/long.log"
+exit "$status"

@@ -223,7 +223,7 @@ TEST_F(GpuTest, ExhaustedChunkHeapIsReportedAndFilledInAfterGrowth) { heapExhaus
 // default the same tiny capacities grow: no warning, and the mesh of ample capacities.
 TEST_F(GpuTest, CliReportsCapacityEvents) {
     auto dir = test::makeTempDir("capacity_cli");
-    auto synthRun = test::runCli("synth " + (dir / "seq").string() + " --frames 3 --width 160 --height 120");
+    auto synthRun = test::runCli("synth " + (dir / "seq").string() + " --frames 3 --width 160 --height 120 --gt-spacing 0.05");
     ASSERT_EQ(synthRun.exitCode, 0) << synthRun.err;
     const std::string tiny = " --voxel 0.04 --vertices 256 --chunks 256 --blocks 64 -q";
     auto run = test::runCli("fuse " + (dir / "seq").string() + " -o " + (dir / "mesh.ply").string() + " --stats " +

@@ -29,14 +29,10 @@ using test::CliRun;
 using test::readText;
 using test::runCli;
 
-// A small synthetic sequence, made once for the whole test program.
+// A small synthetic sequence, made once for all the test programs of the build (tests copy it before changing it).
+// Coarse ground-truth points: no test here evaluates against them, and the default 5 mm took ~3.5 s to write.
 const fs::path& smallSequence() {
-    static fs::path dir = [] {
-        fs::path d = test::makeTempDir("cli_seq");
-        CliRun r = runCli("synth " + d.string() + " --frames 6 --width 160 --height 120");
-        EXPECT_EQ(r.exitCode, 0) << r.err;
-        return d;
-    }();
+    static const fs::path dir = test::sharedSynthSequence("cli_small", "--frames 6 --width 160 --height 120 --gt-spacing 0.05");
     return dir;
 }
 
@@ -505,14 +501,10 @@ namespace vkmesh {
 namespace {
 
 // A synthetic sequence whose camera moves as a sensor's does (240 poses to the orbit: about 3.6 cm and
-// 1.5 degrees per frame), for tracking; made once.
+// 1.5 degrees per frame), for tracking; made once for all the test programs of the build.
 const std::filesystem::path& trackingSequence() {
-    static std::filesystem::path dir = [] {
-        std::filesystem::path d = test::makeTempDir("cli_track_seq");
-        test::CliRun r = test::runCli("synth " + d.string() + " --frames 240 --width 160 --height 120");
-        EXPECT_EQ(r.exitCode, 0) << r.err;
-        return d;
-    }();
+    static const std::filesystem::path dir =
+        test::sharedSynthSequence("cli_tracking", "--frames 240 --width 160 --height 120 --gt-spacing 0.05");
     return dir;
 }
 

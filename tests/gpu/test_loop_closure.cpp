@@ -197,14 +197,13 @@ TEST(LoopCloser, ClosesALoopOverDriftedPosesAndCorrectsTheFrames) {
 namespace vkmesh {
 namespace {
 
-// The noisy room's revisit path (three laps of 60 frames at 320 x 240), rendered once for the tests below, with
-// frames cut out of laps 2 and 3 so that the camera jumps 10 times to places lap 1 saw: frames 0-55, then 4
-// frames of every 12 from frame 60 on (each kept run starts with a jump of 5 or 8 frames: 30-48 degrees).
+// The noisy room's revisit path (three laps of 60 frames at 320 x 240), rendered once for the tests below (and shared
+// with their other programs), with frames cut out of laps 2 and 3 so that the camera jumps 10 times to places lap 1
+// saw: frames 0-55, then 4 frames of every 12 from frame 60 on (each kept run starts with a jump of 5 or 8 frames:
+// 30-48 degrees).
 const fs::path& kidnapSequence() {
-    static fs::path dir = [] {
-        fs::path d = test::makeTempDir("loop_kidnap_seq");
-        const test::CliRun r = test::runCli("synth " + d.string() + " --frames 180 --path revisit --noise --width 320 --height 240");
-        EXPECT_EQ(r.exitCode, 0) << r.err;
+    static const fs::path dir = test::sharedSynthSequence("loop_kidnap", "--frames 180 --path revisit --noise --width 320 --height 240 --gt-spacing 0.05",
+                                                          [](const fs::path& d) {
         std::ifstream in(d / "depth.txt");
         std::string line, kept;
         int frame = 0;
@@ -218,11 +217,9 @@ const fs::path& kidnapSequence() {
         }
         in.close();
         std::ofstream(d / "depth.txt") << kept;
-        return d;
-    }();
+    });
     return dir;
 }
-
 
 // Kidnapping: after each of the 10 jumps the camera is relocalised within 5 frames, within 5 cm and 5 degrees of
 // the truth, in at least 9 of the 10; no frame stays lost for good, and the map holds only tracked frames.
@@ -387,10 +384,11 @@ TEST(LoopClosure, DriftingGalleryIsNotMadeWorse) {
 
 // Bad combinations are clear errors.
 TEST(LoopClosure, OptionsNeedTracking) {
-    const test::CliRun r = test::runCli("fuse " + kidnapSequence().string() + " --loop-closure -o /dev/null");
+    const fs::path seq = test::makeMinimalTum("loop_options");   // refused before any frame is read
+    const test::CliRun r = test::runCli("fuse " + seq.string() + " --loop-closure -o /dev/null");
     EXPECT_NE(r.exitCode, 0);
     EXPECT_NE(r.err.find("need --track"), std::string::npos) << r.err;
-    const test::CliRun s = test::runCli("fuse " + kidnapSequence().string() + " --track --corrections-per-frame 3 -o /dev/null");
+    const test::CliRun s = test::runCli("fuse " + seq.string() + " --track --corrections-per-frame 3 -o /dev/null");
     EXPECT_NE(s.exitCode, 0);
     EXPECT_NE(s.err.find("--corrections-per-frame needs --loop-closure"), std::string::npos) << s.err;
 }

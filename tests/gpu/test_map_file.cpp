@@ -138,9 +138,13 @@ TEST_P(ResumeTest, SaveLoadAndFuseTheRestIsTheUninterruptedRun) {
     // Through the bytes of a file (the writer and the parser), into a new volume.
     const map::MapData saved = map::parse(map::serialize(first.saveMap()), "resume.vkmap");
     EXPECT_EQ(saved.blocks.size(), first.readCounters().blocksInUse);
-    if (!GetParam()) EXPECT_GT(saved.capacities.blocks, config.blockCapacity) << "the pool grew before the save";
+    if (!GetParam()) {
+        EXPECT_GT(saved.capacities.blocks, config.blockCapacity) << "the pool grew before the save";
+    }
     EXPECT_FALSE(saved.vertexFree.holes.empty()) << "freed vertices below the high water";
-    if (GetParam()) EXPECT_FALSE(saved.blockFree.holes.empty()) << "recycled blocks";
+    if (GetParam()) {
+        EXPECT_FALSE(saved.blockFree.holes.empty()) << "recycled blocks";
+    }
     std::unique_ptr<gpu::GpuVolume> resumed = gpu::GpuVolume::load(context(), saved, gpu::GpuVolume::mapConfig(saved), "resume.vkmap");
     EXPECT_EQ(resumed->frameNumber(), first.frameNumber());
     EXPECT_EQ(resumed->framesIntegrated(), 7u);

@@ -42,7 +42,7 @@ testing::AssertionResult sameMesh(const fs::path& a, const fs::path& b) {
 
 TEST(RecordingsFuse, EveryRecordingFusesToTheFolderMesh) {
     const fs::path dir = test::makeTempDir("recordings_fuse");
-    CliRun r = runCli("synth " + (dir / "room").string() + " --frames 8 --width 160 --height 120 --noise");
+    CliRun r = runCli("synth " + (dir / "room").string() + " --frames 8 --width 160 --height 120 --noise --gt-spacing 0.05");
     ASSERT_EQ(r.exitCode, 0) << r.err;
     const std::string kinds = "tum-ros1-bz2,tum-ros1-lz4,tum-mcap-zstd,tum-mcap-lz4,tum-db3,realsense";
     if (const std::string skip = test::makeRecordings(dir / "room", dir / "rec", kinds); !skip.empty()) GTEST_SKIP() << skip;

@@ -194,7 +194,7 @@ TEST_F(GpuTest, CliSoakAndFuseWithBoundedMaps) {
     EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 41);
     EXPECT_EQ(csv.rfind("frame,lap,hash_entries,hash_tombstones,hash_rebuilt,blocks_in_use,vertices_in_use,chunks_in_use", 0), 0u);
     EXPECT_NE(soak.out.find("high water per lap"), std::string::npos) << soak.out;
-    auto synthRun = test::runCli("synth " + (dir / "seq").string() + " --frames 12 --width 160 --height 120");
+    auto synthRun = test::runCli("synth " + (dir / "seq").string() + " --frames 12 --width 160 --height 120 --gt-spacing 0.05");
     ASSERT_EQ(synthRun.exitCode, 0) << synthRun.err;
     auto fuse = test::runCli("fuse " + (dir / "seq").string() + " -o " + (dir / "mesh.ply").string() + " --stats " +
                              (dir / "stats.json").string() + " --voxel 0.04 --keep-radius 1.5 --recycle --recycle-after 3 -q");

@@ -43,7 +43,7 @@ def run_cli(*args) -> subprocess.CompletedProcess:
 def small_sequence(tmp_path_factory) -> Path:
     """6 frames of the synthetic room at 160 x 120 with colour, written by vkmesh.synth (as `vkmesh synth`)."""
     folder = tmp_path_factory.mktemp("seq") / "room"
-    vkmesh.synth(folder, frames=6, width=160, height=120)
+    vkmesh.synth(folder, frames=6, width=160, height=120, gt_spacing=0.05)
     return folder
 
 

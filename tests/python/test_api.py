@@ -201,6 +201,18 @@ def test_synth_arguments(tmp_path):
         vkmesh.synth(tmp_path / "x", width=8)
     with pytest.raises(ValueError, match="path 'spiral'"):
         vkmesh.synth(tmp_path / "x", path="spiral")
+    with pytest.raises(ValueError, match="gt_spacing 0 must be in"):
+        vkmesh.synth(tmp_path / "x", gt_spacing=0)
+
+
+def test_synth_gt_spacing_sets_the_ground_truth_density(tmp_path):
+    def points(spacing):
+        folder = vkmesh.synth(tmp_path / str(spacing), frames=1, width=16, height=16, gt_spacing=spacing)
+        with open(os.path.join(folder, "gt_points.ply"), "rb") as f:
+            header = f.read(400).split(b"end_header")[0].decode()
+        return int(header.split("element vertex ")[1].split()[0])
+    # Uniform by area: half the spacing, about four times the points.
+    assert 3.5 < points(0.05) / points(0.1) < 4.5
 
 
 def test_everything_public_is_documented():

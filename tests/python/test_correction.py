@@ -20,7 +20,7 @@ def drift(pose: np.ndarray, i: int) -> np.ndarray:
 
 @pytest.fixture(scope="module")
 def frames(tmp_path_factory):
-    folder = vkmesh.synth(tmp_path_factory.mktemp("correct") / "room", frames=24, width=160, height=120)
+    folder = vkmesh.synth(tmp_path_factory.mktemp("correct") / "room", frames=24, width=160, height=120, gt_spacing=0.05)
     return list(vkmesh.open_dataset(folder, frames=8))
 
 

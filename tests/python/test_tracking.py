@@ -11,7 +11,7 @@ import vkmesh
 
 def test_integrate_without_a_pose_tracks_the_camera(tmp_path):
     # 240 frames to the orbit: about 3.6 cm and 1.5 degrees between neighbours. Only the first 10 are used.
-    folder = vkmesh.synth(tmp_path / "room", frames=240, width=160, height=120)
+    folder = vkmesh.synth(tmp_path / "room", frames=240, width=160, height=120, gt_spacing=0.05)
     frames = list(vkmesh.open_dataset(folder, frames=10))
     r = vkmesh.Reconstructor(voxel_size=0.03)
     results = [r.integrate(f.depth, f.intrinsics, color=f.color) for f in frames]
@@ -38,7 +38,7 @@ def test_integrate_without_a_pose_tracks_the_camera(tmp_path):
 
 
 def test_tracking_with_the_systems_solved_on_the_gpu(tmp_path):
-    folder = vkmesh.synth(tmp_path / "room", frames=240, width=160, height=120)
+    folder = vkmesh.synth(tmp_path / "room", frames=240, width=160, height=120, gt_spacing=0.05)
     frames = list(vkmesh.open_dataset(folder, frames=6))
     r = vkmesh.Reconstructor(voxel_size=0.03, track_solve="gpu", track_color_weight=0)
     assert r.stats()["tracking"] == {"color_weight": 0.0, "solve": "gpu", "downsample": 0, "model_reuse": 2}   # 0: by width
@@ -74,7 +74,7 @@ def test_integrate_with_a_pose_returns_none_and_is_in_the_trajectory(small_seque
 
 
 def test_a_sequence_without_poses_opens_for_tracking(tmp_path):
-    folder = vkmesh.synth(tmp_path / "room", frames=240, width=160, height=120)
+    folder = vkmesh.synth(tmp_path / "room", frames=240, width=160, height=120, gt_spacing=0.05)
     truth = [f.pose for f in vkmesh.open_dataset(folder, frames=6)]
     os.remove(os.path.join(folder, "groundtruth.txt"))
     with pytest.raises(vkmesh.Error, match="--track"):
@@ -92,7 +92,7 @@ def test_a_sequence_without_poses_opens_for_tracking(tmp_path):
 def test_loop_closure_relocalises_a_kidnapped_camera(tmp_path):
     # Three laps of the room (60 frames each); the camera jumps from frame 55 of lap 1 to frame 72 of lap 2, a view
     # lap 1 saw: tracking from the prediction loses it, a keyframe's pose finds it again (docs/LOOP_CLOSURE.md).
-    folder = vkmesh.synth(tmp_path / "room", frames=180, width=320, height=240, noise=True, path="revisit")
+    folder = vkmesh.synth(tmp_path / "room", frames=180, width=320, height=240, noise=True, path="revisit", gt_spacing=0.05)
     frames = list(vkmesh.open_dataset(folder, frames=80))
     with pytest.raises(ValueError, match="keep_frames"):
         vkmesh.Reconstructor(voxel_size=0.03, loop_closure=True)

@@ -14,6 +14,7 @@
 #include <sstream>
 #include <cmath>
 #include <numbers>
+#include <cstdio>
 #include <cstdlib>
 #include <unistd.h>
 
@@ -149,6 +150,46 @@ CliRun runCli(const std::string& args) {
     CliRun run{WIFEXITED(status) ? WEXITSTATUS(status) : -1, readText(dir / "out"), readText(dir / "err")};
     std::filesystem::remove_all(dir);
     return run;
+}
+
+namespace {
+std::string fileStamp(const std::filesystem::path& file) {
+    std::error_code error;
+    const auto size = std::filesystem::file_size(file, error);
+    const auto time = std::filesystem::last_write_time(file, error).time_since_epoch().count();
+    return std::to_string(size) + ":" + std::to_string(time);
+}
+}  // namespace
+
+std::filesystem::path sharedSynthSequence(const std::string& name, const std::string& args,
+                                          const std::function<void(const std::filesystem::path&)>& prepare) {
+    namespace fs = std::filesystem;
+    const fs::path cli = fs::absolute(VKMESH_CLI);
+    const std::string stamp = args + "|" + fileStamp(cli) + "|" + fileStamp("/proc/self/exe");
+    char key[17];
+    std::snprintf(key, sizeof key, "%016zx", std::hash<std::string>{}(stamp));
+    // Named after the test program too: two programs that chose the same name keep apart.
+    const std::string prefix = fs::read_symlink("/proc/self/exe").filename().string() + "_" + name + "_";
+    const fs::path cache = cli.parent_path() / "test_cache", shared = cache / (prefix + key);
+    if (fs::is_directory(shared)) return shared;
+
+    fs::create_directories(cache);
+    const fs::path mine = cache / (".making_" + prefix + key + "_" + std::to_string(::getpid()));
+    fs::remove_all(mine);
+    fs::create_directories(mine);
+    const CliRun r = runCli("synth " + mine.string() + " " + args);
+    EXPECT_EQ(r.exitCode, 0) << r.err;
+    if (r.exitCode != 0) return mine;   // the failure is recorded; the folder is not shared
+    if (prepare) prepare(mine);
+    std::error_code error;
+    fs::rename(mine, shared, error);   // fails when another program's folder is in place: use that one
+    if (error) fs::remove_all(mine, error);
+    // Folders of `name` that older builds of this program rendered: nothing will ask for them again.
+    for (const fs::directory_entry& entry : fs::directory_iterator(cache, error)) {
+        const std::string file = entry.path().filename().string();
+        if (file.rfind(prefix, 0) == 0 && entry.path() != shared) fs::remove_all(entry.path(), error);
+    }
+    return shared;
 }
 
 Pose lookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& target) {

@@ -36,6 +36,16 @@ struct CliRun {
 };
 CliRun runCli(const std::string& args);
 
+// The folder `vkmesh synth <folder> <args>` writes, then `prepare` edits (if given), made once and shared by the test
+// programs of one build: ctest runs each test in a program of its own, and a sequence several tests fuse took
+// ~17 s to render in each. Kept in <build>/test_cache/<test program>_<name>_<key>, the key a hash of the arguments and
+// of the vkmesh program's and this test program's size and time, so a rebuilt program renders it again (and the
+// stale folders of `name` are removed then). Programs that ask at once may both render it: each renders into a folder of its own
+// and renames it into place, the first rename wins and the others use that folder. Tests must not change it.
+// A failed render is a test failure (and the folder is not shared).
+std::filesystem::path sharedSynthSequence(const std::string& name, const std::string& args,
+                                          const std::function<void(const std::filesystem::path&)>& prepare = {});
+
 std::string readText(const std::filesystem::path& path);
 
 // Writes the recordings tests/support/make_recordings.py makes of a TUM-layout `folder` (kinds as it names

@@ -81,7 +81,7 @@ class Served:
 def sequence(tmp_path_factory):
     """40 noisy frames of the synthetic room at 320 x 240 with colour."""
     folder = tmp_path_factory.mktemp("viewer") / "room"
-    run("synth", folder, "--frames", 40, "--width", 320, "--height", 240, "--noise")
+    run("synth", folder, "--frames", 40, "--width", 320, "--height", 240, "--noise", "--gt-spacing", 0.05)
     return folder
 
 
