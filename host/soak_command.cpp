@@ -15,11 +15,10 @@
 #include <memory>
 #include <optional>
 
+#include "api/mapper.h"
 #include "cli_options.h"
 #include "commands.h"
 #include "core/camera.h"
-#include "gpu/gpu_volume.h"
-#include "gpu/tracking/pose_tracker.h"
 #include "synth/synthetic_scene.h"
 #include "vk/context.h"
 
@@ -62,13 +61,12 @@ int runSoak(const SoakArgs& a) {
         if (config.meshMode != gpu::MeshMode::Incremental) throw Error("soak --track needs --mode incremental (it tracks against the mesh)");
         config.publishMesh = true;   // tracking draws the mesh fused so far
     }
-    gpu::GpuVolume volume(context, config);
-    std::optional<gpu::PoseTracker> tracker;
-    if (a.track) {
-        gpu::TrackerOptions trackerOptions;
-        trackerOptions.maxDepth = a.maxDepth;
-        tracker.emplace(context, trackerOptions);
-    }
+    MapperOptions options;
+    options.volume = config;
+    options.tracker.maxDepth = a.maxDepth;
+    Mapper mapper(context, options);
+    mapper.createVolume(a.width, a.height);
+    const gpu::GpuVolume& volume = mapper.volume();
     // Tracking: a new copy of the room for every lap unless --rooms says otherwise, so the map grows lap after
     // lap and the tracked view never holds more of it than one room.
     const size_t rooms = a.track && a.cmd->get_option("--rooms")->count() == 0 ? a.laps : a.rooms;
@@ -109,18 +107,19 @@ int runSoak(const SoakArgs& a) {
         Pose placed = pose;
         placed(0, 3) += kRoomSpacing * double((i / framesPerLap) % rooms);
         const size_t lapIndex = i / framesPerLap;
+        // Every lap's first frame at its true pose (tracking restarts there), with --track the rest tracked.
+        MapperFrame frame;
+        frame.index = uint32_t(i);
+        frame.timestamp = double(i);
+        frame.depth = &depth;
+        frame.intrinsics = intrinsics;
+        frame.source = "the synthetic room";
+        if (!a.track || i % framesPerLap == 0) frame.pose = placed;
         auto t0 = std::chrono::steady_clock::now();
-        gpu::FrameReport r;
-        std::optional<gpu::TrackingReport> tracking;   // a tracked frame (not a lap's first)
-        if (tracker && i % framesPerLap != 0) {
-            gpu::TrackedFusion f = tracker->trackAndFuse(volume, depth, intrinsics, nullptr, nullptr);
-            tracking = f.tracking;
-            if (f.fused) r = *f.fused;
-            else ++lostFrames;
-        } else {
-            if (tracker) tracker->start(placed);   // a lap starts where the camera is placed
-            r = volume.integrate(depth, intrinsics, placed);
-        }
+        MapperResult result = mapper.process(frame);
+        gpu::FrameReport r = result.fused ? std::move(*result.fused) : gpu::FrameReport{};
+        const std::optional<gpu::TrackingReport>& tracking = result.tracking;   // a tracked frame (not a lap's first)
+        if (result.status == FrameStatus::Lost) ++lostFrames;
         const double wallMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
         double gpuMs = 0;
         for (const auto& [name, ms] : r.stageMs) gpuMs += ms;
@@ -179,7 +178,7 @@ int runSoak(const SoakArgs& a) {
         return v[v.size() / 2];
     };
     nlohmann::json trackingJson;
-    if (tracker) {
+    if (a.track) {
         nlohmann::json perLap = nlohmann::json::array();
         std::cout << "  tracking per lap: median ms per tracked frame / largest position error (m)\n";
         for (size_t l = 0; l < a.laps; ++l) {
@@ -199,7 +198,7 @@ int runSoak(const SoakArgs& a) {
                             {"block_capacity", volume.config().blockCapacity}, {"hash_capacity", volume.config().hashCapacity},
                             {"high_water_per_lap", lapsJson}, {"blocks_freed", freed}, {"hash_rebuilds", rebuilds},
                             {"warnings", warnings}, {"seconds", seconds}, {"device", context.info().name}};
-        if (tracker) s["tracking"] = trackingJson;
+        if (a.track) s["tracking"] = trackingJson;
         std::ofstream file(a.summaryPath);
         if (!file) throw Error("cannot write " + a.summaryPath);
         file << s.dump(2) << "\n";

@@ -30,6 +30,7 @@
 
 #include "api/exported_mesh.h"
 #include "api/reconstructor.h"
+#include "api/run_stats_json.h"
 #include "core/mesh_delta.h"
 #include "core/types.h"
 #include "gpu/gpu_volume.h"
@@ -514,7 +515,9 @@ public:
             "triangle_ids"_a = triangleIds, "triangle_kinds"_a = triangleKinds, "triangle_vertices"_a = triangleVertices);
     }
 
-    // The keys and their meaning follow `vkmesh fuse --stats` where the two report the same thing.
+    // The library's run statistics (api/run_stats_json.h: the keys of `vkmesh fuse --stats`), with this module's own
+    // keys as they have always been (the settings as Python shows floats, the last frame); where both have a key,
+    // this module's value stays, so that no key a script reads changes.
     py::dict stats() {
         struct Snapshot {
             std::string device;
@@ -526,7 +529,7 @@ public:
             gpu::FrameReport last;
             std::optional<FrameStoreStats> store;   // keep_frames
             size_t pendingCorrections = 0;
-            std::optional<slam::LoopClosureStats> loops;   // loop_closure
+            std::string run;   // runStatsJson, as JSON text
         };
         Snapshot s = locked([&](Reconstructor& rec) {
             Snapshot s;
@@ -547,7 +550,7 @@ public:
             s.last = lastReport_;
             if (const FrameStore* store = rec.frameStore()) s.store = store->stats();
             s.pendingCorrections = rec.pendingCorrections();
-            if (const auto* closer = dynamic_cast<const slam::LoopCloser*>(options_.loopClosure.get())) s.loops = closer->stats();
+            s.run = runStatsJson(rec.mapper()).dump();
             return s;
         });
         const gpu::GpuVolumeConfig& c = s.config;
@@ -568,23 +571,6 @@ public:
         d["tracking"] = py::dict("color_weight"_a = shortest(options_.tracker.colorWeight),
                                  "solve"_a = options_.tracker.solveOnGpu ? "gpu" : "host", "downsample"_a = options_.tracker.downsample,
                                  "model_reuse"_a = options_.tracker.modelReuseFrames);
-        if (s.loops) {
-            // As `vkmesh fuse --stats` "loop_closure" (host/fuse_loop_closure.cpp), without its per-loop list.
-            const slam::LoopClosureStats& l = *s.loops;
-            py::dict rejectedBy, ms;
-            for (const auto& [reason, n] : l.rejectedBy) rejectedBy[py::str(reason)] = n;
-            for (const auto& [stage, sumCount] : l.milliseconds)
-                ms[py::str(stage)] = py::dict("total"_a = sumCount.first, "count"_a = sumCount.second,
-                                              "mean"_a = sumCount.second ? sumCount.first / sumCount.second : 0.0);
-            d["loop_closure"] = py::dict("enabled"_a = true, "keyframes"_a = l.keyframes, "loops_detected"_a = l.loopsDetected,
-                                         "loops_accepted"_a = l.loopsAccepted, "loops_rejected"_a = l.loopsRejected,
-                                         "loops_consistent"_a = l.loopsConsistent, "rejected_by"_a = rejectedBy, "lost_frames"_a = l.lostFrames,
-                                         "relocalisations"_a = l.relocalisations,
-                                         "relocalisation_candidates_tried"_a = l.relocalisationCandidatesTried,
-                                         "frames_corrected"_a = l.framesCorrected, "graph_solves"_a = l.graphSolves, "ms"_a = ms);
-        } else {
-            d["loop_closure"] = py::dict("enabled"_a = false);
-        }
         d["color"] = py::dict("fused"_a = c.params.colorFusion != ColorFusion::Off, "mode"_a = colorModeName(c.params.colorFusion),
                               "recency"_a = shortest(c.params.colorRecency));
         if (s.store) {
@@ -600,7 +586,7 @@ public:
         d["capacities"] = py::dict("grow"_a = c.growCapacities, "blocks"_a = c.blockCapacity, "hash_slots"_a = c.hashCapacity,
                                    "touched"_a = c.touchedCapacity, "retype"_a = c.retypeCapacity, "vertices"_a = c.vertexCapacity,
                                    "triangle_chunks"_a = c.chunkCapacity);
-        if (!s.hasVolume) return d;   // nothing on the GPU before the first frame
+        if (!s.hasVolume) return withRunStats(d, s.run);   // nothing on the GPU before the first frame
         d["blocks"] = py::dict("in_use"_a = k.blocksInUse, "capacity"_a = c.blockCapacity, "hash_capacity"_a = c.hashCapacity,
                                "hash_entries"_a = k.hashEntries, "hash_tombstones"_a = k.hashTombstones);
         d["heaps"] = py::dict(
@@ -621,7 +607,24 @@ public:
                                    "cubes_retyped"_a = f.cubesRetyped, "triangles_created"_a = f.trianglesCreated,
                                    "warnings"_a = s.last.warnings, "growth"_a = s.last.growth,
                                    "deferred_attempts"_a = s.last.deferredAttempts);
-        return d;
+        return withRunStats(d, s.run);
+    }
+
+    // `own` with every key of the run statistics it lacks, at any depth (json.loads of `runJson`).
+    static py::dict withRunStats(py::dict own, const std::string& runJson) {
+        const py::dict run = py::module_::import("json").attr("loads")(runJson);
+        addMissing(own, run);
+        return own;
+    }
+    static void addMissing(py::dict& into, const py::dict& from) {
+        for (const auto& [key, value] : from) {
+            if (!into.contains(key)) {
+                into[key] = value;
+            } else if (py::isinstance<py::dict>(into[key]) && py::isinstance<py::dict>(value)) {
+                py::dict inner = into[key];
+                addMissing(inner, value.cast<py::dict>());
+            }
+        }
     }
 
     void save(const fs::path& path) {

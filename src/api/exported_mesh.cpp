@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "core/mesh_analysis.h"
+#include "core/refinement.h"
 #include "core/voxel_color.h"
 
 namespace vkmesh {
@@ -23,6 +25,35 @@ Mesh toMesh(const gpu::ExportedMesh& exported, std::optional<uint32_t> currentFr
             mesh.colors.push_back(vertexHasColor(v.color) ? vertexColorRgb(v.color) : std::array<uint8_t, 3>{128, 128, 128});
     }
     return mesh;
+}
+
+RunMesh meshOfRun(gpu::GpuVolume& volume) {
+    RunMesh r;
+    if (volume.config().meshMode != gpu::MeshMode::Incremental) {
+        gpu::TriangleSoup soup = volume.extractBaselineMesh(&r.stageMs);
+        r.mesh.positions = soup.vertices;
+        for (uint32_t t = 0; t < soup.triangleCount(); ++t) r.mesh.triangles.push_back({3 * t, 3 * t + 1, 3 * t + 2});
+        r.baselineVertices = soup.vertices.size();
+        return r;
+    }
+    const gpu::ExportedMesh exported = volume.exportMesh(&r.stageMs);
+    r.unreferencedVertices = exported.unreferencedVertices;
+    r.mesh = toMesh(exported, volume.frameNumber());   // ages in the GPU's frame numbers, as createdFrame
+    r.baselineVertices = volume.countBaselineVertices();
+    // Regularity (what refinement improves) and cracks (what refinement must not open: edges with one triangle).
+    r.sliverTriangleShare = triangleRegularity(r.mesh).sliverShare();
+    const std::array<uint64_t, 256> types = volume.surfaceCubeTypes();
+    uint64_t surface = 0, irregular = 0;
+    for (int t = 0; t < 256; ++t) {
+        surface += types[t];
+        if (!isRegularType(t)) irregular += types[t];
+    }
+    r.irregularCubeShare = surface ? double(irregular) / double(surface) : 0.0;
+    const TopologyReport topology = analyzeTopology(r.mesh);
+    r.boundaryEdges = topology.boundaryEdges;
+    r.nonManifoldEdges = topology.nonManifoldEdges;
+    r.coincidentVertices = countDuplicatePositions(r.mesh);
+    return r;
 }
 
 }  // namespace vkmesh

@@ -4,6 +4,9 @@
 
 #include <cstdint>
 #include <optional>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "gpu/gpu_volume.h"
 #include "io/ply.h"
@@ -13,5 +16,21 @@ namespace vkmesh {
 // Positions, normals, colours (when any vertex has one; grey for those without) and triangles in the export's order. With the current frame number (the number of
 // frames integrated), also each vertex's age: currentFrame - createdFrame (PLY's `age` property).
 Mesh toMesh(const gpu::ExportedMesh& exported, std::optional<uint32_t> currentFrame = std::nullopt);
+
+// The mesh at the end of a run, with what `vkmesh fuse --stats` says of it: the persistent shared-vertex mesh
+// compacted on the GPU (ages in the GPU's frame numbers), or in baseline mode the marching-cubes soup. The
+// baseline's vertex count is measured on the same TSDF either way (the paper's memory comparison); regularity and
+// topology are analysed for the shared-vertex mesh.
+struct RunMesh {
+    Mesh mesh;
+    size_t baselineVertices = 0;
+    uint32_t unreferencedVertices = 0;
+    double sliverTriangleShare = 0;    // smallest angle < 10 degrees
+    double irregularCubeShare = 0;     // surface cubes whose type is not one of the six half-cube types
+    size_t boundaryEdges = 0, nonManifoldEdges = 0;   // of the shared-vertex mesh (a soup has no shared edges)
+    size_t coincidentVertices = 0;     // vertices at exactly the position of another (0 by design)
+    std::vector<std::pair<std::string, double>> stageMs;   // GPU ms of the extraction's stages
+};
+RunMesh meshOfRun(gpu::GpuVolume& volume);
 
 }  // namespace vkmesh

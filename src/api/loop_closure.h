@@ -8,6 +8,8 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <map>
+#include <string>
 #include <vector>
 
 #include "core/types.h"
@@ -30,6 +32,30 @@ struct PoseCorrections {
     bool empty() const { return frames.empty(); }
 };
 
+// What a loop closer did (--stats "loop_closure", Python's stats(): RunStats carries it).
+struct LoopClosureStats {
+    uint32_t keyframes = 0;
+    uint32_t loopsDetected = 0;        // candidates the ferns found (verified or not)
+    uint32_t loopsAccepted = 0;
+    uint32_t loopsRejected = 0;
+    uint32_t loopsConsistent = 0;      // verified, but the trajectory already agrees: nothing to correct
+    std::map<std::string, uint32_t> rejectedBy;   // "registration", "implausible", "graph"
+    uint32_t lostFrames = 0, relocalisations = 0, relocalisationCandidatesTried = 0;
+    uint32_t framesCorrected = 0;      // poses handed back (a frame counts once per loop that moved it)
+    uint32_t graphSolves = 0;
+    // Milliseconds per stage (sum and count): encode (shrink + code), keyframe (registration image), search,
+    // verify (registration), solve (the graph), per frameFused call in all ("frame").
+    std::map<std::string, std::pair<double, uint32_t>> milliseconds;
+    struct Loop {
+        uint32_t frame = 0, keyframeFrame = 0;   // the new keyframe's frame and the old one's
+        double dissimilarity = 0;
+        bool accepted = false;                   // verified (and plausible)
+        std::string reason;                      // why rejected; "consistent" when verified but nothing to correct
+        double correctionMetres = 0, correctionDegrees = 0;   // how far the loop moved the camera
+    };
+    std::vector<Loop> loops;
+};
+
 class LoopClosure {
 public:
     virtual ~LoopClosure() = default;
@@ -48,6 +74,8 @@ public:
     // newer version, a truncated or corrupt file; it replaces what the loop closer held.
     virtual void save(const std::filesystem::path& path, uint64_t mapId) const = 0;
     virtual void load(const std::filesystem::path& path, uint64_t mapId) = 0;
+    // What it did so far (counts, per-stage times, the loops it tried).
+    virtual const LoopClosureStats& stats() const = 0;
 };
 
 // Where a map's loop-closure state is kept: beside the map, with the extension .vkloops.

@@ -31,6 +31,7 @@
 #include <optional>
 
 #include "api/loop_closure.h"
+#include "api/mapper.h"
 #include "core/mesh_delta.h"
 #include "core/types.h"
 #include "core/frame_store.h"
@@ -83,6 +84,8 @@ struct TrackedFrame {
     bool lost() const { return !fused.has_value(); }
 };
 
+// A facade over the library's frame loop (api/mapper.h): every host-image frame goes through Mapper::process, as the
+// CLI's do; asynchronous and GPU-image frames are submitted here and recorded with the Mapper.
 class Reconstructor {
 public:
     // Creates its own Vulkan instance and device (the first suitable device unless options.device says).
@@ -111,7 +114,7 @@ public:
                            const vk::SubmitSync& sync = {});
     // The camera-to-world pose used for every frame so far (given, tracked, or predicted for a lost frame; a
     // corrected frame's once it has been re-fused).
-    const std::vector<Pose>& trajectory() const { return trajectory_; }
+    const std::vector<Pose>& trajectory() const { return mapper_->poses(); }
 
     // ---- correcting the map (docs/CORRECTION.md; needs options.keepFrames) ----
     // New camera-to-world poses for frames already fused: frame i is the i-th frame integrated (trajectory()[i];
@@ -128,7 +131,7 @@ public:
     // What the last integrate() or finishCorrections() re-fused.
     const gpu::CorrectionReport& lastCorrections() const { return lastCorrections_; }
     // The kept frames (nullptr unless options.keepFrames).
-    const FrameStore* frameStore() const { return corrector_ ? &corrector_->store() : nullptr; }
+    const FrameStore* frameStore() const { return mapper_->frameStore(); }
 
     // ---- asynchronous frames: the application's frame never waits for vkmesh's GPU work ----
     // integrateAsync() checks and copies the input, records the frame and submits it, and returns at once.
@@ -187,28 +190,25 @@ public:
     const vk::Context& context() const { return *context_; }
     vk::Context& context() { return *context_; }   // e.g. to take its validation messages
     // The data structure itself, for what the facade does not cover; nullptr before the first frame.
-    gpu::GpuVolume* volume() { return volume_.get(); }
+    gpu::GpuVolume* volume() { return mapper_->volumePtr(); }
+    const gpu::GpuVolume* volume() const { return mapper_->volumePtr(); }
+    // The run's frame loop and its statistics (runStatsJson, api/run_stats_json.h).
+    const Mapper& mapper() const { return *mapper_; }
 
 private:
+    void createMapper();
     void loadMap(const map::MapData& map, const std::filesystem::path& path);
-    // Before a frame: up to `budget` queued corrections re-fused as intermediate frames.
-    void applyCorrections(size_t budget);
-    // After a frame was fused at `cameraToWorld`: kept for later corrections (options.keepFrames).
-    void keepFrame(const DepthImage& depth, const ColorImage* color, const Intrinsics& intrinsics, const Pose& cameraToWorld);
-    void createVolume(int width, int height);
+    // The number of the next frame: frames integrated so far (a loaded map's first).
+    uint32_t nextIndex() const { return firstFrameIndex_ + uint32_t(mapper_->trajectory().size()); }
+    MapperFrame frameOf(const DepthImage* depth, const ColorImage* color, const Intrinsics& intrinsics, const vk::SubmitSync& sync) const;
     AsyncFrame submitAsync(const gpu::FrameInput& input);
     uint64_t nextReadyValue_ = 0;
     std::unique_ptr<vk::Context> context_;
     ReconstructorOptions options_;
-    std::unique_ptr<gpu::GpuVolume> volume_;
+    std::unique_ptr<Mapper> mapper_;
     MeshDelta lastDelta_;
-    std::unique_ptr<gpu::PoseTracker> tracker_;   // created by the first frame integrated without a pose
-    std::vector<Pose> trajectory_;
-    uint32_t firstFrameIndex_ = 0;                 // the index of trajectory_[0] (a loaded map's frames come first)
-    std::optional<gpu::MapCorrector> corrector_;   // options.keepFrames
+    uint32_t firstFrameIndex_ = 0;                 // the number of the first frame integrated here (a loaded map's frames come first)
     gpu::CorrectionReport lastCorrections_;
-    // A frame given with a pose: the trajectory records it and tracking restarts from it.
-    void given(const Pose& cameraToWorld);
 };
 
 }  // namespace vkmesh

@@ -74,29 +74,8 @@ struct LoopClosureOptions {
     int relocaliseCandidates = 3;
 };
 
-// What the loop closer did (--stats "loop_closure", Python's stats()).
-struct LoopClosureStats {
-    uint32_t keyframes = 0;
-    uint32_t loopsDetected = 0;        // candidates the ferns found (verified or not)
-    uint32_t loopsAccepted = 0;
-    uint32_t loopsRejected = 0;
-    uint32_t loopsConsistent = 0;      // verified, but the trajectory already agrees: nothing to correct
-    std::map<std::string, uint32_t> rejectedBy;   // "registration", "implausible", "graph"
-    uint32_t lostFrames = 0, relocalisations = 0, relocalisationCandidatesTried = 0;
-    uint32_t framesCorrected = 0;      // poses handed back (a frame counts once per loop that moved it)
-    uint32_t graphSolves = 0;
-    // Milliseconds per stage (sum and count): encode (shrink + code), keyframe (registration image), search,
-    // verify (registration), solve (the graph), per frameFused call in all ("frame").
-    std::map<std::string, std::pair<double, uint32_t>> milliseconds;
-    struct Loop {
-        uint32_t frame = 0, keyframeFrame = 0;   // the new keyframe's frame and the old one's
-        double dissimilarity = 0;
-        bool accepted = false;                   // verified (and plausible)
-        std::string reason;                      // why rejected; "consistent" when verified but nothing to correct
-        double correctionMetres = 0, correctionDegrees = 0;   // how far the loop moved the camera
-    };
-    std::vector<Loop> loops;
-};
+// What the loop closer did: LoopClosureStats (api/loop_closure.h).
+using LoopClosureStats = vkmesh::LoopClosureStats;
 
 class LoopCloser final : public LoopClosure {
 public:
@@ -111,7 +90,7 @@ public:
     // keyframe and poses; f64 poses row-major). Counters (stats()) start again at 0.
     void save(const std::filesystem::path& path, uint64_t mapId) const override;
     void load(const std::filesystem::path& path, uint64_t mapId) override;
-    const LoopClosureStats& stats() const { return stats_; }
+    const LoopClosureStats& stats() const override { return stats_; }
     const LoopClosureOptions& options() const { return options_; }
     const PoseGraph& graph() const { return graph_; }
 
