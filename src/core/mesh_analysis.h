@@ -11,7 +11,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "io/ply.h"
+#include "core/mesh.h"
 
 namespace vkmesh {
 

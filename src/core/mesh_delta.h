@@ -8,8 +8,8 @@
 #include <vector>
 
 #include "core/types.h"
-#include "gpu/layout.h"
-#include "io/ply.h"
+#include "core/mesh.h"
+#include "shared_layout.h"   // the delta records (their sizes are checked in gpu/layout.h)
 
 namespace vkmesh {
 

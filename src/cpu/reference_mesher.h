@@ -21,7 +21,7 @@
 
 #include "cpu/reference_block.h"
 #include "cpu/reference_volume.h"
-#include "io/ply.h"
+#include "core/mesh.h"
 #include "shared_layout.h"
 
 namespace vkmesh::cpu {

@@ -1,6 +1,7 @@
 // Triangle meshes and point clouds on disk: PLY (read and write) and Wavefront OBJ (write).
 #pragma once
 
+#include "core/mesh.h"
 #include "core/types.h"
 
 #include <Eigen/Core>
@@ -12,15 +13,6 @@
 #include <vector>
 
 namespace vkmesh {
-
-// An indexed triangle mesh, or a point cloud when `triangles` is empty.
-struct Mesh {
-    std::vector<Eigen::Vector3f> positions;
-    std::vector<Eigen::Vector3f> normals;          // empty, or one per vertex
-    std::vector<uint32_t> vertexAge;               // empty, or one per vertex: frames since the vertex was created
-    std::vector<std::array<uint8_t, 3>> colors;    // empty, or one per vertex: red, green, blue
-    std::vector<std::array<uint32_t, 3>> triangles;  // vertex indices, counter-clockwise seen from outside
-};
 
 // Writes binary_little_endian 1.0 PLY: vertex `float x y z`, then `float nx ny nz` when normals are present,
 // then `uchar red green blue` when colours are present, then `uint age` when ages are present; face `property list uchar uint vertex_indices` (always declared,

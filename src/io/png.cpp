@@ -36,7 +36,7 @@ void writeDepthPng(const std::filesystem::path& path, int width, int height, con
     encode(path, raw, "depth image '" + path.string() + "'");
 }
 
-void writePng(const std::filesystem::path& path, const render::Image& image) {
+void writePng(const std::filesystem::path& path, const Image& image) {
     if (image.width <= 0 || image.height <= 0 || image.rgba.size() != size_t(image.width) * image.height * 4)
         throw Error("cannot write " + path.string() + ": the image is empty or inconsistent");
     cv::Mat bgr(image.height, image.width, CV_8UC3);

@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "core/types.h"
-#include "render/image.h"
+#include "core/image.h"
 
 namespace vkmesh::io {
 
@@ -17,7 +17,7 @@ void writeDepthPng(const std::filesystem::path& path, int width, int height, con
 
 // An 8-bit RGB PNG of the renderer's RGBA image (alpha dropped). Throws Error naming the file for an empty
 // or inconsistent image or one that cannot be written.
-void writePng(const std::filesystem::path& path, const render::Image& image);
+void writePng(const std::filesystem::path& path, const Image& image);
 
 // An 8-bit RGB PNG of a colour image. Throws Error naming the file for an empty or inconsistent image or one
 // that cannot be written.

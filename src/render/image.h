@@ -1,19 +1,10 @@
-// The picture the renderer returns: plain pixels, no Vulkan and no image library, so that io/png.h (the
-// vkmesh_io library) can write it without the renderer linking OpenCV.
+// The renderer's picture: vkmesh::Image (core/image.h), by its renderer name.
 #pragma once
 
-#include <cstddef>
-#include <cstdint>
-#include <vector>
+#include "core/image.h"
 
 namespace vkmesh::render {
 
-// An RGBA8 image, row-major, top row first.
-struct Image {
-    int width = 0;
-    int height = 0;
-    std::vector<uint8_t> rgba;
-    const uint8_t* pixel(int x, int y) const { return &rgba[(static_cast<size_t>(y) * width + x) * 4]; }
-};
+using Image = vkmesh::Image;
 
 }  // namespace vkmesh::render

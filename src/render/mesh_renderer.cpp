@@ -14,7 +14,7 @@
 #include "../../shaders_render/mesh_render.h"
 #include "core/types.h"
 #include "vk/buffer.h"
-#include "render/graphics_resources.h"
+#include "vk/graphics_resources.h"
 #include "vk/check.h"
 #include "vk/commands.h"
 
@@ -317,8 +317,8 @@ MeshRenderer::MeshRenderer(const vk::Context& context) : context_(context) {
         layoutInfo.pPushConstantRanges = &range;
         VKM_CHECK(vkCreatePipelineLayout(device, &layoutInfo, nullptr, &pipelineLayout_));
 
-        vert = createGraphicsShaderModule(device, "mesh.vert");
-        frag = createGraphicsShaderModule(device, "mesh.frag");
+        vert = vk::createGraphicsShaderModule(device, "mesh.vert");
+        frag = vk::createGraphicsShaderModule(device, "mesh.frag");
         VkPipelineShaderStageCreateInfo stages[2]{};
         stages[0].sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO;
         stages[0].stage = VK_SHADER_STAGE_VERTEX_BIT;
@@ -474,9 +474,9 @@ Image MeshRenderer::draw(const Geometry& geometry, const RenderPush& push, int w
     vk::Buffer readback(context_, imageBytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT, vk::MemoryUse::Readback, "render image (readback)");
 
     Target target(context_.device());
-    createAttachmentImage(context_, width, height, kColorFormat, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
+    vk::createAttachmentImage(context_, width, height, kColorFormat, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
                 VK_IMAGE_ASPECT_COLOR_BIT, target.color, target.colorMemory, target.colorView);
-    createAttachmentImage(context_, width, height, kDepthFormat, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT, VK_IMAGE_ASPECT_DEPTH_BIT,
+    vk::createAttachmentImage(context_, width, height, kDepthFormat, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT, VK_IMAGE_ASPECT_DEPTH_BIT,
                 target.depth, target.depthMemory, target.depthView);
     VkImageView views[2] = {target.colorView, target.depthView};
     VkFramebufferCreateInfo fbInfo{VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO};

@@ -7,7 +7,7 @@
 
 #include "../../../shaders_render/track_model.h"
 #include "core/camera.h"
-#include "render/graphics_resources.h"
+#include "vk/graphics_resources.h"
 #include "vk/check.h"
 
 namespace vkmesh::gpu {
@@ -52,7 +52,7 @@ ModelMapRenderer::ModelMapRenderer(const vk::Context& context, int width, int he
     try {
         for (int i = 0; i < kImages; ++i) {
             const bool depth = i == kDepthImage;
-            render::createAttachmentImage(context, width, height, imageFormat(i),
+            vk::createAttachmentImage(context, width, height, imageFormat(i),
                                           depth ? VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT
                                                 : VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
                                           depth ? VK_IMAGE_ASPECT_DEPTH_BIT : VK_IMAGE_ASPECT_COLOR_BIT, images_[i], memory_[i], views_[i]);
@@ -121,8 +121,8 @@ ModelMapRenderer::ModelMapRenderer(const vk::Context& context, int width, int he
         layoutInfo.pPushConstantRanges = &range;
         VKM_CHECK(vkCreatePipelineLayout(device, &layoutInfo, nullptr, &pipelineLayout_));
 
-        vert = render::createGraphicsShaderModule(device, "track_model.vert");
-        frag = render::createGraphicsShaderModule(device, "track_model.frag");
+        vert = vk::createGraphicsShaderModule(device, "track_model.vert");
+        frag = vk::createGraphicsShaderModule(device, "track_model.frag");
         VkPipelineShaderStageCreateInfo stages[2]{};
         for (int i = 0; i < 2; ++i) {
             stages[i].sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO;

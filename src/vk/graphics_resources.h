@@ -9,7 +9,7 @@
 
 #include "vk/context.h"
 
-namespace vkmesh::render {
+namespace vkmesh::vk {
 
 // A shader module of the embedded shader `name` ("mesh.vert"); the caller destroys it. Throws Error when no
 // shader of that name is embedded, VKM_CHECK's error when Vulkan fails.
@@ -21,4 +21,4 @@ VkShaderModule createGraphicsShaderModule(VkDevice device, const std::string& na
 void createAttachmentImage(const vk::Context& context, int width, int height, VkFormat format, VkImageUsageFlags usage,
                            VkImageAspectFlags aspect, VkImage& image, VkDeviceMemory& memory, VkImageView& view);
 
-}  // namespace vkmesh::render
+}  // namespace vkmesh::vk

@@ -1,4 +1,4 @@
-#include "render/graphics_resources.h"
+#include "vk/graphics_resources.h"
 
 #include <cstdint>
 #include <map>
@@ -12,7 +12,7 @@ namespace vkmesh::shaders {
 const std::map<std::string, std::span<const uint32_t>>& graphics();
 }  // namespace vkmesh::shaders
 
-namespace vkmesh::render {
+namespace vkmesh::vk {
 
 VkShaderModule createGraphicsShaderModule(VkDevice device, const std::string& name) {
     const auto& table = shaders::graphics();
@@ -56,4 +56,4 @@ void createAttachmentImage(const vk::Context& context, int width, int height, Vk
     VKM_CHECK(vkCreateImageView(device, &viewInfo, nullptr, &view));
 }
 
-}  // namespace vkmesh::render
+}  // namespace vkmesh::vk
