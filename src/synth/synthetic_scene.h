@@ -1,7 +1,9 @@
 // Synthetic RGB-D input with exact ground truth: an analytic scene (a signed distance function built from
 // a few primitives), a sphere-tracing depth renderer with an optional Kinect-like noise model, smooth camera
 // paths. The writer for the TUM RGB-D folder layout that vkmesh's dataset reader opens is synth/tum_sequence.h
-// (part of the vkmesh_io library: it writes PNGs).
+// (part of the vkmesh_io library: it writes PNGs). Implemented in synth/shapes.cpp (primitives, the scene's
+// sdf, sphere tracing), scenes.cpp (built-in scenes, camera paths), sensor_model.cpp (depth and colour
+// rendering, noise) and ground_truth.cpp (sampleSurface).
 //
 // Conventions (the same as everywhere in vkmesh):
 //   * world z is up; metres; poses are camera-to-world;

@@ -1,0 +1,97 @@
+// vkmesh._vkmesh's free functions: Vulkan devices, the synthetic sequence writer, mesh files (PLY, glTF) read and
+// written, the mesh delta kinds and the validation messages collected from every Reconstructor.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
+
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "arrays.h"
+#include "bindings.h"
+#include "core/mesh.h"
+#include "core/mesh_delta.h"
+#include "io/mesh_file.h"
+#include "io/mesh_simplify.h"
+#include "io/ply.h"
+#include "synth/synthetic_scene.h"
+#include "synth/tum_sequence.h"
+#include "vk/context.h"
+
+using namespace pybind11::literals;
+
+namespace vkmesh::python {
+
+void bindModuleFunctions(py::module_& m) {
+    m.def("_devices", [] {
+        std::vector<vk::DeviceInfo> devices;
+        {
+            py::gil_scoped_release release;
+            devices = vk::Context::listDevices();
+        }
+        py::list out;
+        for (const auto& d : devices)
+            out.append(py::dict("index"_a = d.index, "name"_a = d.name, "type"_a = d.type, "api_version"_a = d.apiVersion,
+                                "driver"_a = d.driver, "suitable"_a = d.suitable, "why_not"_a = d.whyNot,
+                                "int64_atomics"_a = d.int64Atomics, "hash_path"_a = d.hashPath));
+        return out;
+    });
+
+    m.def("_synth", [](const fs::path& out, size_t frames, int width, int height, bool noise, uint32_t seed, const std::string& path,
+                       double colorNoise, double exposureDrift, double gtSpacing) {
+        synth::SequenceOptions o;
+        o.frames = frames;
+        o.width = width;
+        o.height = height;
+        o.intrinsics = synth::kinectIntrinsics(width, height);
+        o.noise = noise;
+        o.seed = seed;
+        o.path = path == "revisit" ? synth::PathKind::Revisit : synth::PathKind::Orbit;
+        o.colorNoise = colorNoise;
+        o.exposureDrift = exposureDrift;
+        o.gtPointSpacing = gtSpacing;
+        py::gil_scoped_release release;
+        synth::writeTumSequence(out, synth::SyntheticScene::defaultRoom(), o);
+    });
+
+    m.def("_read_mesh", [](const fs::path& path) {
+        Mesh mesh;
+        {
+            py::gil_scoped_release release;
+            mesh = readMesh(path);   // .glb as glTF, anything else as PLY
+        }
+        return meshToPython(std::move(mesh));
+    });
+
+    m.def("_write_mesh", [](const fs::path& path, const py::array& vertices, const py::array& triangles, const py::object& normals,
+                            const py::object& colors, const py::object& ages, const py::object& simplify) -> py::object {
+        Mesh mesh = meshFromArrays(vertices, triangles, normals, colors, ages);
+        meshFormatOf(path);   // an unknown extension fails before any simplification
+        std::optional<SimplifyReport> report;
+        if (!simplify.is_none()) {
+            const double ratio = simplify.cast<double>();
+            checkSimplifyRatio(ratio, "simplify=");
+            report.emplace();
+            py::gil_scoped_release release;
+            mesh = simplifyMesh(mesh, ratio, &*report);
+        }
+        {
+            py::gil_scoped_release release;
+            writeMesh(path, mesh);
+        }
+        if (!report) return py::none();
+        return py::dict("ratio"_a = report->ratio, "triangles_before"_a = report->trianglesBefore,
+                        "triangles_after"_a = report->trianglesAfter, "error_m"_a = report->errorMetres);
+    });
+
+    m.attr("_DELTA_ADDED") = uint32_t(DeltaKind::Added);
+    m.attr("_DELTA_CHANGED") = uint32_t(DeltaKind::Changed);
+    m.attr("_DELTA_REMOVED") = uint32_t(DeltaKind::Removed);
+
+    m.def("_take_validation_messages", [] { return std::exchange(validationMessages(), {}); });
+}
+
+}  // namespace vkmesh::python
