@@ -68,7 +68,7 @@ def main():
                         "--stats", stats], stdout=subprocess.DEVNULL)
             entry["vkmesh"][stride] = json.loads(stats.read_text())
         stats = out / f"{name}_vkmesh_incremental.json"
-        run(fuse + ["-o", out / f"{name}_vkmesh_incremental.ply", "--stats", stats], stdout=subprocess.DEVNULL)
+        run(fuse + ["-o", out / f"{name}_vkmesh_incremental.ply", "--stats", stats, "--analyse-mesh"], stdout=subprocess.DEVNULL)
         entry["incremental"] = json.loads(stats.read_text())
         peer = out / f"{name}_open3d.json"
         run(["/usr/bin/python3", ROOT / "bench/open3d_peer_guarded.py", frames_json, "--voxel", args.voxel,

@@ -16,7 +16,7 @@ frames=()
 [ -f "$OUT/room/gt_points.ply" ] || "$VKMESH" synth "$OUT/room" --frames 120 --noise >/dev/null
 
 run() {  # tag dataset flag
-    "$VKMESH" fuse "$2" -q -o "$OUT/$1.ply" --stats "$OUT/$1.json" --voxel 0.03 --max-depth 4 "${frames[@]}" $3
+    "$VKMESH" fuse "$2" -q -o "$OUT/$1.ply" --stats "$OUT/$1.json" --analyse-mesh --voxel 0.03 --max-depth 4 "${frames[@]}" $3
 }
 for d in room "$DATASETS/iclnuim_office_traj0" "$DATASETS/tum_fr1_rpy"; do
     name=$(basename "$d")

@@ -17,12 +17,11 @@
 #include <vector>
 
 #include "api/exported_mesh.h"
+#include "api/mapper.h"
 #include "cli_options.h"
 #include "commands.h"
 #include "core/frame_store.h"
 #include "core/map_format.h"
-#include "gpu/gpu_volume.h"
-#include "gpu/map_corrector.h"
 #include "io/mesh_file.h"
 #include "io/trajectory.h"
 #include "vk/context.h"
@@ -57,12 +56,12 @@ int runCorrect(const CorrectArgs& args) {
     if (!std::filesystem::exists(framesPath))
         throw Error(args.map + " has no frame store beside it (" + framesPath.string() + "): save the map with vkmesh fuse ... --save " +
                     "(which keeps the frames) to correct it later");
-    gpu::MapCorrector corrector(FrameStore::load(framesPath.string(), m.saveId));
+    FrameStore store = FrameStore::load(framesPath.string(), m.saveId);
     const std::vector<TimedPose> wanted = readTumTrajectory(args.trajectory);
 
     // Stored frames by timestamp; each line of the trajectory finds its frame or is counted as unmatched.
     std::map<double, uint32_t> byTime;
-    for (uint32_t index : corrector.store().indices()) byTime.emplace(corrector.store().timestamp(index), index);
+    for (uint32_t index : store.indices()) byTime.emplace(store.timestamp(index), index);
     std::vector<uint32_t> frames;
     std::vector<Pose> poses;
     size_t unmatched = 0, unchanged = 0;
@@ -72,43 +71,48 @@ int runCorrect(const CorrectArgs& args) {
             ++unmatched;
             continue;
         }
-        if (gpu::poseChange(corrector.store().pose(it->second), p.cameraToWorld) < kSamePose) {
+        if (gpu::poseChange(store.pose(it->second), p.cameraToWorld) < kSamePose) {
             ++unchanged;
             continue;
         }
         frames.push_back(it->second);
         poses.push_back(p.cameraToWorld);
     }
-    corrector.correct(frames, poses);
 
-    vk::Context context(args.device.contextOptions());
     gpu::GpuVolumeConfig config = gpu::GpuVolume::mapConfig(m);
     if (config.meshMode != gpu::MeshMode::Incremental)
         throw Error(args.map + " was fused with --mode baseline; correction keeps the incremental mesh (fuse with --mode incremental)");
-    std::unique_ptr<gpu::GpuVolume> volume = gpu::GpuVolume::load(context, m, config, args.map);
+    vk::Context context(args.device.contextOptions());
+    // The library's frame loop with the map and its kept frames: the corrections re-fused in one go.
+    Mapper mapper(context, MapperOptions{});
+    mapper.keepFrames(std::move(store));
+    mapper.correct(frames, poses);
+    mapper.loadMap(m, config, args.map);
     const double loadMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-    const gpu::CorrectionReport report = corrector.apply(*volume, corrector.pending());
+    gpu::CorrectionReport report;
+    mapper.finishCorrections(&report, false);   // the mesh is exported below, after the map is saved
     for (const std::string& w : report.warnings) std::cerr << "warning: " << w << "\n";
+    const FrameStore& kept = *mapper.frameStore();
+    gpu::GpuVolume& volume = mapper.volume();
 
     double saveMs = 0;
     if (!args.savePath.empty()) {
         const auto t0 = std::chrono::steady_clock::now();
-        const uint64_t saveId = volume->save(args.savePath);
-        corrector.store().save(gpu::frameStorePathOf(args.savePath).string(), saveId);
+        mapper.save(args.savePath);
         saveMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     }
-    const Mesh mesh = toMesh(volume->exportMesh(), volume->frameNumber());
+    const Mesh mesh = toMesh(volume.exportMesh(), volume.frameNumber());
     const std::filesystem::path out(args.output);
     writeMesh(out, mesh);
-    std::cout << "vkmesh correct: " << report.framesRefused << " of " << corrector.store().size() << " frames re-fused ("
+    std::cout << "vkmesh correct: " << report.framesRefused << " of " << kept.size() << " frames re-fused ("
               << unchanged << " unchanged, " << unmatched << " trajectory lines without a frame), " << report.blocksFreed
               << " blocks freed, " << report.milliseconds << " ms: " << mesh.positions.size() << " vertices, " << mesh.triangles.size()
               << " triangles -> " << out.string() << "\n";
     if (!args.statsPath.empty()) {
-        const gpu::Counters k = volume->readCounters();
+        const gpu::Counters k = volume.readCounters();
         json stats;
         stats["map"] = args.map;
-        stats["frame_store"] = {{"path", framesPath.string()}, {"frames", corrector.store().size()}};
+        stats["frame_store"] = {{"path", framesPath.string()}, {"frames", kept.size()}};
         stats["correction"] = {{"frames_refused", report.framesRefused},
                                {"frames_unchanged", unchanged},
                                {"trajectory_lines_unmatched", unmatched},

@@ -188,7 +188,7 @@ int runFuse(const FuseArgs& args) {
         mapBytes = std::filesystem::file_size(args.savePath);
     }
     const auto t0 = std::chrono::steady_clock::now();
-    const RunMesh result = meshOfRun(mapper.volume());
+    const RunMesh result = meshOfRun(mapper.volume(), args.analyseMesh);
     const double meshWallMs = millisecondsSince(t0);
     const Mesh& mesh = result.mesh;
     const std::filesystem::path out(args.output.path);
@@ -206,17 +206,20 @@ int runFuse(const FuseArgs& args) {
     stats["color"]["dataset_has_color"] = dataset->hasColor();
     stats["color"]["mesh_has_color"] = !mesh.colors.empty();
     const uint32_t blocksInUse = stats["blocks"]["in_use"].get<uint32_t>();
+    // The analyses (--analyse-mesh) are null when not asked for: the keys stay for the scripts that read them.
+    auto analysed = [&](auto value) { return result.analysed ? json(value) : json(nullptr); };
     stats["mesh"] = {{"vertices", mesh.positions.size()},
                      {"triangles", mesh.triangles.size()},
                      {"path", out.string()},
-                     {"baseline_vertices", result.baselineVertices},
-                     {"vertices_vs_baseline", result.baselineVertices ? double(mesh.positions.size()) / result.baselineVertices : 0.0},
+                     {"analysed", result.analysed},
+                     {"baseline_vertices", analysed(result.baselineVertices)},
+                     {"vertices_vs_baseline", analysed(result.baselineVertices ? double(mesh.positions.size()) / result.baselineVertices : 0.0)},
                      {"unreferenced_vertices", result.unreferencedVertices},
-                     {"sliver_triangle_share", result.sliverTriangleShare},   // smallest angle < 10 degrees
-                     {"irregular_cube_share", result.irregularCubeShare},
-                     {"boundary_edges", result.boundaryEdges},
-                     {"non_manifold_edges", result.nonManifoldEdges},
-                     {"coincident_vertices", result.coincidentVertices}};
+                     {"sliver_triangle_share", analysed(result.sliverTriangleShare)},   // smallest angle < 10 degrees
+                     {"irregular_cube_share", analysed(result.irregularCubeShare)},
+                     {"boundary_edges", analysed(result.boundaryEdges)},
+                     {"non_manifold_edges", analysed(result.nonManifoldEdges)},
+                     {"coincident_vertices", analysed(result.coincidentVertices)}};
     json meshStage = json::object();
     for (const auto& [name, ms] : result.stageMs) meshStage[name] = ms;
     stats["gpu_ms_mesh_export"] = meshStage;
@@ -251,7 +254,8 @@ int runFuse(const FuseArgs& args) {
     std::cout << "vkmesh fuse: " << run.integrated << " frames (" << run.skipped << " skipped) from " << args.data.dataset << " on "
               << context.info().name << "\n"
               << "  voxel " << config.params.voxelSize << " m, " << blocksInUse << " blocks, mesh (" << stats["mode"].get<std::string>()
-              << "): " << mesh.positions.size() << " vertices (baseline " << result.baselineVertices << "), " << mesh.triangles.size()
+              << "): " << mesh.positions.size() << " vertices"
+              << (result.analysed ? " (baseline " + std::to_string(result.baselineVertices) + ")" : std::string()) << ", " << mesh.triangles.size()
               << " triangles -> " << out.string() << "\n"
               << (simplified ? "  " + describe(*simplified) + "\n" : "");
     if (!config.timeStages)

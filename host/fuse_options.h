@@ -26,6 +26,7 @@ struct FuseArgs {
     bool quiet = false;
     bool noStageTimes = false;
     bool passTimes = false;
+    bool analyseMesh = false;   // --analyse-mesh: the baseline's vertex count, regularity and topology in --stats
     // Pictures while fusing (drawn from the GPU mesh buffers) and the mesh-delta stream.
     uint32_t renderEvery = 0;
     std::string renderDir;

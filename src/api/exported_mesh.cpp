@@ -27,18 +27,21 @@ Mesh toMesh(const gpu::ExportedMesh& exported, std::optional<uint32_t> currentFr
     return mesh;
 }
 
-RunMesh meshOfRun(gpu::GpuVolume& volume) {
+RunMesh meshOfRun(gpu::GpuVolume& volume, bool analyse) {
     RunMesh r;
     if (volume.config().meshMode != gpu::MeshMode::Incremental) {
         gpu::TriangleSoup soup = volume.extractBaselineMesh(&r.stageMs);
         r.mesh.positions = soup.vertices;
         for (uint32_t t = 0; t < soup.triangleCount(); ++t) r.mesh.triangles.push_back({3 * t, 3 * t + 1, 3 * t + 2});
         r.baselineVertices = soup.vertices.size();
+        r.analysed = true;   // a soup has nothing more to analyse
         return r;
     }
     const gpu::ExportedMesh exported = volume.exportMesh(&r.stageMs);
     r.unreferencedVertices = exported.unreferencedVertices;
     r.mesh = toMesh(exported, volume.frameNumber());   // ages in the GPU's frame numbers, as createdFrame
+    if (!analyse) return r;
+    r.analysed = true;
     r.baselineVertices = volume.countBaselineVertices();
     // Regularity (what refinement improves) and cracks (what refinement must not open: edges with one triangle).
     r.sliverTriangleShare = triangleRegularity(r.mesh).sliverShare();

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "gpu/gpu_volume.h"
-#include "io/ply.h"
+#include "core/mesh.h"
 
 namespace vkmesh {
 
@@ -18,11 +18,13 @@ namespace vkmesh {
 Mesh toMesh(const gpu::ExportedMesh& exported, std::optional<uint32_t> currentFrame = std::nullopt);
 
 // The mesh at the end of a run, with what `vkmesh fuse --stats` says of it: the persistent shared-vertex mesh
-// compacted on the GPU (ages in the GPU's frame numbers), or in baseline mode the marching-cubes soup. The
-// baseline's vertex count is measured on the same TSDF either way (the paper's memory comparison); regularity and
-// topology are analysed for the shared-vertex mesh.
+// compacted on the GPU (ages in the GPU's frame numbers), or in baseline mode the marching-cubes soup. With
+// `analyse` (what the paper's evaluation reads, `fuse --analyse-mesh`): the baseline's vertex count measured on the
+// same TSDF (the paper's memory comparison), and the shared-vertex mesh's regularity and topology; they cost a GPU
+// pass over every block and two passes over the mesh on the host, so a plain run leaves them out.
 struct RunMesh {
     Mesh mesh;
+    bool analysed = false;
     size_t baselineVertices = 0;
     uint32_t unreferencedVertices = 0;
     double sliverTriangleShare = 0;    // smallest angle < 10 degrees
@@ -31,6 +33,6 @@ struct RunMesh {
     size_t coincidentVertices = 0;     // vertices at exactly the position of another (0 by design)
     std::vector<std::pair<std::string, double>> stageMs;   // GPU ms of the extraction's stages
 };
-RunMesh meshOfRun(gpu::GpuVolume& volume);
+RunMesh meshOfRun(gpu::GpuVolume& volume, bool analyse);
 
 }  // namespace vkmesh

@@ -210,11 +210,12 @@ void Mapper::correct(const std::vector<uint32_t>& frames, const std::vector<Pose
     corrector_->correct(frames, poses);
 }
 
-std::optional<gpu::FrameReport> Mapper::finishCorrections(gpu::CorrectionReport* applied) {
+std::optional<gpu::FrameReport> Mapper::finishCorrections(gpu::CorrectionReport* applied, bool publish) {
     if (!volume_ || pendingCorrections() == 0) return std::nullopt;
     gpu::CorrectionReport report;
     applyCorrections(std::numeric_limits<size_t>::max(), report);
     if (applied) *applied = report;
+    if (!publish) return std::nullopt;
     return volume_->publishMesh();
 }
 

@@ -132,9 +132,9 @@ public:
     // New poses for fused frames, re-fused correctionsPerFrame before each later frame (MapCorrector::correct).
     void correct(const std::vector<uint32_t>& frames, const std::vector<Pose>& poses);
     size_t pendingCorrections() const { return corrector_ ? corrector_->pending() : 0; }
-    // Re-fuses every queued correction now and publishes the mesh (its report: the delta); nothing queued: nullopt.
-    // `applied` (optional) receives what was re-fused.
-    std::optional<gpu::FrameReport> finishCorrections(gpu::CorrectionReport* applied = nullptr);
+    // Re-fuses every queued correction now and publishes the mesh (its report: the delta); nothing queued, or not
+    // `publish`: nullopt. `applied` (optional) receives what was re-fused.
+    std::optional<gpu::FrameReport> finishCorrections(gpu::CorrectionReport* applied = nullptr, bool publish = true);
     // The end of a run: every queued correction re-fused, and with a loop closer every posed frame's trajectory
     // entry takes its latest pose (every loop's correction applied).
     void finish();

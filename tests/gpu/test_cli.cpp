@@ -51,7 +51,7 @@ TEST(Cli, DevicesListsAUsableDevice) {
 TEST(Cli, FuseWritesMeshAndStats) {
     fs::path out = test::makeTempDir("cli_fuse");
     CliRun r = runCli("fuse " + smallSequence().string() + " -o " + (out / "mesh.ply").string() + " --stats " +
-                   (out / "stats.json").string() + " --voxel 0.04 --validation");
+                   (out / "stats.json").string() + " --voxel 0.04 --validation --analyse-mesh");
     ASSERT_EQ(r.exitCode, 0) << r.err;
     EXPECT_EQ(r.err.find("[validation"), std::string::npos) << r.err;
     Mesh mesh = readPly(out / "mesh.ply");
@@ -73,6 +73,7 @@ TEST(Cli, FuseWritesMeshAndStats) {
     // Refinement is on by default: the mesh differs from the baseline (plain MC, 3 vertices per triangle, on
     // the same TSDF), which it equals with --no-refine (below).
     EXPECT_TRUE(stats["refine"].get<bool>());
+    EXPECT_TRUE(stats["mesh"]["analysed"].get<bool>());
     EXPECT_NE(stats["mesh"]["baseline_vertices"].get<size_t>(), 3 * mesh.triangles.size());
     EXPECT_TRUE(stats["mesh"].contains("boundary_edges"));
     EXPECT_TRUE(stats["mesh"].contains("non_manifold_edges"));
@@ -89,7 +90,7 @@ TEST(Cli, FuseWritesMeshAndStats) {
     for (const auto& p : mesh.positions) ASSERT_LT(p.norm(), 4.0f);
 
     r = runCli("fuse " + smallSequence().string() + " -o " + (out / "plain.ply").string() + " --stats " +
-               (out / "plain.json").string() + " --voxel 0.04 --no-refine");
+               (out / "plain.json").string() + " --voxel 0.04 --no-refine --analyse-mesh");
     ASSERT_EQ(r.exitCode, 0) << r.err;
     const Mesh plain = readPly(out / "plain.ply");
     stats = nlohmann::json::parse(readText(out / "plain.json"));
@@ -104,6 +105,12 @@ TEST(Cli, FuseWritesMeshAndStats) {
     stats = nlohmann::json::parse(readText(out / "untimed.json"));
     EXPECT_TRUE(stats["gpu_ms_per_frame"].empty()) << stats["gpu_ms_per_frame"].dump();
     EXPECT_GT(stats["wall_ms_per_frame"]["median"].get<double>(), 0.0);
+    // Without --analyse-mesh the analyses are not run: their keys stay, null.
+    EXPECT_FALSE(stats["mesh"]["analysed"].get<bool>());
+    for (const char* key : {"baseline_vertices", "vertices_vs_baseline", "sliver_triangle_share", "irregular_cube_share", "boundary_edges",
+                            "non_manifold_edges", "coincident_vertices"})
+        EXPECT_TRUE(stats["mesh"].contains(key) && stats["mesh"][key].is_null()) << key;
+    EXPECT_EQ(stats["mesh"]["unreferenced_vertices"], 0);
     // -q without --stats: nothing reads the stage times, so none are recorded (the summary says so).
     r = runCli("fuse " + smallSequence().string() + " -o " + (out / "quiet.ply").string() + " --voxel 0.04 -q");
     ASSERT_EQ(r.exitCode, 0) << r.err;

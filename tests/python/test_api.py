@@ -152,10 +152,13 @@ def test_deltas_replay_to_the_mesh():
 def test_stats():
     r = small_reconstructor(color_mode="recent", color_recency=0.5, voxel_size=0.02)
     s = r.stats()
-    assert "blocks" not in s and s["frames"] == {"integrated": 0}
+    # Keys are only ever added (the run's statistics, RunStats, add "skipped", "frames_with_color", ...).
+    assert "blocks" not in s and s["frames"]["integrated"] == 0 and s["frames"]["skipped"] == 0
     r.integrate(*plane_frame())
     s = r.stats()
-    assert s["voxel_size"] == 0.02 and s["color"] == {"fused": True, "mode": "recent", "recency": 0.5}
+    assert s["voxel_size"] == 0.02
+    assert {k: s["color"][k] for k in ("fused", "mode", "recency")} == {"fused": True, "mode": "recent", "recency": 0.5}
+    assert s["color"]["frames_with_color"] == 0 and s["frames"]["integrated"] == 1
     assert s["blocks"]["in_use"] > 0 and s["heaps"]["live_triangles"] == len(r.mesh().triangles)
     assert s["gpu_bytes_total"] == sum(s["gpu_pool_bytes"].values())
     assert "fuse" in s["last_frame"]["gpu_ms"] and s["last_frame"]["warnings"] == []

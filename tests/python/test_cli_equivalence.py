@@ -57,6 +57,39 @@ def test_same_frames_give_the_clis_mesh(small_sequence, cli_fused):
     assert r.stats()["blocks"]["in_use"] == stats["blocks"]["in_use"]
 
 
+def key_paths(d: dict, prefix=()) -> set:
+    """Every key path of a nested dict, lists of records not entered (their keys depend on what happened)."""
+    out = set()
+    for k, v in d.items():
+        out.add(prefix + (k,))
+        if isinstance(v, dict):
+            out |= key_paths(v, prefix + (k,))
+    return out
+
+
+# What only `vkmesh fuse` knows: the dataset, the mesh file and its analyses, map timings, the trajectory files.
+CLI_ONLY = {"dataset", "mesh", "gpu_ms_mesh_export", "wall_ms_mesh_export", "wall_ms_mesh_write", "simplify", "map", "viewer"}
+
+
+def test_stats_have_the_clis_keys(small_sequence, cli_fused):
+    """One RunStats behind both (api/run_stats_json.h): Python's stats() has every key `fuse --stats` writes from the
+    library's counts, and the per-frame series agree in length with the frames fused."""
+    _, stats = cli_fused
+    r = vkmesh.Reconstructor()
+    for f in vkmesh.open_dataset(small_sequence):
+        r.integrate(f.depth, f.intrinsics, f.pose, color=f.color)
+    mine = r.stats()
+    wanted = {p for p in key_paths(stats) if p[0] not in CLI_ONLY and p[-1] not in ("trajectory", "trajectory_online",
+                                                                                    "dataset_has_color", "mesh_has_color")}
+    wanted = {p for p in wanted if p[0] != "frame_store" or p[-1] not in ("path", "file_bytes")}
+    missing = sorted(".".join(p) for p in wanted - key_paths(mine))
+    assert not missing, missing
+    assert mine["frames"]["skipped"] == stats["frames"]["skipped"] == 0
+    assert mine["per_frame_counts"]["touched_blocks"].keys() == stats["per_frame_counts"]["touched_blocks"].keys()
+    assert mine["color"]["frames_with_color"] == stats["color"]["frames_with_color"] == 6
+    assert mine["capacity_events"] == stats["capacity_events"]
+
+
 def raw_depth(frame) -> np.ndarray:
     """The uint16 values of the frame's PNG, recovered exactly from its metres (raw / depth_scale in float)."""
     return np.round(frame.depth.astype(np.float64) * frame.depth_scale).astype(np.uint16)

@@ -41,8 +41,13 @@ def test_tracking_with_the_systems_solved_on_the_gpu(tmp_path):
     folder = vkmesh.synth(tmp_path / "room", frames=240, width=160, height=120, gt_spacing=0.05)
     frames = list(vkmesh.open_dataset(folder, frames=6))
     r = vkmesh.Reconstructor(voxel_size=0.03, track_solve="gpu", track_color_weight=0)
-    assert r.stats()["tracking"] == {"color_weight": 0.0, "solve": "gpu", "downsample": 0, "model_reuse": 2}   # 0: by width
+    settings = {"color_weight": 0.0, "solve": "gpu", "downsample": 0, "model_reuse": 2}   # 0: by width
+    tracking = r.stats()["tracking"]
+    assert {k: tracking[k] for k in settings} == settings
+    assert tracking["enabled"] is False   # the run's statistics (RunStats): no frame tracked yet
     results = [r.integrate(f.depth, f.intrinsics) for f in frames]
+    tracking = r.stats()["tracking"]
+    assert tracking["enabled"] is True and tracking["frames_tracked"] + tracking["lost_frames"] == len(frames) - 1
     assert all(res["tracked"] for res in results[1:]), [res["lost_reason"] for res in results]
     assert any(not res["model_drawn"] for res in results[1:]), "the model maps reused (track_model_reuse=2)"
     first = np.linalg.inv(frames[0].pose)
