@@ -2,6 +2,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 
@@ -9,19 +10,71 @@
 
 namespace vkmesh::cli {
 
+namespace {
+
+// The description of the first long name in CLI11's `names` ("--refine,!--no-refine" -> "--refine").
+const SettingDescription& settingOf(const std::string& names) {
+    size_t start = 0;
+    while (start <= names.size()) {
+        size_t end = names.find(',', start);
+        if (end == std::string::npos) end = names.size();
+        std::string name = names.substr(start, end - start);
+        if (!name.empty() && name[0] == '!') name.erase(0, 1);
+        if (name.rfind("--", 0) == 0) return setting(name);
+        start = end + 1;
+    }
+    throw Error("option '" + names + "' has no long name to find its description by");
+}
+
+// The description's range or choices, and its deprecation message, on the option.
+CLI::Option* described(CLI::Option* option, const SettingDescription& d) {
+    if (!d.choices.empty()) {
+        option->check(CLI::IsMember(d.choices));
+    } else if (d.minExclusive && d.min == 0 && std::isinf(d.max)) {
+        option->check(CLI::PositiveNumber);
+    } else if (d.min == 0 && !d.minExclusive && std::isinf(d.max)) {
+        option->check(CLI::NonNegativeNumber);
+    } else if (!std::isinf(d.min) || !std::isinf(d.max)) {
+        option->check(CLI::Range(d.min, d.max));
+    }
+    if (!d.deprecated.empty()) {
+        const std::string message = "vkmesh: " + d.cli + " is deprecated and has no effect: " + d.deprecated + "\n";
+        option->each([message](const std::string&) { std::cerr << message; });
+    }
+    return option;
+}
+
+template <class T>
+CLI::Option* addDescribed(CLI::App* cmd, const std::string& names, T& value) {
+    const SettingDescription& d = settingOf(names);
+    return described(cmd->add_option(names, value, d.help), d);
+}
+
+}  // namespace
+
+CLI::Option* addSetting(CLI::App* cmd, const std::string& names, float& value) { return addDescribed(cmd, names, value); }
+CLI::Option* addSetting(CLI::App* cmd, const std::string& names, double& value) { return addDescribed(cmd, names, value); }
+CLI::Option* addSetting(CLI::App* cmd, const std::string& names, int& value) { return addDescribed(cmd, names, value); }
+CLI::Option* addSetting(CLI::App* cmd, const std::string& names, uint32_t& value) { return addDescribed(cmd, names, value); }
+CLI::Option* addSetting(CLI::App* cmd, const std::string& names, size_t& value) { return addDescribed(cmd, names, value); }
+CLI::Option* addSetting(CLI::App* cmd, const std::string& names, std::string& value) { return addDescribed(cmd, names, value); }
+CLI::Option* addSettingFlag(CLI::App* cmd, const std::string& names, bool& value) {
+    const SettingDescription& d = settingOf(names);
+    return described(cmd->add_flag(names, value, d.help), d);
+}
+
 void DatasetArgs::add(CLI::App* cmd) {
     cmd->add_option("DATASET", dataset,
                     "dataset folder (TUM, ICL-NUIM, Redwood, 7-Scenes, a folder with camera.json) or recording (ROS 1 .bag, "
                     "RealSense .bag, .mcap, rosbag2 .db3 or folder)")
         ->required();
-    cmd->add_option("--frames", frames, "use at most N frames (0 = all)");
-    cmd->add_option("--max-depth", maxDepth, "ignore depth beyond M metres")->check(CLI::PositiveNumber);
-    cmd->add_option("--intrinsics", intrinsics, "override the camera: fx,fy,cx,cy");
-    cmd->add_option("--depth-scale", depthScale, "raw depth units per metre (5000 TUM, 1000 mm)")->check(CLI::PositiveNumber);
-    cmd->add_option("--depth-topic", depthTopic, "recordings: the depth image topic (default: the one sensor_msgs/Image topic of depth)");
-    cmd->add_option("--color-topic", colorTopic, "recordings: the colour image topic (default: the one of colour, if any)");
-    cmd->add_option("--info-topic", infoTopic,
-                    "recordings: the depth camera's sensor_msgs/CameraInfo topic (default: the one beside the depth topic)");
+    addSetting(cmd, "--frames", frames);
+    addSetting(cmd, "--max-depth", maxDepth);
+    addSetting(cmd, "--intrinsics", intrinsics);
+    addSetting(cmd, "--depth-scale", depthScale);
+    addSetting(cmd, "--depth-topic", depthTopic);
+    addSetting(cmd, "--color-topic", colorTopic);
+    addSetting(cmd, "--info-topic", infoTopic);
 }
 
 std::unique_ptr<Dataset> DatasetArgs::open() const {
@@ -38,64 +91,33 @@ std::unique_ptr<Dataset> DatasetArgs::open() const {
 }
 
 void VolumeOptions::addCommon(CLI::App* cmd) {
-    cmd->add_option("--voxel", voxel, "voxel (cube) size in metres");
-    cmd->add_option("--blocks", blocks, "initial block pool capacity (8x8x8 voxels each); grows when nearly full")->check(CLI::PositiveNumber);
-    cmd->add_flag("--no-grow", noGrow,
-                  "keep every capacity (--blocks, --vertices, --chunks, --hash-slots) fixed: what does not fit is reported "
-                  "and skipped instead of grown past");
-    cmd->add_option("--keep-radius", keepRadius,
-                    "bounded map: keep only blocks within R metres of the camera; farther ones are not allocated and are "
-                    "freed with their mesh (0 = off, the default)")
-        ->check(CLI::NonNegativeNumber);
-    cmd->add_flag("--recycle", recycle,
-                  "bounded map: blocks not seen for --recycle-after frames lose --starve-weight per frame and are freed "
-                  "(with their mesh) once empty (off by default)");
-    cmd->add_option("--recycle-after", recycleAfter, "frames without a touch before a block starves")->check(CLI::PositiveNumber);
-    cmd->add_option("--starve-weight", starveWeight, "weight a starving block's corners lose per frame")
-        ->check(CLI::PositiveNumber);
+    addSetting(cmd, "--voxel", voxel);
+    addSetting(cmd, "--blocks", blocks);
+    addSettingFlag(cmd, "--no-grow", noGrow);
+    addSetting(cmd, "--keep-radius", keepRadius);
+    addSettingFlag(cmd, "--recycle", recycle);
+    addSetting(cmd, "--recycle-after", recycleAfter);
+    addSetting(cmd, "--starve-weight", starveWeight);
 }
 
 void VolumeOptions::addTuning(CLI::App* cmd) {
-    cmd->add_option("--mode", mode,
-                    "incremental: one shared-vertex mesh updated every frame (default); "
-                    "baseline: marching cubes at the end, every triangle with its own 3 vertices")
-        ->check(CLI::IsMember({"incremental", "baseline"}));
-    cmd->add_flag("--refine,!--no-refine", refine,
-                  "Hamming-distance refinement of cube types, decided per corner so the mesh has no cracks (paper "
-                  "§V.F, docs/REFINEMENT.md; on by default, --no-refine turns it off)");
-    cmd->add_option("--refine-eps", refineEps, "refinement: corners within this many voxels of the surface may flip")
-        ->check(CLI::Range(0.0f, 1.0f));
-    cmd->add_flag("--lock-free", lockFree, "claim edge vertices in 4 parity-class passes without atomics (paper's lock-free)");
-    cmd->add_option("--vertices", vertices, "initial vertex heap capacity (grows when nearly full)")->check(CLI::PositiveNumber);
-    cmd->add_option("--chunks", chunks, "initial triangle chunk heap capacity (5 triangles each; grows when nearly full)")->check(CLI::PositiveNumber);
-    cmd->add_option("--hash-slots", hashSlots, "initial spatial hash capacity, a power of two (0 = 2x --blocks; grows when half full)");
-    cmd->add_option("--trunc", truncVoxels, "truncation distance in voxels");
+    addSetting(cmd, "--mode", mode);
+    addSettingFlag(cmd, "--refine,!--no-refine", refine);
+    addSetting(cmd, "--refine-eps", refineEps);
+    addSettingFlag(cmd, "--lock-free", lockFree);
+    addSetting(cmd, "--vertices", vertices);
+    addSetting(cmd, "--chunks", chunks);
+    addSetting(cmd, "--hash-slots", hashSlots);
+    addSetting(cmd, "--trunc", truncVoxels);
     // Deprecated (map version 2): fusion keeps exact integer sums, which a cap would make impossible to undo.
-    cmd->add_option("--max-weight", maxWeight, "deprecated, no effect: fusion keeps exact sums (docs/CORRECTION.md)")
-        ->each([](const std::string&) {
-            std::cerr << "vkmesh: --max-weight is deprecated and has no effect: the TSDF keeps exact sums of every "
-                         "observation so that frames can be taken out again (docs/CORRECTION.md)\n";
-        });
-    cmd->add_option("--min-weight", minWeight, "a cube is meshed when its 8 corners have at least this weight")
-        ->check(CLI::Range(1.0f, 255.0f));
-    cmd->add_option("--alloc-stride", allocStride,
-                    "allocate blocks from every Nth pixel in x and y (1 = every pixel, as the paper; Open3D uses 4)")
-        ->check(CLI::Range(1, 64));
-    cmd->add_flag("--alloc-tiles", allocTiles,
-                  "allocation by tiles (the default): claim the blocks around the plane of a tile of 8 x 8 sampled pixels "
-                  "where one fits, instead of walking each pixel's truncation band (a few percent more blocks, less "
-                  "allocation work)");
-    cmd->add_flag("--alloc-pixels", allocPixels,
-                  "allocation pixel by pixel: every sampled pixel walks its truncation band (the default before "
-                  "2026-12-05; maps fused that way keep it)")
-        ->excludes("--alloc-tiles");
-    cmd->add_flag("--no-color", noColor, "fuse depth only, even when the dataset has colour images (4 bytes per cube less)");
-    cmd->add_option("--color-mode", colorMode,
-                    "average: running average of the colour with the TSDF's weights (default); recent: exponential "
-                    "average that follows lighting changes (--color-recency)")
-        ->check(CLI::IsMember({"average", "recent"}));
-    cmd->add_option("--color-recency", colorRecency, "--color-mode recent: share of the newest colour, in (0, 1]")
-        ->check(CLI::Range(0.001f, 1.0f));
+    addSetting(cmd, "--max-weight", maxWeight);
+    addSetting(cmd, "--min-weight", minWeight);
+    addSetting(cmd, "--alloc-stride", allocStride);
+    addSettingFlag(cmd, "--alloc-tiles", allocTiles);
+    addSettingFlag(cmd, "--alloc-pixels", allocPixels)->excludes("--alloc-tiles");
+    addSettingFlag(cmd, "--no-color", noColor);
+    addSetting(cmd, "--color-mode", colorMode);
+    addSetting(cmd, "--color-recency", colorRecency);
 }
 
 gpu::GpuVolumeConfig VolumeOptions::toConfig(float maxDepth, int width, int height, bool inputHasColor) const {
@@ -130,15 +152,13 @@ gpu::GpuVolumeConfig VolumeOptions::toConfig(float maxDepth, int width, int heig
 }
 
 void DeviceArgs::add(CLI::App* cmd) {
-    cmd->add_option("--device", device, "Vulkan device index (see `vkmesh devices`)");
-    cmd->add_flag("--validation", validation, "enable the Khronos validation layer (or VKMESH_VALIDATION=1)");
+    addSetting(cmd, "--device", device);
+    addSettingFlag(cmd, "--validation", validation);
 }
 
 void MeshOutputArgs::add(CLI::App* cmd) {
-    cmd->add_option("-o,--output", path, "mesh file (.ply binary, .obj or .glb binary glTF)")->required();
-    cmd->add_option("--simplify", simplify,
-                    "write a simplified copy keeping about this fraction of the triangles, 0 < RATIO <= 1 (meshoptimizer; "
-                    "its geometric error is reported; the fused mesh itself is not changed)");
+    addSetting(cmd, "-o,--output", path)->required();
+    addSetting(cmd, "--simplify", simplify);
 }
 
 void MeshOutputArgs::check() const {

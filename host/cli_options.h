@@ -12,6 +12,7 @@
 #include <optional>
 #include <string>
 
+#include "api/settings.h"
 #include "gpu/gpu_volume.h"
 #include "io/dataset.h"
 #include "io/mesh_simplify.h"
@@ -19,6 +20,7 @@
 
 namespace CLI {
 class App;
+class Option;
 }
 
 namespace vkmesh::cli {
@@ -26,7 +28,7 @@ namespace vkmesh::cli {
 struct DatasetArgs {
     std::string dataset;
     size_t frames = 0;
-    float maxDepth = 4.0f;
+    float maxDepth = kDefaultMaxDepth;
     std::string intrinsics;
     double depthScale = 0;
     std::string depthTopic, colorTopic, infoTopic;  // recordings: which topics, when the types do not tell
@@ -99,6 +101,17 @@ struct MeshOutputArgs {
     // Writes the mesh, simplified when --simplify was given (then returns what simplification did).
     std::optional<SimplifyReport> write(const Mesh& mesh) const;
 };
+
+// Registers a setting described in api/settings.h under the CLI11 `names` ("--refine,!--no-refine", "-q,--quiet"):
+// the description of the first long name gives the help, the range or choices, and for a deprecated setting the
+// message printed when it is given. Throws Error for a name no description has (a test registers every command).
+CLI::Option* addSetting(CLI::App* cmd, const std::string& names, float& value);
+CLI::Option* addSetting(CLI::App* cmd, const std::string& names, double& value);
+CLI::Option* addSetting(CLI::App* cmd, const std::string& names, int& value);
+CLI::Option* addSetting(CLI::App* cmd, const std::string& names, uint32_t& value);
+CLI::Option* addSetting(CLI::App* cmd, const std::string& names, size_t& value);
+CLI::Option* addSetting(CLI::App* cmd, const std::string& names, std::string& value);
+CLI::Option* addSettingFlag(CLI::App* cmd, const std::string& names, bool& value);
 
 // One line for the command's summary: "simplified to T of T0 triangles (--simplify R), geometric error E mm".
 std::string describe(const SimplifyReport& report);

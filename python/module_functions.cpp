@@ -1,4 +1,4 @@
-// vkmesh._vkmesh's free functions: Vulkan devices, the synthetic sequence writer, mesh files (PLY, glTF) read and
+// vkmesh._vkmesh's free functions: the settings' descriptions, Vulkan devices, the synthetic sequence writer, mesh files (PLY, glTF) read and
 // written, the mesh delta kinds and the validation messages collected from every Reconstructor.
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
@@ -10,6 +10,7 @@
 #include <utility>
 #include <vector>
 
+#include "api/settings.h"
 #include "arrays.h"
 #include "bindings.h"
 #include "core/mesh.h"
@@ -26,6 +27,16 @@ using namespace pybind11::literals;
 namespace vkmesh::python {
 
 void bindModuleFunctions(py::module_& m) {
+    // Every setting as api/settings.h describes it (tests/python/test_settings.py checks the keywords against it).
+    m.def("_settings", [] {
+        py::list out;
+        for (const SettingDescription& d : settingDescriptions())
+            out.append(py::dict("cli"_a = d.cli, "python"_a = d.python, "kind"_a = toString(d.kind), "default"_a = d.defaultValue,
+                                "min"_a = d.min, "max"_a = d.max, "min_exclusive"_a = d.minExclusive, "choices"_a = d.choices,
+                                "help"_a = d.help, "cli_negates"_a = d.cliNegates, "deprecated"_a = d.deprecated,
+                                "from_map"_a = d.fromMap != nullptr));
+        return out;
+    });
     m.def("_devices", [] {
         std::vector<vk::DeviceInfo> devices;
         {

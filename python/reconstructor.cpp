@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "api/reconstructor.h"
+#include "api/settings.h"
 #include "arrays.h"
 #include "core/types.h"
 #include "gpu/gpu_volume.h"
@@ -274,7 +275,7 @@ Bad settings raise ValueError; no usable device or a capacity that does not fit 
              }),
              py::kw_only(), "voxel_size"_a = shortest(dp.voxelSize), "truncation_voxels"_a = shortest(dp.truncVoxels),
              // `vkmesh fuse --max-depth` defaults to 4 m (host/cli_options.h, DatasetArgs), not VolumeParams' 5 m.
-             "max_depth"_a = 4.0, "device"_a = py::none(), "color_mode"_a = "average", "color_recency"_a = shortest(dp.colorRecency),
+             "max_depth"_a = kDefaultMaxDepth, "device"_a = py::none(), "color_mode"_a = "average", "color_recency"_a = shortest(dp.colorRecency),
              "track_deltas"_a = false, "max_weight"_a = shortest(dp.maxWeight), "min_weight"_a = shortest(dc.minMeshWeight),
              "allocation_stride"_a = dp.allocationStride, "refine"_a = dc.refine,
              "refine_epsilon_voxels"_a = shortest(dc.refineEpsilonVoxels),
