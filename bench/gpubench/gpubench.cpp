@@ -42,9 +42,9 @@
 
 #include <Eigen/Geometry>
 
-#include "api/mapper.h"
 #include "core/types.h"
 #include "gpu/gpu_volume.h"
+#include "gpu/tracking/pose_tracker.h"
 #include "synth/synthetic_scene.h"
 #include "vk/context.h"
 
@@ -214,6 +214,8 @@ vkmesh::gpu::GpuVolumeConfig volumeConfig(double voxel, bool publish, bool passT
     return config;
 }
 
+// The same sequence as the library's frame loop (api/mapper.h) for given and tracked frames, written out here: the
+// Mapper links the frame store (zstd), and the pack carries only glibc and libvulkan (scripts/pack_gpubench.sh).
 // Fuses frames 0..count-1 of the loop (frame i is rendered[i % rendered.size()]) into a fresh volume.
 // `run` is null for the untimed warm-up.
 // With `track`, the first frame is fused at its true pose and every later one at the pose tracked against the
@@ -222,36 +224,27 @@ vkmesh::gpu::GpuVolumeConfig volumeConfig(double voxel, bool publish, bool passT
 // the pose it was fused at and fused again at that pose moved by 1 cm and 0.5 degrees.
 void fuseSequence(const vkmesh::vk::Context& context, const std::vector<Frame>& rendered, size_t count, double voxel,
                   bool publish, bool track, bool trackSolveOnGpu, bool correct, bool passTimes, bool allocTiles, VoxelRun* run) {
-    // The library's frame loop, as `vkmesh fuse` drives it (a tracked run starts at the first frame's true pose).
-    vkmesh::MapperOptions options;
-    options.volume = volumeConfig(voxel, publish || track, passTimes, allocTiles);
-    options.tracker.maxDepth = kMaxDepth;
-    options.tracker.solveOnGpu = trackSolveOnGpu;
-    vkmesh::Mapper mapper(context, options);
-    mapper.createVolume(kWidth, kHeight);
-    vkmesh::gpu::GpuVolume& volume = mapper.volume();
+    vkmesh::gpu::GpuVolume volume(context, volumeConfig(voxel, publish || track, passTimes, allocTiles));
     const Intrinsics intrinsics = vkmesh::synth::kinectIntrinsics(kWidth, kHeight);
+    std::optional<vkmesh::gpu::PoseTracker> tracker;
+    if (track) {
+        vkmesh::gpu::TrackerOptions options;
+        options.maxDepth = kMaxDepth;
+        options.solveOnGpu = trackSolveOnGpu;
+        tracker.emplace(context, options);
+    }
     std::vector<std::pair<size_t, Pose>> fusedAt;   // --correct: each frame fused and its pose
     for (size_t i = 0; i < count; ++i) {
         const Frame& frame = rendered[i % rendered.size()];
-        vkmesh::MapperFrame input;
-        input.index = uint32_t(i);
-        input.timestamp = double(i);
-        input.depth = &frame.depth;
-        input.color = &frame.color;
-        input.intrinsics = intrinsics;
-        input.source = "the rendered room";
-        if (track) {
-            input.startPose = frame.pose;
-            input.reference = frame.pose;
-        } else {
-            input.pose = frame.pose;
-        }
-        vkmesh::MapperResult result = mapper.process(input);
-        if (track && i > 0 && result.tracking) {
+        Pose pose = frame.pose;
+        std::optional<vkmesh::gpu::TrackedFusion> tracked;
+        if (tracker && i == 0) {
+            tracker->start(frame.pose);
+        } else if (tracker) {
             // Tracked, then fused at the tracked pose (--track-solve gpu: both in one submission, and the wall
             // times below are each the whole frame's).
-            const vkmesh::gpu::TrackingReport& tr = *result.tracking;
+            tracked = tracker->trackAndFuse(volume, frame.depth, intrinsics, &frame.color, &frame.color);
+            const vkmesh::gpu::TrackingReport& tr = tracked->tracking;
             if (run) {
                 run->trackGpuMs.push_back(tr.gpuMilliseconds);
                 run->trackWallMs.push_back(tr.milliseconds);
@@ -263,16 +256,18 @@ void fuseSequence(const vkmesh::vk::Context& context, const std::vector<Frame>& 
                 }
                 run->modelDraws += tr.modelDrawn;
                 run->lostFrames += !tr.tracked;
-                run->oneSubmission = trackSolveOnGpu;
+                run->oneSubmission = tracked->oneSubmission;
             }
+            if (!tr.tracked) continue;
         }
-        if (!result.isFused()) continue;
         // The stage times are those of the frame's last submission: a frame run again after growing a capacity is
         // timed on its second attempt, and mesh completion passes after a heap growth are not timed; the wall
         // time holds all of it, and the depth/colour upload before the first stage too.
-        const vkmesh::gpu::FrameReport& report = *result.fused;
-        const double wallMs = result.fuseWallMs;
-        const Pose pose = result.cameraToWorld;
+        const auto t0 = Clock::now();
+        vkmesh::gpu::FrameReport report =
+            tracked ? std::move(*tracked->fused) : volume.integrate(frame.depth, &frame.color, intrinsics, pose);
+        const double wallMs =
+            tracked ? tracked->fuseMilliseconds : std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
         for (const std::string& w : report.warnings) std::cerr << "warning: " << cm(voxel) << ", frame " << i << ": " << w << "\n";
         for (const std::string& g : report.growth) std::cerr << "note: " << cm(voxel) << ", frame " << i << ": grew " << g << "\n";
         if (!run) continue;
@@ -295,7 +290,7 @@ void fuseSequence(const vkmesh::vk::Context& context, const std::vector<Frame>& 
             framePassMs[name] += ms;
         }
         for (const auto& [name, ms] : framePassMs) run->passMs[name].push_back(ms);
-        if (correct) fusedAt.emplace_back(i, pose);
+        if (correct) fusedAt.emplace_back(i, tracked ? tracked->tracking.cameraToWorld : pose);
         run->last = report.counters;
         run->growths += report.growth.size();
         run->deferredAttempts += report.deferredAttempts;
