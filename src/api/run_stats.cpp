@@ -75,7 +75,6 @@ void RunStats::addTracking(const gpu::TrackingReport& tr) {
 
 void RunStats::addCorrections(const gpu::CorrectionReport& r) {
     framesRefused += r.framesRefused;
-    blocksFreedByCorrection += r.blocksFreed;
     observationsDropped += r.observationsDropped;
     correctionMilliseconds += r.milliseconds;
 }

@@ -69,7 +69,7 @@ struct RunStats {
         int tried = 0;
     };
     std::vector<Relocalisation> relocalisations;      // at most kRunStatsListLimit
-    uint32_t framesRefused = 0, blocksFreedByCorrection = 0, observationsDropped = 0;
+    uint32_t framesRefused = 0, observationsDropped = 0;
     double correctionMilliseconds = 0;
     std::optional<LoopClosureStats> loopClosure;       // a run with a loop closer
     std::vector<double> finalPositionError;            // filled by Mapper::finish()
