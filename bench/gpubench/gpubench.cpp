@@ -2,9 +2,11 @@
 // install but a Vulkan driver. It renders the sequence `vkmesh synth` writes by default (the furnished room,
 // the 60-pose orbit, 640x480, colour, no noise) in memory, quantised as the TUM writer and the dataset reader
 // would (1/5000 m, depth beyond 4 m dropped), and fuses it as `vkmesh fuse` does with its defaults (incremental
-// shared-vertex mesh kept current every frame, colour fused by running average) at each voxel size asked for.
-// It links the vkmesh libraries statically and libstdc++/libgcc statically too, so the binary needs only glibc
-// and libvulkan.so.1: scripts/pack_gpubench.sh packs it with the loader for a bare machine (bench/README.md).
+// shared-vertex mesh kept current every frame, colour fused by running average) at each voxel size asked for:
+// it drives the library's frame loop, vkmesh::Mapper (api/mapper.h), and reports what the Mapper reports per frame.
+// It links the vkmesh libraries statically and libstdc++/libgcc statically too, so the binary needs only glibc,
+// libvulkan.so.1 and libzstd.so.1 (the Mapper's frame store): scripts/pack_gpubench.sh packs it with the loader
+// and libzstd for a bare machine (bench/README.md).
 //
 //   vkmesh_gpubench [--voxel 0.03,0.01] [--frames 60] [--repeat 1] [--warmup 10] [--device I] [--json FILE]
 //                   [--publish] [--track [--track-solve host|gpu]] [--correct] [--quick] [--devices]
@@ -42,6 +44,7 @@
 
 #include <Eigen/Geometry>
 
+#include "api/mapper.h"
 #include "core/types.h"
 #include "gpu/gpu_volume.h"
 #include "gpu/tracking/pose_tracker.h"
@@ -214,60 +217,63 @@ vkmesh::gpu::GpuVolumeConfig volumeConfig(double voxel, bool publish, bool passT
     return config;
 }
 
-// The same sequence as the library's frame loop (api/mapper.h) for given and tracked frames, written out here: the
-// Mapper links the frame store (zstd), and the pack carries only glibc and libvulkan (scripts/pack_gpubench.sh).
-// Fuses frames 0..count-1 of the loop (frame i is rendered[i % rendered.size()]) into a fresh volume.
-// `run` is null for the untimed warm-up.
-// With `track`, the first frame is fused at its true pose and every later one at the pose tracked against the
-// mesh (lost frames are not fused), as `vkmesh fuse --track` does.
+// Fuses frames 0..count-1 of the loop (frame i is rendered[i % rendered.size()]) into a fresh volume: gpubench drives
+// the library's frame loop, vkmesh::Mapper (api/mapper.h), as `vkmesh fuse` does, and records what each frame's
+// MapperResult reports. `run` is null for the untimed warm-up.
+// Without `track` every frame is given its true pose. With `track`, the first frame is fused at its true pose (the
+// run's start pose) and every later one is tracked against the mesh and fused at the tracked pose (lost frames are
+// not fused), as `vkmesh fuse --track` does; the true pose is each frame's reference.
 // With `correct`, after the sequence every fused frame is re-fused as Reconstructor::correct does it: taken out at
 // the pose it was fused at and fused again at that pose moved by 1 cm and 0.5 degrees.
 void fuseSequence(const vkmesh::vk::Context& context, const std::vector<Frame>& rendered, size_t count, double voxel,
                   bool publish, bool track, bool trackSolveOnGpu, bool correct, bool passTimes, bool allocTiles, VoxelRun* run) {
-    vkmesh::gpu::GpuVolume volume(context, volumeConfig(voxel, publish || track, passTimes, allocTiles));
+    vkmesh::MapperOptions options;
+    options.volume = volumeConfig(voxel, publish || track, passTimes, allocTiles);
+    options.tracker.maxDepth = kMaxDepth;
+    options.tracker.solveOnGpu = trackSolveOnGpu;
+    vkmesh::Mapper mapper(context, std::move(options));
     const Intrinsics intrinsics = vkmesh::synth::kinectIntrinsics(kWidth, kHeight);
-    std::optional<vkmesh::gpu::PoseTracker> tracker;
-    if (track) {
-        vkmesh::gpu::TrackerOptions options;
-        options.maxDepth = kMaxDepth;
-        options.solveOnGpu = trackSolveOnGpu;
-        tracker.emplace(context, options);
-    }
     std::vector<std::pair<size_t, Pose>> fusedAt;   // --correct: each frame fused and its pose
     for (size_t i = 0; i < count; ++i) {
         const Frame& frame = rendered[i % rendered.size()];
-        Pose pose = frame.pose;
-        std::optional<vkmesh::gpu::TrackedFusion> tracked;
-        if (tracker && i == 0) {
-            tracker->start(frame.pose);
-        } else if (tracker) {
-            // Tracked, then fused at the tracked pose (--track-solve gpu: both in one submission, and the wall
-            // times below are each the whole frame's).
-            tracked = tracker->trackAndFuse(volume, frame.depth, intrinsics, &frame.color, &frame.color);
-            const vkmesh::gpu::TrackingReport& tr = tracked->tracking;
-            if (run) {
-                run->trackGpuMs.push_back(tr.gpuMilliseconds);
-                run->trackWallMs.push_back(tr.milliseconds);
-                run->trackSubmissions.push_back(tr.submissions);
-                run->trackErrorMm.push_back(1e3 * (tr.cameraToWorld.block<3, 1>(0, 3) - frame.pose.block<3, 1>(0, 3)).norm());
-                for (const auto& [name, ms] : tr.gpuStageMilliseconds) {
-                    if (!run->trackStageMs.count(name)) run->trackStageOrder.push_back(name);
-                    run->trackStageMs[name].push_back(ms);
-                }
-                run->modelDraws += tr.modelDrawn;
-                run->lostFrames += !tr.tracked;
-                run->oneSubmission = tracked->oneSubmission;
-            }
-            if (!tr.tracked) continue;
+        vkmesh::MapperFrame input;
+        input.index = uint32_t(i);
+        input.depth = &frame.depth;
+        input.color = &frame.color;
+        input.intrinsics = intrinsics;
+        input.source = "synthetic frame " + std::to_string(i);
+        if (!track) {
+            input.pose = frame.pose;
+        } else {
+            if (i == 0) input.startPose = frame.pose;   // later frames: no pose, tracked
+            input.reference = frame.pose;
         }
+        // Tracked frames: tracked, then fused at the tracked pose (--track-solve gpu: both in one submission, and
+        // the wall times below are each the whole frame's).
+        const vkmesh::MapperResult result = mapper.process(input);
+        // A tracked run's first frame reports the tracker's start (TrackingReport::first): nothing was tracked.
+        if (result.tracking && !result.tracking->first && run) {
+            const vkmesh::gpu::TrackingReport& tr = *result.tracking;
+            run->trackGpuMs.push_back(tr.gpuMilliseconds);
+            run->trackWallMs.push_back(tr.milliseconds);
+            run->trackSubmissions.push_back(tr.submissions);
+            run->trackErrorMm.push_back(1e3 * (tr.cameraToWorld.block<3, 1>(0, 3) - frame.pose.block<3, 1>(0, 3)).norm());
+            for (const auto& [name, ms] : tr.gpuStageMilliseconds) {
+                if (!run->trackStageMs.count(name)) run->trackStageOrder.push_back(name);
+                run->trackStageMs[name].push_back(ms);
+            }
+            run->modelDraws += tr.modelDrawn;
+            run->lostFrames += result.status == vkmesh::FrameStatus::Lost;
+            run->oneSubmission = result.oneSubmission;
+        }
+        if (result.status == vkmesh::FrameStatus::Skipped)
+            for (const std::string& w : result.warnings) std::cerr << "warning: " << cm(voxel) << ", " << w << "\n";
+        if (!result.isFused()) continue;   // lost by tracking (or skipped): not fused
         // The stage times are those of the frame's last submission: a frame run again after growing a capacity is
         // timed on its second attempt, and mesh completion passes after a heap growth are not timed; the wall
         // time holds all of it, and the depth/colour upload before the first stage too.
-        const auto t0 = Clock::now();
-        vkmesh::gpu::FrameReport report =
-            tracked ? std::move(*tracked->fused) : volume.integrate(frame.depth, &frame.color, intrinsics, pose);
-        const double wallMs =
-            tracked ? tracked->fuseMilliseconds : std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+        const vkmesh::gpu::FrameReport& report = *result.fused;
+        const double wallMs = result.fuseWallMs;
         for (const std::string& w : report.warnings) std::cerr << "warning: " << cm(voxel) << ", frame " << i << ": " << w << "\n";
         for (const std::string& g : report.growth) std::cerr << "note: " << cm(voxel) << ", frame " << i << ": grew " << g << "\n";
         if (!run) continue;
@@ -290,13 +296,21 @@ void fuseSequence(const vkmesh::vk::Context& context, const std::vector<Frame>& 
             framePassMs[name] += ms;
         }
         for (const auto& [name, ms] : framePassMs) run->passMs[name].push_back(ms);
-        if (correct) fusedAt.emplace_back(i, tracked ? tracked->tracking.cameraToWorld : pose);
+        if (correct) fusedAt.emplace_back(i, result.cameraToWorld);
         run->last = report.counters;
         run->growths += report.growth.size();
         run->deferredAttempts += report.deferredAttempts;
         run->warnings += report.warnings.size();
         ++run->frames;
     }
+    if (!mapper.hasVolume()) return;
+    vkmesh::gpu::GpuVolume& volume = mapper.volume();
+    // --correct goes to the Mapper's volume itself, not through Mapper::correct / finishCorrections: their report
+    // (CorrectionReport) has one wall time for the whole batch re-fused, where this times each frame's take-out and
+    // re-fuse apart, on the GPU and in wall time; and they need the fused frames kept (keepFrames: a frame store
+    // that compresses every frame as it is fused, host work the runs without --correct would not do). It submits
+    // what MapCorrector::apply does: the frame de-integrated at its pose, then integrated at the new one, each an
+    // intermediate frame.
     if (run && correct) {
         Pose moved = Pose::Identity();
         moved.topLeftCorner<3, 3>() = Eigen::AngleAxisd(0.5 * M_PI / 180.0, Eigen::Vector3d::UnitY()).toRotationMatrix();

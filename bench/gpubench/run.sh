@@ -65,8 +65,9 @@ main() {
     done
   fi
   [[ -n $nvidia_lib ]] && say "NVIDIA driver library: $nvidia_lib"
-  # The pack's loader first; the driver's folder too, so that a manifest naming the library without a folder
-  # (and the driver's own libraries next to it) resolve even where ldconfig does not know them.
+  # The pack's lib/ first (its Vulkan loader, and libzstd.so.1 for the binary); the driver's folder too, so that
+  # a manifest naming the library without a folder (and the driver's own libraries next to it) resolve even where
+  # ldconfig does not know them.
   export LD_LIBRARY_PATH=$here/lib${nvidia_lib:+:$(dirname "$nvidia_lib")}${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}
 
   # --- the driver manifest ---

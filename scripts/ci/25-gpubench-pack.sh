@@ -3,7 +3,8 @@
 # get it. Packs it (reusing the main suite's build/), checks its size, extracts the tarball into a temporary
 # folder and checks there that
 #   (a) every library the binary needs, apart from glibc's, resolves into the pack (ldd with the
-#       LD_LIBRARY_PATH run.sh sets), and that the binary needs nothing but glibc and libvulkan.so.1;
+#       LD_LIBRARY_PATH run.sh sets): libvulkan.so.1 and libzstd.so.1 (the Mapper's frame store) come from its
+#       lib/, and the binary needs nothing but glibc, libvulkan.so.1 and libzstd.so.1;
 #   (b) `env -i PATH=/usr/bin:/bin HOME=/tmp ./run.sh --quick` runs on lavapipe, the driver coming from the
 #       system as an NVIDIA one would, with the pack's loader, and writes JSON with both voxel sizes timed;
 #   (c) the pack's own glibc works (run.sh --glibc bundled), as used on a host whose glibc is too old;
@@ -42,6 +43,14 @@ while read -r name arrow path _; do
   esac
 done <<<"$deps"
 grep -q "libvulkan.so.1 => $pack/lib/libvulkan.so.1" <<<"$deps" || fail "libvulkan.so.1 does not come from the pack"
+grep -q "libzstd.so.1 => $pack/lib/libzstd.so.1" <<<"$deps" || fail "libzstd.so.1 does not come from the pack"
+needed=$(readelf -d "$pack/vkmesh_gpubench" | sed -n 's/.*(NEEDED).*\[\(.*\)\]/\1/p')
+for lib in $needed; do
+  case $lib in
+    libvulkan.so.1 | libzstd.so.1 | libc.so.6 | libm.so.6 | ld-linux-x86-64.so.2 | libpthread.so.0 | libdl.so.2 | librt.so.1) ;;
+    *) fail "the binary needs $lib: nothing but glibc, libvulkan.so.1 and libzstd.so.1 is allowed" ;;
+  esac
+done
 
 # --- (b) a clean environment on lavapipe ---
 check_json() {   # FILE VOXEL...: every voxel size has a timed run with per-stage medians

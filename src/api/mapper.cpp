@@ -141,6 +141,7 @@ MapperResult Mapper::tracked(const MapperFrame& frame, size_t valid) {
         if (result.relocalised) ++stats_.tracking.relocalisedFrames;
     }
     stats_.addTracking(f.tracking);
+    result.oneSubmission = f.oneSubmission;
     result.cameraToWorld = f.tracking.cameraToWorld;
     result.posed = true;
     record(frame, result.cameraToWorld, true);

@@ -84,6 +84,8 @@ struct MapperResult {
     std::optional<gpu::TrackingReport> tracking;    // a tracked frame
     std::optional<gpu::FrameReport> fused;          // status Fused
     double fuseWallMs = 0;                          // wall time of the fusion (one submission: the whole frame's)
+    bool oneSubmission = false;                     // a tracked frame tracked and fused in one submission
+                                                    // (TrackerOptions::solveOnGpu; TrackedFusion::oneSubmission)
     bool relocalised = false;                       // lost from the prediction, found again from a keyframe's pose
     int relocalisationCandidatesTried = 0;
     uint32_t loopCorrections = 0;                   // fused frames a loop closing at this frame queued for re-fusion

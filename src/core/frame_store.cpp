@@ -1,5 +1,6 @@
 #include "core/frame_store.h"
 
+#include "core/fuzzing.h"
 #include "core/map_format.h"  // map::crc32
 
 #include <zstd.h>
@@ -434,14 +435,10 @@ FrameStore FrameStore::load(const std::string& path, uint64_t expectedMapId, Fra
         in.read(e.payload.data(), std::streamsize(payloadBytes));
         if (uint64_t(in.gcount()) != payloadBytes) throw Error(frame + ": read error");
         offset += payloadBytes;
-        // A fuzzer cannot forge checksums: in fuzzing builds (only) they are not checked, so that it reaches the
-        // checks behind them (CMakeLists.txt, VKMESH_BUILD_FUZZERS).
-#ifdef FUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION
-        constexpr bool kCheckSums = false;
-#else
-        constexpr bool kCheckSums = true;
-#endif
-        if (kCheckSums &&
+        // A fuzzer cannot forge checksums: under the fuzz targets (only) they are not checked, so that it reaches
+        // the checks behind them (core/fuzzing.h).
+        const bool checkSums = !fuzzing::active();
+        if (checkSums &&
             map::crc32(e.payload.data(), e.payload.size(), map::crc32(rh.data(), kRecordFieldBytes)) != readAt<uint32_t>(rh.data() + kRecordFieldBytes))
             throw Error(frame + ": CRC mismatch (the file is corrupt)");
 

@@ -9,6 +9,7 @@
 #include <set>
 #include <tuple>
 
+#include "core/fuzzing.h"
 #include "core/types.h"
 
 namespace vkmesh::map {
@@ -204,14 +205,10 @@ MapData parse(std::string_view bytes, const std::string& name) {
                "vkmesh reads version " + std::to_string(kVersion) + " (integer sums that can be de-integrated, docs/MAPFILE.md): "
                "fuse the dataset again with this vkmesh (vkmesh fuse DATASET --save map.vkmap)");
     if (r.u32(12) != kHeaderBytes) r.fail("header size " + std::to_string(r.u32(12)) + " is not " + std::to_string(kHeaderBytes));
-    // A fuzzer cannot forge checksums: in fuzzing builds (only) they are not checked, so that it reaches the
-    // checks behind them (CMakeLists.txt, VKMESH_BUILD_FUZZERS).
-#ifdef FUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION
-    constexpr bool kCheckSums = false;
-#else
-    constexpr bool kCheckSums = true;
-#endif
-    if (kCheckSums && crc32(bytes.data(), kHeaderBytes - 4) != r.u32(kHeaderBytes - 4)) r.fail("header checksum mismatch (the file is corrupt)");
+    // A fuzzer cannot forge checksums: under the fuzz targets (only) they are not checked, so that it reaches the
+    // checks behind them (core/fuzzing.h).
+    const bool checkSums = !fuzzing::active();
+    if (checkSums && crc32(bytes.data(), kHeaderBytes - 4) != r.u32(kHeaderBytes - 4)) r.fail("header checksum mismatch (the file is corrupt)");
     const uint64_t payloadBytes = r.u64(64);
     if (bytes.size() - kHeaderBytes < payloadBytes)
         r.fail("truncated: the header announces " + std::to_string(kHeaderBytes + payloadBytes) + " bytes, the file has " +
@@ -219,7 +216,7 @@ MapData parse(std::string_view bytes, const std::string& name) {
     if (bytes.size() - kHeaderBytes > payloadBytes)
         r.fail(std::to_string(bytes.size() - kHeaderBytes - payloadBytes) + " bytes of trailing garbage after the map");
     const std::string_view payload = bytes.substr(kHeaderBytes);
-    if (kCheckSums && crc32(payload.data(), payload.size()) != r.u32(72)) r.fail("checksum mismatch (CRC-32 of the sections; the file is corrupt)");
+    if (checkSums && crc32(payload.data(), payload.size()) != r.u32(72)) r.fail("checksum mismatch (CRC-32 of the sections; the file is corrupt)");
     map.features = r.u32(16);
     if (map.features & ~kKnownFeatures) {
         std::string what = (map.features & FEATURE_COLOR) ? "colour (FEATURE_COLOR)" : "flags " + std::to_string(map.features & ~kKnownFeatures);

@@ -2,6 +2,7 @@
 returns what tracking did, and trajectory() gives every frame's pose."""
 
 import os
+import shutil
 
 import numpy as np
 import pytest
@@ -9,9 +10,15 @@ import pytest
 import vkmesh
 
 
-def test_integrate_without_a_pose_tracks_the_camera(tmp_path):
-    # 240 frames to the orbit: about 3.6 cm and 1.5 degrees between neighbours. Only the first 10 are used.
-    folder = vkmesh.synth(tmp_path / "room", frames=240, width=160, height=120, gt_spacing=0.05)
+@pytest.fixture(scope="module")
+def orbit_room(tmp_path_factory):
+    """240 frames to the orbit: about 3.6 cm and 1.5 degrees between neighbours; the tests use the first 10 at most.
+    Rendered once for the module's tests (~7 s each time)."""
+    return vkmesh.synth(tmp_path_factory.mktemp("orbit") / "room", frames=240, width=160, height=120, gt_spacing=0.05)
+
+
+def test_integrate_without_a_pose_tracks_the_camera(orbit_room):
+    folder = orbit_room
     frames = list(vkmesh.open_dataset(folder, frames=10))
     r = vkmesh.Reconstructor(voxel_size=0.03)
     results = [r.integrate(f.depth, f.intrinsics, color=f.color) for f in frames]
@@ -37,8 +44,8 @@ def test_integrate_without_a_pose_tracks_the_camera(tmp_path):
     assert again["tracked"], again["lost_reason"]
 
 
-def test_tracking_with_the_systems_solved_on_the_gpu(tmp_path):
-    folder = vkmesh.synth(tmp_path / "room", frames=240, width=160, height=120, gt_spacing=0.05)
+def test_tracking_with_the_systems_solved_on_the_gpu(orbit_room):
+    folder = orbit_room
     frames = list(vkmesh.open_dataset(folder, frames=6))
     r = vkmesh.Reconstructor(voxel_size=0.03, track_solve="gpu", track_color_weight=0)
     settings = {"color_weight": 0.0, "solve": "gpu", "downsample": 0, "model_reuse": 2}   # 0: by width
@@ -78,8 +85,8 @@ def test_integrate_with_a_pose_returns_none_and_is_in_the_trajectory(small_seque
     np.testing.assert_allclose(r.trajectory(), np.stack([f.pose for f in frames]))
 
 
-def test_a_sequence_without_poses_opens_for_tracking(tmp_path):
-    folder = vkmesh.synth(tmp_path / "room", frames=240, width=160, height=120, gt_spacing=0.05)
+def test_a_sequence_without_poses_opens_for_tracking(orbit_room, tmp_path):
+    folder = shutil.copytree(orbit_room, tmp_path / "room")   # a copy: its ground truth is removed below
     truth = [f.pose for f in vkmesh.open_dataset(folder, frames=6)]
     os.remove(os.path.join(folder, "groundtruth.txt"))
     with pytest.raises(vkmesh.Error, match="--track"):

@@ -149,9 +149,9 @@ std::vector<uint8_t> zstd(std::string_view in, uint64_t expected, const std::str
 
 std::vector<uint8_t> decompress(std::string_view compression, std::string_view in, uint64_t expectedSize,
                                 const std::string& where) {
-    if (expectedSize > kMaxChunkBytes)
+    if (expectedSize > maxChunkBytes())
         throw Error(where + ": the chunk declares " + std::to_string(expectedSize) +
-                    " bytes uncompressed, more than the limit of " + std::to_string(kMaxChunkBytes));
+                    " bytes uncompressed, more than the limit of " + std::to_string(maxChunkBytes()));
     if (compression.empty() || compression == "none") {
         if (in.size() != expectedSize)
             throw Error(where + ": an uncompressed chunk of " + std::to_string(in.size()) + " bytes declares " +
