@@ -62,8 +62,9 @@ gpu_tests='(GpuTest\.(FusedTsdfMatchesReference|EmptyVolumeExportsAnEmptyMesh|Ve
 # together a third of the job's test time), variants with more frames, noise or another epsilon of tests that
 # run here in their short form (RefinementOnASlantedPlane, IncrementalEqualsFromScratch, ...): the same code,
 # longer (RefinementHalvesIrregularity...: the noisier slanted plane's run on another plane, 2 minutes under ASan and
-# the last test to finish). They run in the main suite.
-cpu_slow='^(ReferenceMesher\.(RefinementOnASlantedPlaneNoisier|RefinementHalvesIrregularityOnANoisyNearlyFlatPlane|RefinementOnASlantedPlaneNoisierQuarterVoxel|RefinementOnASlantedPlaneQuarterVoxel|RefinementKeepsTheInvariantsEveryFrame|RevisitingKeepsTheHeapsBounded)|ReferenceVolume\.FlippedCornersAndRetypeSetWithRefinementAndMinWeight)$'
+# the last test to finish; the sphere's and the torus's closed meshes: the mesher's code on other shapes, 30-35 s each).
+# They run in the main suite.
+cpu_slow='^(ReferenceMesher\.(SphereSeenFromAllAroundIsClosedWithChiTwo|TorusSeenFromAllAroundIsClosedWithChiZero|RefinementOnASlantedPlaneNoisier|RefinementHalvesIrregularityOnANoisyNearlyFlatPlane|RefinementOnASlantedPlaneNoisierQuarterVoxel|RefinementOnASlantedPlaneQuarterVoxel|RefinementKeepsTheInvariantsEveryFrame|RevisitingKeepsTheHeapsBounded)|ReferenceVolume\.FlippedCornersAndRetypeSetWithRefinementAndMinWeight)$'
 echo "sanitize: running the CPU tests and the selected GPU tests"
 (
   cd build-asan
