@@ -7,7 +7,7 @@
 set -euo pipefail
 
 packages=(
-  cmake g++ make pkg-config
+  cmake g++ make ninja-build pkg-config
   libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers vulkan-tools glslang-tools spirv-tools
   libeigen3-dev libopencv-core-dev libopencv-imgcodecs-dev libcli11-dev nlohmann-json3-dev libgtest-dev
   # the frame store (core/frame_store.h): lossless compression of the fused frames
