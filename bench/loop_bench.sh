@@ -34,7 +34,7 @@ import json, sys
 s, a, name = json.load(open(sys.argv[1])), json.load(open(sys.argv[2])), sys.argv[3]
 t, l = s["tracking"], s["loop_closure"]
 line = (f"{name}: {a['pairs']} frames: ATE RMSE {a['ate']['rmse']*100:.2f} cm (max {a['ate']['max']*100:.2f}); unaligned error max "
-        f"{t['position_error_m']['max']*100:.1f} cm online; lost {t['lost_frames']}; tracking {t['ms_per_frame']['median']:.1f} ms wall (median)")
+        f"{t['position_error_m']['max']*100:.1f} cm online; lost {t['lost_frames']}, tentative {t.get('tentative_frames', 0)}; tracking {t['ms_per_frame']['median']:.1f} ms wall (median)")
 if l.get("enabled"):
     ms = ", ".join(f"{k} {v['mean']:.2f} ms x {v['count']}" for k, v in sorted(l["ms"].items()) if v["count"])
     line += (f"\n  loop closure: {l['keyframes']} keyframes; loops detected {l['loops_detected']}, accepted {l['loops_accepted']}, "
@@ -56,7 +56,8 @@ import json, sys, math
 import numpy as np
 s = json.load(open(sys.argv[1]))
 online = np.loadtxt(sys.argv[2]); truth = {round(r[0], 6): r[1:] for r in np.loadtxt(sys.argv[3])}
-lost = {e["frame"] for e in s["tracking"]["lost"]}
+# Not fused: lost, or tentative (tracked from a relocalisation not yet confirmed)
+lost = {e["frame"] for e in s["tracking"]["lost"]} | {v["frame"] for v in s["tracking"].get("per_frame", []) if v["status"] == "tentative"}
 def angle(q1, q2):
     return math.degrees(2 * math.acos(min(1.0, abs(float(np.dot(q1 / np.linalg.norm(q1), q2 / np.linalg.norm(q2)))))))
 ok = 0

@@ -3,6 +3,7 @@
 of a `vkmesh fuse --track --loop-closure` run on it (../shared/docs/real-data.md; docs/LOOP_CLOSURE.md).
 
   /usr/bin/python3 bench/real_kidnaps.py make DATASET OUT (--cut START:COUNT ... | --auto N)
+  /usr/bin/python3 bench/real_kidnaps.py mirror DATASET OUT --frames N
   /usr/bin/python3 bench/real_kidnaps.py score OUT RUN_DIR [--json FILE]
 
 make: OUT gets depth.txt and rgb.txt without the cut frames (associations.txt too, if the dataset has one), copies
@@ -15,6 +16,12 @@ intrinsics by the folder's name (fr1/freiburg1, icl), so OUT's name must select 
 (last kept frame before -> first kept frame after) is at most 80 cm and 120 degrees and at least 30 cm or 30 degrees.
 A landing is "mapped" when a kept frame before it is within 30 cm and 30 degrees of its true pose (a proxy for "that
 view was seen": same place, overlapping view cone), else "unmapped". OUT/kidnaps.json lists the cuts.
+
+mirror: OUT is a there-and-back sequence: frames 0..N-1 of DATASET, then N-2..0 again (2N-1 frames), so that the
+way back revisits what the way there mapped. The way back gets new timestamps (2 t_last - t: increasing, and ICL-
+NUIM's stay frame indices); OUT's depth.txt, rgb.txt (each frame's nearest colour image) and groundtruth.txt (each
+frame's pose) are written with them, the image folders are symlinks. `make OUT ...` then cuts it: jumps on the way
+back land on mapped places.
 
 score: reads what this run wrote (it runs nothing):
   build/vkmesh fuse OUT --track --loop-closure --trajectory-online RUN_DIR/online.txt \
@@ -243,16 +250,80 @@ def cmd_make(args):
     print(json.dumps(result, indent=1))
 
 
+def cmd_mirror(args):
+    seq = Sequence(args.dataset)
+    n = args.frames
+    if not 2 <= n <= len(seq.frames):
+        fail(f"--frames {n}: the dataset has {len(seq.frames)} frames")
+    if seq.preset(args.out) != seq.preset(args.dataset):
+        fail(f"vkmesh picks intrinsics by folder name: keep the dataset's sensor word (fr1, icl) in OUT's name")
+    missing = [f for f in range(n) if seq.poses[f] is None]
+    if missing:
+        fail(f"frames {missing[:5]} of {args.dataset} have no ground-truth pose")
+    with open(os.path.join(args.dataset, "depth.txt"), encoding="utf-8") as f:
+        data = [raw.split() for raw in f if raw.split() and not raw.startswith("#")]
+    depth_paths = [tokens[1] for tokens in data]
+    rgb = read_list(os.path.join(args.dataset, "rgb.txt"))
+    with open(os.path.join(args.dataset, "rgb.txt"), encoding="utf-8") as f:
+        rgb_paths = [raw.split()[1] for raw in f if raw.split() and not raw.startswith("#")]
+    rgb_stamps = np.array([t for t, _ in rgb])
+    last = seq.stamps[n - 1]
+    order = list(range(n)) + list(range(n - 2, -1, -1))
+    stamps = [seq.stamps[f] if k < n else 2 * last - seq.stamps[f] for k, f in enumerate(order)]
+    os.makedirs(args.out, exist_ok=True)
+    fmt = (lambda t: f"{t:.0f}") if seq.frame_indices else (lambda t: f"{t:.6f}")
+    note = f"# real_kidnaps.py mirror: frames 0-{n - 1} then {n - 2}-0 of {os.path.abspath(args.dataset)}\n"
+    with open(os.path.join(args.out, "depth.txt"), "w", encoding="utf-8") as d, \
+            open(os.path.join(args.out, "rgb.txt"), "w", encoding="utf-8") as c, \
+            open(os.path.join(args.out, "groundtruth.txt"), "w", encoding="utf-8") as g:
+        for out in (d, c, g):
+            out.write(note)
+        g.write("# timestamp tx ty tz qx qy qz qw\n")
+        for f, t in zip(order, stamps):
+            d.write(f"{fmt(t)} {depth_paths[f]}\n")
+            if len(rgb_stamps):
+                c.write(f"{fmt(t)} {rgb_paths[nearest_index(rgb_stamps, seq.stamps[f])]}\n")
+            p, r = seq.poses[f]
+            q = matrix_to_quaternion(r)
+            g.write(f"{fmt(t)} {p[0]:.9f} {p[1]:.9f} {p[2]:.9f} {q[0]:.9f} {q[1]:.9f} {q[2]:.9f} {q[3]:.9f}\n")
+    for name in sorted(os.listdir(args.dataset)):
+        source, target = os.path.join(args.dataset, name), os.path.join(args.out, name)
+        if os.path.isdir(source) and not os.path.lexists(target):
+            os.symlink(os.path.abspath(source), target)
+    print(f"{args.out}: {len(order)} frames (0-{n - 1}, then {n - 2}-0)")
+
+
+def matrix_to_quaternion(r):
+    """(qx, qy, qz, qw) of a rotation matrix (Shepperd's method)."""
+    trace = r[0, 0] + r[1, 1] + r[2, 2]
+    if trace > 0:
+        s = 2.0 * math.sqrt(trace + 1.0)
+        return ((r[2, 1] - r[1, 2]) / s, (r[0, 2] - r[2, 0]) / s, (r[1, 0] - r[0, 1]) / s, 0.25 * s)
+    i = int(np.argmax([r[0, 0], r[1, 1], r[2, 2]]))
+    j, k = (i + 1) % 3, (i + 2) % 3
+    s = 2.0 * math.sqrt(1.0 + r[i, i] - r[j, j] - r[k, k])
+    q = [0.0, 0.0, 0.0, 0.0]
+    q[i] = 0.25 * s
+    q[j] = (r[j, i] + r[i, j]) / s
+    q[k] = (r[k, i] + r[i, k]) / s
+    q[3] = (r[k, j] - r[j, k]) / s
+    return tuple(q)
+
+
 def cmd_score(args):
     seq = Sequence(args.out)
     kidnaps = json.load(open(os.path.join(args.out, "kidnaps.json")))["kidnaps"]
     stats = json.load(open(os.path.join(args.run_dir, "stats.json")))
     tracking, loops = stats["tracking"], stats.get("loop_closure", {})
-    lost = {e["frame"] for e in tracking["lost"]}
-    if len(lost) != tracking["lost_frames"]:
+    # Not fused: lost, or tentative (tracked from a relocalisation not yet confirmed); relocalised: the frame that
+    # confirmed one (the first fused after the loss).
+    verdicts = {v["frame"]: v["status"] for v in tracking.get("per_frame", [])}
+    lost = {e["frame"] for e in tracking["lost"]} | {f for f, v in verdicts.items() if v == "tentative"}
+    if len(lost) != tracking["lost_frames"] + tracking.get("tentative_frames", 0):
         print(f"warning: stats list {len(lost)} of {tracking['lost_frames']} lost frames (truncated list)")
     attempted = {r["frame"] for r in loops.get("relocalisation", [])}
-    relocalised = {r["frame"] for r in loops.get("relocalisation", []) if r["relocalised"]}
+    relocalised = {f for f, v in verdicts.items() if v == "relocalised"} if verdicts else \
+        {r["frame"] for r in loops.get("relocalisation", []) if r["relocalised"]}
     est = {}
     for name in ("online", "final"):
         t, p, q = read_trajectory(os.path.join(args.run_dir, name + ".txt"))
@@ -354,13 +425,17 @@ def main():
     how = make.add_mutually_exclusive_group(required=True)
     how.add_argument("--cut", action="append", metavar="START:COUNT", help="cut COUNT frames from frame START")
     how.add_argument("--auto", type=int, metavar="N", help="choose N cuts")
+    mirror = sub.add_parser("mirror", help="write a there-and-back sequence (frames 0..N-1, then back to 0)")
+    mirror.add_argument("dataset")
+    mirror.add_argument("out")
+    mirror.add_argument("--frames", type=int, required=True, metavar="N", help="frames of the way there")
     score = sub.add_parser("score", help="score a vkmesh run on OUT")
     score.add_argument("out")
     score.add_argument("run_dir")
     score.add_argument("--json", help="write the scores here")
     args = parser.parse_args()
     try:
-        cmd_make(args) if args.command == "make" else cmd_score(args)
+        {"make": cmd_make, "mirror": cmd_mirror, "score": cmd_score}[args.command](args)
     except (InputError, OSError, KeyError, ValueError) as e:
         fail(str(e))
 

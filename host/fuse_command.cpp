@@ -266,7 +266,8 @@ int runFuse(const FuseArgs& args) {
     std::cout << "wall " << summarize(run.frameWallMs).median << " ms/frame\n";
     if (run.tracking.enabled) {
         const json& t = stats["tracking"];
-        std::cout << "  tracking: " << t["frames_tracked"] << " frames tracked, " << t["lost_frames"] << " lost; "
+        std::cout << "  tracking: " << t["frames_tracked"] << " frames tracked, " << t["lost_frames"] << " lost"
+                  << (t["tentative_frames"] > 0 ? ", " + t["tentative_frames"].dump() + " tentative (not fused)" : std::string()) << "; "
                   << t["ms_per_frame"]["median"] << " ms/frame (median), " << t["iterations"]["mean"] << " iterations/frame (mean)"
                   << (args.trajectoryPath.empty() ? std::string() : " -> " + args.trajectoryPath) << "\n";
     }

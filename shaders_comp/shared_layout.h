@@ -519,7 +519,7 @@ struct TrackParamsGpu {
     uint pixelsPerInvocation;
     uint pad0, pad1, pad2;
     // The loss policy (TrackerOptions; PoseTracker), for track_decide: the last tracked pose, the recent
-    // frames' mean inlier RMSE (0: none yet) and the bounds.
+    // frames' mean inlier RMSE and share (0: none yet) and the bounds.
     VKM_ROWS3(lastTrackedCameraToWorld);
     float minInliers;
     float minInlierFraction;
@@ -529,6 +529,9 @@ struct TrackParamsGpu {
     float maxErrorRise;
     float minErrorForRise;
     float recentRmse;
+    float recentInlierShare;    // the recent tracked frames' mean inlier share (0: none yet)
+    float minShareOfRecent;
+    float pad3, pad4;
 };
 
 // Push constants of the tracker's compute passes.
@@ -578,6 +581,7 @@ VKM_CONST TRACK_LOST_ILL_CONDITIONED = 4u;
 VKM_CONST TRACK_LOST_JUMP = 5u;
 VKM_CONST TRACK_LOST_TURN = 6u;
 VKM_CONST TRACK_LOST_ERROR_ROSE = 7u;
+VKM_CONST TRACK_LOST_SHARE_FELL = 8u;
 #ifdef __cplusplus
 }  // namespace vkmesh::gpu
 #endif

@@ -86,6 +86,7 @@ void main() {
     else if (!(degrees <= track.maxJumpDegrees)) reason = TRACK_LOST_TURN;
     else if (track.recentRmse > 0.0 && rmse > track.minErrorForRise && rmse > track.maxErrorRise * track.recentRmse)
         reason = TRACK_LOST_ERROR_ROSE;
+    else if (inliers < track.minShareOfRecent * track.recentInlierShare * valid) reason = TRACK_LOST_SHARE_FELL;
     state.lostReason = reason;
     state.conditioning = conditioning;
 

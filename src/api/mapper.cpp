@@ -1,7 +1,11 @@
 #include "api/mapper.h"
 
 #include <algorithm>
+#include <cstdio>
 #include <limits>
+
+#include "core/camera.h"
+#include "core/icp_solve.h"
 
 namespace vkmesh {
 
@@ -54,6 +58,7 @@ void Mapper::record(const MapperFrame& frame, const Pose& pose, bool posed) {
 void Mapper::recordGiven(const MapperFrame& frame) {
     record(frame, *frame.pose, true);
     if (tracker_) tracker_->start(*frame.pose);
+    hypothesis_.reset(), lost_ = false;
     if (corrector_ && frame.depth) corrector_->keep(frame.index, frame.timestamp, frame.intrinsics, *frame.pose, *frame.depth, fusedColor(frame));
 }
 
@@ -85,6 +90,7 @@ MapperResult Mapper::process(const MapperFrame& frame) {
     result.posed = true;
     record(frame, *frame.pose, true);
     if (tracker_) tracker_->start(*frame.pose);   // tracking goes on from a given pose
+    hypothesis_.reset(), lost_ = false;
     if (valid == 0) {
         skipped(frame, result, "no valid depth in " + frame.source);
         return result;
@@ -119,28 +125,202 @@ MapperResult Mapper::tracked(const MapperFrame& frame, size_t valid) {
     if (!tracker_->started()) tracker_->start(lastPose);
 
     applyCorrections(options_.correctionsPerFrame, result.corrections);
-    LoopClosure* loops = options_.loopClosure.get();
-    gpu::TrackedFusion f = tracker_->trackAndFuse(*volume_, *frame.depth, frame.intrinsics, frame.color, fusedColor(frame), frame.sync);
-    if (!f.tracking.tracked && loops && valid > 0) {
-        // Relocalisation: tracked again from the poses of the keyframes that look like this frame.
-        const Pose predicted = f.tracking.cameraToWorld;
-        const std::vector<Pose> candidates =
-            loops->relocalisationCandidates({frame.index, frame.depth, frame.color, frame.intrinsics, predicted});
-        for (const Pose& candidate : candidates) {
-            ++result.relocalisationCandidatesTried;
-            gpu::TrackedFusion g = tracker_->relocalise(*volume_, candidate, *frame.depth, frame.intrinsics, frame.color, fusedColor(frame));
-            if (g.tracking.tracked) {
-                f = std::move(g);
-                result.relocalised = true;
-                break;
-            }
+    if (hypothesis_) return tentative(frame, valid, std::move(result));
+    gpu::TrackedFusion f;
+    const gpu::PoseTracker::State atLoss = tracker_->state();
+    const double baseline = tracker_->recentRmse();
+    if (lost_ && options_.relocalisation.confirmFrames > 0) {
+        // After a loss, tracking that picks up again from the last pose is a hypothesis as a relocalisation is: on
+        // real data it picks up next to the old pose after a jump (frames 98 and 100 of ICL-NUIM office 0 without
+        // frames 59-98, 1 m off).
+        f.tracking = tracker_->track(*frame.depth, frame.intrinsics, volume_->meshBuffers(), frame.color);
+        const std::string why = f.tracking.tracked ? errorAgainstBaseline(f.tracking.rmse, baseline) : f.tracking.lostReason;
+        if (why.empty()) {
+            hypothesis_ = Hypothesis{frame.index, 0, f.tracking.cameraToWorld, atLoss, baseline, 0, SIZE_MAX};
+            return tentativeVerdict(frame, std::move(f.tracking), std::move(result));
         }
-        loops->relocalisationResult(frame.index, result.relocalised, result.relocalisationCandidatesTried);
-        if (stats_.relocalisations.size() < kRunStatsListLimit)
-            stats_.relocalisations.push_back({frame.index, result.relocalised, candidates.size(), result.relocalisationCandidatesTried});
-        if (result.relocalised) ++stats_.tracking.relocalisedFrames;
+        tracker_->restore(atLoss);
+        f.tracking.tracked = false;
+        f.tracking.cameraToWorld = tracker_->prediction();
+        f.tracking.lostReason = why;
+    } else {
+        f = tracker_->trackAndFuse(*volume_, *frame.depth, frame.intrinsics, frame.color, fusedColor(frame), frame.sync);
     }
+    if (!f.tracking.tracked && options_.loopClosure && valid > 0) {
+        RelocalisationOutcome found = relocalise(frame, f.tracking.cameraToWorld, f.tracking.lostReason, baseline, result);
+        if (found.accepted) {
+            startHypothesis(frame, found, atLoss, baseline);
+            // Fused once it is confirmed (options.relocalisation.confirmFrames), or now.
+            if (options_.relocalisation.confirmFrames > 0) return tentativeVerdict(frame, std::move(found.tracking), std::move(result));
+            return confirmRelocalisation(frame, std::move(found.tracking), std::move(result));
+        }
+        f.tracking.lostReason = found.tracking.lostReason;
+    }
+    return concludeTracked(frame, std::move(f), std::move(result));
+}
+
+Mapper::RelocalisationOutcome Mapper::relocalise(const MapperFrame& frame, const Pose& predicted, const std::string& lostReason,
+                                                 double baseline, MapperResult& result) {
+    LoopClosure& loops = *options_.loopClosure;
+    const MapperOptions::Relocalisation& o = options_.relocalisation;
+    const std::vector<Pose> candidates = loops.relocalisationCandidates({frame.index, frame.depth, frame.color, frame.intrinsics, predicted});
+    RunStats::Relocalisation attempt{frame.index, false, candidates.size(), 0};
+    // Every candidate is tracked from (a few): the map must match the frame at one place only. Each must also
+    // match as closely as the frames tracked before the loss did (`baseline`: a look-alike matches, but worse).
+    RelocalisationOutcome out;
+    std::optional<gpu::TrackingReport> best;
+    int bestCandidate = 0;
+    std::string refusals;
+    for (size_t c = 0; c < candidates.size(); ++c) {
+        gpu::TrackingReport r = tracker_->trackFrom(candidates[c], *frame.depth, frame.intrinsics, volume_->meshBuffers(), frame.color);
+        ++result.relocalisationCandidatesTried;
+        std::string why = r.tracked ? errorAgainstBaseline(r.rmse, baseline) : r.lostReason;
+        if (why.empty() && best && (translationMetres(inverseRigid(best->cameraToWorld) * r.cameraToWorld) > o.ambiguousMetres ||
+                                    rotationDegrees(inverseRigid(best->cameraToWorld) * r.cameraToWorld) > o.ambiguousDegrees)) {
+            char text[160];
+            std::snprintf(text, sizeof text, "ambiguous: candidates %d and %zu match the frame at places %.2f m apart", bestCandidate,
+                          c + 1, translationMetres(inverseRigid(best->cameraToWorld) * r.cameraToWorld));
+            out.tracking = std::move(r);
+            out.tracking.tracked = false;
+            out.tracking.lostReason = text;
+            best.reset();
+            break;
+        }
+        if (why.empty()) {
+            if (!best || r.rmse < best->rmse) best = r, bestCandidate = int(c + 1);
+        } else {
+            refusals += (refusals.empty() ? "" : "; ") + ("candidate " + std::to_string(c + 1) + ": " + why);
+            if (!best && out.tracking.lostReason.empty()) out.tracking = r;   // the numbers of the first refused, for the report
+        }
+    }
+    if (best) {
+        out.accepted = true;
+        out.candidate = bestCandidate;
+        out.statsEntry = stats_.relocalisations.size();
+        out.tracking = std::move(*best);
+        out.tracking.lostReason = "lost (" + lostReason + "), relocalised from candidate " + std::to_string(bestCandidate);
+    } else {
+        if (out.tracking.lostReason.rfind("ambiguous", 0) != 0)
+            out.tracking.lostReason = lostReason + (candidates.empty() ? "; no keyframe looks alike" : "; relocalisation refused (" + refusals + ")");
+        out.tracking.cameraToWorld = predicted;
+        loops.relocalisationResult(frame.index, false, result.relocalisationCandidatesTried);
+    }
+    attempt.tried = result.relocalisationCandidatesTried;
+    attempt.inlierShare = out.tracking.inlierShare();
+    attempt.rmse = out.tracking.rmse;
+    attempt.reason = out.accepted ? std::string() : out.tracking.lostReason;
+    attempt.tentative = out.accepted;
+    if (stats_.relocalisations.size() < kRunStatsListLimit) stats_.relocalisations.push_back(attempt);
+    return out;
+}
+
+void Mapper::startHypothesis(const MapperFrame& frame, const RelocalisationOutcome& found, const gpu::PoseTracker::State& atLoss,
+                             double baseline) {
+    hypothesis_ = Hypothesis{frame.index, found.candidate, found.tracking.cameraToWorld, atLoss, baseline, 0, found.statsEntry};
+    tracker_->resumeAt(found.tracking.cameraToWorld);
+}
+
+std::string Mapper::errorAgainstBaseline(double rmse, double baseline) const {
+    const double limit = options_.relocalisation.maxErrorRatio * baseline;
+    if (baseline <= 0 || rmse <= limit) return {};
+    char text[160];
+    std::snprintf(text, sizeof text, "its error %.4f m is over %.1f times that of the frames tracked before the loss (%.4f m)", rmse,
+                  options_.relocalisation.maxErrorRatio, baseline);
+    return text;
+}
+
+MapperResult Mapper::tentative(const MapperFrame& frame, size_t valid, MapperResult result) {
+    Hypothesis& h = *hypothesis_;
+    gpu::TrackingReport r = tracker_->track(*frame.depth, frame.intrinsics, volume_->meshBuffers(), frame.color);
+    std::string why = r.tracked ? errorAgainstBaseline(r.rmse, h.baselineRmse) : r.lostReason;
+    if (!why.empty()) {
+        // Not tracked from the hypothesis (after a relocalisation the camera's motion is unknown: a fast one is
+        // not followed from a standstill): found again from the keyframes at a place it could have moved to from
+        // the hypothesis, it agrees; elsewhere or not found, the hypothesis was wrong.
+        const std::string lostFromIt = "frame " + std::to_string(frame.index) + " tracked from the relocalisation at frame " +
+                                       std::to_string(h.frame) + " is lost: " + why;
+        RelocalisationOutcome found;
+        if (valid > 0 && options_.loopClosure) found = relocalise(frame, h.pose, lostFromIt, h.baselineRmse, result);
+        else found.tracking.lostReason = lostFromIt;
+        const Pose moved = inverseRigid(h.pose) * found.tracking.cameraToWorld;
+        const gpu::TrackerOptions& t = tracker_->options();
+        if (found.accepted && translationMetres(moved) <= t.maxJumpMetres && rotationDegrees(moved) <= t.maxJumpDegrees) {
+            h.candidate = found.candidate;   // of the loop closer's latest candidates
+            h.pose = found.tracking.cameraToWorld;
+            tracker_->resumeAt(h.pose, moved);
+            r = std::move(found.tracking);
+        } else {
+            // The relocalisation was wrong (or the camera moved on too fast to tell): back to lost, as before it.
+            const std::string reason = "the relocalisation at frame " + std::to_string(h.frame) + " is refused: " + lostFromIt;
+            if (h.statsEntry < stats_.relocalisations.size()) stats_.relocalisations[h.statsEntry].refusedBy = reason;
+            if (!found.accepted && h.candidate > 0) options_.loopClosure->relocalisationResult(h.frame, false, 0);
+            const Hypothesis refused = h;
+            tracker_->restore(refused.before);
+            hypothesis_.reset();
+            if (found.accepted) {   // found elsewhere: a new hypothesis
+                startHypothesis(frame, found, refused.before, refused.baselineRmse);
+                return tentativeVerdict(frame, std::move(found.tracking), std::move(result));
+            }
+            gpu::TrackedFusion f;
+            f.tracking = std::move(r);
+            f.tracking.tracked = false;
+            f.tracking.cameraToWorld = tracker_->prediction();
+            f.tracking.lostReason = reason + "; " + found.tracking.lostReason;
+            return concludeTracked(frame, std::move(f), std::move(result));
+        }
+    } else {
+        h.pose = r.cameraToWorld;
+    }
+    if (++h.confirmed < options_.relocalisation.confirmFrames) return tentativeVerdict(frame, std::move(r), std::move(result));
+    return confirmRelocalisation(frame, std::move(r), std::move(result));
+}
+
+MapperResult Mapper::tentativeVerdict(const MapperFrame& frame, gpu::TrackingReport tracking, MapperResult result) {
+    const Hypothesis& h = *hypothesis_;
+    tracking.tracked = false;   // not fused: for a caller (and the tracked frames' statistics), lost until confirmed
+    stats_.addTracking(tracking);
+    const std::string why = "tentative: tracked from the relocalisation at frame " + std::to_string(h.frame) + ", not fused until " +
+                            std::to_string(options_.relocalisation.confirmFrames) + " more frames agree with the map (" +
+                            std::to_string(h.confirmed) + " so far)";
+    if (stats_.tracking.verdicts.size() < kRunStatsListLimit)
+        stats_.tracking.verdicts.push_back({frame.index, "tentative", tracking.inlierShare(), tracking.rmse, tracking.conditioning, why});
+    ++stats_.tracking.tentativeFrames;
+    tracking.lostReason = why;
+    result.status = FrameStatus::Tentative;
+    result.cameraToWorld = tracking.cameraToWorld;
+    result.posed = true;
+    record(frame, result.cameraToWorld, true);
+    if (frame.reference) stats_.tracking.positionError.push_back(positionError(result.cameraToWorld, *frame.reference));
+    result.tracking = std::move(tracking);
+    for (FrameSink* sink : sinks_) sink->frameDone(result, frame, *volume_);
+    return result;
+}
+
+MapperResult Mapper::confirmRelocalisation(const MapperFrame& frame, gpu::TrackingReport tracking, MapperResult result) {
+    const Hypothesis h = *hypothesis_;
+    hypothesis_.reset();
+    if (h.candidate > 0) {   // from a keyframe (else picked up from the last pose)
+        options_.loopClosure->relocalisationResult(h.frame, true, h.candidate);
+        if (h.statsEntry < stats_.relocalisations.size()) {
+            stats_.relocalisations[h.statsEntry].relocalised = true;
+            stats_.relocalisations[h.statsEntry].confirmedAt = int64_t(frame.index);
+        }
+        ++stats_.tracking.relocalisedFrames;
+        result.relocalised = true;
+    }
+    const auto t0 = std::chrono::steady_clock::now();
+    gpu::TrackedFusion f;
+    f.fused = volume_->integrate(*frame.depth, fusedColor(frame), frame.intrinsics, tracking.cameraToWorld, frame.sync);
+    f.fuseMilliseconds = millisecondsSince(t0);
+    f.tracking = std::move(tracking);
+    return concludeTracked(frame, std::move(f), std::move(result));
+}
+
+MapperResult Mapper::concludeTracked(const MapperFrame& frame, gpu::TrackedFusion f, MapperResult result) {
     stats_.addTracking(f.tracking);
+    if (stats_.tracking.verdicts.size() < kRunStatsListLimit)
+        stats_.tracking.verdicts.push_back({frame.index, !f.tracking.tracked ? "lost" : result.relocalised ? "relocalised" : "tracked",
+                                            f.tracking.inlierShare(), f.tracking.rmse, f.tracking.conditioning, f.tracking.lostReason});
     result.oneSubmission = f.oneSubmission;
     result.cameraToWorld = f.tracking.cameraToWorld;
     result.posed = true;
@@ -151,6 +331,9 @@ MapperResult Mapper::tracked(const MapperFrame& frame, size_t valid) {
     if (!isTracked) {
         // A frame the tracker is not sure of stays out of the map: it keeps the predicted pose, nothing is fused.
         result.status = FrameStatus::Lost;
+        // A frame lost for want of depth says nothing about where the camera is; one that disagreed with the map
+        // makes tracking that picks up again a hypothesis (tracked()).
+        if (result.tracking->validPixels > 0) lost_ = true;
         ++stats_.tracking.lostFrames;
         if (stats_.tracking.lost.size() < kRunStatsListLimit) stats_.tracking.lost.push_back({frame.index, result.tracking->lostReason});
         result.warnings.push_back("frame " + std::to_string(frame.index) + " lost (not fused): " + result.tracking->lostReason);
@@ -174,6 +357,7 @@ MapperResult Mapper::fuseAt(const MapperFrame& frame, const Pose& pose, MapperRe
 
 void Mapper::finishFrame(const MapperFrame& frame, MapperResult& result) {
     result.status = FrameStatus::Fused;
+    lost_ = false;
     const gpu::FrameReport& report = *result.fused;
     const gpu::GpuVolumeConfig& config = volume_->config();
     stats_.addFusedFrame(frame.index, report, result.fuseWallMs, config.meshMode == gpu::MeshMode::Incremental, config.touchedCapacity,

@@ -69,7 +69,7 @@ void RunStats::addTracking(const gpu::TrackingReport& tr) {
     tracking.modelDraws += tr.modelDrawn;
     if (tr.tracked) {
         tracking.rmse.push_back(tr.rmse);
-        tracking.inlierShare.push_back(tr.validPixels > 0 ? tr.inliers / tr.validPixels : 0.0);
+        tracking.inlierShare.push_back(tr.inlierShare());
     }
 }
 

@@ -51,11 +51,23 @@ struct RunStats {
         size_t modelDraws = 0;                          // frames whose tracking drew the mesh
         size_t lostFrames = 0;
         size_t relocalisedFrames = 0;
+        size_t tentativeFrames = 0;                     // tracked from an unconfirmed relocalisation, not fused
         struct Lost {
             uint32_t frame = 0;
             std::string reason;
         };
         std::vector<Lost> lost;                          // at most kRunStatsListLimit
+        // Every tracked run's frame after the first, with its verdict and what it was decided on (--stats
+        // "tracking.per_frame"): how a user sees why a frame was kept or lost, and what thresholds separate them.
+        struct Verdict {
+            uint32_t frame = 0;
+            // "tracked", "relocalised" (confirmed: fused), "tentative" (tracked from a relocalisation not yet
+            // confirmed: not fused) or "lost"
+            const char* status = "tracked";
+            double inlierShare = 0, rmse = 0, conditioning = 0;
+            std::string reason;                          // a lost or tentative frame's; a relocalised one's loss
+        };
+        std::vector<Verdict> verdicts;                   // at most kRunStatsListLimit
         // Metres between the tracked position and the frame's reference (the dataset's pose, where it has one).
         std::vector<double> positionError;
     } tracking;
@@ -67,6 +79,12 @@ struct RunStats {
         bool relocalised = false;
         size_t candidates = 0;
         int tried = 0;
+        // The match of the accepted candidate (or of a refused one): its inlier share and RMSE, and why it was refused.
+        double inlierShare = 0, rmse = 0;
+        std::string reason;
+        bool tentative = false;          // a candidate was accepted as the hypothesis to confirm;
+        int64_t confirmedAt = -1;        //  confirmed at this frame (relocalised true then),
+        std::string refusedBy;           //  or refused later, and why
     };
     std::vector<Relocalisation> relocalisations;      // at most kRunStatsListLimit
     uint32_t framesRefused = 0, observationsDropped = 0;

@@ -38,10 +38,14 @@ json trackingJson(const Mapper& mapper, const RunStats& s) {
     for (const auto& [name, values] : t.stageMs) stages[name] = seriesJson(values);
     json lost = json::array();
     for (const auto& l : t.lost) lost.push_back({{"frame", l.frame}, {"reason", l.reason}});
+    json verdicts = json::array();
+    for (const auto& v : t.verdicts)
+        verdicts.push_back({{"frame", v.frame}, {"status", v.status}, {"inlier_share", v.inlierShare}, {"rmse_m", v.rmse},
+                            {"conditioning", v.conditioning}, {"reason", v.reason}});
     json its = seriesJson(t.iterations);
     its["total"] = std::accumulate(t.iterations.begin(), t.iterations.end(), 0.0);
     return {{"enabled", true},
-            {"frames_tracked", t.ms.size() - t.lostFrames},
+            {"frames_tracked", t.ms.size() - t.lostFrames - t.tentativeFrames},
             {"lost_frames", t.lostFrames},
             {"lost", lost},
             {"ms_per_frame", ms},
@@ -62,7 +66,11 @@ json trackingJson(const Mapper& mapper, const RunStats& s) {
             {"model_reuse_frames", options.modelReuseFrames},
             // against the frames' reference poses where they have them (the first frame's is shared: no alignment); metres
             {"position_error_m", positionErrorJson(t.positionError)},
-            {"relocalised_frames", t.relocalisedFrames}};
+            {"relocalised_frames", t.relocalisedFrames},
+            // tracked from a relocalisation not yet confirmed, not fused (docs/LOOP_CLOSURE.md, "Relocalisation")
+            {"tentative_frames", t.tentativeFrames},
+            // every tracked frame's verdict and the numbers it was decided on (at most the first 1000 frames)
+            {"per_frame", verdicts}};
 }
 
 json loopClosureJson(const Mapper& mapper, const RunStats& s) {
@@ -84,7 +92,9 @@ json loopClosureJson(const Mapper& mapper, const RunStats& s) {
     for (const auto& [reason, n] : l.rejectedBy) rejectedBy[reason] = n;
     json relocalisation = json::array();
     for (const auto& r : s.relocalisations)
-        relocalisation.push_back({{"frame", r.frame}, {"relocalised", r.relocalised}, {"candidates", r.candidates}, {"tried", r.tried}});
+        relocalisation.push_back({{"frame", r.frame}, {"relocalised", r.relocalised}, {"candidates", r.candidates}, {"tried", r.tried},
+                                  {"inlier_share", r.inlierShare}, {"rmse_m", r.rmse}, {"reason", r.reason}, {"tentative", r.tentative},
+                                  {"confirmed_at", r.confirmedAt >= 0 ? json(r.confirmedAt) : json(nullptr)}, {"refused_by", r.refusedBy}});
     return {{"enabled", true},
             {"keyframes", l.keyframes},
             {"loops_detected", l.loopsDetected},

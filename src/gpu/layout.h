@@ -34,9 +34,9 @@ static_assert(VOXELS_PER_INVOCATION * WG_BLOCK == VOXELS_PER_BLOCK);
 // (cornerOfInvocation, block_store.glsl; toggleTsdfMasks, frame_lists.glsl).
 static_assert(VOXELS_PER_INVOCATION == 4 && BLOCK_SIDE % VOXELS_PER_INVOCATION == 0);
 static_assert(sizeof(TrackPush) == 96, "tracking push constants: at most 128 bytes, all lavapipe guarantees");
-static_assert(sizeof(TrackParamsGpu) == 192 && offsetof(TrackParamsGpu, modelWorldToCamera) == 48 &&
+static_assert(sizeof(TrackParamsGpu) == 208 && offsetof(TrackParamsGpu, modelWorldToCamera) == 48 &&
                   offsetof(TrackParamsGpu, pixelsPerInvocation) == 96 && offsetof(TrackParamsGpu, lastTrackedCameraToWorld) == 112 &&
-                  offsetof(TrackParamsGpu, recentRmse) == 188,
+                  offsetof(TrackParamsGpu, recentRmse) == 188 && offsetof(TrackParamsGpu, minShareOfRecent) == 196,
               "TrackParamsGpu: std140 layout");
 static_assert(sizeof(TrackStateGpu) == 208 && offsetof(TrackStateGpu, finalSums) == 64 && offsetof(TrackStateGpu, lostReason) == 192,
               "TrackStateGpu: std430 layout");

@@ -145,8 +145,8 @@ std::string LoopCloser::verified(const Registration& r, const Pose& initial) con
     const Pose motion = inverseRigid(initial) * r.cameraToWorld;
     gpu::TrackerOptions checks = options_.tracker;
     checks.maxJumpMetres = checks.maxJumpDegrees = 1e9;   // the plausibility test bounds a loop's correction
-    const uint32_t verdict = gpu::trackingLoss(r.system, r.solved, r.conditioning, motion, 0.0, checks);
-    if (verdict != gpu::TRACK_TRACKED) return gpu::lossText(verdict, r.system, r.conditioning, motion, 0.0, checks);
+    const uint32_t verdict = gpu::trackingLoss(r.system, r.solved, r.conditioning, motion, {}, checks);
+    if (verdict != gpu::TRACK_TRACKED) return gpu::lossText(verdict, r.system, r.conditioning, motion, {}, checks);
     if (r.inlierShare() < options_.minInlierShare)
         return "inliers cover " + std::to_string(int(std::lround(100 * r.inlierShare()))) + " % of the frame";
     if (r.system.rmse() > options_.maxRmse) return "RMSE " + std::to_string(r.system.rmse()) + " m";

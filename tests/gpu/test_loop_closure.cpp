@@ -8,7 +8,9 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <numbers>
+#include <sstream>
 #include <set>
 
 #include "core/camera.h"
@@ -222,7 +224,8 @@ const fs::path& kidnapSequence() {
 }
 
 // Kidnapping: after each of the 10 jumps the camera is relocalised within 5 frames, within 5 cm and 5 degrees of
-// the truth, in at least 9 of the 10; no frame stays lost for good, and the map holds only tracked frames.
+// the truth, in at least 9 of the 10 (the relocalised frame and the next one tentative, the one after fused); no
+// frame stays lost for good, and the map holds only tracked frames.
 TEST(LoopClosure, KidnappedCameraIsRelocalisedFromTheKeyframes) {
     if (const std::string why = test::lavapipeCannotDraw(); !why.empty()) GTEST_SKIP() << why;   // tracking draws the mesh
     const fs::path d = test::makeTempDir("loop_kidnap");
@@ -242,8 +245,10 @@ TEST(LoopClosure, KidnappedCameraIsRelocalisedFromTheKeyframes) {
     std::set<size_t> relocalisedFrames;
     for (const auto& e : stats["loop_closure"]["relocalisation"])
         if (e["relocalised"].get<bool>()) relocalisedFrames.insert(e["frame"].get<size_t>());
-    std::set<size_t> lost;
-    for (const auto& e : stats["tracking"]["lost"]) lost.insert(e["frame"].get<size_t>());
+    std::set<size_t> lost;   // not fused: lost, or tentative (tracked from a relocalisation not yet confirmed)
+    for (const auto& e : stats["tracking"]["per_frame"])
+        if (e["status"] == "lost" || e["status"] == "tentative") lost.insert(e["frame"].get<size_t>());
+    EXPECT_EQ(lost.size(), stats["tracking"]["lost_frames"].get<size_t>() + stats["tracking"]["tentative_frames"].get<size_t>());
     int recovered = 0;
     for (size_t jump = 56; jump < 96; jump += 4) {
         // The first frame of the run that is fused (tracked or relocalised), within 5 frames of the jump.
@@ -379,6 +384,143 @@ TEST(LoopClosure, DriftingGalleryIsNotMadeWorse) {
     EXPECT_GT(stats["loop_closure"]["keyframes"].get<int>(), 100);
     EXPECT_GT(stats["loop_closure"]["loops_detected"].get<int>(), 0);
     EXPECT_EQ(stats["loop_closure"]["observations_dropped"], 0);
+    fs::remove_all(d);
+}
+
+// A real sequence made of ICL-NUIM office 0's frames in the order `frames` (numbers of the data lines of its depth.txt):
+// cut, reversed and joined as ../shared/docs/real-data.md says, each frame with its colour image and its true pose,
+// under new timestamps (2, 8, 14, ...: vkmesh reads frames in time order). bench/real_kidnaps.py (make, mirror)
+// makes the same from any TUM-layout dataset and scores runs on them. `name` must keep the word "icl" (the camera
+// preset).
+fs::path iclSequence(const fs::path& source, const fs::path& dir, const std::string& name, const std::vector<size_t>& frames) {
+    const auto dataLines = [&](const char* file) {
+        std::vector<std::vector<std::string>> lines;
+        std::ifstream in(source / file);
+        for (std::string line; std::getline(in, line);) {
+            if (line.empty() || line[0] == '#') continue;
+            std::istringstream words(line);
+            std::vector<std::string> tokens;
+            for (std::string w; words >> w;) tokens.push_back(w);
+            lines.push_back(tokens);
+        }
+        return lines;
+    };
+    const auto depth = dataLines("depth.txt"), rgb = dataLines("rgb.txt"), truth = dataLines("groundtruth.txt");
+    std::map<std::string, std::string> poseAt;   // ICL-NUIM: one pose per frame, at its timestamp (the frame index)
+    for (const auto& t : truth) {
+        std::string pose;
+        for (size_t i = 1; i < t.size(); ++i) pose += " " + t[i];
+        poseAt[t[0]] = pose;
+    }
+    EXPECT_EQ(rgb.size(), depth.size()) << "ICL-NUIM pairs every depth image with the colour image of its timestamp";
+    const fs::path out = dir / name;
+    fs::create_directories(out);
+    std::ofstream d(out / "depth.txt"), c(out / "rgb.txt"), g(out / "groundtruth.txt");
+    for (size_t k = 0; k < frames.size(); ++k) {
+        const size_t f = frames[k];
+        const std::string stamp = std::to_string(2 + 6 * k);
+        d << stamp << " " << depth.at(f)[1] << "\n";
+        c << stamp << " " << rgb.at(f)[1] << "\n";
+        EXPECT_EQ(poseAt.count(depth[f][0]), 1u) << "frame " << f << " has no true pose";
+        g << stamp << poseAt[depth[f][0]] << "\n";
+    }
+    for (const char* folder : {"depth", "rgb"}) fs::create_directory_symlink(source / folder, out / folder);
+    return out;
+}
+
+std::vector<size_t> frameRange(size_t first, size_t last) {   // first..last, either way
+    std::vector<size_t> v;
+    for (size_t f = first;; f = first <= last ? f + 1 : f - 1) {
+        v.push_back(f);
+        if (f == last) return v;
+    }
+}
+
+std::vector<size_t> joined(std::initializer_list<std::vector<size_t>> parts) {
+    std::vector<size_t> v;
+    for (const auto& p : parts) v.insert(v.end(), p.begin(), p.end());
+    return v;
+}
+
+// A tracked run with loop closure on a real sequence, and what a user needs of it: the frames each verdict gave
+// (fused: tracked or relocalised), every fused frame within 5 cm of its true place, and the confirmed relocalisations
+// within 5 cm and 5 degrees.
+struct RealRun {
+    nlohmann::json stats;
+    std::vector<TimedPose> online, truth;
+    std::set<size_t> fused, notFused, relocalised;
+};
+
+RealRun runOnRealSequence(const fs::path& seq, const fs::path& d) {
+    RealRun run;
+    const test::CliRun r = test::runCli("fuse " + seq.string() + " --track --loop-closure --voxel 0.02 --trajectory-online " +
+                                        (d / "online.txt").string() + " --stats " + (d / "s.json").string() + " -o /dev/null -q");
+    EXPECT_EQ(r.exitCode, 0) << r.err;
+    if (r.exitCode != 0) return run;
+    run.stats = nlohmann::json::parse(test::readText(d / "s.json"));
+    run.online = readTumTrajectory(d / "online.txt");
+    run.truth = readTumTrajectory(seq / "groundtruth.txt");
+    EXPECT_EQ(run.online.size(), run.truth.size());
+    for (const auto& v : run.stats["tracking"]["per_frame"]) {
+        const size_t f = v["frame"].get<size_t>();
+        const bool isFused = v["status"] == "tracked" || v["status"] == "relocalised";
+        (isFused ? run.fused : run.notFused).insert(f);
+        if (v["status"] == "relocalised") run.relocalised.insert(f);
+        if (!isFused || f >= run.online.size() || f >= run.truth.size()) continue;
+        EXPECT_LT(distanceMetres(run.online[f].cameraToWorld, run.truth[f].cameraToWorld), 0.05)
+            << "frame " << f << " (" << v["status"] << ", inlier share " << v["inlier_share"] << ") fused off its place";
+        if (v["status"] == "relocalised")
+            EXPECT_LT(angleDegrees(run.online[f].cameraToWorld, run.truth[f].cameraToWorld), 5.0) << "frame " << f << " relocalised off";
+    }
+    return run;
+}
+
+// Real data (../shared/docs/real-data.md): ICL-NUIM office traj0 with frames 59-98 cut out, a jump of 113 cm and 98
+// degrees into a part of the office not yet mapped. The jump is noticed at once (the landing frame is lost) and
+// nothing is fused at a wrong place. Before relocalisations were tentative (MapperOptions::Relocalisation), frame
+// 93 settled on a look-alike 108 cm off (65 % of its pixels matching, at 3.6 times the inlier RMSE of the frames
+// before the loss) and tracking went on from there; and a lost tracker picked up again from its last pose (frames
+// 98, 100). Frames 0-129 of the cut sequence: the camera does not come back over the mapped part, so it stays lost.
+TEST(RealLoopClosure, IclKidnapIntoAnUnmappedPlaceIsNotFusedAtAWrongPlace) {
+    if (const std::string why = test::lavapipeCannotDraw(); !why.empty()) GTEST_SKIP() << why;
+    const auto root = test::sharedDatasetsDir();
+    if (!root) GTEST_SKIP() << "shared datasets not found at ../shared/datasets (or $VKMESH_DATASETS)";
+    const fs::path d = test::makeTempDir("real_kidnap_icl");
+    const RealRun run = runOnRealSequence(iclSequence(*root / "iclnuim_office_traj0", d, "icl_cut", joined({frameRange(0, 58), frameRange(99, 169)})), d);
+    ASSERT_EQ(run.online.size(), 130u);
+    EXPECT_TRUE(run.notFused.count(59) || run.notFused.count(60) || run.notFused.count(61)) << "the jump at frame 59 went unnoticed";
+    EXPECT_EQ(run.fused.size() + run.notFused.size(), 129u);   // every frame after the first has a verdict
+    EXPECT_GE(run.fused.size(), 55u);                          // the frames before the jump were tracked
+    for (const auto& e : run.stats["loop_closure"]["relocalisation"])
+        EXPECT_FALSE(e["relocalised"].get<bool>()) << "frame " << e["frame"] << " relocalised in a place never mapped";
+    fs::remove_all(d);
+}
+
+// Real data: ICL-NUIM office 0 there and back (frames 0-119, then 118-0, ../shared/docs/real-data.md), with two runs
+// of 25 frames cut out of the way back: jumps of 84 cm / 39 degrees and 35 cm / 77 degrees onto places the way there
+// mapped. Each jump is reported within 2 frames (lost or tentative) and relocalised within 5 frames, within 5 cm and
+// 5 degrees (measured: both confirmed 2 frames after the landing, 1.1 cm off); no frame is fused more than 5 cm off.
+// The way back's images are the way there's, so the ferns see the same images: this tests tracking's loss and the
+// verification of relocalisations on real frames, not place recognition.
+TEST(RealLoopClosure, IclThereAndBackKidnapsOntoMappedPlacesAreRelocalised) {
+    if (const std::string why = test::lavapipeCannotDraw(); !why.empty()) GTEST_SKIP() << why;
+    const auto root = test::sharedDatasetsDir();
+    if (!root) GTEST_SKIP() << "shared datasets not found at ../shared/datasets (or $VKMESH_DATASETS)";
+    const fs::path d = test::makeTempDir("real_back_icl");
+    // Frames 0-134 of the sequence (0-119, 118-104), then its frames 160-184 (orig. 78-54), then 210-238 (28-0).
+    const std::vector<size_t> frames = joined({frameRange(0, 119), frameRange(118, 104), frameRange(78, 54), frameRange(28, 0)});
+    const RealRun run = runOnRealSequence(iclSequence(*root / "iclnuim_office_traj0", d, "icl_back", frames), d);
+    ASSERT_EQ(run.online.size(), 189u);
+    for (size_t landing : {135u, 160u}) {
+        EXPECT_TRUE(run.notFused.count(landing) || run.notFused.count(landing + 1) || run.notFused.count(landing + 2))
+            << "the jump at frame " << landing << " went unnoticed";
+        size_t relocalisedAt = 0;
+        for (size_t f = landing; f <= landing + 5 && !relocalisedAt; ++f)
+            if (run.relocalised.count(f)) relocalisedAt = f;
+        EXPECT_NE(relocalisedAt, 0u) << "the jump at frame " << landing << " was not relocalised within 5 frames";
+    }
+    EXPECT_EQ(run.relocalised.size(), 2u);
+    EXPECT_GE(run.fused.size(), 175u);
     fs::remove_all(d);
 }
 

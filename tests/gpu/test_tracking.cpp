@@ -568,10 +568,21 @@ TEST_P(TrackingModes, UnusableFramesAreLostAndLeaveTheMapBitIdentical) {
         EXPECT_TRUE(mapBytes(rec.volume()->saveMap()) == mapBytes(before)) << name << ": the map changed";
     }
     EXPECT_EQ(rec.trajectory().size(), 4u);
-    // The room seen from the start pose again (the camera did not move): tracked, fused.
-    const TrackedFrame again = rec.integrate(roomDepth(0, false), nullptr, k);
-    EXPECT_FALSE(again.lost()) << again.tracking.lostReason;
-    EXPECT_LT(translationMetres(again.cameraToWorld), 0.002);
+    // The room seen from the start pose again (the camera did not move): tracked, but after a frame that disagreed
+    // with the map (another scene) tracking that picks up again is tentative until confirmFrames more frames agree
+    // (MapperOptions::Relocalisation): not fused until then, the map still bit-identical; then fused.
+    const int confirm = MapperOptions{}.relocalisation.confirmFrames;
+    for (int i = 0; i <= confirm; ++i) {
+        const TrackedFrame again = rec.integrate(roomDepth(0, false), nullptr, k);
+        EXPECT_LT(translationMetres(again.cameraToWorld), 0.002) << i;
+        if (i < confirm) {
+            EXPECT_TRUE(again.lost()) << i;
+            EXPECT_NE(again.tracking.lostReason.find("tentative"), std::string::npos) << again.tracking.lostReason;
+            EXPECT_TRUE(mapBytes(rec.volume()->saveMap()) == mapBytes(before)) << i << ": a tentative frame was fused";
+        } else {
+            EXPECT_FALSE(again.lost()) << again.tracking.lostReason;
+        }
+    }
 }
 
 // track_decide (the loss policy on the GPU, in the submission that fuses the frame) against its CPU reference,
@@ -606,17 +617,20 @@ TEST_F(Tracking, GpuLossDecisionMatchesTheHostPolicy) {
         const DepthImage* depth;
         const DepthImage* fusedFirst;
         Pose lastTracked;
-        double recentRmse;
+        gpu::RecentFrames recent;
         uint32_t expected;
     };
     const Case cases[] = {
-        {"tracked", &depth1, &depth0, orbit()[0], 0.0, gpu::TRACK_TRACKED},
-        {"no depth", &empty, &depth0, orbit()[0], 0.0, gpu::TRACK_LOST_NO_DEPTH},
-        {"another scene", &other, &depth0, orbit()[0], 0.0, gpu::TRACK_LOST_FEW_INLIERS},
-        {"one plane", &wall, &wall, orbit()[0], 0.0, gpu::TRACK_LOST_ILL_CONDITIONED},
-        {"jump", &depth1, &depth0, moved, 0.0, gpu::TRACK_LOST_JUMP},
-        {"turn", &depth1, &depth0, turned, 0.0, gpu::TRACK_LOST_TURN},
-        {"error rose", &depth1, &depth0, orbit()[0], 1e-7, gpu::TRACK_LOST_ERROR_ROSE},
+        {"tracked", &depth1, &depth0, orbit()[0], {}, gpu::TRACK_TRACKED},
+        {"no depth", &empty, &depth0, orbit()[0], {}, gpu::TRACK_LOST_NO_DEPTH},
+        {"another scene", &other, &depth0, orbit()[0], {}, gpu::TRACK_LOST_FEW_INLIERS},
+        {"one plane", &wall, &wall, orbit()[0], {}, gpu::TRACK_LOST_ILL_CONDITIONED},
+        {"jump", &depth1, &depth0, moved, {}, gpu::TRACK_LOST_JUMP},
+        {"turn", &depth1, &depth0, turned, {}, gpu::TRACK_LOST_TURN},
+        {"error rose", &depth1, &depth0, orbit()[0], {1e-7, 0.0}, gpu::TRACK_LOST_ERROR_ROSE},
+        // Recent frames matched over almost twice the pixels this one can (a share of 1.9 is impossible: the check
+        // is inliers < 0.5 * 1.9 * valid pixels, true for any share below 0.95).
+        {"share fell", &depth1, &depth0, orbit()[0], {0.0, 1.9}, gpu::TRACK_LOST_SHARE_FELL},
     };
     for (const Case& c : cases) {
         gpu::GpuVolume volume(context(), volumeConfig(0.03f));
@@ -627,13 +641,13 @@ TEST_F(Tracking, GpuLossDecisionMatchesTheHostPolicy) {
         input.depth = c.depth;
         input.intrinsics = k;
         input.recordPose = [&](VkCommandBuffer cmd, const vk::Buffer& framePose) {
-            tracker.recordTrackAndDecide(cmd, *c.depth, k, mesh, orbit()[0], orbit()[0], nullptr, c.lastTracked, c.recentRmse, framePose);
+            tracker.recordTrackAndDecide(cmd, *c.depth, k, mesh, orbit()[0], orbit()[0], nullptr, c.lastTracked, c.recent, framePose);
         };
         volume.submitFrame(input);
         const gpu::FrameReport frame = volume.finishFrame();
         const gpu::IcpResult icp = tracker.gpuSolvedResult();
         const Pose motion = inverseRigid(c.lastTracked) * icp.gpuEstimate;
-        const uint32_t host = gpu::trackingLoss(icp.finalSystem, icp.finalStep.solved, icp.finalStep.conditioning, motion, c.recentRmse, options);
+        const uint32_t host = gpu::trackingLoss(icp.finalSystem, icp.finalStep.solved, icp.finalStep.conditioning, motion, c.recent, options);
         std::printf("%-14s GPU verdict %u, host %u; conditioning GPU %.6g, host %.6g\n", c.name, icp.gpuLostReason, host, icp.gpuConditioning,
                     icp.finalStep.conditioning);
         EXPECT_EQ(icp.gpuLostReason, c.expected) << c.name;

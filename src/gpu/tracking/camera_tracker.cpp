@@ -76,6 +76,7 @@ TrackParamsGpu trackParamsFor(const TrackerOptions& o) {
     p.maxJumpDegrees = float(o.maxJumpDegrees);
     p.maxErrorRise = float(o.maxErrorRise);
     p.minErrorForRise = float(o.minErrorForRise);
+    p.minShareOfRecent = float(o.minShareOfRecent);
     return p;
 }
 
@@ -349,14 +350,15 @@ IcpResult CameraTracker::trackInOneSubmission(const DepthImage& depth, const Int
 
 void CameraTracker::recordTrackAndDecide(VkCommandBuffer cmd, const DepthImage& depth, const Intrinsics& intrinsics, const MeshBuffers& mesh,
                                          const Pose& modelPose, const Pose& initial, const ColorImage* color, const Pose& lastTracked,
-                                         double recentRmse, const vk::Buffer& framePose) {
+                                         const RecentFrames& recent, const vk::Buffer& framePose) {
     // Bound before anything is recorded (a binding changes decide_'s descriptor set at once).
     if (boundFramePose_ != framePose.handle()) {
         table_.bind(TRACK_BINDING_FRAME_POSE, framePose);
         boundFramePose_ = framePose.handle();
     }
     copyRows(paramValues_.lastTrackedCameraToWorld, lastTracked);
-    paramValues_.recentRmse = float(recentRmse);   // recordPrepare uploads the parameters
+    paramValues_.recentRmse = float(recent.rmse);   // recordPrepare uploads the parameters
+    paramValues_.recentInlierShare = float(recent.inlierShare);
     recordGpuSolvedTracking(cmd, depth, intrinsics, mesh, modelPose, initial, color);
     TrackPush push{};
     decide_.dispatch(cmd, &push, 1);

@@ -74,7 +74,11 @@ struct TrackerOptions {
     double maxJumpMetres = 0.30;       //  the pose moved further than this from the last tracked one,
     double maxJumpDegrees = 30.0;      //  or turned further;
     double maxErrorRise = 3.0;         //  its inlier RMSE exceeds this many times the recent tracked frames'
-    double minErrorForRise = 0.005;    //  (and this many metres: a tiny error may triple harmlessly).
+    double minErrorForRise = 0.005;    //  (and this many metres: a tiny error may triple harmlessly);
+    double minShareOfRecent = 0.5;     //  its inlier share is below this fraction of the recent tracked frames'
+                                       //  (a jump that ICP settles next to the old pose: on real data the share
+                                       //  falls to 0.4 of the recent frames', where tracked frames stay above 0.73;
+                                       //  docs/TRACKING.md).
     // Where the 6x6 systems are solved: false, on the host in double after each iteration (one submission per
     // iteration); true, on the GPU in float, the whole frame's ICP in one submission with prepare()
     // (CameraTracker::trackInOneSubmission; docs/TRACKING.md, "One submission").
@@ -104,6 +108,12 @@ struct TrackerOptions {
     int modelReuseFrames = 2;
     double modelReuseMetres = 0.04;
     double modelReuseDegrees = 4.0;
+};
+
+// The recent tracked frames' means that the loss policy compares a frame with (0: none yet; PoseTracker keeps them).
+struct RecentFrames {
+    double rmse = 0;          // inlier RMSE (metres)
+    double inlierShare = 0;   // inliers / valid pixels
 };
 
 // The factor frames `width` pixels wide are tracked downsampled by (TrackerOptions::downsample, 0 resolved).
@@ -160,11 +170,11 @@ public:
                                    const Pose& initial, const ColorImage* color = nullptr);
     // trackInOneSubmission()'s passes recorded into `cmd`, the start of a volume's frame (FrameInput::recordPose),
     // followed by track_decide: the loss policy (trackingLoss, pose_tracker.h) decided on the GPU against
-    // `lastTracked` and `recentRmse` (the recent tracked frames' mean RMSE, 0: none), and the frame's pose written
+    // `lastTracked` and `recent` (the recent tracked frames' means, 0: none), and the frame's pose written
     // into the volume's `framePose` (FramePoseGpu; skip when lost). After the submission: gpuSolvedResult().
     void recordTrackAndDecide(VkCommandBuffer cmd, const DepthImage& depth, const Intrinsics& intrinsics, const MeshBuffers& mesh,
                               const Pose& modelPose, const Pose& initial, const ColorImage* color, const Pose& lastTracked,
-                              double recentRmse, const vk::Buffer& framePose);
+                              const RecentFrames& recent, const vk::Buffer& framePose);
     // Throws Error unless the frame's depth is width x height and its colour (used when options.colorWeight > 0) is
     // registered to it; what recordTrackAndDecide's caller checks before it records anything.
     void checkFrame(const DepthImage& depth, const ColorImage* color) const;

@@ -108,6 +108,7 @@ TrackingReport PoseTracker::start(const Pose& cameraToWorld) {
     lastTracked_ = cameraToWorld;
     velocity_ = Pose::Identity();
     recentRmse_.clear();
+    recentShare_.clear();
     modelFresh_ = false;   // a new start (a jump, a new map): the mesh is drawn again
     TrackingReport report;
     report.cameraToWorld = cameraToWorld;
@@ -116,7 +117,7 @@ TrackingReport PoseTracker::start(const Pose& cameraToWorld) {
     return report;
 }
 
-uint32_t trackingLoss(const IcpSystem& system, bool solved, double conditioning, const Pose& motion, double recentRmse,
+uint32_t trackingLoss(const IcpSystem& system, bool solved, double conditioning, const Pose& motion, const RecentFrames& recent,
                       const TrackerOptions& o) {
     // Written as track_decide.comp makes them (a NaN motion is a jump there too).
     if (system.validPixels == 0) return TRACK_LOST_NO_DEPTH;
@@ -126,11 +127,12 @@ uint32_t trackingLoss(const IcpSystem& system, bool solved, double conditioning,
     if (!(translationMetres(motion) <= o.maxJumpMetres)) return TRACK_LOST_JUMP;
     if (!(rotationDegrees(motion) <= o.maxJumpDegrees)) return TRACK_LOST_TURN;
     const double rmse = system.rmse();
-    if (recentRmse > 0 && rmse > o.minErrorForRise && rmse > o.maxErrorRise * recentRmse) return TRACK_LOST_ERROR_ROSE;
+    if (recent.rmse > 0 && rmse > o.minErrorForRise && rmse > o.maxErrorRise * recent.rmse) return TRACK_LOST_ERROR_ROSE;
+    if (system.inliers < o.minShareOfRecent * recent.inlierShare * system.validPixels) return TRACK_LOST_SHARE_FELL;
     return TRACK_TRACKED;
 }
 
-std::string lossText(uint32_t reason, const IcpSystem& system, double conditioning, const Pose& motion, double recentRmse,
+std::string lossText(uint32_t reason, const IcpSystem& system, double conditioning, const Pose& motion, const RecentFrames& recent,
                      const TrackerOptions& o) {
     switch (reason) {
         case TRACK_TRACKED: return "";
@@ -141,7 +143,10 @@ std::string lossText(uint32_t reason, const IcpSystem& system, double conditioni
             return format("ill-conditioned system (conditioning %.3g, limit %.3g)", conditioning, o.minConditioning);
         case TRACK_LOST_JUMP: return format("a jump of %.3f m (limit %.3f m)", translationMetres(motion), o.maxJumpMetres);
         case TRACK_LOST_TURN: return format("a turn of %.1f degrees (limit %.1f)", rotationDegrees(motion), o.maxJumpDegrees);
-        case TRACK_LOST_ERROR_ROSE: return format("the error rose to %.4f m (recent frames: %.4f m)", system.rmse(), recentRmse);
+        case TRACK_LOST_ERROR_ROSE: return format("the error rose to %.4f m (recent frames: %.4f m)", system.rmse(), recent.rmse);
+        case TRACK_LOST_SHARE_FELL:
+            return format("the share of pixels matching the map fell to %.2f (recent frames: %.2f)",
+                          system.validPixels > 0 ? system.inliers / system.validPixels : 0.0, recent.inlierShare);
         default: return "lost (reason " + std::to_string(reason) + ")";
     }
 }
@@ -165,8 +170,9 @@ bool PoseTracker::reuseModelMaps(CameraTracker& tracker, const Pose& predicted) 
     return reuse;
 }
 
-double PoseTracker::recentRmse() const {
-    return recentRmse_.empty() ? 0.0 : std::accumulate(recentRmse_.begin(), recentRmse_.end(), 0.0) / double(recentRmse_.size());
+RecentFrames PoseTracker::recent() const {
+    const auto mean = [](const std::deque<double>& v) { return v.empty() ? 0.0 : std::accumulate(v.begin(), v.end(), 0.0) / double(v.size()); };
+    return {mean(recentRmse_), mean(recentShare_)};
 }
 
 TrackingReport PoseTracker::conclude(const IcpResult& icp, uint32_t reason, double conditioning, const Pose& estimate, const Pose& predicted) {
@@ -186,10 +192,11 @@ TrackingReport PoseTracker::conclude(const IcpResult& icp, uint32_t reason, doub
         velocity_ = motion;
         lastTracked_ = estimate;
         recentRmse_.push_back(report.rmse);
-        if (recentRmse_.size() > kRecentFrames) recentRmse_.pop_front();
+        recentShare_.push_back(report.inlierShare());
+        if (recentRmse_.size() > kRecentFrames) recentRmse_.pop_front(), recentShare_.pop_front();
     } else {
         report.tracked = false;
-        report.lostReason = lossText(reason, icp.finalSystem, conditioning, motion, recentRmse(), options_);
+        report.lostReason = lossText(reason, icp.finalSystem, conditioning, motion, recent(), options_);
         report.cameraToWorld = predicted;
         velocity_ = Pose::Identity();   // the motion is unknown now: predict the last tracked pose
         modelFresh_ = false;            // and draw the mesh for the next frame
@@ -211,7 +218,7 @@ TrackingReport PoseTracker::track(const DepthImage& depth, const Intrinsics& int
         icp = tracker.align(predicted);
     }
     const Pose motion = inverseRigid(lastTracked_) * icp.cameraToWorld;
-    const uint32_t reason = trackingLoss(icp.finalSystem, icp.finalStep.solved, icp.finalStep.conditioning, motion, recentRmse(), options_);
+    const uint32_t reason = trackingLoss(icp.finalSystem, icp.finalStep.solved, icp.finalStep.conditioning, motion, recent(), options_);
     TrackingReport report = conclude(icp, reason, icp.finalStep.conditioning, icp.cameraToWorld, predicted);
     report.modelDrawn = !reused;
     report.milliseconds = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
@@ -239,11 +246,11 @@ TrackedFusion PoseTracker::trackAndFuse(GpuVolume& volume, const DepthImage& dep
     const bool reused = reuseModelMaps(tracker, predicted);
     const MeshBuffers mesh = volume.meshBuffers();   // last frame's mesh: the frame's own export replaces it later
     const Pose lastTracked = lastTracked_;
-    const double recent = recentRmse();
+    const RecentFrames recentFrames = recent();
     FrameInput input = FrameInput::fromHost(depth, fusedColor, intrinsics, predicted);   // the pose is not read: the tracker's is
     input.sync = sync;
     input.recordPose = [&](VkCommandBuffer cmd, const vk::Buffer& framePose) {
-        tracker.recordTrackAndDecide(cmd, *in.depth, in.intrinsics, mesh, predicted, predicted, in.color, lastTracked, recent, framePose);
+        tracker.recordTrackAndDecide(cmd, *in.depth, in.intrinsics, mesh, predicted, predicted, in.color, lastTracked, recentFrames, framePose);
     };
     volume.submitFrame(input);
     FrameReport frame = volume.finishFrame();
@@ -261,15 +268,29 @@ TrackedFusion PoseTracker::trackAndFuse(GpuVolume& volume, const DepthImage& dep
     return out;
 }
 
-TrackedFusion PoseTracker::relocalise(GpuVolume& volume, const Pose& candidate, const DepthImage& depth, const Intrinsics& intrinsics,
-                                      const ColorImage* trackingColor, const ColorImage* fusedColor) {
-    const Pose lastTracked = lastTracked_;
-    lastTracked_ = candidate;
+TrackingReport PoseTracker::trackFrom(const Pose& start, const DepthImage& depth, const Intrinsics& intrinsics, const MeshBuffers& mesh,
+                                      const ColorImage* color) {
+    const State before = state();
+    lastTracked_ = start;
     velocity_ = Pose::Identity();
+    modelFresh_ = false;   // drawn at `start`
+    TrackingReport report = track(depth, intrinsics, mesh, color);
+    restore(before);
+    return report;
+}
+
+void PoseTracker::resumeAt(const Pose& pose, const Pose& motion) {
+    lastTracked_ = pose;
+    velocity_ = motion;   // not the move from the last tracked frame: that is a jump, not a motion to go on with
     modelFresh_ = false;
-    TrackedFusion out = trackAndFuse(volume, depth, intrinsics, trackingColor, fusedColor);
-    if (!out.tracking.tracked) lastTracked_ = lastTracked;   // conclude() left the rest as a lost frame does
-    return out;
+}
+
+void PoseTracker::restore(const State& state) {
+    lastTracked_ = state.lastTracked;
+    velocity_ = state.velocity;
+    recentRmse_ = state.recentRmse;
+    recentShare_ = state.recentShare;
+    modelFresh_ = false;
 }
 
 void PoseTracker::correctLastPose(const Pose& corrected) {

@@ -31,6 +31,7 @@ struct TrackingReport {
     uint32_t submissions = 0;               // GPU submissions waited for (host round trips)
     double inliers = 0;                     // level 0, last iteration
     double validPixels = 0;
+    double inlierShare() const { return validPixels > 0 ? inliers / validPixels : 0.0; }
     double rmse = 0;                        // inliers' point-to-plane RMSE (metres)
     double conditioning = 0;
     double milliseconds = 0;                // wall time of track()
@@ -51,11 +52,11 @@ struct TrackedFusion {
 // The loss policy (TrackerOptions' bounds), and the CPU reference of the GPU's (track_decide.comp): why a frame
 // whose ICP ended with `system` (level 0's last, before its step) at `motion` from the last tracked pose is lost,
 // TRACK_TRACKED if it is not. `solved`: that system could be solved; `conditioning`: its smallest over largest
-// eigenvalue; `recentRmse`: the recent tracked frames' mean inlier RMSE (0: none yet).
-uint32_t trackingLoss(const IcpSystem& system, bool solved, double conditioning, const Pose& motion, double recentRmse,
+// eigenvalue; `recent`: the recent tracked frames' means (RecentFrames, camera_tracker.h; 0: none yet).
+uint32_t trackingLoss(const IcpSystem& system, bool solved, double conditioning, const Pose& motion, const RecentFrames& recent,
                       const TrackerOptions& options);
 // The reason in words, with the numbers behind it.
-std::string lossText(uint32_t reason, const IcpSystem& system, double conditioning, const Pose& motion, double recentRmse,
+std::string lossText(uint32_t reason, const IcpSystem& system, double conditioning, const Pose& motion, const RecentFrames& recent,
                      const TrackerOptions& options);
 
 // Halves a depth image: each pixel averages the 2 x 2 measured samples within `band` metres of the first
@@ -81,12 +82,27 @@ public:
     // else track() and then volume.integrate().
     TrackedFusion trackAndFuse(GpuVolume& volume, const DepthImage& depth, const Intrinsics& intrinsics, const ColorImage* trackingColor,
                                const ColorImage* fusedColor, const vk::SubmitSync& sync = {});
-    // Relocalisation (docs/LOOP_CLOSURE.md): trackAndFuse() of a frame from `candidate` instead of the prediction,
-    // with every loss check measured from there (the jump bound from the candidate, not from the last tracked
-    // pose). Tracked: the frame is fused and tracking goes on from it; lost: nothing changed (the state is that of
-    // a lost frame, as before the call).
-    TrackedFusion relocalise(GpuVolume& volume, const Pose& candidate, const DepthImage& depth, const Intrinsics& intrinsics,
-                             const ColorImage* trackingColor, const ColorImage* fusedColor);
+    // Relocalisation (docs/LOOP_CLOSURE.md): track() of a frame from `start` (a keyframe's pose) instead of the
+    // prediction, with every loss check measured from there (the jump bound from `start`, not from the last tracked
+    // pose). Nothing is fused and the tracker's state stays as it was: the result is a hypothesis for the caller to
+    // verify, and to go on from with resumeAt().
+    TrackingReport trackFrom(const Pose& start, const DepthImage& depth, const Intrinsics& intrinsics, const MeshBuffers& mesh,
+                             const ColorImage* color = nullptr);
+    // Tracking goes on from `pose` (an accepted relocalisation) with `motion` (none: the next frame is predicted
+    // at `pose`).
+    void resumeAt(const Pose& pose, const Pose& motion = Pose::Identity());
+    // What the prediction and the loss checks are made of: kept before frames that may turn out wrong (tracked
+    // from a tentative relocalisation) and put back if they do.
+    struct State {
+        Pose lastTracked, velocity;
+        std::deque<double> recentRmse, recentShare;
+    };
+    State state() const { return {lastTracked_, velocity_, recentRmse_, recentShare_}; }
+    void restore(const State& state);
+    // The mean inlier RMSE (metres) and inlier share of the last tracked frames (0 before any): what "the error
+    // rose" and "the share fell" are measured against.
+    double recentRmse() const { return recent().rmse; }
+    RecentFrames recent() const;
     // The last tracked frame's pose was corrected (a loop closed): the next frame is predicted from `corrected`
     // with the same motion, and the mesh is drawn anew (maps drawn at the old pose are stale).
     void correctLastPose(const Pose& corrected);
@@ -103,7 +119,6 @@ private:
     };
     TrackingInput trackingInput(const DepthImage& depth, const ColorImage* color, const Intrinsics& intrinsics);
     CameraTracker& trackerFor(const DepthImage& depth);
-    double recentRmse() const;
     // Whether the frame predicted at `predicted` reuses the last model maps (TrackerOptions::modelReuse*); tells
     // the tracker so.
     bool reuseModelMaps(CameraTracker& tracker, const Pose& predicted);
@@ -115,7 +130,8 @@ private:
     bool started_ = false;
     Pose lastTracked_ = Pose::Identity();
     Pose velocity_ = Pose::Identity();         // last tracked motion, in the camera's frame
-    std::deque<double> recentRmse_;            // of the last tracked frames (the "error rises" check)
+    std::deque<double> recentRmse_;            // of the last tracked frames (the "error rose" check)
+    std::deque<double> recentShare_;           //  and their inlier shares (the "share fell" check)
     int modelReuses_ = 0;                      // frames in a row that reused the model maps
     bool modelFresh_ = false;                  // the maps were drawn since start() and no frame was lost since
     DepthImage smallDepth_;                    // the frame downsampled (options.downsample > 1)
