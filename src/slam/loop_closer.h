@@ -9,7 +9,8 @@
 //              camera no further than the drift the path since then allows becomes a loop edge; the graph is
 //              optimised (Ceres) and every frame's new pose handed back for the map's correction.
 //   relocalise a lost frame's code ranks the keyframes; the caller tracks the frame from the most alike ones'
-//              poses with the tracker's own checks (PoseTracker::relocalise).
+//              poses with the tracker's own checks and confirms the result over the next frames
+//              (Mapper::relocalise, PoseTracker::trackFrom).
 // Everything is deterministic: the same frames give the same keyframes, loops and poses (fixed fern seed, ties
 // broken by keyframe order, Ceres on one thread).
 #pragma once
