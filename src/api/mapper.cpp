@@ -127,9 +127,9 @@ MapperResult Mapper::tracked(const MapperFrame& frame, size_t valid) {
     applyCorrections(options_.correctionsPerFrame, result.corrections);
     if (hypothesis_) return tentative(frame, valid, std::move(result));
     gpu::TrackedFusion f;
-    const gpu::PoseTracker::State atLoss = tracker_->state();
-    const double baseline = tracker_->recentRmse();
+    const double baseline = tracker_->recentRmse();   // lost frames leave it as the last tracked ones made it
     if (lost_ && options_.relocalisation.confirmFrames > 0) {
+        const gpu::PoseTracker::State atLoss = tracker_->state();
         // After a loss, tracking that picks up again from the last pose is a hypothesis as a relocalisation is: on
         // real data it picks up next to the old pose after a jump (frames 98 and 100 of ICL-NUIM office 0 without
         // frames 59-98, 1 m off).
@@ -147,6 +147,7 @@ MapperResult Mapper::tracked(const MapperFrame& frame, size_t valid) {
         f = tracker_->trackAndFuse(*volume_, *frame.depth, frame.intrinsics, frame.color, fusedColor(frame), frame.sync);
     }
     if (!f.tracking.tracked && options_.loopClosure && valid > 0) {
+        const gpu::PoseTracker::State atLoss = tracker_->state();   // a lost frame's: no motion to predict with
         RelocalisationOutcome found = relocalise(frame, f.tracking.cameraToWorld, f.tracking.lostReason, baseline, result);
         if (found.accepted) {
             startHypothesis(frame, found, atLoss, baseline);
@@ -175,11 +176,11 @@ Mapper::RelocalisationOutcome Mapper::relocalise(const MapperFrame& frame, const
         gpu::TrackingReport r = tracker_->trackFrom(candidates[c], *frame.depth, frame.intrinsics, volume_->meshBuffers(), frame.color);
         ++result.relocalisationCandidatesTried;
         std::string why = r.tracked ? errorAgainstBaseline(r.rmse, baseline) : r.lostReason;
-        if (why.empty() && best && (translationMetres(inverseRigid(best->cameraToWorld) * r.cameraToWorld) > o.ambiguousMetres ||
-                                    rotationDegrees(inverseRigid(best->cameraToWorld) * r.cameraToWorld) > o.ambiguousDegrees)) {
+        const Pose apart = best ? Pose(inverseRigid(best->cameraToWorld) * r.cameraToWorld) : Pose(Pose::Identity());
+        if (why.empty() && (translationMetres(apart) > o.ambiguousMetres || rotationDegrees(apart) > o.ambiguousDegrees)) {
             char text[160];
             std::snprintf(text, sizeof text, "ambiguous: candidates %d and %zu match the frame at places %.2f m apart", bestCandidate,
-                          c + 1, translationMetres(inverseRigid(best->cameraToWorld) * r.cameraToWorld));
+                          c + 1, translationMetres(apart));
             out.tracking = std::move(r);
             out.tracking.tracked = false;
             out.tracking.lostReason = text;
@@ -253,7 +254,6 @@ MapperResult Mapper::tentative(const MapperFrame& frame, size_t valid, MapperRes
             // The relocalisation was wrong (or the camera moved on too fast to tell): back to lost, as before it.
             const std::string reason = "the relocalisation at frame " + std::to_string(h.frame) + " is refused: " + lostFromIt;
             if (h.statsEntry < stats_.relocalisations.size()) stats_.relocalisations[h.statsEntry].refusedBy = reason;
-            if (!found.accepted && h.candidate > 0) options_.loopClosure->relocalisationResult(h.frame, false, 0);
             const Hypothesis refused = h;
             tracker_->restore(refused.before);
             hypothesis_.reset();

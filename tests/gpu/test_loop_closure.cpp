@@ -10,12 +10,12 @@
 #include <fstream>
 #include <map>
 #include <numbers>
-#include <sstream>
 #include <set>
 
 #include "core/camera.h"
 #include "core/icp_solve.h"
 #include "io/ply.h"
+#include "io/text_lines.h"
 #include "io/trajectory.h"
 #include "slam/frame_registration.h"
 #include "slam/loop_closer.h"
@@ -394,23 +394,15 @@ TEST(LoopClosure, DriftingGalleryIsNotMadeWorse) {
 // preset).
 fs::path iclSequence(const fs::path& source, const fs::path& dir, const std::string& name, const std::vector<size_t>& frames) {
     const auto dataLines = [&](const char* file) {
-        std::vector<std::vector<std::string>> lines;
-        std::ifstream in(source / file);
-        for (std::string line; std::getline(in, line);) {
-            if (line.empty() || line[0] == '#') continue;
-            std::istringstream words(line);
-            std::vector<std::string> tokens;
-            for (std::string w; words >> w;) tokens.push_back(w);
-            lines.push_back(tokens);
-        }
-        return lines;
+        std::ifstream in = io::text::openText(source / file);
+        return io::text::readDataLines(in, (source / file).string());
     };
     const auto depth = dataLines("depth.txt"), rgb = dataLines("rgb.txt"), truth = dataLines("groundtruth.txt");
     std::map<std::string, std::string> poseAt;   // ICL-NUIM: one pose per frame, at its timestamp (the frame index)
     for (const auto& t : truth) {
         std::string pose;
-        for (size_t i = 1; i < t.size(); ++i) pose += " " + t[i];
-        poseAt[t[0]] = pose;
+        for (size_t i = 1; i < t.tokens.size(); ++i) pose += " " + t.tokens[i];
+        poseAt[t.tokens[0]] = pose;
     }
     EXPECT_EQ(rgb.size(), depth.size()) << "ICL-NUIM pairs every depth image with the colour image of its timestamp";
     const fs::path out = dir / name;
@@ -419,10 +411,11 @@ fs::path iclSequence(const fs::path& source, const fs::path& dir, const std::str
     for (size_t k = 0; k < frames.size(); ++k) {
         const size_t f = frames[k];
         const std::string stamp = std::to_string(2 + 6 * k);
-        d << stamp << " " << depth.at(f)[1] << "\n";
-        c << stamp << " " << rgb.at(f)[1] << "\n";
-        EXPECT_EQ(poseAt.count(depth[f][0]), 1u) << "frame " << f << " has no true pose";
-        g << stamp << poseAt[depth[f][0]] << "\n";
+        const std::string& time = depth.at(f).tokens.at(0);
+        d << stamp << " " << depth[f].tokens.at(1) << "\n";
+        c << stamp << " " << rgb.at(f).tokens.at(1) << "\n";
+        EXPECT_EQ(poseAt.count(time), 1u) << "frame " << f << " has no true pose";
+        g << stamp << poseAt[time] << "\n";
     }
     for (const char* folder : {"depth", "rgb"}) fs::create_directory_symlink(source / folder, out / folder);
     return out;
