@@ -49,6 +49,7 @@ struct LoopClosureStats {
     struct Loop {
         uint32_t frame = 0, keyframeFrame = 0;   // the new keyframe's frame and the old one's
         double dissimilarity = 0;
+        std::string proposedBy;                  // "ferns" (the codes look alike) or "proximity" (the graph puts them close)
         bool accepted = false;                   // verified (and plausible)
         std::string reason;                      // why rejected; "consistent" when verified but nothing to correct
         double correctionMetres = 0, correctionDegrees = 0;   // how far the loop moved the camera

@@ -85,7 +85,7 @@ json loopClosureJson(const Mapper& mapper, const RunStats& s) {
     for (const auto& loop : l.loops) {
         if (loops.size() >= kRunStatsListLimit) break;
         loops.push_back({{"frame", loop.frame}, {"keyframe_frame", loop.keyframeFrame}, {"dissimilarity", loop.dissimilarity},
-                         {"accepted", loop.accepted}, {"reason", loop.reason}, {"correction_m", loop.correctionMetres},
+                         {"proposed_by", loop.proposedBy}, {"accepted", loop.accepted}, {"reason", loop.reason}, {"correction_m", loop.correctionMetres},
                          {"correction_deg", loop.correctionDegrees}});
     }
     json rejectedBy = json::object();

@@ -125,20 +125,59 @@ PoseCorrections LoopCloser::frameFused(const LoopClosureFrame& frame) {
     }
     std::sort(alike.begin(), alike.end());
     if (alike.size() > size_t(options_.candidates)) alike.resize(size_t(options_.candidates));
+    std::vector<int> tried;
+    for (const auto& [d, k] : alike) tried.push_back(k);
+    const bool placeChecked = lastVerifiedKeyframe_ >= 0 && id - lastVerifiedKeyframe_ <= options_.proximitySpacing;
+    const std::vector<int> nearby = placeChecked ? std::vector<int>{} : nearbyKeyframes(current, tried);
     time("search", msSince(t));
-    if (!alike.empty()) {
+    if (!alike.empty() || !nearby.empty()) {
         const RegistrationFrame currentFrame = registrationFrame(current.depth, current.intrinsics, options_.tracker, options_.registrationWidth);
-        for (const auto& [d, k] : alike) {
-            const LoopOutcome outcome = tryLoop(current, currentFrame, k, d);
+        // The ferns' candidates first (most alike first), then the nearby keyframes (nearest first).
+        std::vector<std::pair<int, const char*>> candidates;
+        for (const int k : tried) candidates.emplace_back(k, "ferns");
+        for (const int k : nearby) candidates.emplace_back(k, "proximity");
+        for (const auto& [k, proposedBy] : candidates) {
+            const double d = RandomFerns::dissimilarity(current.code, keyframes_[size_t(k)].code);
+            const LoopOutcome outcome = tryLoop(current, currentFrame, k, d, proposedBy);
             if (outcome == LoopOutcome::Closed) {
                 result = corrections();
                 stats_.framesCorrected += uint32_t(result.frames.size());
             }
-            if (outcome != LoopOutcome::Rejected) break;
+            if (outcome != LoopOutcome::Rejected) {
+                lastVerifiedKeyframe_ = id;
+                break;
+            }
         }
     }
     time("frame", msSince(t0));
     return result;
+}
+
+std::vector<int> LoopCloser::nearbyKeyframes(const Keyframe& current, const std::vector<int>& skip) const {
+    if (options_.proximityCandidates < 1) return {};
+    const Pose currentPose = graph_.pose(current.node);
+    const int id = int(keyframes_.size()) - 1;
+    std::vector<std::pair<double, int>> near;
+    for (int k = 0; k + options_.minKeyframeGap <= id; ++k) {
+        const Keyframe& old = keyframes_[size_t(k)];
+        if (old.frame + options_.minFrameGap > current.frame || std::find(skip.begin(), skip.end(), k) != skip.end()) continue;
+        const Pose oldPose = graph_.pose(old.node);
+        const double metres = (currentPose.block<3, 1>(0, 3) - oldPose.block<3, 1>(0, 3)).norm();
+        const double axisCosine = std::clamp(currentPose.block<3, 1>(0, 2).dot(oldPose.block<3, 1>(0, 2)), -1.0, 1.0);
+        const double axisDegrees = std::acos(axisCosine) / kRadiansPerDegree;
+        // Where the camera can be: no further than tracking can have drifted since the old keyframe (tryLoop's
+        // plausibility bound), looking at what it saw.
+        const double path = current.pathMetres - old.pathMetres;
+        if (metres > options_.driftBaseMetres + options_.driftPerMetre * path || axisDegrees > options_.proximityDegrees) continue;
+        near.emplace_back(metres / options_.keyframeMetres + axisDegrees / options_.keyframeDegrees, k);   // in keyframe spacings
+    }
+    std::sort(near.begin(), near.end());
+    std::vector<int> out;
+    for (const auto& [distance, k] : near) {
+        if (int(out.size()) >= options_.proximityCandidates) break;
+        out.push_back(k);
+    }
+    return out;
 }
 
 std::string LoopCloser::verified(const Registration& r, const Pose& initial) const {
@@ -153,13 +192,15 @@ std::string LoopCloser::verified(const Registration& r, const Pose& initial) con
     return "";
 }
 
-LoopCloser::LoopOutcome LoopCloser::tryLoop(const Keyframe& current, const RegistrationFrame& currentFrame, int candidate, double dissimilarity) {
+LoopCloser::LoopOutcome LoopCloser::tryLoop(const Keyframe& current, const RegistrationFrame& currentFrame, int candidate, double dissimilarity,
+                                             const char* proposedBy) {
     ++stats_.loopsDetected;
     const Keyframe& old = keyframes_[size_t(candidate)];
     LoopClosureStats::Loop loop;
     loop.frame = current.frame;
     loop.keyframeFrame = old.frame;
     loop.dissimilarity = dissimilarity;
+    loop.proposedBy = proposedBy;
     auto reject = [&](const std::string& reason) {
         loop.reason = reason;
         ++stats_.loopsRejected;
@@ -215,7 +256,10 @@ LoopCloser::LoopOutcome LoopCloser::tryLoop(const Keyframe& current, const Regis
     // A loop that agrees with the trajectory within what a registration at registration size can tell corrects
     // nothing: no edge, no solve (re-solving for a registration's noise moved poses by its noise: TUM fr1/rpy's and
     // ICL-NUIM's ATE got worse).
-    if (loop.correctionMetres < options_.minLoopCorrectionMetres && loop.correctionDegrees < options_.minLoopCorrectionDegrees) {
+    const bool byPlace = loop.proposedBy == "proximity";
+    const double minMetres = byPlace ? options_.proximityMinCorrectionMetres : options_.minLoopCorrectionMetres;
+    const double minDegrees = byPlace ? options_.proximityMinCorrectionDegrees : options_.minLoopCorrectionDegrees;
+    if (loop.correctionMetres < minMetres && loop.correctionDegrees < minDegrees) {
         ++stats_.loopsConsistent;
         loop.accepted = true;
         loop.reason = "consistent";

@@ -4,10 +4,11 @@
 //              and its depth at registration size (slam/frame_registration.h). Every fused frame moves with the
 //              keyframe it follows (its pose relative to that keyframe is kept).
 //   loops      a new keyframe's code is compared with the older keyframes' (at least minKeyframeGap keyframes and
-//              minFrameGap frames back); the most alike are verified by the tracker's ICP against their depth,
-//              from the current pose and, failing that, from theirs; a verified registration that moves the
-//              camera no further than the drift the path since then allows becomes a loop edge; the graph is
-//              optimised (Ceres) and every frame's new pose handed back for the map's correction.
+//              minFrameGap frames back), and the older keyframes the graph puts near it are found (the ferns miss
+//              real views turned 10-20 degrees); the most alike and the nearest are verified by the tracker's ICP
+//              against their depth, from the current pose and, failing that, from theirs; a verified registration
+//              that moves the camera no further than the drift the path since then allows becomes a loop edge; the
+//              graph is optimised (Ceres) and every frame's new pose handed back for the map's correction.
 //   relocalise a lost frame's code ranks the keyframes; the caller tracks the frame from the most alike ones'
 //              poses with the tracker's own checks and confirms the result over the next frames
 //              (Mapper::relocalise, PoseTracker::trackFrom).
@@ -41,6 +42,18 @@ struct LoopClosureOptions {
     uint32_t minFrameGap = 30;
     double loopDissimilarity = 0.30;
     int candidates = 3;
+    // Loop candidates by place, besides the ferns (which miss real views 10-20 degrees apart: docs/RESULTS.md,
+    // "Place recognition"): old enough keyframes that the graph puts within the drift the path since them allows
+    // (the plausibility bound below) and whose optical axis is within proximityDegrees of the camera's; the
+    // nearest `proximityCandidates` are verified as the ferns' are, unless a loop was verified at one of the last
+    // proximitySpacing keyframes (a place already tied to the map needs no second check).
+    int proximityCandidates = 2;
+    double proximityDegrees = 20.0;
+    int proximitySpacing = 3;
+    // A loop proposed by place corrects the trajectory only when it moves the camera at least this far or turns
+    // it this much (below, it counts as consistent): registrations of real views that far apart can be off by
+    // 6 cm and 6 degrees and still verify (TUM fr1/rpy), and closing such loops made its ATE worse (docs/RESULTS.md).
+    double proximityMinCorrectionMetres = 0.10, proximityMinCorrectionDegrees = 8.0;
     // Verification (on top of the tracker's own loss checks): the registration's inliers cover at least this
     // share of the frame's valid pixels, and their RMSE is below maxRmse metres.
     double minInlierShare = 0.50;
@@ -111,7 +124,9 @@ private:
     };
     // Verifies and, if accepted, closes a loop from the newest keyframe to `candidate`.
     enum class LoopOutcome { Rejected, Consistent, Closed };
-    LoopOutcome tryLoop(const Keyframe& current, const RegistrationFrame& currentFrame, int candidate, double dissimilarity);
+    LoopOutcome tryLoop(const Keyframe& current, const RegistrationFrame& currentFrame, int candidate, double dissimilarity, const char* proposedBy);
+    // Old enough keyframes that could be where the camera is now (proximity* options), nearest first, not in `skip`.
+    std::vector<int> nearbyKeyframes(const Keyframe& current, const std::vector<int>& skip) const;
     void time(const std::string& stage, double ms);
     // Why registration `r` (from `initial`) does not verify: the tracker's loss checks, the inlier share, the RMSE; "" when it does.
     std::string verified(const Registration& r, const Pose& initial) const;
@@ -129,6 +144,7 @@ private:
     // A relocalisation succeeded: the next fused frame becomes a keyframe tied to this keyframe.
     std::optional<int> relocalisedFrom_;
     std::vector<int> lastCandidates_;   // relocalisationCandidates' keyframes, in the order returned
+    int lastVerifiedKeyframe_ = -1;     // the newest keyframe whose loop verified (closed or consistent)
     LoopClosureStats stats_;
 };
 
