@@ -139,24 +139,28 @@ TEST(PoseGraph, ALoopEdgeSpreadsTheDriftAlongTheChain) {
 }
 
 // The loop closer on its own (no GPU): a lap of the room whose poses drift as a tracker's do (a world-frame error
-// growing along the path: 8 cm and 2 degrees by the lap's end), then the start again. The revisit is recognised,
-// verified against the first keyframes' depth, and the graph's corrections move the drifted frames back towards
-// the truth; after a correction the poses given go on from the corrected one, as the tracker's do
-// (PoseTracker::correctLastPose).
-TEST(LoopCloser, ClosesALoopOverDriftedPosesAndCorrectsTheFrames) {
+// growing along the path to `driftMetres` sideways, a third of it forward, and 2 degrees by the lap's end), then the
+// start again. The poses given after a correction go on from the corrected one, as the tracker's do
+// (PoseTracker::correctLastPose). Returns the closer and what the tests below check.
+struct DriftedLap {
+    slam::LoopClosureStats stats;
+    uint32_t closedAt = 0;          // the frame whose loop first corrected poses (0: none)
+    size_t corrected = 0;           // poses handed back
+    double before = 0, after = 0;   // the mean error of the lap's second half, as given and after the corrections
+    double lastError = 0;           // frame 51's error after the corrections
+};
+
+DriftedLap closeDriftedLap(const slam::LoopClosureOptions& options, double driftMetres) {
     const synth::SyntheticScene room = synth::SyntheticScene::defaultRoom();
     const Intrinsics k = synth::kinectIntrinsics(160, 120);
     const std::vector<Pose> path = synth::cameraPath(120, synth::PathKind::Revisit);   // 3 laps of 40 frames
-    slam::LoopClosureOptions options;
-    options.registrationWidth = 160;
     slam::LoopCloser closer(options);
     std::vector<Pose> given;
     Pose followed = Pose::Identity();   // the corrections so far, as the tracker takes them on
-    uint32_t closedAt = 0;
-    size_t corrected = 0;
+    DriftedLap lap;
     for (uint32_t i = 0; i < 52; ++i) {
         const double s = double(i) / 40.0;
-        const Pose drift = turned(Pose::Identity(), 2.0 * s, {0, 0, 1}, {0.08 * s, 0.03 * s, 0.0});
+        const Pose drift = turned(Pose::Identity(), 2.0 * s, {0, 0, 1}, {driftMetres * s, driftMetres / 3 * s, 0.0});
         given.push_back(followed * drift * path[i]);
         synth::RenderOptions noisy;
         noisy.noise = true;
@@ -166,33 +170,63 @@ TEST(LoopCloser, ClosesALoopOverDriftedPosesAndCorrectsTheFrames) {
         const PoseCorrections c = closer.frameFused({i, &depth, &color, k, given[i]});
         if (c.empty()) continue;
         EXPECT_TRUE(std::is_sorted(c.frames.begin(), c.frames.end()));
-        corrected += c.frames.size();
-        if (closedAt == 0) closedAt = i;
+        lap.corrected += c.frames.size();
+        if (lap.closedAt == 0) lap.closedAt = i;
         Pose latest;
-        ASSERT_TRUE(closer.latestPose(i, latest));
+        EXPECT_TRUE(closer.latestPose(i, latest));
         followed = latest * inverseRigid(drift * path[i]);
     }
-    const slam::LoopClosureStats& stats = closer.stats();
-    ASSERT_GE(stats.loopsAccepted, 1u) << "no loop closed (detected " << stats.loopsDetected << ", rejected " << stats.loopsRejected << ")";
-    EXPECT_GE(closedAt, 38u);
-    EXPECT_GT(corrected, 20u);
-    // The frames of the lap's second half were furthest off; the corrections bring them back.
-    double before = 0, after = 0;
+    lap.stats = closer.stats();
     int counted = 0;
     for (uint32_t i = 20; i < 40; ++i) {
         Pose latest;
-        ASSERT_TRUE(closer.latestPose(i, latest)) << i;
-        before += distanceMetres(given[i], path[i]);
-        after += distanceMetres(latest, path[i]);
+        EXPECT_TRUE(closer.latestPose(i, latest)) << i;
+        lap.before += distanceMetres(given[i], path[i]);
+        lap.after += distanceMetres(latest, path[i]);
         ++counted;
     }
-    EXPECT_LT(after, 0.5 * before) << "mean error " << before / counted << " -> " << after / counted << " m";
-    // The frame that closed the loop, and those after it, are where the truth is, within the drift that goes on.
+    lap.before /= counted, lap.after /= counted;
     Pose last;
-    ASSERT_TRUE(closer.latestPose(51, last));
-    EXPECT_LT(distanceMetres(last, path[51]), 0.03);
+    EXPECT_TRUE(closer.latestPose(51, last));
+    lap.lastError = distanceMetres(last, path[51]);
     Pose unknown;
     EXPECT_FALSE(closer.latestPose(1000, unknown));
+    return lap;
+}
+
+// 8 cm of drift: the revisit is recognised by the ferns, verified against the first keyframes' depth, and the
+// graph's corrections move the drifted frames back towards the truth.
+TEST(LoopCloser, ClosesALoopOverDriftedPosesAndCorrectsTheFrames) {
+    slam::LoopClosureOptions options;
+    options.registrationWidth = 160;
+    const DriftedLap lap = closeDriftedLap(options, 0.08);
+    ASSERT_GE(lap.stats.loopsAccepted, 1u) << "no loop closed (detected " << lap.stats.loopsDetected << ", rejected " << lap.stats.loopsRejected << ")";
+    EXPECT_GE(lap.closedAt, 38u);
+    EXPECT_GT(lap.corrected, 20u);
+    // The frames of the lap's second half were furthest off; the corrections bring them back.
+    EXPECT_LT(lap.after, 0.5 * lap.before) << "mean error " << lap.before << " -> " << lap.after << " m";
+    // The frame that closed the loop, and those after it, are where the truth is, within the drift that goes on.
+    EXPECT_LT(lap.lastError, 0.03);
+}
+
+// The same lap with the ferns proposing nothing (as on real data, where the revisits differ in more of their ferns
+// than the threshold allows) and 15 cm of drift: the keyframes the graph puts near the camera are proposed by place,
+// verified, and close the loop (past the 10 cm a loop proposed by place needs). Without candidates by place, nothing
+// closes.
+TEST(LoopCloser, ARevisitTheFernsMissIsProposedByPlace) {
+    slam::LoopClosureOptions options;
+    options.registrationWidth = 160;
+    options.loopDissimilarity = -1;   // no code is that alike
+    const DriftedLap lap = closeDriftedLap(options, 0.15);
+    ASSERT_GE(lap.stats.loopsAccepted, 1u) << "no loop closed (detected " << lap.stats.loopsDetected << ", rejected " << lap.stats.loopsRejected << ")";
+    for (const auto& loop : lap.stats.loops) EXPECT_EQ(loop.proposedBy, "proximity") << "frame " << loop.frame;
+    EXPECT_LT(lap.after, 0.5 * lap.before) << "mean error " << lap.before << " -> " << lap.after << " m";
+    EXPECT_LT(lap.lastError, 0.05);
+
+    options.proximityCandidates = 0;
+    const DriftedLap none = closeDriftedLap(options, 0.15);
+    EXPECT_EQ(none.stats.loopsDetected, 0u);
+    EXPECT_EQ(none.corrected, 0u);
 }
 
 }  // namespace
