@@ -58,7 +58,8 @@ void FuseArgs::check() const {
         throw Error("--track-iterations, --track-color-weight, --track-solve, --track-downsample and --track-model-reuse need --track");
     if ((loopClosure || !trajectoryOnlinePath.empty()) && !track)
         throw Error("--loop-closure and --trajectory-online need --track (loops are closed over tracked poses)");
-    if (given("--corrections-per-frame") && !loopClosure) throw Error("--corrections-per-frame needs --loop-closure");
+    for (const char* option : {"--corrections-per-frame", "--loop-place-candidates"})
+        if (given(option) && !loopClosure) throw Error(std::string(option) + " needs --loop-closure");
     if (!trackIterations.empty()) parseIterations(trackIterations);
 #ifndef VKMESH_HAVE_VIEWER
     if (serving())
@@ -100,6 +101,7 @@ MapperOptions FuseArgs::mapperOptions(const gpu::GpuVolumeConfig& config) const 
     if (loopClosure) {
         slam::LoopClosureOptions loopOptions;
         loopOptions.tracker = options.tracker;
+        loopOptions.proximityCandidates = loopPlaceCandidates;
         options.loopClosure = std::make_shared<slam::LoopCloser>(loopOptions);
     }
     return options;
@@ -141,6 +143,7 @@ void addFuseOptions(CLI::App* cmd, FuseArgs& args) {
     addSettingFlag(cmd, "--loop-closure", args.loopClosure);
     addSetting(cmd, "--trajectory-online", args.trajectoryOnlinePath);
     addSetting(cmd, "--corrections-per-frame", args.correctionsPerFrame);
+    addSetting(cmd, "--loop-place-candidates", args.loopPlaceCandidates);
     addSetting(cmd, "--track-iterations", args.trackIterations);
     addSetting(cmd, "--track-color-weight", args.trackColorWeight);
     addSetting(cmd, "--track-solve", args.trackSolve);

@@ -58,6 +58,7 @@ struct FuseArgs {
     bool loopClosure = false;
     std::string trajectoryOnlinePath;  // the poses as they were when each frame was fused
     size_t correctionsPerFrame = 2;    // queued corrections re-fused before each frame
+    int loopPlaceCandidates = kDefaultLoopPlaceCandidates;   // loop candidates by place (slam::LoopClosureOptions)
     const CLI::App* cmd = nullptr;     // which options were given (a loaded map's settings fill the others)
 
     bool given(const char* option) const;

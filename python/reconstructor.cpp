@@ -88,11 +88,14 @@ struct CorrectionSettings {
     bool keepFrames = false;
     bool loopClosure = false;
     long long correctionsPerFrame = ReconstructorOptions{}.correctionsPerFrame;
+    long long loopPlaceCandidates = kDefaultLoopPlaceCandidates;
     double framesBudgetMb = 1024;
     std::string framesSpill;
     void applyTo(ReconstructorOptions& o) const {
         if (correctionsPerFrame < 0 || correctionsPerFrame > 1000000)
             throw py::value_error("corrections_per_frame " + std::to_string(correctionsPerFrame) + " must be in [0, 1000000]");
+        if (loopPlaceCandidates < 0 || loopPlaceCandidates > 100)
+            throw py::value_error("loop_place_candidates " + std::to_string(loopPlaceCandidates) + " must be in [0, 100]");
         if (!(framesBudgetMb > 0)) throw py::value_error("frames_budget_mb " + std::to_string(framesBudgetMb) + " must be positive");
         o.keepFrames = keepFrames;
         o.correctionsPerFrame = uint32_t(correctionsPerFrame);
@@ -104,6 +107,7 @@ struct CorrectionSettings {
         if (!keepFrames) throw py::value_error("loop_closure=True re-fuses the frames a loop moves: it needs keep_frames=True");
         slam::LoopClosureOptions lo;
         lo.tracker = o.tracker;
+        lo.proximityCandidates = int(loopPlaceCandidates);
         o.loopClosure = std::make_shared<slam::LoopCloser>(lo);
     }
 };
@@ -252,6 +256,8 @@ Keyword arguments (all optional):
   loop_closure          tracking: recognise places seen before, verify them, optimise a pose graph and re-fuse the
                         frames a loop moves; relocalise lost frames from keyframes (docs/LOOP_CLOSURE.md; needs
                         keep_frames=True; --loop-closure; False)
+  loop_place_candidates loop closure: old keyframes that the pose graph puts near a new keyframe verified as loop
+                        candidates besides the ferns'; 0: the ferns alone (--loop-place-candidates; 2)
 
 Bad settings raise ValueError; no usable device or a capacity that does not fit it raises vkmesh.Error.
 )doc")
@@ -264,14 +270,16 @@ Bad settings raise ValueError; no usable device or a capacity that does not fit 
                          long long recycleAfterFrames, double starveWeight, bool validation, double trackColorWeight,
                          const std::string& trackSolve, int trackDownsample, int trackModelReuse, bool keepFrames,
                          long long correctionsPerFrame, double framesBudgetMb, const std::string& framesSpill, bool loopClosure,
-                         bool allocationTiles) {
+                         long long loopPlaceCandidates, bool allocationTiles) {
                  return makeReconstructor(voxelSize, truncationVoxels, maxDepth, device, colorMode, colorRecency, trackDeltas,
                                           maxWeight, minWeight, allocationStride, refine, refineEpsilonVoxels, lockFree,
                                           {blockCapacity, hashCapacity, touchedCapacity, vertexCapacity, chunkCapacity,
                                            retypeCapacity, deltaRecordCapacity},
                                           growCapacities, keepRadius, recycle, recycleAfterFrames, starveWeight, validation,
                                           float(trackColorWeight), trackSolve, trackDownsample, trackModelReuse,
-                                          {keepFrames, loopClosure, correctionsPerFrame, framesBudgetMb, framesSpill}, allocationTiles);
+                                          {.keepFrames = keepFrames, .loopClosure = loopClosure, .correctionsPerFrame = correctionsPerFrame,
+                                           .loopPlaceCandidates = loopPlaceCandidates, .framesBudgetMb = framesBudgetMb,
+                                           .framesSpill = framesSpill}, allocationTiles);
              }),
              py::kw_only(), "voxel_size"_a = shortest(dp.voxelSize), "truncation_voxels"_a = shortest(dp.truncVoxels),
              // `vkmesh fuse --max-depth` defaults to 4 m (host/cli_options.h, DatasetArgs), not VolumeParams' 5 m.
@@ -288,7 +296,7 @@ Bad settings raise ValueError; no usable device or a capacity that does not fit 
              "track_downsample"_a = gpu::TrackerOptions{}.downsample,
              "track_model_reuse"_a = gpu::TrackerOptions{}.modelReuseFrames, "keep_frames"_a = false,
              "corrections_per_frame"_a = ReconstructorOptions{}.correctionsPerFrame, "frames_budget_mb"_a = 1024.0, "frames_spill"_a = "",
-             "loop_closure"_a = false, "allocation_tiles"_a = dp.allocationTiles)
+             "loop_closure"_a = false, "loop_place_candidates"_a = kDefaultLoopPlaceCandidates, "allocation_tiles"_a = dp.allocationTiles)
         .def("integrate", &PyReconstructor::integrate, "depth"_a, "intrinsics"_a, "pose"_a = py::none(), "depth_scale"_a = 5000.0,
              "color"_a = py::none(), R"doc(
 Fuses one frame and updates the mesh; returns when the GPU has finished it.
@@ -359,7 +367,9 @@ Raises vkmesh.Error before the first frame or when the file cannot be written.
                         return loadReconstructor(path, device, trackDeltas,
                                                  {blockCapacity, hashCapacity, touchedCapacity, vertexCapacity, chunkCapacity,
                                                   retypeCapacity, deltaRecordCapacity},
-                                                 validation, {keepFrames, false, correctionsPerFrame, framesBudgetMb, framesSpill});
+                                                 validation,
+                                                 {.keepFrames = keepFrames, .correctionsPerFrame = correctionsPerFrame,
+                                                  .framesBudgetMb = framesBudgetMb, .framesSpill = framesSpill});
                     },
                     "path"_a, py::kw_only(), "device"_a = py::none(), "track_deltas"_a = false, "block_capacity"_a = dc.blockCapacity,
                     "hash_capacity"_a = dc.hashCapacity, "touched_capacity"_a = dc.touchedCapacity,

@@ -32,6 +32,10 @@ struct PoseCorrections {
     bool empty() const { return frames.empty(); }
 };
 
+// The loop closer's (slam::LoopClosureOptions::proximityCandidates) default, here so that the settings
+// (api/settings.cpp) state it without depending on the loop closer.
+inline constexpr int kDefaultLoopPlaceCandidates = 2;
+
 // What a loop closer did (--stats "loop_closure", Python's stats(): RunStats carries it).
 struct LoopClosureStats {
     uint32_t keyframes = 0;

@@ -202,6 +202,11 @@ std::vector<SettingDescription> describeAll() {
     s.push_back(make("--corrections-per-frame", "corrections_per_frame", K::Correction, text(m.correctionsPerFrame),
                      "with --loop-closure: frames a loop moved that are re-fused before each new frame (default 2; the rest "
                      "after the last frame)"));
+    s.push_back(range(make("--loop-place-candidates", "loop_place_candidates", K::Correction, text(kDefaultLoopPlaceCandidates),
+                           "with --loop-closure: old keyframes that the pose graph puts near a new keyframe (within the drift the "
+                           "path allows, looking the same way) verified as loop candidates besides the ferns' (default 2; 0: the "
+                           "ferns alone, a third of the loop closer's time where the camera stays in one place; docs/LOOP_CLOSURE.md)"),
+                      0, 100));
 
     // --- instrumentation ---
     s.push_back(make("--no-stage-times", "", K::Instrumentation, "false",

@@ -47,7 +47,7 @@ struct LoopClosureOptions {
     // (the plausibility bound below) and whose optical axis is within proximityDegrees of the camera's; the
     // nearest `proximityCandidates` are verified as the ferns' are, unless a loop was verified at one of the last
     // proximitySpacing keyframes (a place already tied to the map needs no second check).
-    int proximityCandidates = 2;
+    int proximityCandidates = kDefaultLoopPlaceCandidates;   // --loop-place-candidates
     double proximityDegrees = 20.0;
     int proximitySpacing = 3;
     // A loop proposed by place corrects the trajectory only when it moves the camera at least this far or turns

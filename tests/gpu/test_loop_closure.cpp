@@ -498,8 +498,9 @@ RealRun runOnRealSequence(const fs::path& seq, const fs::path& d) {
         if (!isFused || f >= run.online.size() || f >= run.truth.size()) continue;
         EXPECT_LT(distanceMetres(run.online[f].cameraToWorld, run.truth[f].cameraToWorld), 0.05)
             << "frame " << f << " (" << v["status"] << ", inlier share " << v["inlier_share"] << ") fused off its place";
-        if (v["status"] == "relocalised")
+        if (v["status"] == "relocalised") {
             EXPECT_LT(angleDegrees(run.online[f].cameraToWorld, run.truth[f].cameraToWorld), 5.0) << "frame " << f << " relocalised off";
+        }
     }
     return run;
 }
@@ -596,6 +597,12 @@ TEST(LoopClosure, OptionsNeedTracking) {
     const test::CliRun s = test::runCli("fuse " + seq.string() + " --track --corrections-per-frame 3 -o /dev/null");
     EXPECT_NE(s.exitCode, 0);
     EXPECT_NE(s.err.find("--corrections-per-frame needs --loop-closure"), std::string::npos) << s.err;
+    const test::CliRun p = test::runCli("fuse " + seq.string() + " --track --loop-place-candidates 0 -o /dev/null");
+    EXPECT_NE(p.exitCode, 0);
+    EXPECT_NE(p.err.find("--loop-place-candidates needs --loop-closure"), std::string::npos) << p.err;
+    const test::CliRun q = test::runCli("fuse " + seq.string() + " --track --loop-closure --loop-place-candidates 101 -o /dev/null");
+    EXPECT_NE(q.exitCode, 0);
+    EXPECT_NE(q.err.find("--loop-place-candidates"), std::string::npos) << q.err;
 }
 
 }  // namespace
