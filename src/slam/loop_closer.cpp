@@ -118,26 +118,33 @@ PoseCorrections LoopCloser::frameFused(const LoopClosureFrame& frame) {
     t = Clock::now();
     const Keyframe& current = keyframes_.back();
     std::vector<std::pair<double, int>> alike;
-    for (int k = 0; k + options_.minKeyframeGap <= id; ++k) {
-        if (keyframes_[size_t(k)].frame + options_.minFrameGap > current.frame) continue;
+    for (int k = 0; k < id; ++k) {
+        if (!oldEnoughForLoop(k, current)) continue;
         const double d = RandomFerns::dissimilarity(current.code, keyframes_[size_t(k)].code);
         if (d <= options_.loopDissimilarity) alike.emplace_back(d, k);
     }
     std::sort(alike.begin(), alike.end());
     if (alike.size() > size_t(options_.candidates)) alike.resize(size_t(options_.candidates));
-    std::vector<int> tried;
-    for (const auto& [d, k] : alike) tried.push_back(k);
+    // The ferns' candidates first (most alike first), then the nearby keyframes (nearest first).
+    struct Candidate {
+        int keyframe;
+        double dissimilarity;
+        const char* proposedBy;
+    };
+    std::vector<Candidate> candidates;
+    std::vector<int> byLook;
+    for (const auto& [d, k] : alike) {
+        candidates.push_back({k, d, "ferns"});
+        byLook.push_back(k);
+    }
     const bool placeChecked = lastVerifiedKeyframe_ >= 0 && id - lastVerifiedKeyframe_ <= options_.proximitySpacing;
-    const std::vector<int> nearby = placeChecked ? std::vector<int>{} : nearbyKeyframes(current, tried);
+    if (!placeChecked)
+        for (const int k : nearbyKeyframes(current, byLook))
+            candidates.push_back({k, RandomFerns::dissimilarity(current.code, keyframes_[size_t(k)].code), "proximity"});
     time("search", msSince(t));
-    if (!alike.empty() || !nearby.empty()) {
+    if (!candidates.empty()) {
         const RegistrationFrame currentFrame = registrationFrame(current.depth, current.intrinsics, options_.tracker, options_.registrationWidth);
-        // The ferns' candidates first (most alike first), then the nearby keyframes (nearest first).
-        std::vector<std::pair<int, const char*>> candidates;
-        for (const int k : tried) candidates.emplace_back(k, "ferns");
-        for (const int k : nearby) candidates.emplace_back(k, "proximity");
-        for (const auto& [k, proposedBy] : candidates) {
-            const double d = RandomFerns::dissimilarity(current.code, keyframes_[size_t(k)].code);
+        for (const auto& [k, d, proposedBy] : candidates) {
             const LoopOutcome outcome = tryLoop(current, currentFrame, k, d, proposedBy);
             if (outcome == LoopOutcome::Closed) {
                 result = corrections();
@@ -153,14 +160,20 @@ PoseCorrections LoopCloser::frameFused(const LoopClosureFrame& frame) {
     return result;
 }
 
+bool LoopCloser::oldEnoughForLoop(int k, const Keyframe& current) const {
+    const int newest = int(keyframes_.size()) - 1;
+    return k + options_.minKeyframeGap <= newest && keyframes_[size_t(k)].frame + options_.minFrameGap <= current.frame;
+}
+
+double LoopCloser::maxDriftMetres(double path) const { return options_.driftBaseMetres + options_.driftPerMetre * path; }
+
 std::vector<int> LoopCloser::nearbyKeyframes(const Keyframe& current, const std::vector<int>& skip) const {
     if (options_.proximityCandidates < 1) return {};
     const Pose currentPose = graph_.pose(current.node);
-    const int id = int(keyframes_.size()) - 1;
     std::vector<std::pair<double, int>> near;
-    for (int k = 0; k + options_.minKeyframeGap <= id; ++k) {
+    for (int k = 0; k + 1 < int(keyframes_.size()); ++k) {
         const Keyframe& old = keyframes_[size_t(k)];
-        if (old.frame + options_.minFrameGap > current.frame || std::find(skip.begin(), skip.end(), k) != skip.end()) continue;
+        if (!oldEnoughForLoop(k, current) || std::find(skip.begin(), skip.end(), k) != skip.end()) continue;
         const Pose oldPose = graph_.pose(old.node);
         const double metres = (currentPose.block<3, 1>(0, 3) - oldPose.block<3, 1>(0, 3)).norm();
         const double axisCosine = std::clamp(currentPose.block<3, 1>(0, 2).dot(oldPose.block<3, 1>(0, 2)), -1.0, 1.0);
@@ -168,7 +181,7 @@ std::vector<int> LoopCloser::nearbyKeyframes(const Keyframe& current, const std:
         // Where the camera can be: no further than tracking can have drifted since the old keyframe (tryLoop's
         // plausibility bound), looking at what it saw.
         const double path = current.pathMetres - old.pathMetres;
-        if (metres > options_.driftBaseMetres + options_.driftPerMetre * path || axisDegrees > options_.proximityDegrees) continue;
+        if (metres > maxDriftMetres(path) || axisDegrees > options_.proximityDegrees) continue;
         near.emplace_back(metres / options_.keyframeMetres + axisDegrees / options_.keyframeDegrees, k);   // in keyframe spacings
     }
     std::sort(near.begin(), near.end());
@@ -247,7 +260,7 @@ LoopCloser::LoopOutcome LoopCloser::tryLoop(const Keyframe& current, const Regis
     loop.correctionMetres = translationMetres(correction);
     loop.correctionDegrees = rotationDegrees(correction);
     const double path = current.pathMetres - old.pathMetres;
-    const double maxMetres = options_.driftBaseMetres + options_.driftPerMetre * path;
+    const double maxMetres = maxDriftMetres(path);
     const double maxDegrees = options_.driftBaseDegrees + options_.driftDegreesPerMetre * path;
     if (loop.correctionMetres > maxMetres || loop.correctionDegrees > maxDegrees)
         return reject("implausible: moves the camera " + std::to_string(loop.correctionMetres) + " m, " +

@@ -125,6 +125,11 @@ private:
     // Verifies and, if accepted, closes a loop from the newest keyframe to `candidate`.
     enum class LoopOutcome { Rejected, Consistent, Closed };
     LoopOutcome tryLoop(const Keyframe& current, const RegistrationFrame& currentFrame, int candidate, double dissimilarity, const char* proposedBy);
+    // Whether keyframe k is old enough to close a loop with `current` (the newest keyframe): minKeyframeGap
+    // keyframes and minFrameGap frames back.
+    bool oldEnoughForLoop(int k, const Keyframe& current) const;
+    // How far tracking can have drifted over `path` metres (the plausibility bound).
+    double maxDriftMetres(double path) const;
     // Old enough keyframes that could be where the camera is now (proximity* options), nearest first, not in `skip`.
     std::vector<int> nearbyKeyframes(const Keyframe& current, const std::vector<int>& skip) const;
     void time(const std::string& stage, double ms);

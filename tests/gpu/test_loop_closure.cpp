@@ -591,18 +591,18 @@ TEST(RealLoopClosure, TumRevisitsTheFernsMissAreProposedByPlace) {
 // Bad combinations are clear errors.
 TEST(LoopClosure, OptionsNeedTracking) {
     const fs::path seq = test::makeMinimalTum("loop_options");   // refused before any frame is read
-    const test::CliRun r = test::runCli("fuse " + seq.string() + " --loop-closure -o /dev/null");
-    EXPECT_NE(r.exitCode, 0);
-    EXPECT_NE(r.err.find("need --track"), std::string::npos) << r.err;
-    const test::CliRun s = test::runCli("fuse " + seq.string() + " --track --corrections-per-frame 3 -o /dev/null");
-    EXPECT_NE(s.exitCode, 0);
-    EXPECT_NE(s.err.find("--corrections-per-frame needs --loop-closure"), std::string::npos) << s.err;
-    const test::CliRun p = test::runCli("fuse " + seq.string() + " --track --loop-place-candidates 0 -o /dev/null");
-    EXPECT_NE(p.exitCode, 0);
-    EXPECT_NE(p.err.find("--loop-place-candidates needs --loop-closure"), std::string::npos) << p.err;
-    const test::CliRun q = test::runCli("fuse " + seq.string() + " --track --loop-closure --loop-place-candidates 101 -o /dev/null");
-    EXPECT_NE(q.exitCode, 0);
-    EXPECT_NE(q.err.find("--loop-place-candidates"), std::string::npos) << q.err;
+    // Options, and what the error must say.
+    const std::pair<const char*, const char*> refused[] = {
+        {"--loop-closure", "need --track"},
+        {"--track --corrections-per-frame 3", "--corrections-per-frame needs --loop-closure"},
+        {"--track --loop-place-candidates 0", "--loop-place-candidates needs --loop-closure"},
+        {"--track --loop-closure --loop-place-candidates 101", "--loop-place-candidates"},
+    };
+    for (const auto& [options, says] : refused) {
+        const test::CliRun r = test::runCli("fuse " + seq.string() + " " + options + " -o /dev/null");
+        EXPECT_NE(r.exitCode, 0) << options;
+        EXPECT_NE(r.err.find(says), std::string::npos) << options << ": " << r.err;
+    }
 }
 
 }  // namespace
