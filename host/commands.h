@@ -22,6 +22,7 @@ Run addFramesCommand(CLI::App& app);   // vkmesh frames DATASET -o f.json: the f
 Run addFuseCommand(CLI::App& app);     // vkmesh fuse DATASET -o mesh.ply: fuse on the GPU, write the mesh
 Run addExportCommand(CLI::App& app);   // vkmesh export MAP -o mesh.ply: the mesh of a saved map (fuse --save)
 Run addCorrectCommand(CLI::App& app);  // vkmesh correct MAP --trajectory T -o mesh.ply: re-fuse frames whose poses changed
+Run addMergeCommand(CLI::App& app);    // vkmesh merge A.vkmap B.vkmap -o C.vkmap: the sum of saved maps, with its mesh
 Run addDeltasCommand(CLI::App& app);   // vkmesh deltas STREAM -o mesh.ply: replay a mesh-delta stream
 Run addEvalCommand(CLI::App& app);     // vkmesh eval MESH --gt GT.ply: accuracy, completeness, F-score
 Run addRenderCommand(CLI::App& app);   // vkmesh render MESH -o view.png: offscreen picture of a mesh

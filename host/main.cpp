@@ -20,6 +20,7 @@ int main(int argc, char** argv) {
     const std::vector<std::pair<std::string, Run>> commands = {
         {"devices", addDevicesCommand(app)}, {"synth", addSynthCommand(app)},   {"frames", addFramesCommand(app)},
         {"fuse", addFuseCommand(app)},       {"export", addExportCommand(app)},  {"correct", addCorrectCommand(app)},
+        {"merge", addMergeCommand(app)},
         {"deltas", addDeltasCommand(app)}, {"eval", addEvalCommand(app)},
         {"render", addRenderCommand(app)},   {"soak", addSoakCommand(app)},      {"view", addViewCommand(app)}};
     try {

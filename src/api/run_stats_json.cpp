@@ -212,4 +212,21 @@ json runStatsJson(const Mapper& mapper) {
     return stats;
 }
 
+json mergeReportJson(const MergeReport& r) {
+    json inputs = json::array();
+    for (const MergeInputReport& in : r.inputs)
+        inputs.push_back({{"path", in.path}, {"blocks", in.blocks}, {"frames_integrated", in.framesIntegrated},
+                          {"frame_store", in.frameStore}, {"frames_stored", in.framesStored}});
+    json j;
+    j["inputs"] = inputs;
+    j["blocks"] = {{"merged", r.blocks}, {"shared", r.sharedBlocks}};
+    j["observed_corners"] = r.corners;
+    j["frames_integrated"] = r.framesIntegrated;
+    j["frame_store"] = {{"path", r.frameStorePath}, {"frames", r.framesStored}, {"renumbered", r.framesRenumbered}};
+    j["mesh"] = {{"vertices", r.meshVertices}, {"triangles", r.meshTriangles}};
+    j["ms"] = {{"read", r.readMs}, {"merge", r.mergeMs}, {"rebuild", r.rebuildMs}, {"save", r.saveMs}};
+    j["warnings"] = r.warnings;
+    return j;
+}
+
 }  // namespace vkmesh

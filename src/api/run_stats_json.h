@@ -8,6 +8,7 @@
 
 #include <vector>
 
+#include "api/map_merge.h"
 #include "api/mapper.h"
 
 namespace vkmesh {
@@ -18,5 +19,8 @@ nlohmann::json seriesJson(const std::vector<double>& values);
 // Everything the Mapper knows: settings, frames, per-frame times and counts, capacities and their events, memory,
 // tracking, loop closure, warnings. Before the first frame (no volume) only the settings.
 nlohmann::json runStatsJson(const Mapper& mapper);
+
+// `vkmesh merge --stats` and vkmesh.merge_maps(): the inputs, what the sum holds, its mesh, where the time went.
+nlohmann::json mergeReportJson(const MergeReport& report);
 
 }  // namespace vkmesh

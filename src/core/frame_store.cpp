@@ -350,6 +350,26 @@ void FrameStore::setPose(uint32_t index, const Pose& pose) {
     frames_.at(index).pose = pose;
 }
 
+void FrameStore::absorb(FrameStore&& other, uint32_t indexOffset) {
+    if (&other == this) throw Error("frame store: a store cannot absorb itself");
+    for (const auto& [index, e] : other.frames_) {
+        if (uint64_t(index) + indexOffset > UINT32_MAX)
+            throw Error("frame store: frame " + std::to_string(index) + " moved by " + std::to_string(indexOffset) + " passes the largest index");
+        if (frames_.count(index + indexOffset))
+            throw Error("frame store: frame " + std::to_string(index + indexOffset) + " is in both stores");
+    }
+    for (auto& [index, e] : other.frames_) {
+        if (e.spilled) {
+            e.payload = other.payloadOf(index, e);
+            e.spilled = false;
+        }
+        insert(index + indexOffset, std::move(e));
+    }
+    other.frames_.clear();
+    other.bytesInMemory_ = other.bytesOnDisk_ = other.rawBytes_ = 0;
+    other.removeSpillFolder();
+}
+
 std::vector<uint32_t> FrameStore::indices() const {
     std::vector<uint32_t> out;
     out.reserve(frames_.size());

@@ -76,6 +76,11 @@ public:
     double timestamp(uint32_t index) const;
     // After the frame was fused again at a corrected pose. Throws Error if unknown or not finite.
     void setPose(uint32_t index, const Pose& pose);
+    // Moves every frame of `other` here, under its index + indexOffset, as it is (compressed: nothing is
+    // recompressed; a frame spilled there is read back and kept here as add() keeps one). Throws Error before
+    // anything moves if a new index is already here or passes 2^32 - 1; past the budget without a spill folder,
+    // as add() does (the frames moved so far stay here). `other` is left empty.
+    void absorb(FrameStore&& other, uint32_t indexOffset = 0);
     std::vector<uint32_t> indices() const;  // ascending
     size_t size() const;
     FrameStoreStats stats() const;

@@ -14,23 +14,33 @@
 #include <random>
 #include <set>
 
+#include "core/map_merge.h"
 #include "gpu/capacities.h"
 #include "gpu/gpu_volume.h"
 
 namespace vkmesh::gpu {
+
+namespace {
+
+// What a map file records of a configuration (map::Settings).
+map::Settings settingsOf(const GpuVolumeConfig& c, bool touchedFollowsPool) {
+    const VolumeParams& p = c.params;
+    return {p.voxelSize, p.truncVoxels, p.maxWeight, p.minDepth, p.maxDepth, uint32_t(p.allocationStride), c.minMeshWeight,
+            c.meshMode == MeshMode::Incremental ? 1u : 0u, c.refine ? 1u : 0u, c.refineEpsilonVoxels, c.lockFree ? 1u : 0u,
+            c.vertexUpdate, c.keepRadius, c.recycle ? 1u : 0u, c.recycleAfterFrames, c.starveWeight,
+            c.hashRebuildTombstoneFraction, uint32_t(c.imageWidth), uint32_t(c.imageHeight), c.growCapacities ? 1u : 0u,
+            touchedFollowsPool ? 1u : 0u, uint32_t(p.colorFusion), p.colorRecency,
+            p.allocationTiles ? uint32_t(p.allocationTileRules) : 0u};
+}
+
+}  // namespace
 
 map::MapData GpuVolume::saveMap() const {
     map::MapData m;
     const GpuVolumeConfig& c = config_;
     m.features = (c.meshMode == MeshMode::Incremental ? map::FEATURE_INCREMENTAL_MESH : 0u) |
                  (c.params.colorFusion != ColorFusion::Off ? map::FEATURE_COLOR : 0u);
-    const VolumeParams& p = c.params;
-    m.settings = {p.voxelSize, p.truncVoxels, p.maxWeight, p.minDepth, p.maxDepth, uint32_t(p.allocationStride), c.minMeshWeight,
-                  c.meshMode == MeshMode::Incremental ? 1u : 0u, c.refine ? 1u : 0u, c.refineEpsilonVoxels, c.lockFree ? 1u : 0u,
-                  c.vertexUpdate, c.keepRadius, c.recycle ? 1u : 0u, c.recycleAfterFrames, c.starveWeight,
-                  c.hashRebuildTombstoneFraction, uint32_t(c.imageWidth), uint32_t(c.imageHeight), c.growCapacities ? 1u : 0u,
-                  touchedFollowsPool_ ? 1u : 0u, uint32_t(p.colorFusion), p.colorRecency,
-                  p.allocationTiles ? uint32_t(p.allocationTileRules) : 0u};
+    m.settings = settingsOf(c, touchedFollowsPool_);
     m.capacities = {c.blockCapacity, c.hashCapacity, c.touchedCapacity, c.retypeCapacity, c.vertexCapacity, c.chunkCapacity};
     m.frameNumber = frameNumber_;
     m.framesIntegrated = framesIntegrated_;
@@ -99,36 +109,14 @@ GpuVolumeConfig GpuVolume::mapConfig(const map::MapData& m) {
 
 namespace {
 
-// The settings that change what a frame computes: a volume continuing a map must have the map's. (Depth range,
-// image size, vertex-update path, lock-free claims and growth are the caller's: they give the same map.)
+// The settings that change what a frame computes (map::settingDifferences): a volume continuing a map must have
+// the map's. It follows the map's allocation rules, so allocation by tiles is compared as on or off.
 void checkSettings(const GpuVolumeConfig& want, const GpuVolumeConfig& map, const std::string& name) {
-    struct Setting {
-        const char* what;
-        const char* option;
-        double map, want;
-    };
-    const Setting settings[] = {
-        {"voxel size", "--voxel", map.params.voxelSize, want.params.voxelSize},
-        {"truncation (voxels)", "--trunc", map.params.truncVoxels, want.params.truncVoxels},
-        {"max weight", "--max-weight", map.params.maxWeight, want.params.maxWeight},
-        {"min mesh weight", "--min-weight", map.minMeshWeight, want.minMeshWeight},
-        {"allocation stride", "--alloc-stride", double(map.params.allocationStride), double(want.params.allocationStride)},
-        {"allocation by tiles (1) or pixel by pixel (0)", "--alloc-tiles, --alloc-pixels", double(map.params.allocationTiles), double(want.params.allocationTiles)},
-        {"mesh mode (1 = incremental)", "--mode", double(map.meshMode == MeshMode::Incremental), double(want.meshMode == MeshMode::Incremental)},
-        {"refinement", "--refine", double(map.refine), double(want.refine)},
-        {"refinement epsilon", "--refine-eps", map.refine ? map.refineEpsilonVoxels : 0.0, map.refine ? want.refineEpsilonVoxels : 0.0},
-        {"keep radius", "--keep-radius", map.keepRadius, want.keepRadius},
-        {"recycling", "--recycle", double(map.recycle), double(want.recycle)},
-        {"recycle after (frames)", "--recycle-after", map.recycle ? map.recycleAfterFrames : 0.0, map.recycle ? want.recycleAfterFrames : 0.0},
-        {"starve weight", "--starve-weight", map.recycle ? map.starveWeight : 0.0, map.recycle ? want.starveWeight : 0.0},
-        {"colour fusion (0 off, 1 average, 2 recent)", "--no-color, --color-mode", double(map.params.colorFusion), double(want.params.colorFusion)},
-        {"colour recency", "--color-recency", map.params.colorFusion == ColorFusion::Recent ? map.params.colorRecency : 0.0,
-         map.params.colorFusion == ColorFusion::Recent ? want.params.colorRecency : 0.0},
-    };
-    for (const Setting& s : settings)
-        if (s.map != s.want)
-            throw Error(name + ": the map was fused with " + s.what + " " + std::to_string(s.map) + " but " + std::to_string(s.want) +
-                        " was asked for (" + s.option + "); continue a map with its own settings");
+    const std::vector<map::SettingDifference> d = map::settingDifferences(settingsOf(map, true), settingsOf(want, true),
+                                                                          map::AllocationRules::OnOrOff);
+    if (!d.empty())
+        throw Error(name + ": the map was fused with " + d[0].what + " " + std::to_string(d[0].a) + " but " + std::to_string(d[0].b) +
+                    " was asked for (" + d[0].option + "); continue a map with its own settings");
 }
 
 }  // namespace

@@ -1,0 +1,86 @@
+// `vkmesh merge A.vkmap B.vkmap ... -o C.vkmap [--mesh C.ply]`: the sum of saved maps (docs/SCALING.md). Maps
+// fused from parts of one recording (or from several recordings of one place, in one world frame) add up to the
+// map of all their frames: TSDF sums and counts added corner by corner, blocks united, colour combined by its
+// weights; the mesh is built from the sum (the mesh one run fusing every frame would have), and the frame stores
+// saved beside the inputs are carried over so that the merged map can be corrected. Maps that do not add up
+// (other settings, bounded maps, a corner past its count) are refused naming what differs; nothing is written then.
+//
+// Unlike fuse and correct, where -o is the mesh, -o here is the map: the merged map is what this command makes.
+#include <CLI/CLI.hpp>
+
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "api/map_merge.h"
+#include "api/run_stats_json.h"
+#include "cli_options.h"
+#include "commands.h"
+#include "io/mesh_file.h"
+
+namespace vkmesh::cli {
+
+namespace {
+
+struct MergeArgs {
+    std::vector<std::string> maps;
+    std::string output;
+    std::string meshPath;
+    std::string statsPath;
+    bool noFrames = false;
+    double framesBudgetMb = 1024;
+    std::string framesSpill;
+    DeviceArgs device;
+};
+
+int runMerge(const MergeArgs& args) {
+    const std::filesystem::path out(args.output);
+    if (out.extension() == ".ply" || out.extension() == ".obj" || out.extension() == ".glb")
+        throw Error("-o " + args.output + ": -o is the merged map (.vkmap); write its mesh with --mesh " + args.output);
+    if (!args.meshPath.empty()) meshFormatOf(args.meshPath);   // a mesh name vkmesh cannot write fails now, not after the merge
+    MergeOptions options;
+    options.device = args.device.contextOptions();
+    options.keepFrames = !args.noFrames;
+    options.frames.memoryBudgetBytes = size_t(args.framesBudgetMb * 1024 * 1024);
+    options.frames.spillFolder = args.framesSpill;
+    options.returnMesh = !args.meshPath.empty();
+    std::vector<std::filesystem::path> inputs(args.maps.begin(), args.maps.end());
+    const MergeReport report = mergeMaps(inputs, out, options);
+    for (const std::string& w : report.warnings) std::cerr << "warning: " << w << "\n";
+    if (!args.meshPath.empty()) writeMesh(args.meshPath, report.mesh);
+    std::cout << "vkmesh merge: " << inputs.size() << " maps, " << report.framesIntegrated << " frames, " << report.blocks << " blocks ("
+              << report.sharedBlocks << " in more than one map) -> " << out.string();
+    if (!report.frameStorePath.empty())
+        std::cout << " with " << report.framesStored << " frames kept" << (report.framesRenumbered ? " (renumbered)" : "");
+    std::cout << "; mesh " << report.meshVertices << " vertices, " << report.meshTriangles << " triangles"
+              << (args.meshPath.empty() ? "" : " -> " + args.meshPath) << "\n";
+    if (!args.statsPath.empty()) {
+        nlohmann::json stats = mergeReportJson(report);
+        stats["output"] = out.string();
+        if (!args.meshPath.empty()) stats["mesh"]["path"] = args.meshPath;
+        std::ofstream(args.statsPath) << stats.dump(2) << "\n";
+    }
+    return 0;
+}
+
+}  // namespace
+
+Run addMergeCommand(CLI::App& app) {
+    auto args = std::make_shared<MergeArgs>();
+    auto* cmd = app.add_subcommand("merge", "add saved maps into one: the map of all their frames, with its mesh (docs/SCALING.md)");
+    cmd->add_option("MAPS", args->maps, "maps (.vkmap) saved by vkmesh fuse --save with the same settings, their frame stores beside them")
+        ->required();
+    cmd->add_option("-o,--output", args->output, "the merged map (.vkmap; its frame store is written beside it)")->required();
+    cmd->add_option("--mesh", args->meshPath, "also write the merged map's mesh (.ply binary, .obj or .glb binary glTF)");
+    cmd->add_option("--stats", args->statsPath, "write statistics as JSON (inputs, blocks, frames kept, mesh, ms)");
+    cmd->add_flag("--no-frames", args->noFrames, "do not carry the inputs' frame stores over (the merged map cannot be corrected then)");
+    addSetting(cmd, "--frames-budget", args->framesBudgetMb);
+    addSetting(cmd, "--frames-spill", args->framesSpill);
+    args->device.add(cmd);
+    return [args] { return runMerge(*args); };
+}
+
+}  // namespace vkmesh::cli
