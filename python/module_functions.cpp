@@ -1,5 +1,5 @@
 // vkmesh._vkmesh's free functions: the settings' descriptions, Vulkan devices, the synthetic sequence writer, mesh files (PLY, glTF) read and
-// written, the mesh delta kinds and the validation messages collected from every Reconstructor.
+// written, saved maps merged (api/map_merge.h), the mesh delta kinds and the validation messages collected from every Reconstructor.
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -10,6 +10,8 @@
 #include <utility>
 #include <vector>
 
+#include "api/map_merge.h"
+#include "api/run_stats_json.h"
 #include "api/settings.h"
 #include "arrays.h"
 #include "bindings.h"
@@ -96,6 +98,33 @@ void bindModuleFunctions(py::module_& m) {
         if (!report) return py::none();
         return py::dict("ratio"_a = report->ratio, "triangles_before"_a = report->trianglesBefore,
                         "triangles_after"_a = report->trianglesAfter, "error_m"_a = report->errorMetres);
+    });
+
+    // A mesh path's format checked (vkmesh.Error for an extension vkmesh cannot write), before work whose mesh it is.
+    m.def("_check_mesh_path", [](const fs::path& path) { meshFormatOf(path); });
+
+    // vkmesh.merge_maps(): mergeMaps (api/map_merge.h) without the GIL; returns (the statistics of `vkmesh merge --stats`
+    // as a dict, parsed from mergeReportJson's text by Python's json module, and the merged mesh as a vkmesh.Mesh or None).
+    m.def("_merge_maps", [](const std::vector<fs::path>& inputs, const fs::path& output, bool keepFrames, double framesBudgetMb,
+                            const std::string& framesSpill, const py::object& device, bool validation, bool returnMesh) {
+        if (inputs.empty()) throw py::value_error("merge_maps: no maps given (inputs is empty)");
+        if (!(framesBudgetMb > 0) || !(framesBudgetMb < 1e12))
+            throw py::value_error("frames_budget_mb " + std::to_string(framesBudgetMb) + " must be positive");
+        MergeOptions options;
+        options.device = deviceOptions(device, validation);
+        options.keepFrames = keepFrames;
+        options.frames.memoryBudgetBytes = size_t(framesBudgetMb * 1024 * 1024);
+        options.frames.spillFolder = framesSpill;
+        options.returnMesh = returnMesh;
+        MergeReport report;
+        std::string stats;
+        {
+            py::gil_scoped_release release;
+            report = mergeMaps(inputs, output, options);
+            stats = mergeReportJson(report).dump();
+        }
+        py::object mesh = returnMesh ? meshToPython(std::move(report.mesh)) : py::none();
+        return py::make_tuple(py::module_::import("json").attr("loads")(stats), mesh);
     });
 
     m.attr("_DELTA_ADDED") = uint32_t(DeltaKind::Added);

@@ -28,6 +28,20 @@ using namespace pybind11::literals;
 
 namespace vkmesh::python {
 
+vk::ContextOptions deviceOptions(const py::object& device, bool validation) {
+    vk::ContextOptions o;
+    if (!device.is_none()) {
+        if (!py::isinstance<py::int_>(device) || py::isinstance<py::bool_>(device))
+            throw py::value_error("device must be None (the first suitable one) or an index from vkmesh.devices(), got " +
+                                  py::repr(device).cast<std::string>());
+        const long long index = device.cast<long long>();
+        if (index < 0) throw py::value_error("device " + std::to_string(index) + " must be >= 0");
+        o.deviceIndex = int(std::min<long long>(index, std::numeric_limits<int>::max()));   // too large: vk::Context says so
+    }
+    o.validation = validation;   // VKMESH_VALIDATION=1 turns it on as well (vk::Context, as for the CLI)
+    return o;
+}
+
 namespace {
 
 ColorFusion parseColorMode(const std::string& mode) {
@@ -57,19 +71,6 @@ struct Capacities {
     }
 };
 
-vk::ContextOptions deviceOptions(const py::object& device, bool validation) {
-    vk::ContextOptions o;
-    if (!device.is_none()) {
-        if (!py::isinstance<py::int_>(device) || py::isinstance<py::bool_>(device))
-            throw py::value_error("device must be None (the first suitable one) or an index from vkmesh.devices(), got " +
-                                  py::repr(device).cast<std::string>());
-        const long long index = device.cast<long long>();
-        if (index < 0) throw py::value_error("device " + std::to_string(index) + " must be >= 0");
-        o.deviceIndex = int(std::min<long long>(index, std::numeric_limits<int>::max()));   // too large: vk::Context says so
-    }
-    o.validation = validation;   // VKMESH_VALIDATION=1 turns it on as well (vk::Context, as for the CLI)
-    return o;
-}
 
 // Checks a configuration's settings before any device exists: a bad value is a ValueError naming it. The
 // image size is not known before the first frame; a placeholder stands in for it.

@@ -12,8 +12,8 @@ arrays out; the work is done by the C++ library (vkmesh::Reconstructor), with th
     m = r.mesh()                                         # m.vertices (N, 3) float32, m.triangles (M, 3) uint32
     m.save("room.ply")
 
-Contents: Reconstructor, Mesh, MeshDelta, open_dataset (Dataset, Frame), read_mesh, devices (Device), synth,
-validation_messages, Error, CapacityWarning. docs/PYTHON.md in the source tree has more.
+Contents: Reconstructor, Mesh, MeshDelta, open_dataset (Dataset, Frame), read_mesh, merge_maps, devices (Device),
+synth, validation_messages, Error, CapacityWarning. docs/PYTHON.md in the source tree has more.
 """
 
 import os
@@ -34,8 +34,8 @@ Reconstructor.__module__ = "vkmesh"   # as help() and tracebacks name it (the cl
 
 __version__ = "0.1.0"
 __all__ = [
-    "Reconstructor", "Mesh", "MeshDelta", "Dataset", "Frame", "Device", "open_dataset", "read_mesh", "devices",
-    "synth", "validation_messages", "Error", "CapacityWarning", "ADDED", "CHANGED", "REMOVED",
+    "Reconstructor", "Mesh", "MeshDelta", "Dataset", "Frame", "Device", "open_dataset", "read_mesh", "merge_maps",
+    "devices", "synth", "validation_messages", "Error", "CapacityWarning", "ADDED", "CHANGED", "REMOVED",
 ]
 
 # MeshDelta kinds (docs/DELTAS.md), the GPU's own values.
@@ -115,6 +115,58 @@ def read_mesh(path) -> Mesh:
     and normals, colours and ages when the file has them. Raises vkmesh.Error naming the file for a missing,
     corrupt or unsupported one."""
     return _vkmesh._read_mesh(os.fspath(path))
+
+
+def merge_maps(inputs, output, *, mesh=None, keep_frames: bool = True, frames_budget_mb: float = 1024,
+               frames_spill=None, device=None, validation: bool = False) -> dict:
+    """Adds saved maps into one, as `vkmesh merge INPUTS... -o OUTPUT` does (docs/SCALING.md): maps fused from parts
+    of one recording (or from recordings of one place in one world frame) add up to the map of all their frames. The
+    TSDF sums and counts are added corner by corner, blocks united, colours combined by their weights, and the mesh is
+    built from the sum: the mesh one run fusing every frame would have. Returns the statistics `vkmesh merge --stats`
+    writes, as a dict: inputs (path, blocks, frames_integrated, frame_store, frames_stored of each), blocks (merged,
+    shared), observed_corners, frames_integrated, frame_store (path, frames, renumbered), mesh (vertices, triangles),
+    ms (read, merge, rebuild, save), warnings (each also given to warnings.warn); plus output (the merged map's path)
+    and, with `mesh`, mesh["path"].
+
+    inputs            paths of maps (.vkmap) saved by Reconstructor.save() or `vkmesh fuse --save` with the same
+                      settings (voxel size, truncation, depth range, colour mode, ...)
+    output            the merged map (.vkmap); Reconstructor.load(output) and `vkmesh fuse --load` continue it
+    mesh              None, or a path to write the merged mesh to (.ply, .obj or .glb, as Mesh.save writes them; an
+                      extension vkmesh cannot write raises vkmesh.Error before anything is merged)
+    keep_frames       carry the frame stores saved beside the inputs (INPUT.vkframes) over into OUTPUT.vkframes, so
+                      that the merged map can be corrected (docs/CORRECTION.md); frame indices that collide between
+                      inputs are renumbered (frame_store["renumbered"]). False: like --no-frames
+    frames_budget_mb, frames_spill   the merged frame store's memory budget in MiB (1024) and a folder for the frames
+                      beyond it (None: none, and a store past the budget raises vkmesh.Error) (--frames-budget,
+                      --frames-spill)
+    device            None (a discrete GPU if any, else the first suitable device) or an index from devices()
+    validation        the Khronos validation layer (also on with VKMESH_VALIDATION=1)
+
+    Maps that do not add up (other settings, bounded maps, a corner past its count) raise vkmesh.Error naming the
+    file and what differs ("b.vkmap: fused with voxel size 0.05 but a.vkmap with 0.04 (--voxel); ..."); nothing is
+    written then. The maps are read and added on the host before a device is opened; the GIL is released meanwhile.
+    """
+    if isinstance(inputs, (str, bytes, os.PathLike)):
+        raise TypeError("inputs must be a list of map paths, not one path")
+    paths = [os.fspath(p) for p in inputs]
+    if not paths:
+        raise ValueError("merge_maps: no maps given (inputs is empty)")
+    mesh_path = None if mesh is None else os.fspath(mesh)
+    if mesh_path is not None:
+        _vkmesh._check_mesh_path(mesh_path)   # a mesh vkmesh cannot write fails now, not after the merge
+    if not (np.isfinite(frames_budget_mb) and frames_budget_mb > 0):
+        raise ValueError(f"frames_budget_mb {frames_budget_mb} must be a positive finite number")
+    out = os.fspath(output)
+    stats, merged = _vkmesh._merge_maps(paths, out, bool(keep_frames), float(frames_budget_mb),
+                                        "" if frames_spill is None else os.fspath(frames_spill), device, bool(validation),
+                                        mesh_path is not None)
+    for w in stats["warnings"]:
+        warnings.warn(f"merge_maps: {w}", stacklevel=2)   # what `vkmesh merge` prints as warnings
+    stats["output"] = out
+    if mesh_path is not None:
+        merged.save(mesh_path)
+        stats["mesh"]["path"] = mesh_path
+    return stats
 
 
 class MeshDelta:

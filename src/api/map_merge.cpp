@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <map>
+#include <optional>
 #include <random>
 #include <system_error>
 
@@ -49,9 +50,9 @@ FrameStore mergeFrameStores(std::vector<FrameStore>& stores, const MergeOptions&
     return merged;
 }
 
-}  // namespace
-
-MergeReport mergeMaps(const std::vector<std::filesystem::path>& inputs, const std::filesystem::path& output, const MergeOptions& options) {
+// `external`: the caller's device; nullptr: options.device, opened after every check on the host.
+MergeReport merge(const vk::Context* external, const std::vector<std::filesystem::path>& inputs, const std::filesystem::path& output,
+                  const MergeOptions& options) {
     if (inputs.empty()) throw Error("merge: no maps given");
     MergeReport report;
     auto t0 = std::chrono::steady_clock::now();
@@ -95,7 +96,8 @@ MergeReport mergeMaps(const std::vector<std::filesystem::path>& inputs, const st
 
     // The mesh of the sum, built from scratch on the GPU.
     t0 = std::chrono::steady_clock::now();
-    vk::Context context(options.device);
+    std::optional<vk::Context> own;
+    const vk::Context& context = external ? *external : own.emplace(options.device);
     gpu::GpuVolumeConfig config = gpu::GpuVolume::mapConfig(merged);
     config.growCapacities = true;   // the mesh of the union may need larger heaps than any input's
     std::unique_ptr<gpu::GpuVolume> volume = gpu::GpuVolume::load(context, merged, config, output.string());
@@ -124,6 +126,17 @@ MergeReport mergeMaps(const std::vector<std::filesystem::path>& inputs, const st
     map::writeFile(output, saved);
     report.saveMs = millisecondsSince(t0);
     return report;
+}
+
+}  // namespace
+
+MergeReport mergeMaps(const std::vector<std::filesystem::path>& inputs, const std::filesystem::path& output, const MergeOptions& options) {
+    return merge(nullptr, inputs, output, options);
+}
+
+MergeReport mergeMaps(const vk::Context& context, const std::vector<std::filesystem::path>& inputs, const std::filesystem::path& output,
+                      const MergeOptions& options) {
+    return merge(&context, inputs, output, options);
 }
 
 }  // namespace vkmesh

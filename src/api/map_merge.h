@@ -54,5 +54,8 @@ struct MergeReport {
 // Merges `inputs` (at least one) into `output` (written to output.tmp and renamed; its frame store beside it).
 // Throws vkmesh::Error naming the file and the reason; nothing is written then.
 MergeReport mergeMaps(const std::vector<std::filesystem::path>& inputs, const std::filesystem::path& output, const MergeOptions& options);
+// The same on the caller's device (MergeOptions::device is not used).
+MergeReport mergeMaps(const vk::Context& context, const std::vector<std::filesystem::path>& inputs, const std::filesystem::path& output,
+                      const MergeOptions& options);
 
 }  // namespace vkmesh

@@ -120,6 +120,26 @@ MapData merge(const std::vector<MergeInput>& inputs, MergeSummary* summary) {
             throw Error(inputs[i].name + ": holds other sections than " + inputs[0].name + " (feature flags " + std::to_string(m.features) +
                         " against " + std::to_string(first.features) + ")");
     }
+    // Every input holds the same per-block sections (a map with colour but no colour section passes the parser).
+    const bool color = first.settings.colorMode != 0;
+    for (const MergeInput& in : inputs) {
+        for (const CornerArray& a : first.cornerArrays)
+            if (!in.map->corners(a.tag)) throw Error(in.name + ": the map has no section '" + tagName(a.tag) + "', which " + inputs[0].name + " has");
+        for (const CornerArray& a : in.map->cornerArrays)
+            if (!first.corners(a.tag)) throw Error(in.name + ": the map has a section '" + tagName(a.tag) + "', which " + inputs[0].name + " has not");
+        if (color && !in.map->corners(kColors)) throw Error(in.name + ": a map with colour has no colour section ('colr')");
+    }
+    // The input whose frame header, caller settings (lock-free claims, growth, ...) and settings that are off (the
+    // recency of an average colour) the result keeps: the one with the most frame numbers, ties broken by the bytes,
+    // so that the order of the inputs does not matter.
+    auto later = [](const MapData& a, const MapData& b) {
+        if (a.frameNumber != b.frameNumber) return a.frameNumber > b.frameNumber;
+        if (const int c = std::memcmp(&a.lastPush, &b.lastPush, sizeof(FramePush))) return c > 0;
+        return std::memcmp(&a.settings, &b.settings, sizeof(Settings)) > 0;
+    };
+    const MapData* latest = &first;
+    for (const MergeInput& in : inputs)
+        if (later(*in.map, *latest)) latest = in.map;
 
     // The union of the blocks, in coordinate order (z, y, x): the same result whatever the order of the inputs.
     struct Part {
@@ -135,8 +155,7 @@ MapData merge(const std::vector<MergeInput>& inputs, MergeSummary* summary) {
 
     MapData out;
     out.features = first.features;
-    out.settings = first.settings;
-    const bool color = first.settings.colorMode != 0;
+    out.settings = latest->settings;
     // Arrays in the first input's order (components list theirs); the mesh's empty.
     for (const CornerArray& a : first.cornerArrays) {
         CornerArray c{a.tag, std::vector<uint32_t>(n * VOXELS_PER_BLOCK, 0)};
@@ -151,7 +170,6 @@ MapData merge(const std::vector<MergeInput>& inputs, MergeSummary* summary) {
     std::vector<uint32_t>& sums = *arrayOf(kSums);
     std::vector<uint32_t>& counts = *arrayOf(kCounts);
     std::vector<uint32_t>* colors = color ? arrayOf(kColors) : nullptr;
-    if (color && !colors) throw Error(inputs[0].name + ": a map with colour has no colour section ('colr')");
 
     MergeSummary s;
     out.blocks.reserve(n);
@@ -209,16 +227,11 @@ MapData merge(const std::vector<MergeInput>& inputs, MergeSummary* summary) {
         ++index;
     }
 
-    // Frame numbers add up (every input's frames are in the sum); the last push of the input with the most frames
-    // (ties: the larger push, byte by byte), so that the order of the inputs does not matter.
-    const MapData* latest = &first;
+    // Frame numbers add up (every input's frames are in the sum).
     for (const MergeInput& in : inputs) {
         const MapData& m = *in.map;
         out.frameNumber += m.frameNumber;
         out.framesIntegrated += m.framesIntegrated;
-        if (m.frameNumber > latest->frameNumber ||
-            (m.frameNumber == latest->frameNumber && std::memcmp(&m.lastPush, &latest->lastPush, sizeof(FramePush)) > 0))
-            latest = &m;
         out.settings.imageWidth = std::max(out.settings.imageWidth, m.settings.imageWidth);
         out.settings.imageHeight = std::max(out.settings.imageHeight, m.settings.imageHeight);
         Capacities& k = out.capacities;

@@ -4,7 +4,9 @@
 // corner by corner, blocks united. Colour (an average) is combined by its weights, to within a quarter level.
 //
 // The result holds no mesh (every cube empty, every edge without a vertex): the mesh follows from the TSDF, and
-// a GPU volume builds it (GpuVolume::rebuildMesh; api/map_merge.h does all of it). Everything that can refuse
+// a GPU volume builds it (GpuVolume::rebuildMesh; api/map_merge.h does all of it). Colour is weighted by the
+// corner's count, as fusion weighs it: where some observations brought no colour (frames without a colour image),
+// merging in steps may give another colour than merging at once. Everything that can refuse
 // a merge is checked here, before a device is opened or a file written.
 #pragma once
 
@@ -48,11 +50,12 @@ struct MergeSummary {
 //   to combine it by) or was fused with --mode baseline (no incremental mesh to rebuild),
 // - a corner would hold more than SDF_MAX_COUNT observations (naming the block and the counts),
 // - an input is inconsistent (a count that is not a whole number, a sum beyond what its count allows),
-// - a map holds a per-block section this build cannot add.
-// The result's blocks are in coordinate order with pool indices 0..N-1 (the same result whatever the order of
-// the inputs, but for colour rounding when more than two are merged in steps); its counters are those of a map
-// with no mesh; frame numbers add up; capacities are the largest of the inputs' (blocks and hash slots at least
-// what the union needs).
+// - a map holds a per-block section this build cannot add, or one the others lack.
+// The result's blocks are in coordinate order with pool indices 0..N-1, and it is the same whatever the order of
+// the inputs (settings that are not compared come from the input with the most frame numbers); merged in steps,
+// (A + B) + C and A + (B + C) hold the same TSDF and colours within a quarter level where every observation had
+// a colour. Its counters are those of a map with no mesh; frame numbers add up; capacities are the largest of the
+// inputs' (blocks and hash slots at least what the union needs).
 MapData merge(const std::vector<MergeInput>& inputs, MergeSummary* summary = nullptr);
 
 }  // namespace vkmesh::map

@@ -693,6 +693,41 @@ TEST(Cli, CorrectRefusesDriftedFramesIntoTheTrueMap) {
     EXPECT_EQ(nlohmann::json::parse(readText(out / "both.json"))["correction"]["frames_refused"], 5);
     EXPECT_EQ(countTriangleMismatches(canonicalTriangles(a), canonicalTriangles(readPly(out / "both.ply")), 0), 0u);
 
+    // Two runs fusing a half each, merged (docs/SCALING.md): the merged map keeps both stores, so the correction
+    // of all frames gives the true map again.
+    CliRun otherHalf = runCli("fuse " + driftSeq.string() + " --first-frame 3 -o " + (out / "x.ply").string() + " --save " +
+                              (out / "other.vkmap").string() + common);
+    ASSERT_EQ(otherHalf.exitCode, 0) << otherHalf.err;
+    CliRun merged = runCli("merge " + (out / "other.vkmap").string() + " " + (out / "half.vkmap").string() + " -o " +
+                           (out / "merged.vkmap").string() + " --mesh " + (out / "merged.ply").string() + " --stats " +
+                           (out / "merge.json").string() + " --validation");
+    ASSERT_EQ(merged.exitCode, 0) << merged.err;
+    EXPECT_EQ(merged.err.find("[validation"), std::string::npos) << merged.err;
+    const nlohmann::json mergeStats = nlohmann::json::parse(readText(out / "merge.json"));
+    EXPECT_EQ(mergeStats["frames_integrated"], 6);
+    EXPECT_EQ(mergeStats["frame_store"]["frames"], 6);
+    EXPECT_EQ(mergeStats["frame_store"]["renumbered"], false) << "fuse numbers frames by the dataset: the halves do not collide";
+    EXPECT_EQ(countTriangleMismatches(canonicalTriangles(readPly(out / "drift.ply")), canonicalTriangles(readPly(out / "merged.ply")), 0), 0u)
+        << "the merged halves are the drifted run's map";
+    CliRun mergedCorrected = runCli("correct " + (out / "merged.vkmap").string() + " --trajectory " + (out / "truth.txt").string() + " -o " +
+                                    (out / "merged_corrected.ply").string() + " --stats " + (out / "merged_corrected.json").string());
+    ASSERT_EQ(mergedCorrected.exitCode, 0) << mergedCorrected.err;
+    EXPECT_EQ(nlohmann::json::parse(readText(out / "merged_corrected.json"))["correction"]["frames_refused"], 5);
+    EXPECT_EQ(countTriangleMismatches(canonicalTriangles(a), canonicalTriangles(readPly(out / "merged_corrected.ply")), 0), 0u);
+    // Maps that do not add up are refused naming the setting, and nothing is written.
+    CliRun finer = runCli("fuse " + driftSeq.string() + " --frames 1 -o " + (out / "x.ply").string() + " --voxel 0.04 -q --save " +
+                          (out / "finer.vkmap").string());
+    ASSERT_EQ(finer.exitCode, 0) << finer.err;
+    CliRun refused = runCli("merge " + (out / "half.vkmap").string() + " " + (out / "finer.vkmap").string() + " -o " +
+                            (out / "refused.vkmap").string() + " --mesh " + (out / "refused.ply").string());
+    EXPECT_EQ(refused.exitCode, 2);
+    EXPECT_NE(refused.err.find("--voxel"), std::string::npos) << refused.err;
+    EXPECT_NE(refused.err.find("finer.vkmap"), std::string::npos) << refused.err;
+    EXPECT_FALSE(fs::exists(out / "refused.vkmap") || fs::exists(out / "refused.vkframes") || fs::exists(out / "refused.ply"));
+    CliRun meshForMap = runCli("merge " + (out / "half.vkmap").string() + " -o " + (out / "refused.ply").string());
+    EXPECT_EQ(meshForMap.exitCode, 2);
+    EXPECT_NE(meshForMap.err.find("--mesh"), std::string::npos) << meshForMap.err;
+
     // Bad input: the store of another map, a missing store, a pose that is not rigid.
     fs::copy_file(out / "corrected.vkframes", out / "drift.vkframes", fs::copy_options::overwrite_existing);
     CliRun wrongStore = runCli("correct " + (out / "drift.vkmap").string() + " --trajectory " + (out / "truth.txt").string() + " -o " +

@@ -62,10 +62,14 @@ def colors_by_position(mesh: vkmesh.Mesh) -> dict:
     return {tuple(p): tuple(c) for p, c in zip(mesh.vertices.tolist(), mesh.colors.tolist())}
 
 
+# Small initial capacities (they grow when needed): quick to create on lavapipe; Reconstructor.load takes them too.
+SMALL_CAPACITIES = dict(block_capacity=256, vertex_capacity=1 << 14, chunk_capacity=1 << 13)
+
+
 def small_reconstructor(**kwargs) -> vkmesh.Reconstructor:
-    """A Reconstructor with small capacities (they grow when needed): quick to create on lavapipe. The retype list
+    """A Reconstructor with small capacities (SMALL_CAPACITIES): quick to create on lavapipe. The retype list
     keeps its default: a smaller one defers cubes to later frames, and which ones wait depends on the GPU's order."""
-    options = dict(block_capacity=256, vertex_capacity=1 << 14, chunk_capacity=1 << 13)
+    options = dict(SMALL_CAPACITIES)
     options.update(kwargs)
     return vkmesh.Reconstructor(**options)
 

@@ -1,6 +1,7 @@
 """Every setting is described once (src/api/settings.h): Python's keywords and their defaults, `vkmesh fuse`'s options
 and the docs are checked against the descriptions here, so that none of them can drift from the others."""
 
+import inspect
 import math
 import pathlib
 import re
@@ -50,6 +51,21 @@ def test_every_keyword_is_described_with_its_default():
     assert sorted(set(described) - set(keywords)) == []
     wrong = {k: (keywords[k], s["default"]) for k, s in described.items() if not same_default(keywords[k], s["default"])}
     assert wrong == {}
+
+
+def test_merge_maps_keywords_are_the_settings_names():
+    """vkmesh.merge_maps's keywords that are settings (`vkmesh merge --frames-budget`, ...) have the settings' Python names
+    and defaults; keep_frames is True there, as --keep-frames is with --save (`vkmesh merge --no-frames` turns it off)."""
+    parameters = inspect.signature(vkmesh.merge_maps).parameters
+    described = {s["python"]: s for s in SETTINGS if s["python"]}
+    own = {"inputs", "output", "mesh"}   # merge_maps's own arguments: the maps and where the mesh goes
+    assert sorted(set(parameters) - own - set(described)) == []
+    assert {"keep_frames", "frames_budget_mb", "frames_spill", "device", "validation"} <= set(parameters)
+    defaults = {name: p.default for name, p in parameters.items() if name not in own | {"keep_frames"}}
+    wrong = {k: (v, described[k]["default"]) for k, v in defaults.items()
+             if not same_default("''" if v is None else repr(v), described[k]["default"])}
+    assert wrong == {}
+    assert parameters["keep_frames"].default is True
 
 
 def test_every_cli_setting_is_an_option_of_fuse_with_its_help():
