@@ -22,6 +22,8 @@ packages=(
   libceres-dev
   # the Python module (python/, docs/PYTHON.md) and its tests
   python3-dev pybind11-dev python3-pybind11 python3-numpy python3-pytest
+  # batch reconstruction on Dask (python3 -m vkmesh.batch, docs/SCALING.md) and its tests
+  python3-distributed
   # the browser viewer (docs/VIEWER.md): Boost.Beast (header-only) for its server, three.js r111 embedded in its
   # page, and Chromium for its tests (headless, SwiftShader WebGL; ctest label browser)
   libboost-dev libjs-three chromium

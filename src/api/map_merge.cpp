@@ -69,6 +69,9 @@ MergeReport merge(const vk::Context* external, const std::vector<std::filesystem
     report.blocks = summary.blocks, report.sharedBlocks = summary.sharedBlocks, report.corners = summary.corners;
     report.framesIntegrated = merged.framesIntegrated;
 
+    report.mergeMs = millisecondsSince(t0);
+
+    t0 = std::chrono::steady_clock::now();   // reading the frame stores counts as reading
     std::vector<FrameStore> stores;
     size_t withoutStore = 0;
     for (size_t i = 0; i < inputs.size(); ++i) {
@@ -83,6 +86,8 @@ MergeReport merge(const vk::Context* external, const std::vector<std::filesystem
         }
         report.inputs.push_back(in);
     }
+    report.readMs += millisecondsSince(t0);
+    t0 = std::chrono::steady_clock::now();
     FrameStore store = mergeFrameStores(stores, options, report);
     if (!stores.empty() && withoutStore)
         report.warnings.push_back(std::to_string(withoutStore) + " of the maps have no frame store beside them: their frames are in the merged "
@@ -92,7 +97,7 @@ MergeReport merge(const vk::Context* external, const std::vector<std::filesystem
         }))
         report.warnings.push_back("the loop closers' states (.vkloops) are not merged: a run continuing the merged map with --loop-closure "
                                   "starts with no keyframes");
-    report.mergeMs = millisecondsSince(t0);
+    report.mergeMs += millisecondsSince(t0);
 
     // The mesh of the sum, built from scratch on the GPU.
     t0 = std::chrono::steady_clock::now();

@@ -1,0 +1,523 @@
+"""Batch reconstruction on Dask (docs/SCALING.md): recordings cut into fragments, fused on workers, placed in one
+world frame, and their maps added into one (vkmesh.merge_maps), exactly.
+
+    python3 -m vkmesh.batch RECORDING... -o map.vkmap --mesh mesh.ply [--fragment-frames N] [--overlap K]
+        [--track] [--trajectory FILE] [--local-workers W | --scheduler ADDRESS] [--stats FILE]
+        [vkmesh fuse's dataset, map, capacity and tracking options: --voxel, --max-depth, --intrinsics, ...]
+
+With the recordings' poses, every fragment is fused at them and the maps add up to the map `vkmesh fuse` makes of
+the same frames, bit for bit (the TSDF is an integer sum, independent of the order of the frames). With --track,
+each fragment is tracked from its own first frame (the first fragment from the recording's first pose, as
+`vkmesh fuse --track` starts), consecutive fragments are placed through the K frames they share, and each
+fragment's frames are fused again at their global poses; every frame enters the map once.
+
+Tasks name their inputs (recording, frame range, settings, poses) and write their maps under a name derived from
+them (written under a temporary name and renamed): a task that ran before is not run again (a run stopped half
+way resumes), and a task whose worker died is run again by Dask. A fragment that keeps failing stops the run with
+an error naming its recording and frame range.
+"""
+
+import argparse
+import hashlib
+import json
+import os
+import shutil
+import socket
+import sys
+import time
+import warnings
+
+import numpy as np
+
+import vkmesh
+from vkmesh import _vkmesh
+
+# Setting kinds (api/settings.cpp) that the batch passes on, and those it handles itself.
+_PASSED_KINDS = ("input", "map", "capacity", "tracking", "correction", "processing", "device")
+_OWN_OPTIONS = {"--track", "--loop-closure", "--frames", "--first-frame", "--keep-frames", "--no-keep-frames", "--mode",
+                "--track-iterations", "--corrections-per-frame", "--frames-budget", "--frames-spill",
+                "--loop-place-candidates"}
+# Options of the dataset reader (vkmesh.open_dataset keywords), not of the Reconstructor.
+_DATASET_OPTIONS = {"--intrinsics": "intrinsics", "--depth-scale": "depth_scale", "--depth-topic": "depth_topic",
+                    "--color-topic": "color_topic", "--info-topic": "info_topic"}
+# Testing hook: the first fuse task of fragment 1 to reach its middle exits its worker process (os._exit) when this
+# file does not exist yet, after creating it: a worker killed in the middle of a fragment (tests/python/test_batch.py).
+_KILL_ONCE = "VKMESH_BATCH_KILL_ONCE"
+
+
+# ---- options ------------------------------------------------------------------------------------------------
+
+def _value(text):
+    """A setting's value from the command line: an int, a float, or the text."""
+    for kind in (int, float):
+        try:
+            return kind(text)
+        except ValueError:
+            pass
+    return text
+
+
+def _add_setting_options(parser):
+    """vkmesh fuse's dataset, map, capacity, tracking and device options, from the one table of settings
+    (api/settings.cpp): the same names, help and defaults."""
+    added = []
+    for s in _vkmesh._settings():
+        cli, python = s["cli"], s["python"]
+        if s["kind"] not in _PASSED_KINDS or not cli or cli in _OWN_OPTIONS:
+            continue
+        if not python and cli not in _DATASET_OPTIONS and cli not in ("--no-color", "--alloc-pixels"):
+            continue
+        dest = "setting_" + cli.lstrip("-").replace("-", "_")
+        help_text = s["help"] + (f" (default {s['default']})" if s["default"] not in ("", "false") else "")
+        if s["default"] in ("true", "false"):
+            if s["cli_negates"]:   # --no-grow sets grow_capacities False
+                parser.add_argument(cli, dest=dest, action="store_const", const=False, default=None, help=help_text)
+            else:
+                parser.add_argument(cli, dest=dest, action="store_const", const=True, default=None, help=help_text)
+                if s["default"] == "true":
+                    parser.add_argument("--no-" + cli[2:], dest=dest, action="store_const", const=False,
+                                        help=f"turn {cli} off")
+        else:
+            parser.add_argument(cli, dest=dest, default=None, choices=s["choices"] or None, help=help_text,
+                                metavar=None if s["choices"] else cli.lstrip("-").upper().replace("-", "_"))
+        added.append((cli, python, dest))
+    return added
+
+
+def _settings_from(args, added):
+    """(Reconstructor keywords, open_dataset keywords) from the options given."""
+    reconstructor, dataset = {}, {}
+    for cli, python, dest in added:
+        v = getattr(args, dest)
+        if v is None:
+            continue
+        if cli == "--no-color":
+            reconstructor["color_mode"] = "off"
+        elif cli == "--alloc-pixels":
+            reconstructor["allocation_tiles"] = False
+        elif cli == "--intrinsics":
+            dataset["intrinsics"] = tuple(float(x) for x in str(v).split(","))
+        elif cli in _DATASET_OPTIONS:
+            dataset[_DATASET_OPTIONS[cli]] = _value(v) if cli == "--depth-scale" else v
+        else:
+            reconstructor[python] = v if isinstance(v, bool) else _value(v)
+    return reconstructor, dataset
+
+
+# ---- tasks (run on the workers) -----------------------------------------------------------------------------
+
+def _key(kind, spec):
+    text = json.dumps({k: v for k, v in spec.items() if k not in ("work_dir",)}, sort_keys=True, default=str)
+    return f"{kind}-{hashlib.sha1(text.encode()).hexdigest()[:16]}"
+
+
+def _write_json(path, value):
+    tmp = f"{path}.tmp{os.getpid()}"
+    with open(tmp, "w") as f:
+        json.dump(value, f)
+    os.replace(tmp, path)
+
+
+def _attempt(work_dir, key):
+    """Counts the runs of a task (a retried task runs again): returns this run's number."""
+    path = os.path.join(work_dir, key + ".attempts")
+    with open(path, "a") as f:
+        f.write(f"{socket.gethostname()}:{os.getpid()}\n")
+    with open(path) as f:
+        return len(f.read().splitlines())
+
+
+def _done(work_dir, key):
+    path = os.path.join(work_dir, key + ".json")
+    if os.path.exists(path):
+        with open(path) as f:
+            return json.load(f)
+    return None
+
+
+def _worker_name():
+    try:
+        from distributed import get_worker
+        return get_worker().address
+    except (ImportError, ValueError):
+        return f"{socket.gethostname()}:{os.getpid()}"
+
+
+def fuse_fragment(spec):
+    """Fuses frames [first, stop) of one recording into a map of their own and saves it (spec["map"]).
+
+    spec["poses"]: None (the recording's poses), "track" (tracked from the first frame, fused at spec["first_pose"]),
+    or {frame index: 4x4 list} (fused at these global poses, frames not listed skipped). Returns what it did: every
+    frame's index, timestamp, pose and whether it was fused; idempotent (a finished task's result is read back)."""
+    work_dir = spec["work_dir"]
+    key = _key("fragment", spec)
+    done = _done(work_dir, key)
+    if done is not None:
+        return done
+    attempt = _attempt(work_dir, key)
+    t0 = time.perf_counter()
+    ds = vkmesh.open_dataset(spec["recording"], require_poses=spec["poses"] is None, **spec["dataset"])
+    settings = dict(spec["settings"])
+    frames, skipped = [], []
+    given = spec["poses"] if isinstance(spec["poses"], dict) else None
+    kill_at = (spec["first"] + spec["stop"]) // 2 if spec["index"] == 1 and not isinstance(spec["poses"], dict) else None
+    with vkmesh.Reconstructor(**settings) as r:
+        for i in range(spec["first"], spec["stop"]):
+            if kill_at is not None and i == kill_at and os.environ.get(_KILL_ONCE) and not os.path.exists(os.environ[_KILL_ONCE]):
+                open(os.environ[_KILL_ONCE], "w").close()
+                os._exit(17)   # the testing hook: this worker dies in the middle of the fragment
+            if given is not None and str(i) not in given:
+                continue
+            try:
+                f = ds[i]
+            except vkmesh.Error as e:
+                skipped.append([i, str(e)])
+                continue
+            if not np.any(f.depth > 0):
+                skipped.append([i, f"no valid depth in {f.depth_path}"])
+                continue
+            if given is not None:
+                pose = np.asarray(given[str(i)], dtype=np.float64).reshape(4, 4)
+                r.integrate(f.depth, f.intrinsics, pose, color=f.color)
+                frames.append([i, f.timestamp, pose.ravel().tolist(), True])
+            elif spec["poses"] is None:
+                r.integrate(f.depth, f.intrinsics, f.pose, color=f.color)
+                frames.append([i, f.timestamp, np.asarray(f.pose).ravel().tolist(), True])
+            elif not frames:   # tracked: the first frame is fused where the fragment starts
+                pose = np.asarray(spec["first_pose"], dtype=np.float64).reshape(4, 4)
+                r.integrate(f.depth, f.intrinsics, pose, color=f.color)
+                frames.append([i, f.timestamp, pose.ravel().tolist(), True])
+            else:
+                out = r.integrate(f.depth, f.intrinsics, None, color=f.color)
+                frames.append([i, f.timestamp, np.asarray(out["pose"]).ravel().tolist(), bool(out["tracked"])])
+        tmp_map = os.path.join(work_dir, f"{key}.tmp{os.getpid()}.vkmap")
+        r.save(tmp_map)
+        os.replace(tmp_map, os.path.join(work_dir, key + ".vkmap"))
+    result = {"key": key, "map": os.path.join(work_dir, key + ".vkmap"), "frames": frames, "skipped": skipped,
+              "ms": (time.perf_counter() - t0) * 1e3, "worker": _worker_name(), "attempt": attempt}
+    _write_json(os.path.join(work_dir, key + ".json"), result)
+    return result
+
+
+def merge_fragment_maps(spec):
+    """Adds maps (spec["inputs"]) into spec["output"] (and spec["mesh"] when given): vkmesh.merge_maps on a worker."""
+    work_dir = spec["work_dir"]
+    key = _key("merge", spec)
+    done = _done(work_dir, key)
+    if done is not None and os.path.exists(spec["output"]):
+        return done
+    attempt = _attempt(work_dir, key)
+    t0 = time.perf_counter()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")   # the loop closers' states, not kept by fragments
+        stats = vkmesh.merge_maps(spec["inputs"], spec["output"], mesh=spec.get("mesh"), keep_frames=False,
+                                  **spec.get("device", {}))
+    result = {"key": key, "output": spec["output"], "stats": stats, "ms": (time.perf_counter() - t0) * 1e3,
+              "worker": _worker_name(), "attempt": attempt}
+    _write_json(os.path.join(work_dir, key + ".json"), result)
+    return result
+
+
+# ---- placement (on the client) ------------------------------------------------------------------------------
+
+def place_after(previous_global, local, shared):
+    """The transform from a fragment's own frame into the world, from the frames it shares with the fragment before
+    it (placed already). The earliest shared frame fused by both gives it: world pose x local pose^-1. The fragment
+    tracked that frame from nothing (its first frame, at the identity) and the later shared frames against a map of
+    a few frames only, so their estimates carry its cold start's error; they are reported, as how far they lie from
+    the transform (metres, degrees), not averaged in. None when no shared frame was fused by both."""
+    both = [i for i in shared if i in previous_global and i in local]
+    if not both:
+        return None, None
+    t = previous_global[both[-1]] @ np.linalg.inv(local[both[-1]])
+    estimates = [previous_global[i] @ np.linalg.inv(local[i]) for i in both]
+    spread_m = max(float(np.linalg.norm(e[:3, 3] - t[:3, 3])) for e in estimates)
+    spread_deg = max(float(np.degrees(np.arccos(np.clip((np.trace(t[:3, :3].T @ e[:3, :3]) - 1) / 2, -1, 1)))) for e in estimates)
+    return t, {"frames": len(both), "spread_m": spread_m, "spread_deg": spread_deg}
+
+
+# ---- the run (on the client) --------------------------------------------------------------------------------
+
+class BatchError(Exception):
+    pass
+
+
+def _plan(recordings, dataset_options, fragment_frames, overlap, track, first_frame, last_frame):
+    """Fragments: (recording, index, owned [start, stop), fused from `first`): owned ranges cut the frames, and with
+    --track each fragment after the first also fuses the `overlap` frames before its own, to be placed by them."""
+    fragments = []
+    for rec in recordings:
+        n = len(vkmesh.open_dataset(rec, require_poses=not track, **dataset_options))
+        stop_all = n if last_frame <= 0 else min(n, last_frame)
+        if first_frame >= stop_all:
+            raise BatchError(f"{rec}: --first-frame {first_frame} but it has {stop_all} frames to fuse")
+        starts = list(range(first_frame, stop_all, fragment_frames))
+        if len(starts) > 1 and stop_all - starts[-1] < fragment_frames // 2:
+            starts.pop()   # a short tail joins the fragment before it rather than be tracked from a cold start
+        for k, s in enumerate(starts):
+            e = starts[k + 1] if k + 1 < len(starts) else stop_all
+            first = max(first_frame, s - overlap) if (track and k > 0) else s
+            fragments.append({"recording": os.path.abspath(rec), "index": k, "start": s, "stop": e, "first": first})
+    return fragments
+
+
+def _submit_all(client, fn, specs, what, retries, progress):
+    """Runs fn over specs on the cluster (one GPU each), reporting progress; a spec that keeps failing stops the run
+    naming it."""
+    from distributed import as_completed
+    futures = {client.submit(fn, spec, key=f"{what}-{i}-{_key(what, spec)}", retries=retries, resources={"GPU": 1},
+                             pure=False): i for i, spec in enumerate(specs)}
+    results = [None] * len(specs)
+    done = 0
+    for future in as_completed(futures):
+        i = futures[future]
+        try:
+            results[i] = future.result()
+        except Exception as e:   # a task error, or KilledWorker after the scheduler's allowed failures
+            for f in futures:
+                f.cancel()
+            raise BatchError(f"{what} {specs[i].get('name', i)} failed: {type(e).__name__}: {e}") from e
+        done += 1
+        if progress:
+            print(f"vkmesh.batch: {what} {done}/{len(specs)} ({specs[i].get('name', i)})", file=sys.stderr, flush=True)
+    return results
+
+
+def _pose_dict(frames):
+    return {int(i): np.asarray(p, dtype=np.float64).reshape(4, 4) for i, _, p, fused in frames if fused}
+
+
+def run(args, added):
+    t_start = time.perf_counter()
+    settings, dataset_options = _settings_from(args, added)
+    if args.loop_closure:
+        raise BatchError("--loop-closure: loops between fragments are not built yet (docs/SCALING.md); run without it")
+    # What merging refuses, refused before anything is fused (core/map_merge.h says why).
+    if settings.get("keep_radius", 0) or settings.get("recycle"):
+        raise BatchError("--keep-radius and --recycle make bounded maps, which forget what they fused: their sum is not the map "
+                         "of their frames")
+    if settings.get("color_mode") == "recent":
+        raise BatchError("--color-mode recent keeps no weights to combine the fragments' colours by (use average or --no-color)")
+    if args.fragment_frames < 1:
+        raise BatchError(f"--fragment-frames {args.fragment_frames} must be at least 1")
+    if args.track and not (1 <= args.overlap < args.fragment_frames):
+        raise BatchError(f"--overlap {args.overlap} must be at least 1 and below --fragment-frames ({args.fragment_frames}) "
+                         "with --track: consecutive fragments are placed through the frames they share")
+    out = os.path.abspath(args.output)
+    if os.path.splitext(out)[1] in (".ply", ".obj", ".glb"):
+        raise BatchError(f"-o {args.output}: -o is the map (.vkmap); write its mesh with --mesh")
+    if args.mesh:
+        _vkmesh._check_mesh_path(os.fspath(args.mesh))
+    work_dir = os.path.abspath(args.work_dir or out + ".batch")
+    os.makedirs(work_dir, exist_ok=True)
+    fragments = _plan(args.recordings, dataset_options, args.fragment_frames, args.overlap, args.track,
+                      args.first_frame, args.frames)
+    for f in fragments:
+        f["name"] = f"{os.path.basename(f['recording'])} frames {f['first']}-{f['stop'] - 1}"
+    device = {k: settings[k] for k in ("device", "validation") if k in settings}
+
+    try:
+        from distributed import Client, LocalCluster
+    except ImportError as e:
+        raise BatchError(f"Dask is needed ({e}): on Debian, apt install python3-distributed") from e
+    cluster = None
+    if args.scheduler:
+        client = Client(args.scheduler)
+    else:
+        cluster = LocalCluster(n_workers=args.local_workers, threads_per_worker=1, processes=True,
+                               resources={"GPU": 1}, dashboard_address=None)
+        client = Client(cluster)
+    try:
+        workers = client.scheduler_info()["workers"]
+        if not any(w.get("resources", {}).get("GPU", 0) >= 1 for w in workers.values()):
+            raise BatchError(f"no worker of the scheduler offers the GPU resource: start workers with "
+                             f"`dask worker {args.scheduler or 'ADDRESS'} --nthreads 1 --resources GPU=1` (one per GPU)")
+        progress = not args.quiet
+        phases = {}
+
+        # 1. Fuse every fragment (at the recording's poses, or tracked from its own first frame).
+        t0 = time.perf_counter()
+        specs = []
+        for f in fragments:
+            spec = {"recording": f["recording"], "dataset": dataset_options, "settings": settings, "index": f["index"],
+                    "first": f["first"], "stop": f["stop"], "work_dir": work_dir, "name": f["name"],
+                    "poses": "track" if args.track else None, "first_pose": None}
+            if args.track:
+                if f["index"] == 0:
+                    ds = vkmesh.open_dataset(f["recording"], require_poses=False, **dataset_options)
+                    p = ds[f["first"]].pose
+                    spec["first_pose"] = (np.eye(4) if p is None else np.asarray(p)).ravel().tolist()
+                else:
+                    spec["first_pose"] = np.eye(4).ravel().tolist()
+            specs.append(spec)
+        fused = _submit_all(client, fuse_fragment, specs, "fragment", args.retries, progress)
+        phases["fuse_ms"] = (time.perf_counter() - t0) * 1e3
+
+        # 2. Place (--track): each fragment through the frames it shares with the one before.
+        t0 = time.perf_counter()
+        finals, placements, trajectory = [], [], []
+        previous = None
+        for f, result in zip(fragments, fused):
+            local = _pose_dict(result["frames"])
+            if not args.track:
+                finals.append(result["map"])
+                trajectory += [(f["recording"], i, ts, np.asarray(p).reshape(4, 4)) for i, ts, p, fused_ in result["frames"]]
+                continue
+            if f["index"] == 0:
+                transform, residual = np.eye(4), None
+            else:
+                shared = range(f["first"], f["start"])
+                transform, residual = place_after(previous, local, shared)
+                if transform is None:
+                    raise BatchError(f"{f['name']}: none of its first {f['start'] - f['first']} frames was tracked in both it and "
+                                     "the fragment before, so it cannot be placed (give a larger --overlap)")
+            placed = {i: transform @ p for i, p in local.items()}
+            previous = placed
+            placements.append({"fragment": f["name"], "transform": transform.ravel().tolist(), "overlap": residual})
+            for i, ts, p, fused_ in result["frames"]:
+                if f["start"] <= i < f["stop"]:
+                    trajectory.append((f["recording"], i, ts, transform @ np.asarray(p).reshape(4, 4)))
+            f["global"] = {str(i): placed[i].ravel().tolist() for i in range(f["start"], f["stop"]) if i in placed}
+        phases["place_ms"] = (time.perf_counter() - t0) * 1e3
+
+        # 3. Re-fuse (--track): every fragment's own frames at their global poses (the first fragment's are there already).
+        t0 = time.perf_counter()
+        refused = []
+        if args.track:
+            specs = [{"recording": f["recording"], "dataset": dataset_options, "settings": settings, "index": f["index"],
+                      "first": f["start"], "stop": f["stop"], "work_dir": work_dir, "name": f["name"] + " (global poses)",
+                      "poses": f["global"], "first_pose": None}
+                     for f in fragments if f["index"] > 0]
+            refused = _submit_all(client, fuse_fragment, specs, "re-fusion", args.retries, progress)
+            finals = [r["map"] for f, r in zip(fragments, fused) if f["index"] == 0] + [r["map"] for r in refused]
+        phases["refuse_ms"] = (time.perf_counter() - t0) * 1e3
+
+        # 4. Merge in a tree on the workers; the last merge writes the map and the mesh.
+        t0 = time.perf_counter()
+        merges = []
+        level = finals
+        while True:
+            last = len(level) <= args.merge_fan_in
+            groups = [level[i:i + args.merge_fan_in] for i in range(0, len(level), args.merge_fan_in)]
+            specs = []
+            for g in groups:
+                spec = {"inputs": g, "work_dir": work_dir, "device": device, "name": f"{len(g)} maps"}
+                spec["output"] = out if last else os.path.join(work_dir, _key("merged", {"inputs": g}) + ".vkmap")
+                if last and args.mesh:
+                    spec["mesh"] = os.path.abspath(args.mesh)
+                specs.append(spec)
+            results = _submit_all(client, merge_fragment_maps, specs, "merge", args.retries, progress)
+            merges += results
+            if last:
+                break
+            level = [r["output"] for r in results]
+        phases["merge_ms"] = (time.perf_counter() - t0) * 1e3
+        final = merges[-1]["stats"]
+
+        if args.trajectory:
+            with open(args.trajectory, "w") as t:
+                t.write("# timestamp tx ty tz qx qy qz qw (camera to world; vkmesh.batch)\n")
+                for _, _, ts, p in trajectory:
+                    t.write(_tum_line(ts, p))
+        phases["total_ms"] = (time.perf_counter() - t_start) * 1e3
+
+        tasks = fused + refused + merges
+        per_worker = {}
+        for r in tasks:
+            w = per_worker.setdefault(r["worker"], {"tasks": 0, "ms": 0.0})
+            w["tasks"] += 1
+            w["ms"] += r["ms"]
+        stats = {
+            "output": out, "mesh": final["mesh"], "frames_integrated": final["frames_integrated"],
+            "blocks": final["blocks"], "workers": len(workers), "fragments": [
+                {"name": f["name"], "recording": f["recording"], "frames": [f["start"], f["stop"]], "fused_from": f["first"],
+                 "skipped": r["skipped"], "lost": sum(1 for x in r["frames"] if not x[3]), "ms": r["ms"],
+                 "worker": r["worker"], "attempts": r["attempt"]} for f, r in zip(fragments, fused)],
+            "placements": placements, "ms": phases, "per_worker": per_worker,
+            "retries": sum(_attempts(work_dir, r["key"]) - 1 for r in tasks),
+            "merges": len(merges), "warnings": final["warnings"],
+        }
+        if args.stats:
+            with open(args.stats, "w") as s:
+                json.dump(stats, s, indent=2)
+        if not args.keep_work:
+            shutil.rmtree(work_dir, ignore_errors=True)
+        return stats
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+
+
+def _attempts(work_dir, key):
+    try:
+        with open(os.path.join(work_dir, key + ".attempts")) as f:
+            return len(f.read().splitlines())
+    except FileNotFoundError:
+        return 1
+
+
+def _tum_line(timestamp, pose):
+    r = pose[:3, :3]
+    # Rotation matrix to quaternion (x, y, z, w), the branch with the largest diagonal term for accuracy.
+    tr = np.trace(r)
+    if tr > 0:
+        s = np.sqrt(tr + 1.0) * 2
+        q = [(r[2, 1] - r[1, 2]) / s, (r[0, 2] - r[2, 0]) / s, (r[1, 0] - r[0, 1]) / s, 0.25 * s]
+    else:
+        i = int(np.argmax(np.diag(r)))
+        j, k = (i + 1) % 3, (i + 2) % 3
+        s = np.sqrt(1.0 + r[i, i] - r[j, j] - r[k, k]) * 2
+        q = [0.0, 0.0, 0.0, (r[k, j] - r[j, k]) / s]
+        q[i] = 0.25 * s
+        q[j] = (r[j, i] + r[i, j]) / s
+        q[k] = (r[k, i] + r[i, k]) / s
+    t = pose[:3, 3]
+    return f"{timestamp:.6f} {t[0]:.9f} {t[1]:.9f} {t[2]:.9f} {q[0]:.9f} {q[1]:.9f} {q[2]:.9f} {q[3]:.9f}\n"
+
+
+def parser():
+    p = argparse.ArgumentParser(prog="python3 -m vkmesh.batch", description=__doc__.split("\n\n")[0],
+                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("recordings", nargs="+", metavar="RECORDING", help="datasets or recordings, as vkmesh fuse reads them")
+    p.add_argument("-o", "--output", required=True, help="the map (.vkmap)")
+    p.add_argument("--mesh", help="also write the map's mesh (.ply, .obj or .glb)")
+    p.add_argument("--fragment-frames", type=int, default=100, help="frames per fragment (default 100)")
+    p.add_argument("--overlap", type=int, default=10,
+                   help="with --track: frames each fragment shares with the one before, to place it (default 10)")
+    p.add_argument("--track", action="store_true", help="track the camera (the recordings' poses are not used beyond their first frame)")
+    p.add_argument("--loop-closure", action="store_true", help="not built yet: refused")
+    p.add_argument("--trajectory", help="write every frame's global pose (TUM format)")
+    p.add_argument("--first-frame", type=int, default=0, help="start at this frame of each recording")
+    p.add_argument("--frames", type=int, default=0, help="use at most the first N frames of each recording (0: all)")
+    group = p.add_mutually_exclusive_group()
+    group.add_argument("--local-workers", type=int, default=2, help="start a LocalCluster of W worker processes (default 2)")
+    group.add_argument("--scheduler", help="a running Dask scheduler's address (workers started with --resources GPU=1)")
+    p.add_argument("--retries", type=int, default=2, help="times a failed task is run again (default 2)")
+    p.add_argument("--merge-fan-in", type=int, default=4, help="maps added by one merge task (default 4)")
+    p.add_argument("--work-dir", help="folder for the fragments' maps, on storage every worker reaches (default: OUTPUT.batch)")
+    p.add_argument("--keep-work", action="store_true", help="keep the work folder (a later run with the same inputs reuses it)")
+    p.add_argument("--stats", help="write statistics as JSON (time per phase and per worker, fragments, placements, retries)")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
+    added = _add_setting_options(p)
+    return p, added
+
+
+def main(argv=None):
+    p, added = parser()
+    args = p.parse_args(argv)
+    if args.merge_fan_in < 2:
+        p.error("--merge-fan-in must be at least 2")
+    try:
+        stats = run(args, added)
+    except (BatchError, vkmesh.Error, ValueError) as e:
+        print(f"vkmesh.batch: error: {e}", file=sys.stderr)
+        return 2
+    print(f"vkmesh.batch: {len(stats['fragments'])} fragments on {stats['workers']} workers, {stats['frames_integrated']} frames, "
+          f"{stats['blocks']['merged']} blocks, mesh {stats['mesh']['triangles']} triangles -> {stats['output']} "
+          f"({stats['ms']['total_ms'] / 1e3:.1f} s; {stats['retries']} retries)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
