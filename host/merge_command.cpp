@@ -30,6 +30,8 @@ struct MergeArgs {
     std::string output;
     std::string meshPath;
     std::string statsPath;
+    double tileSize = 0;
+    std::string tilesDir;
     bool noFrames = false;
     double framesBudgetMb = 1024;
     std::string framesSpill;
@@ -40,6 +42,9 @@ int runMerge(const MergeArgs& args) {
     const std::filesystem::path out(args.output);
     if (out.extension() == ".ply" || out.extension() == ".obj" || out.extension() == ".glb")
         throw Error("-o " + args.output + ": -o is the merged map (.vkmap); write its mesh with --mesh " + args.output);
+    if (args.output.empty() && args.tilesDir.empty()) throw Error("merge: give the merged map (-o C.vkmap), tiles (--tiles DIR --tile-size S), or both");
+    if (args.output.empty() && !args.meshPath.empty()) throw Error("--mesh needs -o: without a merged map there is only --tiles");
+    if (!args.tilesDir.empty() != (args.tileSize > 0)) throw Error("--tiles DIR and --tile-size S go together");
     if (!args.meshPath.empty()) meshFormatOf(args.meshPath);   // a mesh name vkmesh cannot write fails now, not after the merge
     MergeOptions options;
     options.device = args.device.contextOptions();
@@ -47,19 +52,34 @@ int runMerge(const MergeArgs& args) {
     options.frames.memoryBudgetBytes = size_t(args.framesBudgetMb * 1024 * 1024);
     options.frames.spillFolder = args.framesSpill;
     options.returnMesh = !args.meshPath.empty();
+    options.tileSize = args.tileSize;
+    if (!args.tilesDir.empty()) {
+        std::filesystem::create_directories(args.tilesDir);
+        options.tileSink = [&](const TileKey& t, const Mesh& mesh) {
+            writeMesh(std::filesystem::path(args.tilesDir) / tileFileName(t), mesh);
+        };
+    }
     std::vector<std::filesystem::path> inputs(args.maps.begin(), args.maps.end());
     const MergeReport report = mergeMaps(inputs, out, options);
     for (const std::string& w : report.warnings) std::cerr << "warning: " << w << "\n";
     if (!args.meshPath.empty()) writeMesh(args.meshPath, report.mesh);
     std::cout << "vkmesh merge: " << inputs.size() << " maps, " << report.framesIntegrated << " frames, " << report.blocks << " blocks ("
-              << report.sharedBlocks << " in more than one map) -> " << out.string();
-    if (!report.frameStorePath.empty())
-        std::cout << " with " << report.framesStored << " frames kept" << (report.framesRenumbered ? " (renumbered)" : "");
-    std::cout << "; mesh " << report.meshVertices << " vertices, " << report.meshTriangles << " triangles"
-              << (args.meshPath.empty() ? "" : " -> " + args.meshPath) << "\n";
+              << report.sharedBlocks << " in more than one map)";
+    if (!args.output.empty()) {
+        std::cout << " -> " << out.string();
+        if (!report.frameStorePath.empty())
+            std::cout << " with " << report.framesStored << " frames kept" << (report.framesRenumbered ? " (renumbered)" : "");
+        std::cout << "; mesh " << report.meshVertices << " vertices, " << report.meshTriangles << " triangles"
+                  << (args.meshPath.empty() ? "" : " -> " + args.meshPath);
+    }
+    if (!args.tilesDir.empty())
+        std::cout << "; " << report.tiles << " tiles of " << args.tileSize << " m, " << report.tileTriangles << " triangles -> " << args.tilesDir
+                  << " (at most " << report.tileBlocksMax << " blocks on the GPU at once)";
+    std::cout << "\n";
     if (!args.statsPath.empty()) {
         nlohmann::json stats = mergeReportJson(report);
         stats["output"] = out.string();
+        if (!args.tilesDir.empty()) stats["tiles"]["path"] = args.tilesDir, stats["tiles"]["size_m"] = args.tileSize;
         if (!args.meshPath.empty()) stats["mesh"]["path"] = args.meshPath;
         std::ofstream(args.statsPath) << stats.dump(2) << "\n";
     }
@@ -73,9 +93,13 @@ Run addMergeCommand(CLI::App& app) {
     auto* cmd = app.add_subcommand("merge", "add saved maps into one: the map of all their frames, with its mesh (docs/SCALING.md)");
     cmd->add_option("MAPS", args->maps, "maps (.vkmap) saved by vkmesh fuse --save with the same settings, their frame stores beside them")
         ->required();
-    cmd->add_option("-o,--output", args->output, "the merged map (.vkmap; its frame store is written beside it)")->required();
+    cmd->add_option("-o,--output", args->output, "the merged map (.vkmap; its frame store is written beside it)");
     cmd->add_option("--mesh", args->meshPath, "also write the merged map's mesh (.ply binary, .obj or .glb binary glTF)");
-    cmd->add_option("--stats", args->statsPath, "write statistics as JSON (inputs, blocks, frames kept, mesh, ms)");
+    cmd->add_option("--tiles", args->tilesDir,
+                    "also write the mesh tile by tile into this folder (tile_X_Y_Z.ply), each tile meshed alone on the GPU; "
+                    "without -o, only the tiles (the whole map is never on the GPU)");
+    cmd->add_option("--tile-size", args->tileSize, "--tiles: the tiles' side in metres (whole blocks)")->check(CLI::PositiveNumber);
+    cmd->add_option("--stats", args->statsPath, "write statistics as JSON (inputs, blocks, frames kept, mesh, tiles, ms)");
     cmd->add_flag("--no-frames", args->noFrames, "do not carry the inputs' frame stores over (the merged map cannot be corrected then)");
     addSetting(cmd, "--frames-budget", args->framesBudgetMb);
     addSetting(cmd, "--frames-spill", args->framesSpill);

@@ -106,7 +106,8 @@ void bindModuleFunctions(py::module_& m) {
     // vkmesh.merge_maps(): mergeMaps (api/map_merge.h) without the GIL; returns (the statistics of `vkmesh merge --stats`
     // as a dict, parsed from mergeReportJson's text by Python's json module, and the merged mesh as a vkmesh.Mesh or None).
     m.def("_merge_maps", [](const std::vector<fs::path>& inputs, const fs::path& output, bool keepFrames, double framesBudgetMb,
-                            const std::string& framesSpill, const py::object& device, bool validation, bool returnMesh) {
+                            const std::string& framesSpill, const py::object& device, bool validation, bool returnMesh,
+                            double tileSize, const fs::path& tilesDir) {
         if (inputs.empty()) throw py::value_error("merge_maps: no maps given (inputs is empty)");
         if (!(framesBudgetMb > 0) || !(framesBudgetMb < 1e12))
             throw py::value_error("frames_budget_mb " + std::to_string(framesBudgetMb) + " must be positive");
@@ -116,6 +117,12 @@ void bindModuleFunctions(py::module_& m) {
         options.frames.memoryBudgetBytes = size_t(framesBudgetMb * 1024 * 1024);
         options.frames.spillFolder = framesSpill;
         options.returnMesh = returnMesh;
+        if (!tilesDir.empty()) {
+            if (!(tileSize > 0) || !(tileSize < 1e9)) throw py::value_error("tile_size " + std::to_string(tileSize) + " must be a positive number of metres");
+            fs::create_directories(tilesDir);
+            options.tileSize = tileSize;
+            options.tileSink = [tilesDir](const TileKey& t, const Mesh& mesh) { writeMesh(tilesDir / tileFileName(t), mesh); };
+        }
         MergeReport report;
         std::string stats;
         {

@@ -118,7 +118,7 @@ def read_mesh(path) -> Mesh:
 
 
 def merge_maps(inputs, output, *, mesh=None, keep_frames: bool = True, frames_budget_mb: float = 1024,
-               frames_spill=None, device=None, validation: bool = False) -> dict:
+               frames_spill=None, device=None, validation: bool = False, tiles=None, tile_size: float = 0) -> dict:
     """Adds saved maps into one, as `vkmesh merge INPUTS... -o OUTPUT` does (docs/SCALING.md): maps fused from parts
     of one recording (or from recordings of one place in one world frame) add up to the map of all their frames. The
     TSDF sums and counts are added corner by corner, blocks united, colours combined by their weights, and the mesh is
@@ -141,6 +141,10 @@ def merge_maps(inputs, output, *, mesh=None, keep_frames: bool = True, frames_bu
                       --frames-spill)
     device            None (a discrete GPU if any, else the first suitable device) or an index from devices()
     validation        the Khronos validation layer (also on with VKMESH_VALIDATION=1)
+    tiles, tile_size  a folder and a size in metres: the mesh also written tile by tile (tile_X_Y_Z.ply; each tile
+                      meshed alone on the GPU; joined by vertex position they are the mesh, no seam) as
+                      `vkmesh merge --tiles DIR --tile-size S`; output may then be None (tiles only). stats["tiles"]:
+                      count, triangles, max_blocks
 
     Maps that do not add up (other settings, bounded maps, a corner past its count) raise vkmesh.Error naming the
     file and what differs ("b.vkmap: fused with voxel size 0.05 but a.vkmap with 0.04 (--voxel); ..."); nothing is
@@ -156,13 +160,22 @@ def merge_maps(inputs, output, *, mesh=None, keep_frames: bool = True, frames_bu
         _vkmesh._check_mesh_path(mesh_path)   # a mesh vkmesh cannot write fails now, not after the merge
     if not (np.isfinite(frames_budget_mb) and frames_budget_mb > 0):
         raise ValueError(f"frames_budget_mb {frames_budget_mb} must be a positive finite number")
-    out = os.fspath(output)
+    if (tiles is None) != (not tile_size):
+        raise ValueError("tiles (a folder) and tile_size (metres) go together")
+    if output is None and tiles is None:
+        raise ValueError("merge_maps: output is None and no tiles are asked for: nothing to write")
+    if output is None and mesh_path is not None:
+        raise ValueError("merge_maps: mesh needs an output map (without one there are only tiles)")
+    out = "" if output is None else os.fspath(output)
     stats, merged = _vkmesh._merge_maps(paths, out, bool(keep_frames), float(frames_budget_mb),
                                         "" if frames_spill is None else os.fspath(frames_spill), device, bool(validation),
-                                        mesh_path is not None)
+                                        mesh_path is not None, float(tile_size or 0), "" if tiles is None else os.fspath(tiles))
     for w in stats["warnings"]:
         warnings.warn(f"merge_maps: {w}", stacklevel=2)   # what `vkmesh merge` prints as warnings
-    stats["output"] = out
+    stats["output"] = out or None
+    if tiles is not None:
+        stats["tiles"]["path"] = os.fspath(tiles)
+        stats["tiles"]["size_m"] = float(tile_size)
     if mesh_path is not None:
         merged.save(mesh_path)
         stats["mesh"]["path"] = mesh_path

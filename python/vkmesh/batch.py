@@ -144,7 +144,8 @@ def _worker_name():
 
 
 def fuse_fragment(spec):
-    """Fuses frames [first, stop) of one recording into a map of their own and saves it (spec["map"]).
+    """Fuses frames [first, stop) of one recording into a map of their own, saved in the work folder under a name
+    derived from the spec (the result's "map").
 
     spec["poses"]: None (the recording's poses), "track" (tracked from the first frame, fused at spec["first_pose"]),
     or {frame index: 4x4 list} (fused at these global poses, frames not listed skipped). Returns what it did: every
@@ -211,7 +212,7 @@ def merge_fragment_maps(spec):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")   # the loop closers' states, not kept by fragments
         stats = vkmesh.merge_maps(spec["inputs"], spec["output"], mesh=spec.get("mesh"), keep_frames=False,
-                                  **spec.get("device", {}))
+                                  tiles=spec.get("tiles"), tile_size=spec.get("tile_size", 0), **spec.get("device", {}))
     result = {"key": key, "output": spec["output"], "stats": stats, "ms": (time.perf_counter() - t0) * 1e3,
               "worker": _worker_name(), "attempt": attempt}
     _write_json(os.path.join(work_dir, key + ".json"), result)
@@ -308,6 +309,8 @@ def run(args, added):
         raise BatchError(f"-o {args.output}: -o is the map (.vkmap); write its mesh with --mesh")
     if args.mesh:
         _vkmesh._check_mesh_path(os.fspath(args.mesh))
+    if bool(args.tiles) != (args.tile_size > 0):
+        raise BatchError("--tiles DIR and --tile-size S (metres, > 0) go together")
     work_dir = os.path.abspath(args.work_dir or out + ".batch")
     os.makedirs(work_dir, exist_ok=True)
     fragments = _plan(args.recordings, dataset_options, args.fragment_frames, args.overlap, args.track,
@@ -405,6 +408,8 @@ def run(args, added):
                 spec["output"] = out if last else os.path.join(work_dir, _key("merged", {"inputs": g}) + ".vkmap")
                 if last and args.mesh:
                     spec["mesh"] = os.path.abspath(args.mesh)
+                if last and args.tiles:
+                    spec["tiles"], spec["tile_size"] = os.path.abspath(args.tiles), args.tile_size
                 specs.append(spec)
             results = _submit_all(client, merge_fragment_maps, specs, "merge", args.retries, progress)
             merges += results
@@ -482,6 +487,8 @@ def parser():
     p.add_argument("recordings", nargs="+", metavar="RECORDING", help="datasets or recordings, as vkmesh fuse reads them")
     p.add_argument("-o", "--output", required=True, help="the map (.vkmap)")
     p.add_argument("--mesh", help="also write the map's mesh (.ply, .obj or .glb)")
+    p.add_argument("--tiles", help="also write the mesh tile by tile into this folder (vkmesh merge --tiles)")
+    p.add_argument("--tile-size", type=float, default=0, help="--tiles: the tiles' side in metres")
     p.add_argument("--fragment-frames", type=int, default=100, help="frames per fragment (default 100)")
     p.add_argument("--overlap", type=int, default=10,
                    help="with --track: frames each fragment shares with the one before, to place it (default 10)")

@@ -1,10 +1,14 @@
 #include "api/map_merge.h"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
+#include <cmath>
+#include <cstring>
 #include <map>
 #include <optional>
 #include <random>
+#include <set>
 #include <system_error>
 
 #include "api/exported_mesh.h"
@@ -50,6 +54,79 @@ FrameStore mergeFrameStores(std::vector<FrameStore>& stores, const MergeOptions&
     return merged;
 }
 
+// ---- tiles ---------------------------------------------------------------------------------------------------
+
+// The tile (TileKey) of a block: its origin's metres divided by the tile size, rounded down, per axis. Tiles hold
+// whole blocks.
+int32_t tileOfBlock(int32_t block, double blockMetres, double tileSize) { return int32_t(std::floor(double(block) * blockMetres / tileSize)); }
+
+// The block a triangle belongs to: the one holding its centroid (its three vertices lie strictly inside edges of one
+// cube; the centroid is taken in a fixed order of the vertices' bits, so every tile computes the same one).
+std::array<int32_t, 3> blockOfTriangle(const Mesh& m, const std::array<uint32_t, 3>& t, float voxel) {
+    std::array<Eigen::Vector3f, 3> p = {m.positions[t[0]], m.positions[t[1]], m.positions[t[2]]};
+    std::sort(p.begin(), p.end(), [](const Eigen::Vector3f& a, const Eigen::Vector3f& b) { return std::memcmp(a.data(), b.data(), 12) < 0; });
+    const Eigen::Vector3f c = (p[0] + p[1] + p[2]) / 3.0f;
+    std::array<int32_t, 3> block;
+    for (int a = 0; a < 3; ++a) block[a] = int32_t(std::floor(std::floor(c[a] / voxel) / float(gpu::BLOCK_SIDE)));
+    return block;
+}
+
+// The triangles of `mesh` that belong to `tile`, with the vertices they use.
+Mesh trianglesOfTile(const Mesh& mesh, const TileKey& tile, float voxel, double tileSize) {
+    const double blockMetres = double(voxel) * gpu::BLOCK_SIDE;
+    Mesh out;
+    std::vector<uint32_t> remap(mesh.positions.size(), UINT32_MAX);
+    auto vertex = [&](uint32_t v) {
+        if (remap[v] == UINT32_MAX) {
+            remap[v] = uint32_t(out.positions.size());
+            out.positions.push_back(mesh.positions[v]);
+            if (!mesh.normals.empty()) out.normals.push_back(mesh.normals[v]);
+            if (!mesh.colors.empty()) out.colors.push_back(mesh.colors[v]);
+            if (!mesh.vertexAge.empty()) out.vertexAge.push_back(mesh.vertexAge[v]);
+        }
+        return remap[v];
+    };
+    for (const auto& t : mesh.triangles) {
+        const std::array<int32_t, 3> b = blockOfTriangle(mesh, t, voxel);
+        if (tileOfBlock(b[0], blockMetres, tileSize) != tile[0] || tileOfBlock(b[1], blockMetres, tileSize) != tile[1] ||
+            tileOfBlock(b[2], blockMetres, tileSize) != tile[2])
+            continue;
+        out.triangles.push_back({vertex(t[0]), vertex(t[1]), vertex(t[2])});
+    }
+    return out;
+}
+
+// Meshes the sum tile by tile: each tile's blocks with one block around them (every cube of the tile reads corners
+// at most one block away: its own corners, refinement's window, the normals' gradients), added from the inputs,
+// loaded alone, meshed from scratch, and cut to the tile's own triangles. The GPU holds one tile at a time.
+void meshTiles(const vk::Context& context, const std::vector<map::MergeInput>& inputs, const MergeOptions& options, MergeReport& report) {
+    const float voxel = inputs[0].map->settings.voxelSize;
+    const double blockMetres = double(voxel) * gpu::BLOCK_SIDE, size = options.tileSize;
+    std::set<TileKey> tiles;
+    for (const map::MergeInput& in : inputs)
+        for (const map::Block& b : in.map->blocks)
+            tiles.insert({tileOfBlock(b.x, blockMetres, size), tileOfBlock(b.y, blockMetres, size), tileOfBlock(b.z, blockMetres, size)});
+    for (const TileKey& tile : tiles) {
+        auto near = [&](int32_t b, int a) { return tileOfBlock(b - 1, blockMetres, size) <= tile[a] && tile[a] <= tileOfBlock(b + 1, blockMetres, size); };
+        map::MapData part = map::merge(inputs, nullptr, [&](int32_t x, int32_t y, int32_t z) { return near(x, 0) && near(y, 1) && near(z, 2); });
+        // Capacities for this part, not for the inputs' whole maps; the heaps grow as the mesh needs.
+        const uint32_t n = uint32_t(part.blocks.size());
+        uint32_t slots = 1024;
+        while (slots < 2 * n) slots *= 2;
+        part.capacities = {std::max(n, 64u), slots, 0, 1u << 16, std::max(n * 128, 4096u), std::max(n * 64, 2048u)};
+        gpu::GpuVolumeConfig config = gpu::GpuVolume::mapConfig(part);
+        config.growCapacities = true;
+        std::unique_ptr<gpu::GpuVolume> volume = gpu::GpuVolume::load(context, part, config, "tile");
+        volume->rebuildMesh();
+        const Mesh mesh = trianglesOfTile(toMesh(volume->exportMesh(), volume->frameNumber()), tile, voxel, size);
+        report.tileBlocksMax = std::max<size_t>(report.tileBlocksMax, n);
+        if (mesh.triangles.empty()) continue;
+        ++report.tiles;
+        report.tileTriangles += mesh.triangles.size();
+        options.tileSink(tile, mesh);
+    }
+}
+
 // `external`: the caller's device; nullptr: options.device, opened after every check on the host.
 MergeReport merge(const vk::Context* external, const std::vector<std::filesystem::path>& inputs, const std::filesystem::path& output,
                   const MergeOptions& options) {
@@ -68,8 +145,12 @@ MergeReport merge(const vk::Context* external, const std::vector<std::filesystem
     map::MapData merged = map::merge(named, &summary);   // every refusal, before a device is opened
     report.blocks = summary.blocks, report.sharedBlocks = summary.sharedBlocks, report.corners = summary.corners;
     report.framesIntegrated = merged.framesIntegrated;
-
     report.mergeMs = millisecondsSince(t0);
+
+    if (options.tileSize > 0 && !options.tileSink) throw Error("merge: tiles asked for (MergeOptions::tileSize) with no tileSink to take them");
+    if (output.empty() && !(options.tileSize > 0)) throw Error("merge: no output map and no tiles: nothing to write");
+    if (!(options.tileSize >= 0) || !std::isfinite(options.tileSize))
+        throw Error("merge: tile size " + std::to_string(options.tileSize) + " must be a positive number of metres (0: no tiles)");
 
     t0 = std::chrono::steady_clock::now();   // reading the frame stores counts as reading
     std::vector<FrameStore> stores;
@@ -77,7 +158,9 @@ MergeReport merge(const vk::Context* external, const std::vector<std::filesystem
     for (size_t i = 0; i < inputs.size(); ++i) {
         MergeInputReport in{inputs[i].string(), maps[i].blocks.size(), maps[i].framesIntegrated, false, 0};
         const std::filesystem::path storePath = gpu::frameStorePathOf(inputs[i]);
-        if (options.keepFrames && std::filesystem::exists(storePath)) {
+        if (output.empty()) {
+            // tiles only: no map, so no frames to keep beside it
+        } else if (options.keepFrames && std::filesystem::exists(storePath)) {
             stores.push_back(FrameStore::load(storePath.string(), maps[i].saveId, options.frames));
             in.frameStore = true;
             in.framesStored = stores.back().size();
@@ -99,10 +182,17 @@ MergeReport merge(const vk::Context* external, const std::vector<std::filesystem
                                   "starts with no keyframes");
     report.mergeMs += millisecondsSince(t0);
 
-    // The mesh of the sum, built from scratch on the GPU.
-    t0 = std::chrono::steady_clock::now();
     std::optional<vk::Context> own;
     const vk::Context& context = external ? *external : own.emplace(options.device);
+    if (options.tileSize > 0) {
+        t0 = std::chrono::steady_clock::now();
+        meshTiles(context, named, options, report);
+        report.tilesMs = millisecondsSince(t0);
+    }
+    if (output.empty()) return report;
+
+    // The mesh of the sum, built from scratch on the GPU.
+    t0 = std::chrono::steady_clock::now();
     gpu::GpuVolumeConfig config = gpu::GpuVolume::mapConfig(merged);
     config.growCapacities = true;   // the mesh of the union may need larger heaps than any input's
     std::unique_ptr<gpu::GpuVolume> volume = gpu::GpuVolume::load(context, merged, config, output.string());

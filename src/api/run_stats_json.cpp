@@ -224,7 +224,8 @@ json mergeReportJson(const MergeReport& r) {
     j["frames_integrated"] = r.framesIntegrated;
     j["frame_store"] = {{"path", r.frameStorePath}, {"frames", r.framesStored}, {"renumbered", r.framesRenumbered}};
     j["mesh"] = {{"vertices", r.meshVertices}, {"triangles", r.meshTriangles}};
-    j["ms"] = {{"read", r.readMs}, {"merge", r.mergeMs}, {"rebuild", r.rebuildMs}, {"save", r.saveMs}};
+    j["ms"] = {{"read", r.readMs}, {"merge", r.mergeMs}, {"rebuild", r.rebuildMs}, {"save", r.saveMs}, {"tiles", r.tilesMs}};
+    j["tiles"] = {{"count", r.tiles}, {"triangles", r.tileTriangles}, {"max_blocks", r.tileBlocksMax}};
     j["warnings"] = r.warnings;
     return j;
 }

@@ -100,7 +100,7 @@ std::vector<SettingDifference> settingDifferences(const Settings& a, const Setti
     return out;
 }
 
-MapData merge(const std::vector<MergeInput>& inputs, MergeSummary* summary) {
+MapData merge(const std::vector<MergeInput>& inputs, MergeSummary* summary, const BlockFilter& keep) {
     if (inputs.empty()) throw Error("merge: no maps given");
     const MapData& first = *inputs[0].map;
     for (const MergeInput& in : inputs) checkMergeable(in);
@@ -148,7 +148,8 @@ MapData merge(const std::vector<MergeInput>& inputs, MergeSummary* summary) {
     std::map<std::tuple<int32_t, int32_t, int32_t>, std::vector<Part>> blocks;
     for (size_t i = 0; i < inputs.size(); ++i) {
         const MapData& m = *inputs[i].map;
-        for (size_t b = 0; b < m.blocks.size(); ++b) blocks[{m.blocks[b].z, m.blocks[b].y, m.blocks[b].x}].push_back({i, b});
+        for (size_t b = 0; b < m.blocks.size(); ++b)
+            if (!keep || keep(m.blocks[b].x, m.blocks[b].y, m.blocks[b].z)) blocks[{m.blocks[b].z, m.blocks[b].y, m.blocks[b].x}].push_back({i, b});
     }
     const size_t n = blocks.size();
     if (n > SIZE_MAX / VOXELS_PER_BLOCK || n >= (size_t(1) << 31)) throw Error("merge: " + std::to_string(n) + " blocks are too many for one map");

@@ -11,6 +11,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -56,6 +57,10 @@ struct MergeSummary {
 // (A + B) + C and A + (B + C) hold the same TSDF and colours within a quarter level where every observation had
 // a colour. Its counters are those of a map with no mesh; frame numbers add up; capacities are the largest of the
 // inputs' (blocks and hash slots at least what the union needs).
-MapData merge(const std::vector<MergeInput>& inputs, MergeSummary* summary = nullptr);
+//
+// `keep`, when given, restricts the result to the blocks (by block coordinate) it accepts: a part of the sum, to
+// mesh one tile of it with its neighbours (api/map_merge.h) without the rest.
+using BlockFilter = std::function<bool(int32_t x, int32_t y, int32_t z)>;
+MapData merge(const std::vector<MergeInput>& inputs, MergeSummary* summary = nullptr, const BlockFilter& keep = {});
 
 }  // namespace vkmesh::map

@@ -1,6 +1,7 @@
 // Map algebra on a GPU volume (docs/SCALING.md): the frames of one run split into parts, each part fused into a
 // map of its own, and the maps merged (mergeMaps), give the map of the one run: TSDF bits (sums, counts), the
-// triangle set, vertex position and normal bits, and colour within one 8-bit level. The host side (what adds
+// triangle set, vertex position and normal bits, and colour within one 8-bit level. Meshed tile by tile, each tile
+// alone on the GPU, the tiles joined are that mesh: no seam, no vertex twice. The host side (what adds
 // up, what is refused) is tested without a GPU in tests/cpu/test_map_algebra.cpp.
 #include <gtest/gtest.h>
 
@@ -65,7 +66,9 @@ Corners cornersOf(const gpu::GpuVolume& volume) {
 struct MeshState {
     std::vector<CanonicalTriangle> triangles;
     std::map<std::array<uint32_t, 3>, std::pair<std::array<uint32_t, 3>, uint32_t>> vertices;
+    size_t borderEdges = 0;
 };
+size_t borderEdges(const std::vector<std::array<std::array<uint32_t, 3>, 3>>& triangles);
 MeshState meshOf(gpu::GpuVolume& volume) {
     MeshState m;
     const gpu::ExportedMesh mesh = volume.exportMesh();
@@ -76,6 +79,13 @@ MeshState meshOf(gpu::GpuVolume& volume) {
         std::memcpy(n.data(), &v.nx, 12);
         m.vertices[p] = {n, v.color};
     }
+    std::vector<std::array<std::array<uint32_t, 3>, 3>> bits;
+    for (const auto& t : mesh.triangles) {
+        std::array<std::array<uint32_t, 3>, 3> b;
+        for (int k = 0; k < 3; ++k) std::memcpy(b[k].data(), &mesh.vertices[t[k]].px, 12);
+        bits.push_back(b);
+    }
+    m.borderEdges = borderEdges(bits);
     return m;
 }
 
@@ -130,13 +140,66 @@ void expectSameMap(const Corners& oneCorners, const MeshState& oneMesh, gpu::Gpu
     EXPECT_TRUE(problems.empty()) << problems.front();
 }
 
+using PositionBits = std::array<uint32_t, 3>;
+PositionBits bitsOf(const Eigen::Vector3f& p) {
+    PositionBits b;
+    std::memcpy(b.data(), p.data(), 12);
+    return b;
+}
+
+// Edges used by exactly one triangle (the mesh's border: walls cut by the view), by the vertices' position bits.
+size_t borderEdges(const std::vector<std::array<PositionBits, 3>>& triangles) {
+    std::map<std::pair<PositionBits, PositionBits>, int> uses;
+    for (const auto& t : triangles)
+        for (int e = 0; e < 3; ++e) ++uses[std::minmax(t[e], t[(e + 1) % 3])];
+    return size_t(std::count_if(uses.begin(), uses.end(), [](const auto& u) { return u.second == 1; }));
+}
+
+// The tiles joined by vertex position bits are the mesh of the sum: the same triangles, as many vertices (a vertex
+// on a tile boundary is one vertex, in each tile that uses it, with its normal), and no edge of a tile boundary left
+// open (as many border edges as the one run's mesh).
+void expectTilesJoinToTheMesh(const std::vector<std::pair<TileKey, Mesh>>& tiles, const MergeReport& report, const MeshState& oneMesh) {
+    ASSERT_GE(tiles.size(), 4u) << "the room spans several tiles";
+    EXPECT_EQ(report.tiles, tiles.size());
+    EXPECT_LT(report.tileBlocksMax, report.blocks) << "a tile with its neighbours is less than the whole map";
+    std::vector<Eigen::Vector3f> soup;
+    std::vector<std::array<PositionBits, 3>> joined;
+    std::map<PositionBits, std::array<uint32_t, 3>> normals;
+    std::map<PositionBits, int> tilesOf;   // how many tiles hold each vertex
+    for (const auto& [key, m] : tiles) {
+        for (size_t v = 0; v < m.positions.size(); ++v) {
+            std::array<uint32_t, 3> n;
+            std::memcpy(n.data(), m.normals[v].data(), 12);
+            auto [it, fresh] = normals.emplace(bitsOf(m.positions[v]), n);
+            EXPECT_TRUE(fresh || it->second == n) << "a boundary vertex has the same normal in every tile";
+            ++tilesOf[bitsOf(m.positions[v])];
+        }
+        for (const auto& t : m.triangles) {
+            joined.push_back({bitsOf(m.positions[t[0]]), bitsOf(m.positions[t[1]]), bitsOf(m.positions[t[2]])});
+            for (uint32_t v : t) soup.push_back(m.positions[v]);
+        }
+    }
+    EXPECT_GT(std::count_if(tilesOf.begin(), tilesOf.end(), [](const auto& t) { return t.second > 1; }), 100) << "tiles share boundary vertices";
+    const std::vector<CanonicalTriangle> triangles = canonicalTriangles(soup);
+    EXPECT_EQ(triangles.size(), oneMesh.triangles.size());
+    EXPECT_EQ(countTriangleMismatches(oneMesh.triangles, triangles, 0), 0u) << "the tiles' triangles are the mesh's";
+    EXPECT_EQ(normals.size(), oneMesh.vertices.size()) << "no vertex twice, none missing";
+    size_t normalMismatches = 0;
+    for (const auto& [p, n] : normals) {
+        auto it = oneMesh.vertices.find(p);
+        normalMismatches += it == oneMesh.vertices.end() || it->second.first != n;
+    }
+    EXPECT_EQ(normalMismatches, 0u) << "vertex positions and normals bit for bit";
+    EXPECT_EQ(borderEdges(joined), oneMesh.borderEdges) << "no seam: no edge left open along a tile boundary";
+}
+
 class MapMergeTest : public GpuTest {
 protected:
     std::filesystem::path dir_ = test::makeTempDir("map_merge");
 };
 
 // The one run, and the same frames split 2 and 7 ways (parts merged in a rotated order): each merge is
-// the one run's map. A merged map continues like any other: loaded, with its frame store.
+// the one run's map, loaded from its file. The 2-way merge is also meshed in tiles of 8 x 8 x 8 blocks.
 TEST_F(MapMergeTest, SplitRunsAddUpToTheOneRunsMap) {
     gpu::GpuVolume one(context(), config());
     integrateFrames(one, 0, kFrames);
@@ -154,7 +217,14 @@ TEST_F(MapMergeTest, SplitRunsAddUpToTheOneRunsMap) {
         }
         std::rotate(inputs.begin(), inputs.begin() + parts / 2, inputs.end());   // the order of the parts does not matter
         const std::filesystem::path out = dir_ / ("merged" + std::to_string(parts) + ".vkmap");
-        const MergeReport report = mergeMaps(context(), inputs, out, MergeOptions{});
+        MergeOptions options;
+        std::vector<std::pair<TileKey, Mesh>> tiles;
+        if (parts == 2) {   // and tile by tile: 8 x 8 x 8 blocks a tile (2.56 m)
+            options.tileSize = 8 * gpu::BLOCK_SIDE * config().params.voxelSize;
+            options.tileSink = [&](const TileKey& t, const Mesh& m) { tiles.emplace_back(t, m); };
+        }
+        const MergeReport report = mergeMaps(context(), inputs, out, options);
+        if (parts == 2) expectTilesJoinToTheMesh(tiles, report, oneMesh);
         EXPECT_EQ(report.framesIntegrated, kFrames);
         EXPECT_EQ(report.blocks, oneCorners.size());
         EXPECT_GT(report.sharedBlocks, 0u);

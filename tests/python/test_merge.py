@@ -61,7 +61,8 @@ def test_merged_map_equals_one_run(frames, parts, tmp_path, capfd):
     assert stats["frame_store"]["path"] == str(out.with_suffix(".vkframes")) and out.with_suffix(".vkframes").exists()
     assert stats["blocks"]["shared"] > 0, "the halves overlap: the test adds TSDF sums, not just unites blocks"
     assert len(stats["warnings"]) == 1
-    assert set(stats["ms"]) == {"read", "merge", "rebuild", "save"}
+    assert set(stats["ms"]) == {"read", "merge", "rebuild", "save", "tiles"}
+    assert stats["tiles"]["count"] == 0, "no tiles asked for"
     assert stats["mesh"]["path"] == str(tmp_path / "ab.ply")
     mesh = vkmesh.read_mesh(tmp_path / "ab.ply")
     assert stats["mesh"]["triangles"] == len(mesh.triangles) == len(truth)
@@ -97,3 +98,20 @@ def test_maps_that_do_not_add_up_are_refused(frames, parts, tmp_path):
     with pytest.raises(vkmesh.Error, match="missing.vkmap"):
         vkmesh.merge_maps([paths[0], tmp_path / "missing.vkmap"], out)
     assert not out.exists()
+
+
+def test_tiles_joined_are_the_merged_mesh(parts, tmp_path):
+    """merge_maps(tiles=..., tile_size=...) with no output map: tile files only, each tile meshed alone; joined by
+    vertex position they are the one-run mesh."""
+    truth, paths = parts
+    stats = vkmesh.merge_maps(paths, None, tiles=tmp_path / "tiles", tile_size=8 * 8 * VOXEL, keep_frames=False)
+    assert stats["output"] is None and stats["tiles"]["count"] >= 2
+    files = sorted((tmp_path / "tiles").glob("tile_*.ply"))
+    assert len(files) == stats["tiles"]["count"]
+    triangles = []
+    for f in files:
+        m = vkmesh.read_mesh(f)
+        triangles += canonical_triangles(m)
+    assert sorted(triangles) == sorted(truth)
+    with pytest.raises(ValueError, match="go together"):
+        vkmesh.merge_maps(paths, None, tiles=tmp_path / "t2")
