@@ -26,24 +26,6 @@ using test::GpuTest;
 
 constexpr int kWidth = 160, kHeight = 120;
 
-// Frames [from, to) of the noisy orbit around the synthetic room, with its textures' colour (the same frame i
-// whoever fuses it).
-void integrateFrames(gpu::GpuVolume& volume, size_t from, size_t to) {
-    static const synth::SyntheticScene scene = synth::SyntheticScene::defaultRoom();
-    const Intrinsics intr = synth::kinectIntrinsics(kWidth, kHeight);
-    const auto poses = synth::cameraPath(24, synth::PathKind::Orbit);
-    for (size_t i = from; i < to; ++i) {
-        synth::RenderOptions options;
-        options.noise = true;
-        options.seed = uint32_t(i + 1);
-        const Pose& pose = poses[i % poses.size()];
-        ColorImage color;
-        const DepthImage depth = scene.renderDepth(intr, pose, options, &color);
-        const gpu::FrameReport r = volume.integrate(depth, &color, intr, pose);
-        EXPECT_TRUE(r.warnings.empty()) << r.warnings.front();
-    }
-}
-
 // A small block pool, so that it grows before and after the save, and recycling, so that the free lists have
 // holes and the hash has tombstones when it is saved.
 gpu::GpuVolumeConfig resumeConfig(bool recycling) {
@@ -131,10 +113,10 @@ class ResumeTest : public GpuTest, public ::testing::WithParamInterface<bool /* 
 TEST_P(ResumeTest, SaveLoadAndFuseTheRestIsTheUninterruptedRun) {
     const gpu::GpuVolumeConfig config = resumeConfig(GetParam());
     gpu::GpuVolume whole(context(), config);
-    integrateFrames(whole, 0, 14);
+    test::integrateNoisyRoomOrbit(whole, 0, 14);
 
     gpu::GpuVolume first(context(), config);
-    integrateFrames(first, 0, 7);
+    test::integrateNoisyRoomOrbit(first, 0, 7);
     // Through the bytes of a file (the writer and the parser), into a new volume.
     const map::MapData saved = map::parse(map::serialize(first.saveMap()), "resume.vkmap");
     EXPECT_EQ(saved.blocks.size(), first.readCounters().blocksInUse);
@@ -152,7 +134,7 @@ TEST_P(ResumeTest, SaveLoadAndFuseTheRestIsTheUninterruptedRun) {
     // The loaded state is the saved one before any frame...
     auto problems = test::checkInvariants(resumed->downloadMeshState(), resumed->config());
     EXPECT_TRUE(problems.empty()) << problems.front();
-    integrateFrames(*resumed, 7, 14);
+    test::integrateNoisyRoomOrbit(*resumed, 7, 14);
     problems = test::checkInvariants(resumed->downloadMeshState(), resumed->config());
     EXPECT_TRUE(problems.empty()) << problems.front();
     // ... and after the rest of the frames it is the uninterrupted run's.
@@ -165,11 +147,11 @@ INSTANTIATE_TEST_SUITE_P(Map, ResumeTest, ::testing::Values(false, true),
 TEST_F(GpuTest, SavingChangesNothing) {
     const gpu::GpuVolumeConfig config = resumeConfig(false);
     gpu::GpuVolume a(context(), config), b(context(), config);
-    integrateFrames(a, 0, 4);
-    integrateFrames(b, 0, 4);
+    test::integrateNoisyRoomOrbit(a, 0, 4);
+    test::integrateNoisyRoomOrbit(b, 0, 4);
     (void)a.saveMap();
-    integrateFrames(a, 4, 6);
-    integrateFrames(b, 4, 6);
+    test::integrateNoisyRoomOrbit(a, 4, 6);
+    test::integrateNoisyRoomOrbit(b, 4, 6);
 
     expectSameState(stateOf(a), stateOf(b));
 }
@@ -198,9 +180,9 @@ vk::Context& contextWith32BitHash() {
 TEST_F(GpuTest, MapLoadsOnThe32BitHashPathIntoLargerCapacities) {
     const gpu::GpuVolumeConfig config = resumeConfig(false);
     gpu::GpuVolume whole(context(), config);
-    integrateFrames(whole, 0, 10);
+    test::integrateNoisyRoomOrbit(whole, 0, 10);
     gpu::GpuVolume first(context(), config);
-    integrateFrames(first, 0, 5);
+    test::integrateNoisyRoomOrbit(first, 0, 5);
     const map::MapData saved = map::parse(map::serialize(first.saveMap()), "cross.vkmap");
 
     vk::Context& other = contextWith32BitHash();
@@ -215,7 +197,7 @@ TEST_F(GpuTest, MapLoadsOnThe32BitHashPathIntoLargerCapacities) {
     EXPECT_EQ(resumed->config().blockCapacity, bigger.blockCapacity);
     EXPECT_EQ(resumed->config().hashCapacity, bigger.hashCapacity);
     EXPECT_EQ(resumed->readCounters().freeTop, bigger.blockCapacity - saved.blocks.size());
-    integrateFrames(*resumed, 5, 10);
+    test::integrateNoisyRoomOrbit(*resumed, 5, 10);
     // Other capacities grow at other times, and a frame that overflowed runs again under the next frame number,
     // so vertex ages may be offset; the TSDF and the triangles are the same.
     expectSameState(stateOf(whole), stateOf(*resumed), /*sameAges=*/false);
@@ -238,7 +220,7 @@ std::string loadError(vk::Context& context, const map::MapData& m, const gpu::Gp
 
 TEST_F(GpuTest, MapsThatCannotBeLoadedAreClearErrors) {
     gpu::GpuVolume volume(context(), resumeConfig(false));
-    integrateFrames(volume, 0, 2);
+    test::integrateNoisyRoomOrbit(volume, 0, 2);
     const map::MapData good = volume.saveMap();
     const gpu::GpuVolumeConfig config = gpu::GpuVolume::mapConfig(good);
 

@@ -20,7 +20,6 @@
 #include "gpu/map_corrector.h"
 #include "gpu_fixture.h"
 #include "mesh_checks.h"
-#include "synth/synthetic_scene.h"
 #include "test_support.h"
 
 namespace vkmesh {
@@ -28,24 +27,7 @@ namespace {
 
 using test::GpuTest;
 
-constexpr int kWidth = 160, kHeight = 120;
 constexpr size_t kFrames = 8;
-
-// Frame i of the noisy orbit around the synthetic room, with its textures' colour (the same whoever fuses it).
-void integrateFrames(gpu::GpuVolume& volume, size_t from, size_t to) {
-    static const synth::SyntheticScene scene = synth::SyntheticScene::defaultRoom();
-    const Intrinsics intr = synth::kinectIntrinsics(kWidth, kHeight);
-    const auto poses = synth::cameraPath(24, synth::PathKind::Orbit);
-    for (size_t i = from; i < to; ++i) {
-        synth::RenderOptions options;
-        options.noise = true;
-        options.seed = uint32_t(i + 1);
-        ColorImage color;
-        const DepthImage depth = scene.renderDepth(intr, poses[i], options, &color);
-        const gpu::FrameReport r = volume.integrate(depth, &color, intr, poses[i]);
-        EXPECT_TRUE(r.warnings.empty()) << r.warnings.front();
-    }
-}
 
 gpu::GpuVolumeConfig config() {
     gpu::GpuVolumeConfig c = test::smallRoomConfig();
@@ -202,7 +184,7 @@ protected:
 // the one run's map, loaded from its file. The 2-way merge is also meshed in tiles of 8 x 8 x 8 blocks.
 TEST_F(MapMergeTest, SplitRunsAddUpToTheOneRunsMap) {
     gpu::GpuVolume one(context(), config());
-    integrateFrames(one, 0, kFrames);
+    test::integrateNoisyRoomOrbit(one, 0, kFrames);
     one.exportMesh();   // cubes left pending at the last frame are meshed, as after the merge's rebuild
     const Corners oneCorners = cornersOf(one);
     const MeshState oneMesh = meshOf(one);
@@ -211,7 +193,7 @@ TEST_F(MapMergeTest, SplitRunsAddUpToTheOneRunsMap) {
         std::vector<std::filesystem::path> inputs;
         for (size_t p = 0; p < parts; ++p) {
             gpu::GpuVolume part(context(), config());
-            integrateFrames(part, p * kFrames / parts, (p + 1) * kFrames / parts);
+            test::integrateNoisyRoomOrbit(part, p * kFrames / parts, (p + 1) * kFrames / parts);
             inputs.push_back(dir_ / ("part" + std::to_string(parts) + "_" + std::to_string(p) + ".vkmap"));
             part.save(inputs.back());
         }

@@ -3,11 +3,13 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <gtest/gtest.h>
 
 #include <string>
 #include <vector>
 
 #include "gpu/gpu_volume.h"
+#include "synth/synthetic_scene.h"
 
 namespace vkmesh::test {
 
@@ -85,6 +87,24 @@ inline std::vector<std::string> checkInvariants(const gpu::MeshStateSnapshot& s,
     if (k.liveTriangles != s.liveTriangles.size())
         fail("liveTriangles " + std::to_string(k.liveTriangles) + " but " + std::to_string(s.liveTriangles.size()) + " found");
     return problems;
+}
+
+// Frames [from, to) of the noisy 24-frame orbit around the synthetic room at 160 x 120, with its textures' colour,
+// fused at their true poses: the same frame i whoever fuses it, so runs split anywhere add up to one run.
+inline void integrateNoisyRoomOrbit(gpu::GpuVolume& volume, size_t from, size_t to) {
+    static const synth::SyntheticScene scene = synth::SyntheticScene::defaultRoom();
+    const Intrinsics intr = synth::kinectIntrinsics(160, 120);
+    const auto poses = synth::cameraPath(24, synth::PathKind::Orbit);
+    for (size_t i = from; i < to; ++i) {
+        synth::RenderOptions options;
+        options.noise = true;
+        options.seed = uint32_t(i + 1);
+        const Pose& pose = poses[i % poses.size()];
+        ColorImage color;
+        const DepthImage depth = scene.renderDepth(intr, pose, options, &color);
+        const gpu::FrameReport r = volume.integrate(depth, &color, intr, pose);
+        EXPECT_TRUE(r.warnings.empty()) << r.warnings.front();
+    }
 }
 
 }  // namespace vkmesh::test
