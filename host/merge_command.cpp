@@ -12,14 +12,18 @@
 #include <fstream>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "api/map_merge.h"
 #include "api/run_stats_json.h"
 #include "cli_options.h"
+#include "core/icp_solve.h"
 #include "commands.h"
 #include "io/mesh_file.h"
+#include "slam/session_join.h"
+#include "slam/session_join_json.h"
 
 namespace vkmesh::cli {
 
@@ -33,6 +37,7 @@ struct MergeArgs {
     double tileSize = 0;
     std::string tilesDir;
     bool noFrames = false;
+    bool registerSessions = false;
     double framesBudgetMb = 1024;
     std::string framesSpill;
     DeviceArgs device;
@@ -60,7 +65,23 @@ int runMerge(const MergeArgs& args) {
         };
     }
     std::vector<std::filesystem::path> inputs(args.maps.begin(), args.maps.end());
-    const MergeReport report = mergeMaps(inputs, out, options);
+    std::optional<slam::JoinReport> joined;
+    if (args.registerSessions) {
+        if (inputs.size() < 2) throw Error("--register joins two maps or more: the later ones are registered to the first");
+        if (args.output.empty()) throw Error("--register needs -o: the joined map");
+        slam::JoinOptions join;
+        join.merge = options;
+        joined = slam::joinSessions(inputs, out, join);
+        for (size_t i = 0; i < joined->registrations.size(); ++i) {
+            const slam::SessionRegistration& r = joined->registrations[i];
+            const Pose& t = r.secondToFirst;
+            std::cout << "vkmesh merge: " << inputs[i + 1].string() << " registered to " << inputs[0].string() << ": " << r.agreeing << " of "
+                      << r.verified << " verified keyframe pairs agree (" << r.registrations << " tried), within " << r.spreadMetres * 100
+                      << " cm and " << r.spreadDegrees << " degrees; moved " << translationMetres(t) << " m, turned " << rotationDegrees(t)
+                      << " degrees\n";
+        }
+    }
+    const MergeReport report = joined ? joined->merge : mergeMaps(inputs, out, options);
     for (const std::string& w : report.warnings) std::cerr << "warning: " << w << "\n";
     if (!args.meshPath.empty()) writeMesh(args.meshPath, report.mesh);
     std::cout << "vkmesh merge: " << inputs.size() << " maps, " << report.framesIntegrated << " frames, " << report.blocks << " blocks ("
@@ -81,6 +102,7 @@ int runMerge(const MergeArgs& args) {
         stats["output"] = out.string();
         if (!args.tilesDir.empty()) stats["tiles"]["path"] = args.tilesDir, stats["tiles"]["size_m"] = args.tileSize;
         if (!args.meshPath.empty()) stats["mesh"]["path"] = args.meshPath;
+        if (joined) stats["registration"] = slam::joinReportJson(*joined, inputs);
         std::ofstream(args.statsPath) << stats.dump(2) << "\n";
     }
     return 0;
@@ -100,6 +122,9 @@ Run addMergeCommand(CLI::App& app) {
                     "without -o, only the tiles (the whole map is never on the GPU)");
     cmd->add_option("--tile-size", args->tileSize, "--tiles: the tiles' side in metres (whole blocks)")->check(CLI::PositiveNumber);
     cmd->add_option("--stats", args->statsPath, "write statistics as JSON (inputs, blocks, frames kept, mesh, tiles, ms)");
+    cmd->add_flag("--register", args->registerSessions,
+                  "the maps are sessions of one place, each in its own world frame: register each later map to the first by the frames "
+                  "their stores keep, re-fuse its frames there, then add them (docs/SCALING.md, \"Sessions of one place\")");
     cmd->add_flag("--no-frames", args->noFrames, "do not carry the inputs' frame stores over (the merged map cannot be corrected then)");
     addSetting(cmd, "--frames-budget", args->framesBudgetMb);
     addSetting(cmd, "--frames-spill", args->framesSpill);

@@ -12,7 +12,8 @@ arrays out; the work is done by the C++ library (vkmesh::Reconstructor), with th
     m = r.mesh()                                         # m.vertices (N, 3) float32, m.triangles (M, 3) uint32
     m.save("room.ply")
 
-Contents: Reconstructor, Mesh, MeshDelta, open_dataset (Dataset, Frame), read_mesh, merge_maps, devices (Device),
+Contents: Reconstructor, Mesh, MeshDelta, open_dataset (Dataset, Frame), read_mesh, merge_maps, list_tiles,
+merge_tiles, devices (Device),
 synth, validation_messages, Error, CapacityWarning. docs/PYTHON.md in the source tree has more.
 """
 
@@ -35,7 +36,7 @@ Reconstructor.__module__ = "vkmesh"   # as help() and tracebacks name it (the cl
 __version__ = "0.1.0"
 __all__ = [
     "Reconstructor", "Mesh", "MeshDelta", "Dataset", "Frame", "Device", "open_dataset", "read_mesh", "merge_maps",
-    "devices", "synth", "validation_messages", "Error", "CapacityWarning", "ADDED", "CHANGED", "REMOVED",
+    "list_tiles", "merge_tiles", "register_maps", "optimise_pose_graph", "devices", "synth", "validation_messages", "Error", "CapacityWarning", "ADDED", "CHANGED", "REMOVED",
 ]
 
 # MeshDelta kinds (docs/DELTAS.md), the GPU's own values.
@@ -118,7 +119,8 @@ def read_mesh(path) -> Mesh:
 
 
 def merge_maps(inputs, output, *, mesh=None, keep_frames: bool = True, frames_budget_mb: float = 1024,
-               frames_spill=None, device=None, validation: bool = False, tiles=None, tile_size: float = 0) -> dict:
+               frames_spill=None, device=None, validation: bool = False, tiles=None, tile_size: float = 0,
+               register: bool = False) -> dict:
     """Adds saved maps into one, as `vkmesh merge INPUTS... -o OUTPUT` does (docs/SCALING.md): maps fused from parts
     of one recording (or from recordings of one place in one world frame) add up to the map of all their frames. The
     TSDF sums and counts are added corner by corner, blocks united, colours combined by their weights, and the mesh is
@@ -145,6 +147,11 @@ def merge_maps(inputs, output, *, mesh=None, keep_frames: bool = True, frames_bu
                       meshed alone on the GPU; joined by vertex position they are the mesh, no seam) as
                       `vkmesh merge --tiles DIR --tile-size S`; output may then be None (tiles only). stats["tiles"]:
                       count, triangles, max_blocks
+    register          the maps are sessions of one place, each in the world frame of its own first pose (each tracked
+                      on its own): each later map is registered to the first by the frames their stores keep, its frames
+                      fused there, and the maps added, as `vkmesh merge --register` (docs/SCALING.md, "Sessions of one
+                      place"). stats["registration"]: per later map the transform and the keyframe pairs tried, verified
+                      and agreeing. Maps that cannot be registered surely raise vkmesh.Error saying what was tried
 
     Maps that do not add up (other settings, bounded maps, a corner past its count) raise vkmesh.Error naming the
     file and what differs ("b.vkmap: fused with voxel size 0.05 but a.vkmap with 0.04 (--voxel); ..."); nothing is
@@ -169,7 +176,8 @@ def merge_maps(inputs, output, *, mesh=None, keep_frames: bool = True, frames_bu
     out = "" if output is None else os.fspath(output)
     stats, merged = _vkmesh._merge_maps(paths, out, bool(keep_frames), float(frames_budget_mb),
                                         "" if frames_spill is None else os.fspath(frames_spill), device, bool(validation),
-                                        mesh_path is not None, float(tile_size or 0), "" if tiles is None else os.fspath(tiles))
+                                        mesh_path is not None, float(tile_size or 0), "" if tiles is None else os.fspath(tiles),
+                                        bool(register))
     for w in stats["warnings"]:
         warnings.warn(f"merge_maps: {w}", stacklevel=2)   # what `vkmesh merge` prints as warnings
     stats["output"] = out or None
@@ -180,6 +188,96 @@ def merge_maps(inputs, output, *, mesh=None, keep_frames: bool = True, frames_bu
         merged.save(mesh_path)
         stats["mesh"]["path"] = mesh_path
     return stats
+
+
+def list_tiles(inputs, tile_size: float) -> dict:
+    """The tiles of the sum of saved maps, from their block tables alone (no corner is read; docs/SCALING.md,
+    "Tiles on separate workers"): {"tiles": [(x, y, z), ...] (every tile holding a block of the sum, in order; a
+    tile's key is the metres of its lower corner divided by tile_size), "blocks": the sum's blocks,
+    "frames_integrated": the sum's frames}. The maps are
+    checked to add up (settings, bounded maps, colour mode): vkmesh.Error naming the file otherwise."""
+    if isinstance(inputs, (str, bytes, os.PathLike)):
+        raise TypeError("inputs must be a list of map paths, not one path")
+    return _vkmesh._list_tiles([os.fspath(p) for p in inputs], float(tile_size))
+
+
+def merge_tiles(inputs, tiles_dir, tile_size: float, *, tiles=None, device=None, validation: bool = False) -> dict:
+    """Makes tiles of the sum of saved maps, each from the blocks it needs read from every input (its own and one
+    block around them), never the whole map: what a worker of a tiled merge runs (vkmesh.batch --tiles; C++
+    vkmesh::mergeTiles, src/api/map_merge.h). Each tile is added, meshed alone on the GPU and cut to its own cubes'
+    triangles: the tile `merge_maps(tiles=..., tile_size=...)` writes from the whole sum, bit for bit, and the tiles
+    joined by vertex position are the mesh of the sum (no seam, no vertex twice).
+
+    inputs     paths of maps (.vkmap) that add up (as for merge_maps)
+    tiles_dir  the folder the tiles are written to, tile_X_Y_Z.ply (each under a temporary name, then renamed: a tile
+               file is whole or absent); created if missing
+    tile_size  the tiles' side in metres (> 0)
+    tiles      the tiles to make, (x, y, z) keys as list_tiles gives them; None: every tile of the sum
+    device, validation   as for merge_maps
+
+    Returns {"tiles": [{"tile", "path" (None: no triangle, nothing written), "blocks_read", "blocks_meshed",
+    "vertices", "triangles", "ms": {"read", "mesh"}}, ...], "count" (tiles written), "triangles",
+    "max_blocks_host" (the most blocks of corners in host memory at once: those read for one tile and their sum),
+    "max_blocks_gpu" (the most on the GPU), "table_blocks" (the inputs' block tables, 16 bytes a block),
+    "ms": {"open"}}. Maps that do not add up raise vkmesh.Error naming the file; the GIL is released meanwhile."""
+    if isinstance(inputs, (str, bytes, os.PathLike)):
+        raise TypeError("inputs must be a list of map paths, not one path")
+    keys = None
+    if tiles is not None:
+        keys = []
+        for t in tiles:
+            if len(t) != 3:
+                raise ValueError(f"tiles: {t!r} is not an (x, y, z) tile key")
+            keys.append(tuple(int(v) for v in t))
+    return _vkmesh._merge_tiles([os.fspath(p) for p in inputs], os.fspath(tiles_dir), float(tile_size), keys, device,
+                                bool(validation))
+
+
+def register_maps(first, second) -> dict:
+    """The transform that takes the second saved map's world into the first's, found from the frames both keep (their
+    .vkframes beside them: maps saved by a Reconstructor(keep_frames=True)); C++ slam::registerSessions
+    (src/slam/session_registration.h): keyframes recognised by their random-fern codes, registered by ICP, verified
+    as loops are, and answered by what several verified pairs agree on. What vkmesh.batch --loop-closure runs between
+    fragments that revisit a place.
+
+    Returns {"transform": 4 x 4 nested list (a point of the second map's world, times it, is in the first's),
+    "pairs_registered", "pairs_verified", "pairs_agreeing", "spread_m", "spread_degrees" (the furthest an agreeing
+    pair's transform lies from the answer), "keyframes": (the first's, the second's), "ms"}. Raises vkmesh.Error when
+    a map has no frame store beside it, or when the registration is not sure (too few pairs agree, no overlap, or two
+    places agree on different transforms), saying what was tried. The GIL is released meanwhile."""
+    return _vkmesh._register_maps(os.fspath(first), os.fspath(second))
+
+
+def _pose16(pose, what):
+    a = np.asarray(pose, dtype=np.float64)
+    if a.size != 16:
+        raise ValueError(f"{what} must be a 4 x 4 pose (or 16 numbers, row-major), got shape {a.shape}")
+    return a.reshape(16).tolist()
+
+
+def optimise_pose_graph(poses, edges, *, huber: float = 1.0, max_iterations: int = 50) -> dict:
+    """Least-squares fit of poses to relative-pose edges (C++ slam::PoseGraph, Ceres; src/slam/pose_graph.h). Node 0
+    is held fixed.
+
+    poses  list of 4 x 4 poses (node k's transform into the world), the starting guess
+    edges  list of {"from": i, "to": j, "measured": 4 x 4, inverse(pose[i]) @ pose[j] as measured,
+           "sigma_m": its translation's standard deviation (metres), "sigma_deg": its rotation's (degrees),
+           "loop": bool (loop edges take a Huber loss of width `huber` standard deviations)}
+
+    Returns {"poses": the optimised 4 x 4 poses (nested lists), "converged", "iterations", "initial_cost",
+    "final_cost", "edge_errors": each edge's whitened residual's length at the solution (how many standard deviations
+    it is off: a large one is an edge that disagrees with the others), "ms"}. Deterministic (one thread)."""
+    nodes = [_pose16(p, f"poses[{k}]") for k, p in enumerate(poses)]
+    if not nodes:
+        raise ValueError("optimise_pose_graph: no poses given")
+    checked = []
+    for k, e in enumerate(edges):
+        missing = {"from", "to", "measured", "sigma_m", "sigma_deg"} - set(e)
+        if missing:
+            raise ValueError(f"edges[{k}] lacks {sorted(missing)}")
+        checked.append({"from": int(e["from"]), "to": int(e["to"]), "measured": _pose16(e["measured"], f"edges[{k}]['measured']"),
+                        "sigma_m": float(e["sigma_m"]), "sigma_deg": float(e["sigma_deg"]), "loop": bool(e.get("loop", False))})
+    return _vkmesh._optimise_pose_graph(nodes, checked, float(huber), int(max_iterations))
 
 
 class MeshDelta:

@@ -2,7 +2,8 @@
 world frame, and their maps added into one (vkmesh.merge_maps), exactly.
 
     python3 -m vkmesh.batch RECORDING... -o map.vkmap --mesh mesh.ply [--fragment-frames N] [--overlap K]
-        [--track] [--trajectory FILE] [--local-workers W | --scheduler ADDRESS] [--stats FILE]
+        [--track [--loop-closure]] [--trajectory FILE] [--local-workers W | --scheduler ADDRESS] [--stats FILE]
+        [--tiles DIR --tile-size S [--tiles-per-task N]]
         [vkmesh fuse's dataset, map, capacity and tracking options: --voxel, --max-depth, --intrinsics, ...]
 
 With the recordings' poses, every fragment is fused at them and the maps add up to the map `vkmesh fuse` makes of
@@ -10,6 +11,15 @@ the same frames, bit for bit (the TSDF is an integer sum, independent of the ord
 each fragment is tracked from its own first frame (the first fragment from the recording's first pose, as
 `vkmesh fuse --track` starts), consecutive fragments are placed through the K frames they share, and each
 fragment's frames are fused again at their global poses; every frame enters the map once.
+
+With --track --loop-closure, fragments that are not consecutive but whose chained frames come near each other are
+registered on the workers (vkmesh.register_maps, through the frames each fragment keeps), and one pose graph over
+the fragments (vkmesh.optimise_pose_graph: the chain's placements as odometry, the verified registrations as loops)
+places them before the re-fusion; a loop the others disagree with is dropped and the graph solved again.
+
+With --tiles, the mesh is also written tile by tile, by tile tasks on the workers that read from the fragments' maps
+only the blocks their tiles need (vkmesh.merge_tiles): no worker holds the whole map. Without -o there is no merged
+map at all, only the tiles.
 
 Tasks name their inputs (recording, frame range, settings, poses) and write their maps under a name derived from
 them (written under a temporary name and renamed): a task that ran before is not run again (a run stopped half
@@ -143,6 +153,11 @@ def _worker_name():
         return f"{socket.gethostname()}:{os.getpid()}"
 
 
+def _frames_path(map_path):
+    """The kept frames saved beside a map (gpu::frameStorePathOf: the extension replaced by .vkframes)."""
+    return os.path.splitext(map_path)[0] + ".vkframes"
+
+
 def fuse_fragment(spec):
     """Fuses frames [first, stop) of one recording into a map of their own, saved in the work folder under a name
     derived from the spec (the result's "map").
@@ -193,9 +208,55 @@ def fuse_fragment(spec):
                 frames.append([i, f.timestamp, np.asarray(out["pose"]).ravel().tolist(), bool(out["tracked"])])
         tmp_map = os.path.join(work_dir, f"{key}.tmp{os.getpid()}.vkmap")
         r.save(tmp_map)
+        if settings.get("keep_frames"):   # the kept frames, saved beside the map, renamed first: a map in place has its frames
+            os.replace(_frames_path(tmp_map), _frames_path(os.path.join(work_dir, key + ".vkmap")))
         os.replace(tmp_map, os.path.join(work_dir, key + ".vkmap"))
     result = {"key": key, "map": os.path.join(work_dir, key + ".vkmap"), "frames": frames, "skipped": skipped,
               "ms": (time.perf_counter() - t0) * 1e3, "worker": _worker_name(), "attempt": attempt}
+    _write_json(os.path.join(work_dir, key + ".json"), result)
+    return result
+
+
+def make_tiles(spec):
+    """Makes some tiles (spec["tiles"], (x, y, z) keys) of the sum of maps (spec["inputs"]) into spec["tiles_dir"]:
+    vkmesh.merge_tiles on a worker, each tile from the blocks it needs read from every map, never the whole map.
+    Idempotent: a finished task's result is read back while the tiles it wrote are there (each tile file is written
+    under a temporary name and renamed)."""
+    work_dir = spec["work_dir"]
+    key = _key("tiles", spec)
+    done = _done(work_dir, key)
+    if done is not None and all(os.path.exists(t["path"]) for t in done["stats"]["tiles"] if t["path"]):
+        return done
+    attempt = _attempt(work_dir, key)
+    t0 = time.perf_counter()
+    stats = vkmesh.merge_tiles(spec["inputs"], spec["tiles_dir"], spec["tile_size"], tiles=spec["tiles"], **spec.get("device", {}))
+    result = {"key": key, "stats": stats, "ms": (time.perf_counter() - t0) * 1e3, "worker": _worker_name(), "attempt": attempt}
+    _write_json(os.path.join(work_dir, key + ".json"), result)
+    return result
+
+
+def register_fragments(spec):
+    """Registers fragment spec["second"]'s map to fragment spec["first"]'s (vkmesh.register_maps) on a worker: a loop
+    between them, or none. Returns {"registration": its dict (its "transform" takes the second fragment's own frame
+    into the first's) or None, "reason": why not (vkmesh.Error's message)}; idempotent (keyed by the two maps, whose
+    names derive from their fragments' specs)."""
+    work_dir = spec["work_dir"]
+    key = _key("loop", spec)
+    done = _done(work_dir, key)
+    if done is not None:
+        return done
+    attempt = _attempt(work_dir, key)
+    t0 = time.perf_counter()
+    registration, reason = None, None
+    for m in (spec["first_map"], spec["second_map"]):
+        if not os.path.exists(_frames_path(m)):   # a bug, not "no loop": the fragments are fused with keep_frames=True
+            raise RuntimeError(f"{spec['name']}: {m} has no kept frames beside it ({_frames_path(m)})")
+    try:
+        registration = vkmesh.register_maps(spec["first_map"], spec["second_map"])
+    except vkmesh.Error as e:   # not sure, or no overlap: no loop (a failure of the task itself is another exception)
+        reason = str(e)
+    result = {"key": key, "registration": registration, "reason": reason, "ms": (time.perf_counter() - t0) * 1e3,
+              "worker": _worker_name(), "attempt": attempt}
     _write_json(os.path.join(work_dir, key + ".json"), result)
     return result
 
@@ -237,6 +298,106 @@ def place_after(previous_global, local, shared):
     return t, {"frames": len(both), "spread_m": spread_m, "spread_deg": spread_deg}
 
 
+# ---- loops between fragments and the pose graph over them (on the client; --loop-closure) ----------------------
+
+# Two non-consecutive fragments are a loop candidate when, by the chain's placement, some frame of one lies within
+# these of some frame of the other: the camera came back to a place it saw, within what registration can recover
+# (the chain's drift over a few fragments is centimetres and degrees, far below these).
+LOOP_CANDIDATE_METRES = 0.5
+LOOP_CANDIDATE_DEGREES = 30.0
+# The pose graph's standard deviations. A loop is one registration of two fragments' kept frames, its agreeing pairs
+# within a few cm and degrees of each other: fixed. An odometry edge (the chain's placement of a fragment after the
+# one before) carries the drift of the one before's tracking from its first frame to the shared frame it is placed
+# by: a floor plus a share of that path's length, translation and rotation separately. With these, a loop across a
+# few fragments weighs more than the chain's odometry it closes, as drift grows with the path.
+LOOP_SIGMA_M, LOOP_SIGMA_DEG = 0.02, 1.0
+ODOMETRY_SIGMA_M, ODOMETRY_SIGMA_DEG = 0.01, 0.5              # floor
+ODOMETRY_SIGMA_M_PER_M, ODOMETRY_SIGMA_DEG_PER_DEG = 0.05, 0.05  # per metre travelled, per degree turned
+# A loop whose whitened error after the solve is above this (standard deviations) disagrees with the odometry and
+# the other loops: it is dropped and the graph solved again, worst first, so that a wrong loop cannot bend the map.
+LOOP_MAX_WHITENED = 5.0
+
+
+def _angle_deg(r):
+    return float(np.degrees(np.arccos(np.clip((np.trace(r) - 1) / 2, -1, 1))))
+
+
+def _path_length(poses):
+    """Metres travelled and degrees turned along poses in order."""
+    metres = sum(float(np.linalg.norm(b[:3, 3] - a[:3, 3])) for a, b in zip(poses, poses[1:]))
+    degrees = sum(_angle_deg(a[:3, :3].T @ b[:3, :3]) for a, b in zip(poses, poses[1:]))
+    return metres, degrees
+
+
+def closest_frames(first_placed, second_placed):
+    """The two frames, one of each fragment, nearest each other by their placed poses: (metres, degrees, first frame,
+    second frame) of the pair within LOOP_CANDIDATE_* with the least distance, or of the nearest pair by position
+    when none is. Every pair at once (numpy): fragments of a thousand frames compare in a moment."""
+    first_ids, second_ids = list(first_placed), list(second_placed)
+    a = np.stack([first_placed[i] for i in first_ids])
+    b = np.stack([second_placed[i] for i in second_ids])
+    metres = np.linalg.norm(a[:, None, :3, 3] - b[None, :, :3, 3], axis=2)
+    # trace(Ra^T Rb) is the sum of the elementwise products of Ra and Rb.
+    cosine = (np.einsum("aij,bij->ab", a[:, :3, :3], b[:, :3, :3]) - 1) / 2
+    degrees = np.degrees(np.arccos(np.clip(cosine, -1, 1)))
+    near = (metres <= LOOP_CANDIDATE_METRES) & (degrees <= LOOP_CANDIDATE_DEGREES)
+    k = np.unravel_index(np.argmin(np.where(near, metres, np.inf) if near.any() else metres), metres.shape)
+    return float(metres[k]), float(degrees[k]), first_ids[k[0]], second_ids[k[1]]
+
+
+def loop_candidates(placed):
+    """Non-consecutive fragment pairs (i, j), i < j - 1, that a frame of each comes near (closest_frames within
+    LOOP_CANDIDATE_*), with their closest frames. Consecutive ones are tied by their shared frames already."""
+    out = []
+    for j in range(len(placed)):
+        for i in range(j - 1):
+            metres, degrees, fi, fj = closest_frames(placed[i], placed[j])
+            near = metres <= LOOP_CANDIDATE_METRES and degrees <= LOOP_CANDIDATE_DEGREES
+            out.append({"first": i, "second": j, "closest_m": metres, "closest_deg": degrees, "frames": [fi, fj], "near": near})
+    return out
+
+
+def fragment_graph(transforms, odometry_paths, loops):
+    """The pose graph over fragments. Node k is fragment k's transform X_k from its own frame into the world (node 0,
+    the first fragment, fixed). An edge from a to b measures inverse(X_a) @ X_b, which takes b's own frame into a's:
+      odometry (k-1, k): inverse(X_{k-1}) @ X_k from the chain's placement (so the chain itself has no residual);
+      loop (i, j): register_maps(map_i, map_j)["transform"], which takes the second map's world (fragment j's own
+        frame, where its frames were tracked and kept) into the first's (fragment i's own frame): the same quantity.
+    odometry_paths[k]: (metres, degrees) fragment k-1 travelled from its first frame to the frame k is placed by.
+    loops: [(i, j, 4 x 4)]. Returns (poses, edges) for vkmesh.optimise_pose_graph."""
+    edges = []
+    for k in range(1, len(transforms)):
+        metres, degrees = odometry_paths[k]
+        edges.append({"from": k - 1, "to": k, "measured": (np.linalg.inv(transforms[k - 1]) @ transforms[k]).tolist(),
+                      "sigma_m": ODOMETRY_SIGMA_M + ODOMETRY_SIGMA_M_PER_M * metres,
+                      "sigma_deg": ODOMETRY_SIGMA_DEG + ODOMETRY_SIGMA_DEG_PER_DEG * degrees, "loop": False})
+    for i, j, measured in loops:
+        edges.append({"from": i, "to": j, "measured": np.asarray(measured).tolist(), "sigma_m": LOOP_SIGMA_M,
+                      "sigma_deg": LOOP_SIGMA_DEG, "loop": True})
+    return [np.asarray(t).tolist() for t in transforms], edges
+
+
+def close_loops(transforms, odometry_paths, loops):
+    """Solves the fragment graph; while a loop's whitened error is above LOOP_MAX_WHITENED, drops the worst such loop
+    and solves again. Returns (the fragments' transforms, the solves, the loops kept as indices into `loops`, the
+    dropped ones as (index, whitened error), each kept loop's whitened error)."""
+    kept, dropped, solves = list(range(len(loops))), [], []
+    while True:
+        poses, edges = fragment_graph(transforms, odometry_paths, [loops[k] for k in kept])
+        solve = vkmesh.optimise_pose_graph(poses, edges)
+        solves.append({k: solve[k] for k in ("converged", "iterations", "initial_cost", "final_cost", "ms")} | {"loops": len(kept)})
+        loop_errors = solve["edge_errors"][len(transforms) - 1:]
+        worst = int(np.argmax(loop_errors)) if loop_errors else None
+        if worst is None or loop_errors[worst] <= LOOP_MAX_WHITENED:
+            return ([np.asarray(p, dtype=np.float64) for p in solve["poses"]], solves, kept, dropped,
+                    dict(zip(kept, loop_errors)))
+        dropped.append((kept.pop(worst), float(loop_errors[worst])))
+
+
+def _transform_change(a, b):
+    return float(np.linalg.norm(a[:3, 3] - b[:3, 3])), _angle_deg(a[:3, :3].T @ b[:3, :3])
+
+
 # ---- the run (on the client) --------------------------------------------------------------------------------
 
 class BatchError(Exception):
@@ -265,9 +426,19 @@ def _plan(recordings, dataset_options, fragment_frames, overlap, track, first_fr
 def _submit_all(client, fn, specs, what, retries, progress):
     """Runs fn over specs on the cluster (one GPU each), reporting progress; a spec that keeps failing stops the run
     naming it."""
+    return _gather(_submit(client, fn, specs, what, retries), specs, what, progress)
+
+
+def _submit(client, fn, specs, what, retries):
+    """Submits fn over specs (one GPU each) without waiting: {future: index}."""
+    return {client.submit(fn, spec, key=f"{what}-{i}-{_key(what, spec)}", retries=retries, resources={"GPU": 1},
+                          pure=False): i for i, spec in enumerate(specs)}
+
+
+def _gather(futures, specs, what, progress):
+    """The results of _submit's futures in the order of specs, reporting progress; a spec that keeps failing stops the
+    run naming it."""
     from distributed import as_completed
-    futures = {client.submit(fn, spec, key=f"{what}-{i}-{_key(what, spec)}", retries=retries, resources={"GPU": 1},
-                             pure=False): i for i, spec in enumerate(specs)}
     results = [None] * len(specs)
     done = 0
     for future in as_completed(futures):
@@ -291,8 +462,12 @@ def _pose_dict(frames):
 def run(args, added):
     t_start = time.perf_counter()
     settings, dataset_options = _settings_from(args, added)
-    if args.loop_closure:
-        raise BatchError("--loop-closure: loops between fragments are not built yet (docs/SCALING.md); run without it")
+    if args.loop_closure and not args.track:
+        raise BatchError("--loop-closure needs --track: loops correct tracked fragments' placements (with the recordings' "
+                         "poses there is nothing to correct)")
+    if args.loop_closure and len(args.recordings) > 1:
+        raise BatchError("--loop-closure: one recording at a time (fragments of different recordings are not chained; "
+                         "sessions are joined by vkmesh merge --register)")
     # What merging refuses, refused before anything is fused (core/map_merge.h says why).
     if settings.get("keep_radius", 0) or settings.get("recycle"):
         raise BatchError("--keep-radius and --recycle make bounded maps, which forget what they fused: their sum is not the map "
@@ -304,14 +479,20 @@ def run(args, added):
     if args.track and not (1 <= args.overlap < args.fragment_frames):
         raise BatchError(f"--overlap {args.overlap} must be at least 1 and below --fragment-frames ({args.fragment_frames}) "
                          "with --track: consecutive fragments are placed through the frames they share")
-    out = os.path.abspath(args.output)
-    if os.path.splitext(out)[1] in (".ply", ".obj", ".glb"):
+    if bool(args.tiles) != (args.tile_size > 0):
+        raise BatchError("--tiles DIR and --tile-size S (metres, > 0) go together")
+    if not args.output and not args.tiles:
+        raise BatchError("give the map (-o map.vkmap), tiles (--tiles DIR --tile-size S), or both")
+    if args.mesh and not args.output:
+        raise BatchError("--mesh needs -o: without a merged map there are only --tiles")
+    if args.tiles_per_task < 0:
+        raise BatchError(f"--tiles-per-task {args.tiles_per_task} must be 0 (automatic) or more")
+    out = os.path.abspath(args.output) if args.output else None
+    if out and os.path.splitext(out)[1] in (".ply", ".obj", ".glb"):
         raise BatchError(f"-o {args.output}: -o is the map (.vkmap); write its mesh with --mesh")
     if args.mesh:
         _vkmesh._check_mesh_path(os.fspath(args.mesh))
-    if bool(args.tiles) != (args.tile_size > 0):
-        raise BatchError("--tiles DIR and --tile-size S (metres, > 0) go together")
-    work_dir = os.path.abspath(args.work_dir or out + ".batch")
+    work_dir = os.path.abspath(args.work_dir or (out or os.path.abspath(args.tiles)) + ".batch")
     os.makedirs(work_dir, exist_ok=True)
     fragments = _plan(args.recordings, dataset_options, args.fragment_frames, args.overlap, args.track,
                       args.first_frame, args.frames)
@@ -341,8 +522,10 @@ def run(args, added):
         # 1. Fuse every fragment (at the recording's poses, or tracked from its own first frame).
         t0 = time.perf_counter()
         specs = []
+        # With --loop-closure each fragment keeps its frames (.vkframes beside its map): register_maps registers them.
+        track_settings = {**settings, "keep_frames": True} if args.loop_closure else settings
         for f in fragments:
-            spec = {"recording": f["recording"], "dataset": dataset_options, "settings": settings, "index": f["index"],
+            spec = {"recording": f["recording"], "dataset": dataset_options, "settings": track_settings, "index": f["index"],
                     "first": f["first"], "stop": f["stop"], "work_dir": work_dir, "name": f["name"],
                     "poses": "track" if args.track else None, "first_pose": None}
             if args.track:
@@ -359,7 +542,7 @@ def run(args, added):
         # 2. Place (--track): each fragment through the frames it shares with the one before.
         t0 = time.perf_counter()
         finals, placements, trajectory = [], [], []
-        previous = None
+        previous, transforms, locals_, chain_placed, odometry_paths = None, [], [], [], []
         for f, result in zip(fragments, fused):
             local = _pose_dict(result["frames"])
             if not args.track:
@@ -368,22 +551,86 @@ def run(args, added):
                 continue
             if f["index"] == 0:
                 transform, residual = np.eye(4), None
+                odometry_paths.append(None)
             else:
                 shared = range(f["first"], f["start"])
                 transform, residual = place_after(previous, local, shared)
                 if transform is None:
                     raise BatchError(f"{f['name']}: none of its first {f['start'] - f['first']} frames was tracked in both it and "
                                      "the fragment before, so it cannot be placed (give a larger --overlap)")
+                # The path the fragment before tracked from its first frame to the shared frame this one is placed by
+                # (place_after's: the last shared frame both fused): the drift the odometry edge carries.
+                before = locals_[-1]
+                by = max(i for i in shared if i in previous and i in local)
+                odometry_paths.append(_path_length([before[i] for i in sorted(before) if i <= by]))
             placed = {i: transform @ p for i, p in local.items()}
             previous = placed
+            transforms.append(transform)
+            locals_.append(local)
+            chain_placed.append(placed)
             placements.append({"fragment": f["name"], "transform": transform.ravel().tolist(), "overlap": residual})
-            for i, ts, p, fused_ in result["frames"]:
-                if f["start"] <= i < f["stop"]:
-                    trajectory.append((f["recording"], i, ts, transform @ np.asarray(p).reshape(4, 4)))
-            f["global"] = {str(i): placed[i].ravel().tolist() for i in range(f["start"], f["stop"]) if i in placed}
         phases["place_ms"] = (time.perf_counter() - t0) * 1e3
 
-        # 3. Re-fuse (--track): every fragment's own frames at their global poses (the first fragment's are there already).
+        # 2b. Loops (--loop-closure; one recording, checked at the start): non-consecutive fragments that come near
+        # each other registered on the workers, then one pose graph over the fragments gives their transforms.
+        t0 = time.perf_counter()
+        loop_stats, registrations = None, []
+        if args.loop_closure:
+            candidates = loop_candidates(chain_placed)
+            tried = [c for c in candidates if c["near"]]
+            loop_specs = [{"first_map": fused[c["first"]]["map"], "second_map": fused[c["second"]]["map"], "work_dir": work_dir,
+                           "name": f"loop {fragments[c['first']]['name']} / {fragments[c['second']]['name']}"} for c in tried]
+            registrations = _submit_all(client, register_fragments, loop_specs, "loop", args.retries, progress) if loop_specs else []
+            verified = [(c, r) for c, r in zip(tried, registrations) if r["registration"] is not None]
+            loops = [(c["first"], c["second"], np.asarray(r["registration"]["transform"], dtype=np.float64)) for c, r in verified]
+            graph_paths = [p if p is not None else (0.0, 0.0) for p in odometry_paths]
+            solved, solves, kept, dropped, errors = close_loops(transforms, graph_paths, loops) if loops else (transforms, [], [], [], {})
+            pairs = []
+            for c, r in zip(tried, registrations):
+                entry = {"first": fragments[c["first"]]["name"], "second": fragments[c["second"]]["name"],
+                         "fragments": [c["first"], c["second"]], "closest_m": c["closest_m"], "closest_deg": c["closest_deg"],
+                         "closest_frames": c["frames"], "ms": r["ms"]}
+                if r["registration"] is None:
+                    entry.update(status="no loop", reason=r["reason"])
+                else:
+                    k = next(n for n, (cc, _) in enumerate(verified) if cc is c)
+                    reg = r["registration"]
+                    entry.update(transform=np.asarray(reg["transform"]).ravel().tolist(),
+                                 pairs_registered=reg["pairs_registered"], pairs_verified=reg["pairs_verified"],
+                                 pairs_agreeing=reg["pairs_agreeing"], spread_m=reg["spread_m"], spread_degrees=reg["spread_degrees"])
+                    if k in kept:
+                        entry.update(status="accepted", whitened_error=errors[k])
+                    else:
+                        entry.update(status="dropped", whitened_error=dict(dropped)[k],
+                                     reason=f"disagrees with the odometry and the other loops by {dict(dropped)[k]:.1f} standard "
+                                            f"deviations (> {LOOP_MAX_WHITENED})")
+                pairs.append(entry)
+            loop_stats = {
+                "candidates": len(candidates), "tried": len(tried), "verified": len(verified), "accepted": len(kept),
+                "pairs": pairs,
+                "not_near": [{"fragments": [c["first"], c["second"]], "closest_m": c["closest_m"], "closest_deg": c["closest_deg"]}
+                             for c in candidates if not c["near"]],
+                "graph": {"solves": solves, "dropped": len(dropped)},
+                "placement": [{"fragment": fragments[k]["name"], "before": transforms[k].ravel().tolist(),
+                               "after": solved[k].ravel().tolist(),
+                               "moved_m": _transform_change(transforms[k], solved[k])[0],
+                               "turned_deg": _transform_change(transforms[k], solved[k])[1]} for k in range(len(fragments))],
+            }
+            transforms = list(solved)
+        phases["loops_ms"] = (time.perf_counter() - t0) * 1e3
+
+        # The global poses: each fragment's own frames through its transform (the chain's, or the graph's).
+        if args.track:
+            for k, (f, result) in enumerate(zip(fragments, fused)):
+                transform = transforms[k]
+                for i, ts, p, fused_ in result["frames"]:
+                    if f["start"] <= i < f["stop"]:
+                        trajectory.append((f["recording"], i, ts, transform @ np.asarray(p).reshape(4, 4)))
+                f["global"] = {str(i): (transform @ locals_[k][i]).ravel().tolist()
+                               for i in range(f["start"], f["stop"]) if i in locals_[k]}
+
+        # 3. Re-fuse (--track): every fragment's own frames at their global poses (the first fragment's are there already:
+        # node 0 of the graph is held fixed).
         t0 = time.perf_counter()
         refused = []
         if args.track:
@@ -395,11 +642,26 @@ def run(args, added):
             finals = [r["map"] for f, r in zip(fragments, fused) if f["index"] == 0] + [r["map"] for r in refused]
         phases["refuse_ms"] = (time.perf_counter() - t0) * 1e3
 
-        # 4. Merge in a tree on the workers; the last merge writes the map and the mesh.
+        # 4. Tiles (--tiles), from the fragments' maps: tile tasks on the workers, each reading the blocks of its tiles
+        # only, submitted before the merge tree and running beside it.
+        t_tiles = time.perf_counter()
+        tile_specs, tile_futures, plan = [], None, None
+        if args.tiles:
+            plan = vkmesh.list_tiles(finals, args.tile_size)   # the maps' block tables only
+            keys = [list(t) for t in plan["tiles"]]
+            per_task = args.tiles_per_task or max(1, -(-len(keys) // (4 * len(workers))))
+            for i in range(0, len(keys), per_task):
+                group = keys[i:i + per_task]
+                tile_specs.append({"inputs": finals, "tiles": group, "tile_size": args.tile_size,
+                                   "tiles_dir": os.path.abspath(args.tiles), "work_dir": work_dir, "device": device,
+                                   "name": f"tiles {i + 1}-{i + len(group)} of {len(keys)}"})
+            tile_futures = _submit(client, make_tiles, tile_specs, "tiles", args.retries)
+
+        # 5. Merge in a tree on the workers (with -o); the last merge writes the map and the mesh.
         t0 = time.perf_counter()
         merges = []
-        level = finals
-        while True:
+        level = finals if out else []
+        while level:
             last = len(level) <= args.merge_fan_in
             groups = [level[i:i + args.merge_fan_in] for i in range(0, len(level), args.merge_fan_in)]
             specs = []
@@ -408,8 +670,6 @@ def run(args, added):
                 spec["output"] = out if last else os.path.join(work_dir, _key("merged", {"inputs": g}) + ".vkmap")
                 if last and args.mesh:
                     spec["mesh"] = os.path.abspath(args.mesh)
-                if last and args.tiles:
-                    spec["tiles"], spec["tile_size"] = os.path.abspath(args.tiles), args.tile_size
                 specs.append(spec)
             results = _submit_all(client, merge_fragment_maps, specs, "merge", args.retries, progress)
             merges += results
@@ -417,7 +677,9 @@ def run(args, added):
                 break
             level = [r["output"] for r in results]
         phases["merge_ms"] = (time.perf_counter() - t0) * 1e3
-        final = merges[-1]["stats"]
+        final = merges[-1]["stats"] if merges else None
+        made = _gather(tile_futures, tile_specs, "tiles", progress) if tile_futures else []
+        phases["tiles_ms"] = (time.perf_counter() - t_tiles) * 1e3
 
         if args.trajectory:
             with open(args.trajectory, "w") as t:
@@ -426,22 +688,27 @@ def run(args, added):
                     t.write(_tum_line(ts, p))
         phases["total_ms"] = (time.perf_counter() - t_start) * 1e3
 
-        tasks = fused + refused + merges
+        tasks = fused + registrations + refused + merges + made
         per_worker = {}
         for r in tasks:
             w = per_worker.setdefault(r["worker"], {"tasks": 0, "ms": 0.0})
             w["tasks"] += 1
             w["ms"] += r["ms"]
         stats = {
-            "output": out, "mesh": final["mesh"], "frames_integrated": final["frames_integrated"],
-            "blocks": final["blocks"], "workers": len(workers), "fragments": [
+            "output": out, "mesh": final["mesh"] if final else None,
+            "frames_integrated": final["frames_integrated"] if final else plan["frames_integrated"],
+            "blocks": final["blocks"] if final else {"merged": plan["blocks"]}, "workers": len(workers), "fragments": [
                 {"name": f["name"], "recording": f["recording"], "frames": [f["start"], f["stop"]], "fused_from": f["first"],
                  "skipped": r["skipped"], "lost": sum(1 for x in r["frames"] if not x[3]), "ms": r["ms"],
                  "worker": r["worker"], "attempts": r["attempt"]} for f, r in zip(fragments, fused)],
             "placements": placements, "ms": phases, "per_worker": per_worker,
             "retries": sum(_attempts(work_dir, r["key"]) - 1 for r in tasks),
-            "merges": len(merges), "warnings": final["warnings"],
+            "merges": len(merges), "warnings": final["warnings"] if final else [],
         }
+        if args.tiles:
+            stats["tiles"] = _tile_stats(args, plan, tile_specs, made, work_dir)
+        if loop_stats is not None:
+            stats["loop_closure"] = loop_stats
         if args.stats:
             with open(args.stats, "w") as s:
                 json.dump(stats, s, indent=2)
@@ -452,6 +719,20 @@ def run(args, added):
         client.close()
         if cluster is not None:
             cluster.close()
+
+
+def _tile_stats(args, plan, specs, made, work_dir):
+    """What the tile tasks made and the most blocks any of them held, against the whole map's: the measure of "no worker
+    needs the whole map"."""
+    tasks = [{"name": spec["name"], "tiles": len(spec["tiles"]), "written": r["stats"]["count"],
+              "triangles": r["stats"]["triangles"], "max_blocks_host": r["stats"]["max_blocks_host"],
+              "max_blocks_gpu": r["stats"]["max_blocks_gpu"], "table_blocks": r["stats"]["table_blocks"], "ms": r["ms"],
+              "worker": r["worker"], "attempts": _attempts(work_dir, r["key"])} for spec, r in zip(specs, made)]
+    return {"path": os.path.abspath(args.tiles), "size_m": args.tile_size, "listed": len(plan["tiles"]),
+            "count": sum(t["written"] for t in tasks), "triangles": sum(t["triangles"] for t in tasks),
+            "tasks": len(tasks), "map_blocks": plan["blocks"],
+            "max_blocks_host": max((t["max_blocks_host"] for t in tasks), default=0),
+            "max_blocks_gpu": max((t["max_blocks_gpu"] for t in tasks), default=0), "per_task": tasks}
 
 
 def _attempts(work_dir, key):
@@ -485,15 +766,20 @@ def parser():
     p = argparse.ArgumentParser(prog="python3 -m vkmesh.batch", description=__doc__.split("\n\n")[0],
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("recordings", nargs="+", metavar="RECORDING", help="datasets or recordings, as vkmesh fuse reads them")
-    p.add_argument("-o", "--output", required=True, help="the map (.vkmap)")
+    p.add_argument("-o", "--output", help="the map (.vkmap); may be left out with --tiles (tiles only)")
     p.add_argument("--mesh", help="also write the map's mesh (.ply, .obj or .glb)")
-    p.add_argument("--tiles", help="also write the mesh tile by tile into this folder (vkmesh merge --tiles)")
+    p.add_argument("--tiles", help="also write the mesh tile by tile into this folder (tile_X_Y_Z.ply), made by tile tasks "
+                                   "that read from the fragments' maps only the blocks of their tiles")
     p.add_argument("--tile-size", type=float, default=0, help="--tiles: the tiles' side in metres")
+    p.add_argument("--tiles-per-task", type=int, default=0,
+                   help="--tiles: tiles made by one task (default 0: about 4 tasks per worker)")
     p.add_argument("--fragment-frames", type=int, default=100, help="frames per fragment (default 100)")
     p.add_argument("--overlap", type=int, default=10,
                    help="with --track: frames each fragment shares with the one before, to place it (default 10)")
     p.add_argument("--track", action="store_true", help="track the camera (the recordings' poses are not used beyond their first frame)")
-    p.add_argument("--loop-closure", action="store_true", help="not built yet: refused")
+    p.add_argument("--loop-closure", action="store_true",
+                   help="with --track: register fragments that come back near each other and place every fragment by one "
+                        "pose graph over them (the chain as odometry, verified registrations as loops)")
     p.add_argument("--trajectory", help="write every frame's global pose (TUM format)")
     p.add_argument("--first-frame", type=int, default=0, help="start at this frame of each recording")
     p.add_argument("--frames", type=int, default=0, help="use at most the first N frames of each recording (0: all)")
@@ -520,9 +806,16 @@ def main(argv=None):
     except (BatchError, vkmesh.Error, ValueError) as e:
         print(f"vkmesh.batch: error: {e}", file=sys.stderr)
         return 2
+    made = [f"mesh {stats['mesh']['triangles']} triangles -> {stats['output']}"] if stats["output"] else []
+    if "tiles" in stats:
+        t = stats["tiles"]
+        made.append(f"{t['count']} tiles of {t['size_m']} m, {t['triangles']} triangles -> {t['path']} (a tile task held at "
+                    f"most {t['max_blocks_host']} blocks, {t['max_blocks_gpu']} on the GPU; the map has {t['map_blocks']})")
     print(f"vkmesh.batch: {len(stats['fragments'])} fragments on {stats['workers']} workers, {stats['frames_integrated']} frames, "
-          f"{stats['blocks']['merged']} blocks, mesh {stats['mesh']['triangles']} triangles -> {stats['output']} "
-          f"({stats['ms']['total_ms'] / 1e3:.1f} s; {stats['retries']} retries)")
+          f"{stats['blocks']['merged']} blocks, {'; '.join(made)} ({stats['ms']['total_ms'] / 1e3:.1f} s; {stats['retries']} retries)")
+    if "loop_closure" in stats:
+        lc = stats["loop_closure"]
+        print(f"vkmesh.batch: loops: {lc['tried']} fragment pairs tried, {lc['verified']} verified, {lc['accepted']} accepted")
     return 0
 
 

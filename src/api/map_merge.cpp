@@ -60,6 +60,49 @@ FrameStore mergeFrameStores(std::vector<FrameStore>& stores, const MergeOptions&
 // whole blocks.
 int32_t tileOfBlock(int32_t block, double blockMetres, double tileSize) { return int32_t(std::floor(double(block) * blockMetres / tileSize)); }
 
+TileKey tileOf(int32_t x, int32_t y, int32_t z, double blockMetres, double tileSize) {
+    return {tileOfBlock(x, blockMetres, tileSize), tileOfBlock(y, blockMetres, tileSize), tileOfBlock(z, blockMetres, tileSize)};
+}
+
+void checkTileSize(double tileSize) {
+    if (!(tileSize > 0) || !std::isfinite(tileSize))
+        throw Error("merge: tile size " + std::to_string(tileSize) + " must be a positive number of metres (0: no tiles)");
+}
+
+// A tile's blocks and the blocks it is meshed from: its own (`own`, whose cubes' triangles it keeps) and one block
+// around them (every cube of the tile reads corners at most one block away: its own corners, refinement's window, the
+// normals' gradients). Both clamped to the block coordinates a map holds; `empty` when the tile holds none of them.
+struct TileBlocks {
+    map::BlockBox own, meshed;
+    bool empty = false;
+};
+TileBlocks blocksOfTile(const TileKey& tile, double blockMetres, double tileSize) {
+    const int64_t lowest = -int64_t(gpu::KEY_BIAS), highest = int64_t(gpu::KEY_BIAS) - 1;
+    TileBlocks out;
+    for (int a = 0; a < 3; ++a) {
+        const int32_t t = tile[a];
+        // Along this axis, the first block whose tile is at least t and the last whose tile is at most t (tileOfBlock
+        // grows with the block): a guess from the tile's metres, then stepped to the exact ends, since the division
+        // rounds. A tile outside the coordinates stops the steps at their ends.
+        const double guess = std::clamp(std::floor(double(t) * tileSize / blockMetres), double(lowest - 2), double(highest + 2));
+        auto tileOfWide = [&](int64_t b) { return std::floor(double(b) * blockMetres / tileSize); };
+        int64_t first = int64_t(guess), last = int64_t(guess);
+        while (first > lowest - 2 && tileOfWide(first - 1) >= t) --first;
+        while (first < highest + 2 && tileOfWide(first) < t) ++first;
+        while (last < highest + 2 && tileOfWide(last + 1) <= t) ++last;
+        while (last > lowest - 2 && tileOfWide(last) > t) --last;
+        const int64_t ownLo = std::max(first, lowest), ownHi = std::min(last, highest);
+        const int64_t lo = std::max(first - 1, lowest), hi = std::min(last + 1, highest);
+        if (ownLo > ownHi || lo > hi) {
+            out.empty = true;
+            return out;
+        }
+        out.own.lo[a] = int32_t(ownLo), out.own.hi[a] = int32_t(ownHi);
+        out.meshed.lo[a] = int32_t(lo), out.meshed.hi[a] = int32_t(hi);
+    }
+    return out;
+}
+
 // The block a triangle belongs to: the one holding its centroid (its three vertices lie strictly inside edges of one
 // cube; the centroid is taken in a fixed order of the vertices' bits, so every tile computes the same one).
 std::array<int32_t, 3> blockOfTriangle(const Mesh& m, const std::array<uint32_t, 3>& t, float voxel) {
@@ -88,43 +131,109 @@ Mesh trianglesOfTile(const Mesh& mesh, const TileKey& tile, float voxel, double 
     };
     for (const auto& t : mesh.triangles) {
         const std::array<int32_t, 3> b = blockOfTriangle(mesh, t, voxel);
-        if (tileOfBlock(b[0], blockMetres, tileSize) != tile[0] || tileOfBlock(b[1], blockMetres, tileSize) != tile[1] ||
-            tileOfBlock(b[2], blockMetres, tileSize) != tile[2])
-            continue;
+        if (tileOf(b[0], b[1], b[2], blockMetres, tileSize) != tile) continue;
         out.triangles.push_back({vertex(t[0]), vertex(t[1]), vertex(t[2])});
     }
     return out;
 }
 
-// Meshes the sum tile by tile: each tile's blocks with one block around them (every cube of the tile reads corners
-// at most one block away: its own corners, refinement's window, the normals' gradients), added from the inputs,
-// loaded alone, meshed from scratch, and cut to the tile's own triangles. The GPU holds one tile at a time.
+// A part of the sum (a tile's blocks and those around it), loaded alone, meshed from scratch and cut to the tile's
+// own triangles.
+Mesh meshTileOfPart(const vk::Context& context, map::MapData part, const TileKey& tile, double tileSize) {
+    const float voxel = part.settings.voxelSize;
+    // Capacities for this part, not for the inputs' whole maps; the heaps grow as the mesh needs.
+    const uint32_t n = uint32_t(part.blocks.size());
+    uint32_t slots = 1024;
+    while (slots < 2 * n) slots *= 2;
+    part.capacities = {std::max(n, 64u), slots, 0, 1u << 16, std::max(n * 128, 4096u), std::max(n * 64, 2048u)};
+    gpu::GpuVolumeConfig config = gpu::GpuVolume::mapConfig(part);
+    config.growCapacities = true;
+    std::unique_ptr<gpu::GpuVolume> volume = gpu::GpuVolume::load(context, part, config, tileFileName(tile));
+    volume->rebuildMesh();
+    return trianglesOfTile(toMesh(volume->exportMesh(), volume->frameNumber()), tile, voxel, tileSize);
+}
+
+// Meshes the sum tile by tile from inputs held whole: each tile's part added from them, meshed alone. The GPU holds
+// one tile at a time.
 void meshTiles(const vk::Context& context, const std::vector<map::MergeInput>& inputs, const MergeOptions& options, MergeReport& report) {
-    const float voxel = inputs[0].map->settings.voxelSize;
-    const double blockMetres = double(voxel) * gpu::BLOCK_SIDE, size = options.tileSize;
+    const double blockMetres = double(inputs[0].map->settings.voxelSize) * gpu::BLOCK_SIDE, size = options.tileSize;
     std::set<TileKey> tiles;
     for (const map::MergeInput& in : inputs)
-        for (const map::Block& b : in.map->blocks)
-            tiles.insert({tileOfBlock(b.x, blockMetres, size), tileOfBlock(b.y, blockMetres, size), tileOfBlock(b.z, blockMetres, size)});
+        for (const map::Block& b : in.map->blocks) tiles.insert(tileOf(b.x, b.y, b.z, blockMetres, size));
     for (const TileKey& tile : tiles) {
-        auto near = [&](int32_t b, int a) { return tileOfBlock(b - 1, blockMetres, size) <= tile[a] && tile[a] <= tileOfBlock(b + 1, blockMetres, size); };
-        map::MapData part = map::merge(inputs, nullptr, [&](int32_t x, int32_t y, int32_t z) { return near(x, 0) && near(y, 1) && near(z, 2); });
-        // Capacities for this part, not for the inputs' whole maps; the heaps grow as the mesh needs.
-        const uint32_t n = uint32_t(part.blocks.size());
-        uint32_t slots = 1024;
-        while (slots < 2 * n) slots *= 2;
-        part.capacities = {std::max(n, 64u), slots, 0, 1u << 16, std::max(n * 128, 4096u), std::max(n * 64, 2048u)};
-        gpu::GpuVolumeConfig config = gpu::GpuVolume::mapConfig(part);
-        config.growCapacities = true;
-        std::unique_ptr<gpu::GpuVolume> volume = gpu::GpuVolume::load(context, part, config, "tile");
-        volume->rebuildMesh();
-        const Mesh mesh = trianglesOfTile(toMesh(volume->exportMesh(), volume->frameNumber()), tile, voxel, size);
-        report.tileBlocksMax = std::max<size_t>(report.tileBlocksMax, n);
+        const map::BlockBox box = blocksOfTile(tile, blockMetres, size).meshed;   // the tile holds a block: not empty
+        map::MapData part = map::merge(inputs, nullptr, [&](int32_t x, int32_t y, int32_t z) { return box.contains(x, y, z); });
+        report.tileBlocksMax = std::max<size_t>(report.tileBlocksMax, part.blocks.size());
+        const Mesh mesh = meshTileOfPart(context, std::move(part), tile, size);
         if (mesh.triangles.empty()) continue;
         ++report.tiles;
         report.tileTriangles += mesh.triangles.size();
         options.tileSink(tile, mesh);
     }
+}
+
+// The inputs opened for partial reads (header and block table each), checked to add up: map::merge of their
+// headers alone (no block) makes every refusal that needs no corner, before any tile is read.
+std::vector<map::BlockReader> openForTiles(const std::vector<std::filesystem::path>& inputs) {
+    if (inputs.empty()) throw Error("merge: no maps given");
+    std::vector<map::BlockReader> readers;
+    readers.reserve(inputs.size());
+    for (const std::filesystem::path& p : inputs) readers.emplace_back(p);
+    std::vector<map::MapData> headers;
+    headers.reserve(readers.size());
+    for (map::BlockReader& r : readers) headers.push_back(r.read([](int32_t, int32_t, int32_t) { return false; }));
+    std::vector<map::MergeInput> named;
+    for (size_t i = 0; i < readers.size(); ++i) named.push_back({readers[i].name(), &headers[i]});
+    map::merge(named);
+    return readers;
+}
+
+TilesReport makeTiles(const vk::Context* external, const std::vector<std::filesystem::path>& inputs, const std::vector<TileKey>& tiles,
+                      const TileOptions& options) {
+    checkTileSize(options.tileSize);
+    if (!options.tileSink) throw Error("merge: tiles asked for with no tileSink to take them");
+    TilesReport report;
+    auto t0 = std::chrono::steady_clock::now();
+    std::vector<map::BlockReader> readers = openForTiles(inputs);
+    for (const map::BlockReader& r : readers) report.tableBlocks += r.blocks().size();
+    const double blockMetres = double(readers[0].header().settings.voxelSize) * gpu::BLOCK_SIDE, size = options.tileSize;
+    std::optional<vk::Context> own;
+    const vk::Context& context = external ? *external : own.emplace(options.device);
+    report.openMs = millisecondsSince(t0);
+
+    for (const TileKey& tile : tiles) {
+        TileReport& r = report.tiles.emplace_back();
+        r.tile = tile;
+        const TileBlocks blocks = blocksOfTile(tile, blockMetres, size);
+        if (blocks.empty) continue;
+        t0 = std::chrono::steady_clock::now();
+        std::vector<map::MapData> parts;
+        parts.reserve(readers.size());
+        bool ownBlock = false;   // a triangle belongs to a block of the tile: without one, nothing to mesh
+        for (map::BlockReader& reader : readers) {
+            parts.push_back(reader.read(blocks.meshed));
+            r.blocksRead += parts.back().blocks.size();
+            for (const map::Block& b : parts.back().blocks) ownBlock = ownBlock || blocks.own.contains(b.x, b.y, b.z);
+        }
+        report.hostBlocksMax = std::max(report.hostBlocksMax, r.blocksRead);
+        if (!ownBlock) continue;
+        std::vector<map::MergeInput> named;
+        for (size_t i = 0; i < readers.size(); ++i) named.push_back({readers[i].name(), &parts[i]});
+        map::MapData sum = map::merge(named);
+        r.blocksMeshed = sum.blocks.size();
+        report.hostBlocksMax = std::max(report.hostBlocksMax, r.blocksRead + r.blocksMeshed);
+        report.gpuBlocksMax = std::max(report.gpuBlocksMax, r.blocksMeshed);
+        parts.clear();   // the parts are in the sum: the GPU work below holds the sum only
+        r.readMs = millisecondsSince(t0);
+
+        t0 = std::chrono::steady_clock::now();
+        const Mesh mesh = meshTileOfPart(context, std::move(sum), tile, size);
+        r.vertices = mesh.positions.size();
+        r.triangles = mesh.triangles.size();
+        if (!mesh.triangles.empty()) options.tileSink(tile, mesh);
+        r.meshMs = millisecondsSince(t0);
+    }
+    return report;
 }
 
 // `external`: the caller's device; nullptr: options.device, opened after every check on the host.
@@ -224,6 +333,31 @@ MergeReport merge(const vk::Context* external, const std::vector<std::filesystem
 }
 
 }  // namespace
+
+TilePlan planTiles(const std::vector<std::filesystem::path>& inputs, double tileSize) {
+    checkTileSize(tileSize);
+    const std::vector<map::BlockReader> readers = openForTiles(inputs);
+    const double blockMetres = double(readers[0].header().settings.voxelSize) * gpu::BLOCK_SIDE;
+    std::vector<std::array<int32_t, 3>> coords;   // 12 bytes a block: the sum's blocks are counted once
+    for (const map::BlockReader& r : readers)
+        for (const map::BlockReader::TableEntry& e : r.blocks()) coords.push_back({e.x, e.y, e.z});
+    std::sort(coords.begin(), coords.end());
+    coords.erase(std::unique(coords.begin(), coords.end()), coords.end());
+    std::set<TileKey> tiles;
+    for (const auto& c : coords) tiles.insert(tileOf(c[0], c[1], c[2], blockMetres, tileSize));
+    TilePlan plan{std::vector<TileKey>(tiles.begin(), tiles.end()), coords.size(), 0};
+    for (const map::BlockReader& r : readers) plan.framesIntegrated += r.header().framesIntegrated;
+    return plan;
+}
+
+TilesReport mergeTiles(const std::vector<std::filesystem::path>& inputs, const std::vector<TileKey>& tiles, const TileOptions& options) {
+    return makeTiles(nullptr, inputs, tiles, options);
+}
+
+TilesReport mergeTiles(const vk::Context& context, const std::vector<std::filesystem::path>& inputs, const std::vector<TileKey>& tiles,
+                       const TileOptions& options) {
+    return makeTiles(&context, inputs, tiles, options);
+}
 
 MergeReport mergeMaps(const std::vector<std::filesystem::path>& inputs, const std::filesystem::path& output, const MergeOptions& options) {
     return merge(nullptr, inputs, output, options);

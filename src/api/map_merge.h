@@ -79,4 +79,58 @@ MergeReport mergeMaps(const std::vector<std::filesystem::path>& inputs, const st
 MergeReport mergeMaps(const vk::Context& context, const std::vector<std::filesystem::path>& inputs, const std::filesystem::path& output,
                       const MergeOptions& options);
 
+// ---- tiles made on their own -----------------------------------------------------------------------------------
+//
+// For a map one process should not hold: workers each make some tiles, reading from the inputs only the blocks those
+// tiles need (map::BlockReader), never the whole map, in host memory or on the GPU.
+//
+//   TilePlan plan = planTiles(inputs, 2.0);                       // from the inputs' block tables only
+//   mergeTiles(inputs, {plan.tiles.begin(), plan.tiles.begin() + 4}, TileOptions{{}, 2.0, sink});   // on one worker
+//
+// A tile made so is the tile mergeMaps(tileSize) makes from the whole sum: its blocks and one block around them, read
+// from every input, added (map::merge, with all its refusals), loaded alone, meshed from scratch and cut to the tile's
+// own cubes' triangles; the same triangles, vertex position and normal bits.
+
+struct TilePlan {
+    std::vector<TileKey> tiles;   // every tile holding a block of the sum, in key order
+    size_t blocks = 0;            // blocks of the sum (distinct block coordinates over the inputs)
+    uint32_t framesIntegrated = 0;   // the sum's (the inputs' added)
+};
+// Reads the inputs' headers and block tables (not their corners) and checks that they add up (settings, bounded maps,
+// colour mode, sections: map::merge's refusals that need no corner). Throws vkmesh::Error naming the file.
+TilePlan planTiles(const std::vector<std::filesystem::path>& inputs, double tileSize);
+
+struct TileOptions {
+    vk::ContextOptions device;
+    double tileSize = 0;   // metres (> 0), as for planTiles and MergeOptions::tileSize
+    // Each tile with a triangle; tiles with none are not handed over.
+    std::function<void(const TileKey& tile, const Mesh& mesh)> tileSink;
+};
+
+struct TileReport {
+    TileKey tile{};
+    size_t blocksRead = 0;     // blocks of corners read from the inputs (the tile's and those around it, from each input holding them)
+    size_t blocksMeshed = 0;   // blocks of their sum, loaded on the GPU (0: the tile holds no block of the sum)
+    size_t vertices = 0, triangles = 0;   // the tile's mesh (0 triangles: not handed to the sink)
+    double readMs = 0, meshMs = 0;        // reading and adding; loading, meshing and cutting
+};
+
+struct TilesReport {
+    std::vector<TileReport> tiles;   // in the order asked for
+    // The most blocks of corners held at once: in host memory (those read for one tile and their sum, both alive
+    // while they are added) and on the GPU (the sum, one tile at a time). Besides them each input's block table is
+    // kept, 16 bytes a block (tableBlocks entries).
+    size_t hostBlocksMax = 0, gpuBlocksMax = 0;
+    size_t tableBlocks = 0;
+    double openMs = 0;               // the inputs' headers and block tables, and the device when it is opened here
+};
+
+// Makes `tiles` (keys as planTiles lists them; a tile holding no block of the sum gives nothing) of the sum of
+// `inputs`, reading only their blocks, and hands each to options.tileSink. Throws vkmesh::Error naming the file and
+// the reason (what map::merge refuses, checked on the corners read).
+TilesReport mergeTiles(const std::vector<std::filesystem::path>& inputs, const std::vector<TileKey>& tiles, const TileOptions& options);
+// The same on the caller's device (TileOptions::device is not used).
+TilesReport mergeTiles(const vk::Context& context, const std::vector<std::filesystem::path>& inputs, const std::vector<TileKey>& tiles,
+                       const TileOptions& options);
+
 }  // namespace vkmesh

@@ -1,8 +1,9 @@
 // The .vkmap file (docs/MAPFILE.md): everything a GPU volume holds between two frames, so that a map outlives
 // the process. This is the host side only (no Vulkan): the in-memory form (MapData), its serialisation, and a
 // parser that checks everything (checksums, sizes, every index against the pools it points into) before
-// anything reaches a GPU. src/gpu/map_file.cpp fills a MapData from a GpuVolume and back, asking each
-// component for its sections.
+// anything reaches a GPU, and a reader of part of a file (BlockReader: the blocks of a box, for maps one process
+// should not hold). src/gpu/map_file.cpp fills a MapData from a GpuVolume and back, asking each component for its
+// sections.
 //
 // Little-endian throughout; a fixed header, then sections, each with a 4-character tag, a kind, the size of
 // one record and the number of records, so a reader can skip what it does not know and a record whose size
@@ -12,6 +13,8 @@
 #include <array>
 #include <cstdint>
 #include <filesystem>
+#include <fstream>
+#include <functional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -133,6 +136,74 @@ MapData parse(std::string_view bytes, const std::string& name);
 MapData readFile(const std::filesystem::path& path);
 // Written to `path`.tmp and renamed, so a crash never leaves a half-written map under the name.
 void writeFile(const std::filesystem::path& path, const MapData& map);
+
+// Which blocks (by block coordinate) a partial read or a merge keeps.
+using BlockFilter = std::function<bool(int32_t x, int32_t y, int32_t z)>;
+
+// A box of block coordinates, both corners included.
+struct BlockBox {
+    std::array<int32_t, 3> lo{}, hi{};
+    bool contains(int32_t x, int32_t y, int32_t z) const {
+        return lo[0] <= x && x <= hi[0] && lo[1] <= y && y <= hi[1] && lo[2] <= z && z <= hi[2];
+    }
+};
+
+// Reads a map file a part at a time, for maps one process should not hold (tiles made on separate workers:
+// api/map_merge.h, mergeTiles). The sections are stored uncompressed, back to back, each announcing its size, so
+// the reader seeks: opening it reads the header, the small single-record sections and the block table (kept as
+// 16 bytes a block: coordinate and hash stamp, against 14 kB of corner data); read() then reads, from every
+// per-block section, the records of the blocks it keeps and nothing else. Memory is bounded by what is kept,
+// not by the file.
+//
+// What read() returns is the TSDF of those blocks as a map with no mesh (what merging and a rebuild need, as
+// map::merge's result): the blocks in file order with pool indices 0..N-1, the TSDF's per-block arrays ('sdf_',
+// 'wght', 'colr' and any other but the mesh's) as stored, the mesh's ('cube', 'edgx', 'edgy', 'edgz') empty and
+// not read, no vertices or triangles, the counters of a map with no mesh; settings, frame numbers, save id and
+// capacities are the file's.
+//
+// Checks (vkmesh::Error naming the file): everything parse() checks of the header, the section table, the settings
+// and the block table (coordinates in the key range and distinct, stamps not after the last frame). Not the CRC of
+// the sections, which needs every byte of the file: verifyChecksum() streams the file through it (one buffer of
+// memory), for a caller that wants it once per file rather than once per part. The corners read are checked by
+// whoever adds them (map::merge refuses counts and sums no fusion gives).
+class BlockReader {
+public:
+    explicit BlockReader(const std::filesystem::path& path);
+
+    struct TableEntry {
+        int32_t x = 0, y = 0, z = 0;
+        uint32_t hashStamp = 0;
+    };
+    const std::string& name() const { return name_; }
+    // Every live block's coordinate, in file order.
+    const std::vector<TableEntry>& blocks() const { return table_; }
+    // Settings, features, capacities, frame numbers, counters, last push: the file's (no blocks, no arrays).
+    const MapData& header() const { return header_; }
+
+    // The blocks inside `box` (lo <= hi on every axis, inside the key range [-2^20, 2^20); otherwise an error naming
+    // the file and the box), or those `keep` accepts.
+    MapData read(const BlockBox& box);
+    MapData read(const BlockFilter& keep);
+
+    // The sections' CRC-32 against the header's (throws "<file>: checksum mismatch ..." when it differs).
+    void verifyChecksum();
+
+private:
+    struct PerBlockSection {
+        uint32_t tag = 0;
+        uint64_t offset = 0;   // of its first record, from the start of the file
+    };
+    void readAt(uint64_t offset, void* out, size_t bytes);
+
+    std::filesystem::path path_;
+    std::string name_;
+    std::ifstream in_;
+    uint64_t fileBytes_ = 0;
+    uint32_t payloadCrc_ = 0;
+    MapData header_;
+    std::vector<TableEntry> table_;
+    std::vector<PerBlockSection> perBlock_;   // in file order (MapData::cornerArrays' order)
+};
 
 // CRC-32 (IEEE 802.3, the zlib / PNG one: reflected polynomial 0xEDB88320, initial and final xor 0xFFFFFFFF).
 uint32_t crc32(const void* data, size_t size, uint32_t crc = 0);

@@ -60,7 +60,7 @@ struct MergeSummary {
 //
 // `keep`, when given, restricts the result to the blocks (by block coordinate) it accepts: a part of the sum, to
 // mesh one tile of it with its neighbours (api/map_merge.h) without the rest.
-using BlockFilter = std::function<bool(int32_t x, int32_t y, int32_t z)>;
+// (BlockFilter: core/map_format.h.)
 MapData merge(const std::vector<MergeInput>& inputs, MergeSummary* summary = nullptr, const BlockFilter& keep = {});
 
 }  // namespace vkmesh::map

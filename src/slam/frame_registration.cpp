@@ -1,5 +1,8 @@
 #include "slam/frame_registration.h"
 
+#include <cmath>
+
+#include "core/camera.h"
 #include "gpu/tracking/pose_tracker.h"
 
 namespace vkmesh::slam {
@@ -54,6 +57,44 @@ Registration registerFrame(const RegistrationFrame& frame, const RegistrationFra
         }
     }
     return result;
+}
+
+std::string registrationFailure(const Registration& r, const Pose& initial, const gpu::TrackerOptions& tracker, const VerificationGates& gates) {
+    const Pose motion = inverseRigid(initial) * r.cameraToWorld;
+    gpu::TrackerOptions checks = tracker;
+    checks.maxJumpMetres = checks.maxJumpDegrees = 1e9;
+    const uint32_t verdict = gpu::trackingLoss(r.system, r.solved, r.conditioning, motion, {}, checks);
+    if (verdict != gpu::TRACK_TRACKED) return gpu::lossText(verdict, r.system, r.conditioning, motion, {}, checks);
+    if (r.inlierShare() < gates.minInlierShare)
+        return "inliers cover " + std::to_string(int(std::lround(100 * r.inlierShare()))) + " % of the frame";
+    if (r.system.rmse() > gates.maxRmse) return "RMSE " + std::to_string(r.system.rmse()) + " m";
+    return "";
+}
+
+VerifiedRegistration verifyRegistration(const RegistrationFrame& frame, const RegistrationFrame& keyframe, const Pose& keyframePose,
+                                        const std::vector<Pose>& initials, const gpu::TrackerOptions& tracker, const VerificationGates& gates) {
+    VerifiedRegistration out;
+    for (const Pose& initial : initials) {
+        const Registration r = registerFrame(frame, keyframe, keyframePose, initial, tracker);
+        out.failure = registrationFailure(r, initial, tracker, gates);
+        if (out.failure.empty()) {
+            out.match = r;
+            break;
+        }
+    }
+    if (!out.match) return out;
+    const Registration back = registerFrame(keyframe, frame, out.match->cameraToWorld, keyframePose, tracker);
+    const Pose disagreement = inverseRigid(keyframePose) * back.cameraToWorld;
+    const std::string backFailure = registrationFailure(back, keyframePose, tracker, gates);
+    if (!backFailure.empty()) {
+        out.failure = "the registration back from the keyframe fails: " + backFailure;
+        out.match.reset();
+    } else if (translationMetres(disagreement) > gates.symmetricMetres || rotationDegrees(disagreement) > gates.symmetricDegrees) {
+        out.failure = "the registration back from the keyframe disagrees by " + std::to_string(translationMetres(disagreement)) + " m, " +
+                      std::to_string(rotationDegrees(disagreement)) + " degrees";
+        out.match.reset();
+    }
+    return out;
 }
 
 }  // namespace vkmesh::slam

@@ -5,6 +5,8 @@
 // there would give for a surface the keyframe saw alone.
 #pragma once
 
+#include <optional>
+#include <string>
 #include <vector>
 
 #include "core/icp_solve.h"
@@ -36,5 +38,26 @@ struct Registration {
 // guess): iterations per level coarse to fine (finest first in the array), each level stopping at a tiny step.
 Registration registerFrame(const RegistrationFrame& frame, const RegistrationFrame& keyframe, const Pose& keyframePose,
                            const Pose& initial, const gpu::TrackerOptions& tracker, const std::array<int, 3>& iterations = {10, 5, 4});
+
+// What a registration must pass to be trusted as a loop, or as the tie between two sessions of one place, on top of
+// the tracker's own loss checks (its jump gates off: the caller bounds how far a match may move the camera).
+struct VerificationGates {
+    double minInlierShare = 0.50;   // the inliers cover at least this share of the frame's valid pixels
+    double maxRmse = 0.015;         // metres
+    // Both ways: the keyframe registered back to the frame (placed where the match says) lands within this of where
+    // it is. A registration that slid along a weakly constrained direction does not come back.
+    double symmetricMetres = 0.01, symmetricDegrees = 0.5;
+};
+// Why `r` (started from `initial`) does not verify; "" when it does.
+std::string registrationFailure(const Registration& r, const Pose& initial, const gpu::TrackerOptions& tracker, const VerificationGates& gates);
+
+struct VerifiedRegistration {
+    std::optional<Registration> match;   // the frame's registration, verified both ways
+    std::string failure;                 // why not, when there is no match
+};
+// `frame` registered to `keyframe` (seen from keyframePose) from each of `initials` in turn until one verifies, then
+// checked both ways.
+VerifiedRegistration verifyRegistration(const RegistrationFrame& frame, const RegistrationFrame& keyframe, const Pose& keyframePose,
+                                        const std::vector<Pose>& initials, const gpu::TrackerOptions& tracker, const VerificationGates& gates);
 
 }  // namespace vkmesh::slam

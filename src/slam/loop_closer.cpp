@@ -193,16 +193,8 @@ std::vector<int> LoopCloser::nearbyKeyframes(const Keyframe& current, const std:
     return out;
 }
 
-std::string LoopCloser::verified(const Registration& r, const Pose& initial) const {
-    const Pose motion = inverseRigid(initial) * r.cameraToWorld;
-    gpu::TrackerOptions checks = options_.tracker;
-    checks.maxJumpMetres = checks.maxJumpDegrees = 1e9;   // the plausibility test bounds a loop's correction
-    const uint32_t verdict = gpu::trackingLoss(r.system, r.solved, r.conditioning, motion, {}, checks);
-    if (verdict != gpu::TRACK_TRACKED) return gpu::lossText(verdict, r.system, r.conditioning, motion, {}, checks);
-    if (r.inlierShare() < options_.minInlierShare)
-        return "inliers cover " + std::to_string(int(std::lround(100 * r.inlierShare()))) + " % of the frame";
-    if (r.system.rmse() > options_.maxRmse) return "RMSE " + std::to_string(r.system.rmse()) + " m";
-    return "";
+VerificationGates LoopCloser::gates() const {
+    return {options_.minInlierShare, options_.maxRmse, options_.symmetricMetres, options_.symmetricDegrees};
 }
 
 LoopCloser::LoopOutcome LoopCloser::tryLoop(const Keyframe& current, const RegistrationFrame& currentFrame, int candidate, double dissimilarity,
@@ -227,31 +219,10 @@ LoopCloser::LoopOutcome LoopCloser::tryLoop(const Keyframe& current, const Regis
     auto t = Clock::now();
     const RegistrationFrame oldFrame = registrationFrame(old.depth, old.intrinsics, options_.tracker, options_.registrationWidth);
     const Pose oldPose = graph_.pose(old.node), currentPose = graph_.pose(current.node);
-    std::string failure;
-    std::optional<Registration> match;
-    for (const Pose& initial : {currentPose, oldPose}) {
-        const Registration r = registerFrame(currentFrame, oldFrame, oldPose, initial, options_.tracker);
-        failure = verified(r, initial);
-        if (failure.empty()) {
-            match = r;
-            break;
-        }
-    }
-    // Both ways: the old keyframe registered to the current frame (placed where the match says) must land where
-    // the old keyframe is. A registration that slid along a weakly constrained direction does not come back.
-    if (match) {
-        const Registration back = registerFrame(oldFrame, currentFrame, match->cameraToWorld, oldPose, options_.tracker);
-        const Pose disagreement = inverseRigid(oldPose) * back.cameraToWorld;
-        const std::string backFailure = verified(back, oldPose);
-        if (!backFailure.empty()) {
-            failure = "the registration back from the old keyframe fails: " + backFailure;
-            match.reset();
-        } else if (translationMetres(disagreement) > options_.symmetricMetres || rotationDegrees(disagreement) > options_.symmetricDegrees) {
-            failure = "the registration back from the old keyframe disagrees by " + std::to_string(translationMetres(disagreement)) + " m, " +
-                      std::to_string(rotationDegrees(disagreement)) + " degrees";
-            match.reset();
-        }
-    }
+    // Both ways (verifyRegistration): a registration that slid along a weakly constrained direction does not come back.
+    const VerifiedRegistration verified = verifyRegistration(currentFrame, oldFrame, oldPose, {currentPose, oldPose}, options_.tracker, gates());
+    const std::string& failure = verified.failure;
+    const std::optional<Registration>& match = verified.match;
     time("verify", msSince(t));
     if (!match) return reject("registration: " + failure);
 

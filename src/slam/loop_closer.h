@@ -133,8 +133,8 @@ private:
     // Old enough keyframes that could be where the camera is now (proximity* options), nearest first, not in `skip`.
     std::vector<int> nearbyKeyframes(const Keyframe& current, const std::vector<int>& skip) const;
     void time(const std::string& stage, double ms);
-    // Why registration `r` (from `initial`) does not verify: the tracker's loss checks, the inlier share, the RMSE; "" when it does.
-    std::string verified(const Registration& r, const Pose& initial) const;
+    // The verification gates of the options (minInlierShare, maxRmse, symmetric*).
+    VerificationGates gates() const;
     // Every fused frame the graph moved by minCorrection* or more from the pose it was fused at or last handed
     // out with; they are handed out with their new poses now.
     PoseCorrections corrections();

@@ -109,6 +109,59 @@ def test_tracked_fragments_of_a_real_recording_track_about_as_well_as_one_run(tm
     assert batch_ate <= 1.25 * one_ate, f"batch ATE {batch_ate:.4f} m, one run {one_ate:.4f} m"
 
 
+def tum_ate(truth, positions):
+    """TUM's absolute trajectory error: RMSE of the positions after the rigid motion that fits them best to the truth's
+    (Horn's method, as bench/ate.py and the tracked test above)."""
+    want = truth[:, :3, 3]
+    a, b = positions - positions.mean(axis=0), want - want.mean(axis=0)
+    u, _, vt = np.linalg.svd(a.T @ b)
+    d = np.diag([1.0, 1.0, np.sign(np.linalg.det(u @ vt))])
+    r = (u @ d @ vt).T
+    aligned = (r @ a.T).T + want.mean(axis=0)
+    return float(np.sqrt(np.mean(np.sum((aligned - want) ** 2, axis=1))))
+
+
+def test_loops_between_tracked_fragments_of_a_real_recording_improve_their_placement(tmp_path):
+    """--track --loop-closure on TUM fr1/rpy's first 80 frames in 4 fragments (the camera turns in place, so every
+    fragment revisits the first's view): the non-consecutive pairs are registered, the verified loops agree with
+    the recording's poses, and the pose graph's placement has a smaller ATE than the chain's. The chain's trajectory
+    is derived from the same run (each fragment's frames moved back by its transform before / after the graph), so
+    one batch run measures both."""
+    tum, n = shared_dataset("tum_fr1_rpy"), 80
+    truth = np.stack([f.pose for f in vkmesh.open_dataset(tum, frames=n)])
+    r = batch(tum, "--frames", n, "--fragment-frames", 20, "--overlap", 10, "--track", "--loop-closure", "--local-workers", 2,
+              "-o", tmp_path / "t.vkmap", "--trajectory", tmp_path / "t.txt", "--stats", tmp_path / "s.json", "-q")
+    assert r.returncode == 0, r.stderr
+    stats = json.loads((tmp_path / "s.json").read_text())
+    assert stats["frames_integrated"] == n
+    lc = stats["loop_closure"]
+    assert lc["tried"] >= 1 and [p["fragments"] for p in lc["pairs"]] == [[0, 2], [0, 3], [1, 3]]
+    assert lc["accepted"] >= 1 and lc["graph"]["solves"][-1]["converged"]
+    # Fragment k's own frame into the truth's world: its first frame is tracked at the identity (the first fragment
+    # at the recording's first pose, so its own frame is the world).
+    own_to_world = [np.eye(4)] + [truth[f["fused_from"]] for f in stats["fragments"][1:]]
+    for p in lc["pairs"]:
+        if p["status"] == "accepted":
+            i, j = p["fragments"]
+            want = np.linalg.inv(own_to_world[i]) @ own_to_world[j]
+            got = np.asarray(p["transform"]).reshape(4, 4)
+            off_m = np.linalg.norm(got[:3, 3] - want[:3, 3])
+            off_deg = np.degrees(np.arccos(np.clip((np.trace(want[:3, :3].T @ got[:3, :3]) - 1) / 2, -1, 1)))
+            # Measured 2-5 cm and 1-6 degrees: the fragments' own tracking drift is in the registration (and in
+            # the chain's same relative transform: 3.5-5 cm, 2-5 degrees).
+            assert off_m < 0.075 and off_deg < 8, f"loop {p['first']} / {p['second']}: {off_m:.3f} m, {off_deg:.1f} degrees off"
+    lines = [l.split() for l in (tmp_path / "t.txt").read_text().splitlines() if not l.startswith("#")]
+    after = np.array([[float(x) for x in l[1:4]] for l in lines])
+    chain = after.copy()
+    for f, pl in zip(stats["fragments"], lc["placement"]):
+        back = np.asarray(pl["before"]).reshape(4, 4) @ np.linalg.inv(np.asarray(pl["after"]).reshape(4, 4))
+        lo, hi = f["frames"]
+        chain[lo:hi] = after[lo:hi] @ back[:3, :3].T + back[:3, 3]
+    loops_ate, chain_ate = tum_ate(truth, after), tum_ate(truth, chain)
+    print(f"ATE against the recording's poses: chain {chain_ate:.4f} m, with {lc['accepted']} loops {loops_ate:.4f} m")
+    assert loops_ate <= chain_ate and loops_ate < 0.05
+
+
 def test_bad_options_are_clear_errors(room, tmp_path):
     r = batch(room, "--track", "--overlap", 0, "-o", tmp_path / "x.vkmap")
     assert r.returncode == 2 and "--overlap" in r.stderr
@@ -117,3 +170,118 @@ def test_bad_options_are_clear_errors(room, tmp_path):
     r = batch(room, "--loop-closure", "-o", tmp_path / "x.vkmap")
     assert r.returncode == 2 and "--loop-closure" in r.stderr
     assert not (tmp_path / "x.vkmap").exists()
+
+
+def test_tile_tasks_on_two_workers_join_to_the_one_run_mesh(room, tmp_path):
+    """--tiles without -o: tile tasks on 2 workers, each reading from the fragments' maps only the blocks of its tiles
+    (vkmesh.merge_tiles), no merged map: joined by vertex position bits, the tiles are the one-run mesh (triangles,
+    vertex normal bits, no vertex twice, no edge left open along a tile boundary), and no task held the whole map."""
+    frames = list(vkmesh.open_dataset(room, frames=9))
+    with vkmesh.Reconstructor(voxel_size=VOXEL) as one:
+        for f in frames:
+            one.integrate(f.depth, f.intrinsics, f.pose, color=f.color)
+        truth = one.mesh()
+    tiles = tmp_path / "tiles"
+    r = batch(room, "--tiles", tiles, "--mesh", tmp_path / "m.ply", "--tile-size", 1)   # refused before a cluster starts
+    assert r.returncode == 2 and "--mesh needs -o" in r.stderr
+    r = batch(room, "--tiles", tiles)
+    assert r.returncode == 2 and "go together" in r.stderr and not tiles.exists()
+    r = batch(room, "--frames", 9, "--fragment-frames", 5, "--local-workers", 2, "--voxel", VOXEL, "--tiles", tiles,
+              "--tile-size", 8 * 8 * VOXEL, "--tiles-per-task", 3, "--stats", tmp_path / "s.json", "-q")
+    assert r.returncode == 0, r.stderr
+    stats = json.loads((tmp_path / "s.json").read_text())
+    t = stats["tiles"]
+    assert stats["output"] is None and stats["merges"] == 0, "tiles only: no merged map"
+    assert stats["frames_integrated"] == 9
+    files = sorted(tiles.glob("tile_*.ply"))
+    assert len(files) == t["count"] >= 4 and t["tasks"] >= 2
+    assert not list(tiles.glob(".writing*")), "every tile file was renamed into place"
+    assert 0 < t["max_blocks_gpu"] < t["map_blocks"], "no task had the whole map on the GPU"
+    assert t["max_blocks_host"] < t["per_task"][0]["table_blocks"] + t["map_blocks"], \
+        "nor in memory what adding the fragments' whole maps holds"
+
+    def bits(a):
+        return [tuple(v) for v in np.ascontiguousarray(a, dtype=np.float32).view(np.uint32).tolist()]
+
+    normal_of = dict(zip(bits(truth.vertices), bits(truth.normals)))
+    joined, normals, edges = [], {}, {}
+    for f in files:
+        m = vkmesh.read_mesh(f)
+        joined += canonical_triangles(m)
+        for p, n in zip(bits(m.vertices), bits(m.normals)):
+            assert normals.setdefault(p, n) == n, "a boundary vertex has one normal in every tile"
+        p = bits(m.vertices)
+        for tri in m.triangles.tolist():
+            for k in range(3):
+                e = tuple(sorted((p[tri[k]], p[tri[(k + 1) % 3]])))
+                edges[e] = edges.get(e, 0) + 1
+    assert sorted(joined) == canonical_triangles(truth), "the tiles' triangles are the one run's"
+    assert normals == normal_of, "every vertex once, with the one run's position and normal bits"
+    truth_edges = {}
+    p = bits(truth.vertices)
+    for tri in truth.triangles.tolist():
+        for k in range(3):
+            e = tuple(sorted((p[tri[k]], p[tri[(k + 1) % 3]])))
+            truth_edges[e] = truth_edges.get(e, 0) + 1
+    assert edges == truth_edges, "the same edges, each used as often: no seam along a tile boundary"
+
+
+def _rz(degrees, t):
+    c, s = np.cos(np.radians(degrees)), np.sin(np.radians(degrees))
+    p = np.eye(4)
+    p[:2, :2] = [[c, -s], [s, c]]
+    p[:3, 3] = t
+    return p
+
+
+def test_pose_graph_of_a_square_closes_its_loop_and_flags_a_wrong_one():
+    """vkmesh.optimise_pose_graph (slam::PoseGraph), what vkmesh.batch --loop-closure solves over fragments: a square
+    walked with drifting odometry (3 cm and 3 degrees too much each side) and one loop edge back to the start ends
+    closer to the truth; a loop edge 1 m off keeps a large whitened error (the batch drops such a loop)."""
+    truth = [_rz(90 * k, [[0, 0], [1, 0], [1, 1], [0, 1]][k] + [0]) for k in range(4)]
+    drift = _rz(3, [0.03, 0, 0])
+    odometry = [np.linalg.inv(truth[k - 1]) @ truth[k] @ drift for k in range(1, 4)]
+    chained = [np.eye(4)]
+    for m in odometry:
+        chained.append(chained[-1] @ m)
+    edges = [{"from": k - 1, "to": k, "measured": odometry[k - 1], "sigma_m": 0.05, "sigma_deg": 3.0} for k in range(1, 4)]
+    loop = {"from": 0, "to": 3, "measured": np.linalg.inv(truth[0]) @ truth[3], "sigma_m": 0.01, "sigma_deg": 0.5, "loop": True}
+
+    def error(poses):
+        return sum(np.linalg.norm(np.asarray(p)[:3, 3] - t[:3, 3]) for p, t in zip(poses, truth))
+
+    solved = vkmesh.optimise_pose_graph(chained, edges + [loop])
+    assert solved["converged"] and solved["final_cost"] < solved["initial_cost"]
+    assert np.allclose(solved["poses"][0], np.eye(4)), "node 0 is held fixed"
+    assert error(solved["poses"]) < 0.5 * error(chained), (error(solved["poses"]), error(chained))
+    assert len(solved["edge_errors"]) == 4 and solved["edge_errors"][3] < 2
+
+    wrong = dict(loop, measured=loop["measured"] @ _rz(0, [1.0, 0, 0]))
+    solved = vkmesh.optimise_pose_graph(chained, edges + [wrong])
+    assert solved["edge_errors"][3] > 10, solved["edge_errors"]
+    with pytest.raises(ValueError):
+        vkmesh.optimise_pose_graph(chained, [dict(loop, sigma_m=0)])
+
+
+def test_fragment_graph_keeps_a_right_loop_and_drops_a_wrong_one():
+    """vkmesh.batch's graph over fragments (no Dask): the chain of 4 fragments drifted 2 cm and 2 degrees per step;
+    loops measured as register_maps gives them (inverse(X_i) @ X_j: fragment j's own frame into fragment i's) from
+    the truth pull the placement to it, while a loop 0.5 m off is dropped and does not bend it."""
+    from vkmesh import batch as vb
+    truth = [_rz(30 * k, [0.3 * k, 0.1 * k, 0]) for k in range(4)]
+    step = _rz(2, [0.02, 0, 0])
+    chain = [truth[0]]
+    for k in range(1, 4):
+        chain.append(chain[-1] @ np.linalg.inv(truth[k - 1]) @ truth[k] @ step)
+    paths = [(0.0, 0.0)] + [(0.3, 30.0)] * 3
+    right = [(i, j, np.linalg.inv(truth[i]) @ truth[j]) for i, j in ((0, 2), (0, 3), (1, 3))]
+    wrong = (0, 3, right[1][2] @ _rz(0, [0.5, 0, 0]))
+
+    def off(poses):
+        return max(np.linalg.norm(p[:3, 3] - t[:3, 3]) for p, t in zip(poses, truth))
+
+    solved, solves, kept, dropped, errors = vb.close_loops(chain, paths, right)
+    assert kept == [0, 1, 2] and not dropped and off(solved) < 0.3 * off(chain), (off(solved), off(chain))
+    solved_wrong, solves, kept, dropped, errors = vb.close_loops(chain, paths, right + [wrong])
+    assert [d[0] for d in dropped] == [3] and len(solves) == 2, dropped
+    assert np.allclose(np.stack(solved_wrong), np.stack(solved)), "the graph without the wrong loop"

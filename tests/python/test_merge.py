@@ -100,13 +100,21 @@ def test_maps_that_do_not_add_up_are_refused(frames, parts, tmp_path):
     assert not out.exists()
 
 
-def test_tiles_joined_are_the_merged_mesh(parts, tmp_path):
+@pytest.fixture(scope="module")
+def whole_tiles(parts, tmp_path_factory):
+    """merge_maps(tiles=..., tile_size=...) with no output map (tiles of 8 x 8 x 8 blocks): its stats and folder."""
+    folder = tmp_path_factory.mktemp("tiles") / "tiles"
+    stats = vkmesh.merge_maps(parts[1], None, tiles=folder, tile_size=8 * 8 * VOXEL, keep_frames=False)
+    return stats, folder
+
+
+def test_tiles_joined_are_the_merged_mesh(parts, whole_tiles, tmp_path):
     """merge_maps(tiles=..., tile_size=...) with no output map: tile files only, each tile meshed alone; joined by
     vertex position they are the one-run mesh."""
     truth, paths = parts
-    stats = vkmesh.merge_maps(paths, None, tiles=tmp_path / "tiles", tile_size=8 * 8 * VOXEL, keep_frames=False)
+    stats, folder = whole_tiles
     assert stats["output"] is None and stats["tiles"]["count"] >= 2
-    files = sorted((tmp_path / "tiles").glob("tile_*.ply"))
+    files = sorted(folder.glob("tile_*.ply"))
     assert len(files) == stats["tiles"]["count"]
     triangles = []
     for f in files:
@@ -115,3 +123,33 @@ def test_tiles_joined_are_the_merged_mesh(parts, tmp_path):
     assert sorted(triangles) == sorted(truth)
     with pytest.raises(ValueError, match="go together"):
         vkmesh.merge_maps(paths, None, tiles=tmp_path / "t2")
+
+
+def test_tiles_made_alone_are_the_merged_maps_tiles(parts, whole_tiles, tmp_path):
+    """vkmesh.list_tiles from the block tables, vkmesh.merge_tiles for two tiles (what a worker runs): each tile read
+    from the parts' files alone is the tile merge_maps writes from the whole sum."""
+    _, paths = parts
+    whole, folder = whole_tiles
+    size = whole["tiles"]["size_m"]
+    plan = vkmesh.list_tiles(paths, size)
+    assert plan["frames_integrated"] == 8 and plan["blocks"] > 0
+    assert plan["blocks"] == whole["blocks"]["merged"]
+    files = {f.name: f for f in folder.glob("tile_*.ply")}
+    assert {f"tile_{x}_{y}_{z}.ply" for x, y, z in plan["tiles"]} >= set(files), "every tile with triangles is listed"
+    biggest = sorted(files, key=lambda n: -len(vkmesh.read_mesh(files[n]).triangles))[:2]
+    asked = [tuple(int(v) for v in n[len("tile_"):-len(".ply")].split("_")) for n in biggest]
+    stats = vkmesh.merge_tiles(paths, tmp_path / "alone", size, tiles=asked)
+    assert [t["tile"] for t in stats["tiles"]] == asked and stats["count"] == 2
+    assert 0 < stats["max_blocks_gpu"] < plan["blocks"]
+    for t, name in zip(stats["tiles"], biggest):
+        assert t["path"] == str(tmp_path / "alone" / name) and t["blocks_read"] > 0
+        alone, from_whole = vkmesh.read_mesh(t["path"]), vkmesh.read_mesh(files[name])
+        assert canonical_triangles(alone) == canonical_triangles(from_whole)
+        assert sorted(map(tuple, alone.normals.view(np.uint32).tolist())) == sorted(map(tuple, from_whole.normals.view(np.uint32).tolist()))
+    assert sorted(p.name for p in (tmp_path / "alone").iterdir()) == sorted(biggest), "no temporary file left"
+    with pytest.raises(ValueError, match="tile_size"):
+        vkmesh.merge_tiles(paths, tmp_path / "x", 0)
+    with pytest.raises(ValueError, match="tile key"):
+        vkmesh.merge_tiles(paths, tmp_path / "x", size, tiles=[(1, 2)])
+    with pytest.raises(vkmesh.Error, match="missing.vkmap"):
+        vkmesh.list_tiles([paths[0], tmp_path / "missing.vkmap"], size)
