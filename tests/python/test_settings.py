@@ -58,7 +58,7 @@ def test_merge_maps_keywords_are_the_settings_names():
     and defaults; keep_frames is True there, as --keep-frames is with --save (`vkmesh merge --no-frames` turns it off)."""
     parameters = inspect.signature(vkmesh.merge_maps).parameters
     described = {s["python"]: s for s in SETTINGS if s["python"]}
-    own = {"inputs", "output", "mesh", "tiles", "tile_size"}   # merge_maps's own arguments: the maps, where the mesh goes
+    own = {"inputs", "output", "mesh", "tiles", "tile_size", "register"}   # merge_maps's own arguments: the maps, where the mesh and tiles go, sessions
     assert sorted(set(parameters) - own - set(described)) == []
     assert {"keep_frames", "frames_budget_mb", "frames_spill", "device", "validation"} <= set(parameters)
     defaults = {name: p.default for name, p in parameters.items() if name not in own | {"keep_frames"}}
