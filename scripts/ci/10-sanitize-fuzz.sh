@@ -64,9 +64,12 @@ gpu_tests='(GpuTest\.(FusedTsdfMatchesReference|EmptyVolumeExportsAnEmptyMesh|Ve
 # together a third of the job's test time), variants with more frames, noise or another epsilon of tests that
 # run here in their short form (RefinementOnASlantedPlane, IncrementalEqualsFromScratch, ...): the same code,
 # longer (RefinementHalvesIrregularity...: the noisier slanted plane's run on another plane, 2 minutes under ASan and
-# the last test to finish; the sphere's and the torus's closed meshes: the mesher's code on other shapes, 30-35 s each).
+# the last test to finish; the sphere's and the torus's closed meshes: the mesher's code on other shapes, 30-35 s each;
+# the lock-free claim order against the plain one, 35 s, and the tile slabs against the pixels' bands on 8 noisy
+# frames at 2 strides, 29 s, whose tile code the short ReferenceAllocation.TileSlabs* tests run here: the two longest
+# left, 2026-12-07, both of src/cpu/, the reference that the GPU tests compare against, which vkmesh itself never runs).
 # They run in the main suite.
-cpu_slow='^(ReferenceMesher\.(SphereSeenFromAllAroundIsClosedWithChiTwo|TorusSeenFromAllAroundIsClosedWithChiZero|RefinementOnASlantedPlaneNoisier|RefinementHalvesIrregularityOnANoisyNearlyFlatPlane|RefinementOnASlantedPlaneNoisierQuarterVoxel|RefinementOnASlantedPlaneQuarterVoxel|RefinementKeepsTheInvariantsEveryFrame|RevisitingKeepsTheHeapsBounded)|ReferenceVolume\.FlippedCornersAndRetypeSetWithRefinementAndMinWeight)$'
+cpu_slow='^(ReferenceMesher\.(SphereSeenFromAllAroundIsClosedWithChiTwo|TorusSeenFromAllAroundIsClosedWithChiZero|RefinementOnASlantedPlaneNoisier|RefinementHalvesIrregularityOnANoisyNearlyFlatPlane|RefinementOnASlantedPlaneNoisierQuarterVoxel|RefinementOnASlantedPlaneQuarterVoxel|RefinementKeepsTheInvariantsEveryFrame|RevisitingKeepsTheHeapsBounded|LockFreeOrderGivesTheSameMesh)|ReferenceVolume\.FlippedCornersAndRetypeSetWithRefinementAndMinWeight|ReferenceAllocation\.TileSlabsCoverThePixelsBands)$'
 echo "sanitize: running the CPU tests and the selected GPU tests"
 (
   cd build-asan

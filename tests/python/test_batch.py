@@ -1,7 +1,8 @@
 """Batch reconstruction on Dask (python3 -m vkmesh.batch; docs/SCALING.md): a sequence cut into fragments, fused on a
 LocalCluster of 2 worker processes and merged, is the map of one run over every frame (given poses), even when a
 worker dies in the middle of a fragment (the task runs again, one retry reported); with --track, fragments of a real
-recording placed through the frames they share track about as well as one run."""
+recording placed through the frames they share track about as well as one run. The kill test starts its own cluster
+(--local-workers, the kill hook in its workers' environment); the others share one (--scheduler)."""
 
 import json
 import os
@@ -12,17 +13,43 @@ import numpy as np
 import pytest
 
 import vkmesh
-from conftest import canonical_triangles
+from conftest import SMALL_CAPACITIES, canonical_triangles
 
 distributed = pytest.importorskip("distributed", reason="python3-distributed (Dask) is not installed")
 
 VOXEL = 0.04
+# Each fragment, merge and tile task makes a Reconstructor of its own, and at vkmesh fuse's default capacities (16,384
+# blocks, 2^20 vertices) its first frame takes ~2 s on lavapipe: most of a 3-frame fragment's time. The room's runs
+# start small (the capacities grow when needed, to the same map); the tracked runs at a quarter of the defaults, where
+# nothing grows and the trajectories are those of the defaults (smaller ones grew, and moved the batch's by up to 8 mm).
+SMALL = ["--blocks", SMALL_CAPACITIES["block_capacity"], "--vertices", SMALL_CAPACITIES["vertex_capacity"],
+         "--chunks", SMALL_CAPACITIES["chunk_capacity"]]
+TRACK_CAPACITIES = dict(block_capacity=1 << 12, vertex_capacity=1 << 18, chunk_capacity=1 << 17)
 
 
 @pytest.fixture(scope="module")
 def room(tmp_path_factory):
     return vkmesh.synth(tmp_path_factory.mktemp("batch") / "room", frames=9, width=160, height=120, noise=True,
                         gt_spacing=0.05)
+
+
+@pytest.fixture(scope="module")
+def one_run(room):
+    """The room's 9 frames fused in one Reconstructor: the mesh the batch runs of the room must give."""
+    with vkmesh.Reconstructor(voxel_size=VOXEL) as one:
+        for f in vkmesh.open_dataset(room, frames=9):
+            one.integrate(f.depth, f.intrinsics, f.pose, color=f.color)
+        return one.mesh()
+
+
+@pytest.fixture(scope="module")
+def scheduler():
+    """A LocalCluster as `--local-workers 2` starts one (2 worker processes, 1 thread each, GPU=1), for the tests that
+    run on a running scheduler (--scheduler): one cluster start instead of one per test. Its workers run without the
+    validation layer, as batch() does (VKMESH_VALIDATION=0: the workers inherit this process's environment)."""
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, resources={"GPU": 1},
+                                  dashboard_address=None, env={"VKMESH_VALIDATION": "0"}) as cluster:
+        yield cluster.scheduler_address
 
 
 def batch(*args, env=None):
@@ -38,15 +65,11 @@ def vertex_bits(mesh):
     return sorted(map(tuple, np.asarray(mesh.vertices).view(np.uint32)))
 
 
-def test_fragments_on_two_workers_are_the_one_run_map_even_when_a_worker_dies(room, tmp_path):
-    frames = list(vkmesh.open_dataset(room, frames=9))
-    with vkmesh.Reconstructor(voxel_size=VOXEL) as one:
-        for f in frames:
-            one.integrate(f.depth, f.intrinsics, f.pose, color=f.color)
-        truth = one.mesh()
+def test_fragments_on_two_workers_are_the_one_run_map_even_when_a_worker_dies(room, one_run, tmp_path):
+    truth = one_run
     marker = tmp_path / "killed"
     r = batch(room, "--frames", 9, "--fragment-frames", 3, "--local-workers", 2, "--voxel", VOXEL, "-o", tmp_path / "b.vkmap",
-              "--mesh", tmp_path / "b.ply", "--stats", tmp_path / "s.json", env={"VKMESH_BATCH_KILL_ONCE": str(marker)})
+              "--mesh", tmp_path / "b.ply", "--stats", tmp_path / "s.json", *SMALL, env={"VKMESH_BATCH_KILL_ONCE": str(marker)})
     assert r.returncode == 0, r.stderr
     assert marker.exists(), "the worker fusing fragment 1 was killed in its middle"
     stats = json.loads((tmp_path / "s.json").read_text())
@@ -84,7 +107,7 @@ def tum_ate(truth, positions):
     return float(np.sqrt(np.mean(np.sum((aligned - want) ** 2, axis=1))))
 
 
-def test_tracked_fragments_of_a_real_recording_placed_by_overlaps_and_loops(tmp_path):
+def test_tracked_fragments_of_a_real_recording_placed_by_overlaps_and_loops(scheduler, tmp_path):
     """TUM fr1/rpy's first 80 frames (real Kinect data) in 4 tracked fragments, --loop-closure. Placed in a chain
     through the 10 frames each shares with the one before, the global trajectory's error against the recording's
     poses is at most 1.25 x that of one tracked run. The camera turns in place, so every fragment revisits the
@@ -94,12 +117,13 @@ def test_tracked_fragments_of_a_real_recording_placed_by_overlaps_and_loops(tmp_
     tum, n = shared_dataset("tum_fr1_rpy"), 80
     frames = list(vkmesh.open_dataset(tum, frames=n))
     truth = np.stack([f.pose for f in frames])
-    with vkmesh.Reconstructor() as one:
+    with vkmesh.Reconstructor(**TRACK_CAPACITIES) as one:
         for i, f in enumerate(frames):
             one.integrate(f.depth, f.intrinsics, f.pose if i == 0 else None, color=f.color)
         one_poses = one.trajectory()
-    r = batch(tum, "--frames", n, "--fragment-frames", 20, "--overlap", 10, "--track", "--loop-closure", "--local-workers", 2,
-              "-o", tmp_path / "t.vkmap", "--trajectory", tmp_path / "t.txt", "--stats", tmp_path / "s.json", "-q")
+    r = batch(tum, "--frames", n, "--fragment-frames", 20, "--overlap", 10, "--track", "--loop-closure", "--scheduler", scheduler,
+              "--blocks", TRACK_CAPACITIES["block_capacity"], "--vertices", TRACK_CAPACITIES["vertex_capacity"],
+              "--chunks", TRACK_CAPACITIES["chunk_capacity"], "-o", tmp_path / "t.vkmap", "--trajectory", tmp_path / "t.txt", "--stats", tmp_path / "s.json", "-q")
     assert r.returncode == 0, r.stderr
     stats = json.loads((tmp_path / "s.json").read_text())
     assert stats["frames_integrated"] == n, "every frame once: the shared frames are fused again only where they belong"
@@ -145,22 +169,18 @@ def test_bad_options_are_clear_errors(room, tmp_path):
     assert not (tmp_path / "x.vkmap").exists()
 
 
-def test_tile_tasks_on_two_workers_join_to_the_one_run_mesh(room, tmp_path):
+def test_tile_tasks_on_two_workers_join_to_the_one_run_mesh(room, one_run, scheduler, tmp_path):
     """--tiles without -o: tile tasks on 2 workers, each reading from the fragments' maps only the blocks of its tiles
     (vkmesh.merge_tiles), no merged map: joined by vertex position bits, the tiles are the one-run mesh (triangles,
     vertex normal bits, no vertex twice, no edge left open along a tile boundary), and no task held the whole map."""
-    frames = list(vkmesh.open_dataset(room, frames=9))
-    with vkmesh.Reconstructor(voxel_size=VOXEL) as one:
-        for f in frames:
-            one.integrate(f.depth, f.intrinsics, f.pose, color=f.color)
-        truth = one.mesh()
+    truth = one_run
     tiles = tmp_path / "tiles"
     r = batch(room, "--tiles", tiles, "--mesh", tmp_path / "m.ply", "--tile-size", 1)   # refused before a cluster starts
     assert r.returncode == 2 and "--mesh needs -o" in r.stderr
     r = batch(room, "--tiles", tiles)
     assert r.returncode == 2 and "go together" in r.stderr and not tiles.exists()
-    r = batch(room, "--frames", 9, "--fragment-frames", 5, "--local-workers", 2, "--voxel", VOXEL, "--tiles", tiles,
-              "--tile-size", 8 * 8 * VOXEL, "--tiles-per-task", 3, "--stats", tmp_path / "s.json", "-q")
+    r = batch(room, "--frames", 9, "--fragment-frames", 5, "--scheduler", scheduler, "--voxel", VOXEL, "--tiles", tiles,
+              "--tile-size", 8 * 8 * VOXEL, "--tiles-per-task", 3, "--stats", tmp_path / "s.json", "-q", *SMALL)
     assert r.returncode == 0, r.stderr
     stats = json.loads((tmp_path / "s.json").read_text())
     t = stats["tiles"]
