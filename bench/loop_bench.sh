@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Loop closure and relocalisation (docs/LOOP_CLOSURE.md) on the synthetic sequences made for them: the gallery
-# (tracking drifts; with and without --loop-closure), the twin places (a false loop) and the room's revisit path
+# (tracking drifts; with and without loop closure, --no-loop-closure), the twin places (a false loop) and the room's revisit path
 # with 10 jumps cut into laps 2 and 3 (kidnapping). Prints the trajectory errors, the loop decisions, the
 # relocalisations and the loop closer's milliseconds per stage. The shared sequences: bench/track_bench.sh with
 # TRACK_OPTIONS="--loop-closure".
@@ -45,10 +45,10 @@ print(line)
 PY
 }
 
-run gallery "$out/gallery"
+run gallery "$out/gallery" --no-loop-closure
 run gallery_loops "$out/gallery" --loop-closure
 run twins_loops "$out/twins" --loop-closure --trajectory-online "$out/twins_online.txt"
-run kidnap "$out/kidnap"
+run kidnap "$out/kidnap" --no-loop-closure
 run kidnap_loops "$out/kidnap" --loop-closure --trajectory-online "$out/kidnap_online.txt"
 # Kidnapping: each jump's first fused frame, its error against the truth (online pose: where it was relocalised).
 $python - "$out/kidnap_loops.json" "$out/kidnap_online.txt" "$out/kidnap/groundtruth.txt" <<'PY'

@@ -6,6 +6,7 @@
 #
 #   bench/track_bench.sh OUT_DIR [DATASETS_DIR] [--frames N] [extra fuse options...]
 #   TRACK_OPTIONS="--track-solve gpu" bench/track_bench.sh OUT_DIR     # options for the tracked runs only
+#   TRACK_OPTIONS="--no-loop-closure" bench/track_bench.sh OUT_DIR     # tracking alone (--track closes loops by default)
 #
 # DATASETS_DIR: ../shared/datasets by default (or $VKMESH_DATASETS); a sequence that is absent is skipped with
 # a note. Writes OUT_DIR/<name>.{txt,ply,json,ate.json,log} and prints one summary line per run.

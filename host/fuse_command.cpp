@@ -82,7 +82,7 @@ int runFuse(const FuseArgs& args) {
     }
     // The frames as fused, for `vkmesh correct` (docs/CORRECTION.md) and loop closure: kept with a saved map. A
     // loaded map's store is continued (and must be the one saved with it).
-    if ((!args.savePath.empty() && !args.noKeepFrames) || args.loopClosure) {
+    if ((!args.savePath.empty() && !args.noKeepFrames) || args.closesLoops()) {
         const std::filesystem::path loadedStore = args.loadPath.empty() ? std::filesystem::path() : gpu::frameStorePathOf(args.loadPath);
         if (!loadedStore.empty() && std::filesystem::exists(loadedStore))
             mapper.keepFrames(FrameStore::load(loadedStore.string(), loaded->saveId, args.frameStoreOptions()));

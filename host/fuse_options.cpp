@@ -3,6 +3,7 @@
 #include <CLI/CLI.hpp>
 
 #include <array>
+#include <filesystem>
 #include <iostream>
 #include <sstream>
 
@@ -56,10 +57,12 @@ void FuseArgs::check() const {
          given("--track-model-reuse")) &&
         !track)
         throw Error("--track-iterations, --track-color-weight, --track-solve, --track-downsample and --track-model-reuse need --track");
-    if ((loopClosure || !trajectoryOnlinePath.empty()) && !track)
-        throw Error("--loop-closure and --trajectory-online need --track (loops are closed over tracked poses)");
+    if ((loopClosure || noLoopClosure || !trajectoryOnlinePath.empty()) && !track)
+        throw Error("--loop-closure, --no-loop-closure and --trajectory-online need --track (loops are closed over tracked poses)");
+    if (loopClosure && noLoopClosure) throw Error("--loop-closure and --no-loop-closure contradict each other");
     for (const char* option : {"--corrections-per-frame", "--loop-place-candidates"})
-        if (given(option) && !loopClosure) throw Error(std::string(option) + " needs --loop-closure");
+        if (given(option) && !closesLoops())
+            throw Error(std::string(option) + " needs loop closure (on with --track unless --no-loop-closure or --no-keep-frames)");
     if (!trackIterations.empty()) parseIterations(trackIterations);
 #ifndef VKMESH_HAVE_VIEWER
     if (serving())
@@ -98,7 +101,7 @@ MapperOptions FuseArgs::mapperOptions(const gpu::GpuVolumeConfig& config) const 
     options.tracker.downsample = trackDownsample;
     options.tracker.modelReuseFrames = trackModelReuse;
     options.correctionsPerFrame = correctionsPerFrame;
-    if (loopClosure) {
+    if (closesLoops()) {
         slam::LoopClosureOptions loopOptions;
         loopOptions.tracker = options.tracker;
         loopOptions.proximityCandidates = loopPlaceCandidates;
@@ -111,6 +114,10 @@ FrameStoreOptions FuseArgs::frameStoreOptions() const {
     FrameStoreOptions options;
     options.memoryBudgetBytes = size_t(framesBudgetMb * 1024 * 1024);
     options.spillFolder = framesSpill;
+    // Frames kept only because loops are closed by default (--track, no --save): the run is not stopped by a budget
+    // for frames the user never asked to keep; those past it go to the system's temporary folder (removed at the end).
+    if (framesSpill.empty() && closesLoops() && !loopClosure && savePath.empty())
+        options.spillFolder = std::filesystem::temp_directory_path().string();
     return options;
 }
 
@@ -141,6 +148,7 @@ void addFuseOptions(CLI::App* cmd, FuseArgs& args) {
     addSettingFlag(cmd, "--track", args.track);
     addSetting(cmd, "--trajectory", args.trajectoryPath);
     addSettingFlag(cmd, "--loop-closure", args.loopClosure);
+    addSettingFlag(cmd, "--no-loop-closure", args.noLoopClosure);
     addSetting(cmd, "--trajectory-online", args.trajectoryOnlinePath);
     addSetting(cmd, "--corrections-per-frame", args.correctionsPerFrame);
     addSetting(cmd, "--loop-place-candidates", args.loopPlaceCandidates);

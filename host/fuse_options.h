@@ -54,8 +54,9 @@ struct FuseArgs {
     std::string trackSolve = "host";   // where the ICP systems are solved: host (double, a wait per iteration) or gpu
     int trackDownsample = gpu::TrackerOptions{}.downsample;   // track on frames downsampled by 1, 2 or 4 (0: by width)
     int trackModelReuse = gpu::TrackerOptions{}.modelReuseFrames;   // frames in a row that may reuse the model maps
-    // Loop closure and relocalisation (docs/LOOP_CLOSURE.md).
-    bool loopClosure = false;
+    // Loop closure and relocalisation (docs/LOOP_CLOSURE.md): on with --track unless --no-loop-closure (or
+    // --no-keep-frames, since a loop re-fuses the kept frames); --loop-closure asks for it explicitly.
+    bool loopClosure = false, noLoopClosure = false;
     std::string trajectoryOnlinePath;  // the poses as they were when each frame was fused
     size_t correctionsPerFrame = 2;    // queued corrections re-fused before each frame
     int loopPlaceCandidates = kDefaultLoopPlaceCandidates;   // loop candidates by place (slam::LoopClosureOptions)
@@ -63,6 +64,8 @@ struct FuseArgs {
 
     bool given(const char* option) const;
     bool serving() const { return servePort >= 0; }
+    // Whether the run closes loops and relocalises: asked for, or by default with --track.
+    bool closesLoops() const { return loopClosure || (track && !noLoopClosure && !noKeepFrames); }
     // The combinations that cannot work, before anything is opened (Error naming the options).
     void check() const;
     // The volume's settings for the dataset's images; with `map` (--load) the map's where the command line gave none.

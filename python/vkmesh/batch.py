@@ -28,6 +28,7 @@ an error naming its recording and frame range.
 """
 
 import argparse
+import functools
 import hashlib
 import json
 import os
@@ -158,7 +159,30 @@ def _frames_path(map_path):
     return os.path.splitext(map_path)[0] + ".vkframes"
 
 
-def fuse_fragment(spec):
+def _task(kind, finished=lambda spec, done: True):
+    """Makes `work(spec, key)` a task the workers run: keyed by its inputs (the spec), idempotent (a finished run's
+    result, written as the key's .json, is returned again while `finished(spec, result)` says its outputs are there),
+    its runs counted (a retried task runs again: "attempt"), timed ("ms") and placed ("worker")."""
+    def wrap(work):
+        @functools.wraps(work)
+        def task(spec):
+            work_dir = spec["work_dir"]
+            key = _key(kind, spec)
+            done = _done(work_dir, key)
+            if done is not None and finished(spec, done):
+                return done
+            attempt = _attempt(work_dir, key)
+            t0 = time.perf_counter()
+            result = {"key": key, **work(spec, key)}
+            result.update(ms=(time.perf_counter() - t0) * 1e3, worker=_worker_name(), attempt=attempt)
+            _write_json(os.path.join(work_dir, key + ".json"), result)
+            return result
+        return task
+    return wrap
+
+
+@_task("fragment")
+def fuse_fragment(spec, key):
     """Fuses frames [first, stop) of one recording into a map of their own, saved in the work folder under a name
     derived from the spec (the result's "map").
 
@@ -166,12 +190,6 @@ def fuse_fragment(spec):
     or {frame index: 4x4 list} (fused at these global poses, frames not listed skipped). Returns what it did: every
     frame's index, timestamp, pose and whether it was fused; idempotent (a finished task's result is read back)."""
     work_dir = spec["work_dir"]
-    key = _key("fragment", spec)
-    done = _done(work_dir, key)
-    if done is not None:
-        return done
-    attempt = _attempt(work_dir, key)
-    t0 = time.perf_counter()
     ds = vkmesh.open_dataset(spec["recording"], require_poses=spec["poses"] is None, **spec["dataset"])
     settings = dict(spec["settings"])
     frames, skipped = [], []
@@ -211,42 +229,25 @@ def fuse_fragment(spec):
         if settings.get("keep_frames"):   # the kept frames, saved beside the map, renamed first: a map in place has its frames
             os.replace(_frames_path(tmp_map), _frames_path(os.path.join(work_dir, key + ".vkmap")))
         os.replace(tmp_map, os.path.join(work_dir, key + ".vkmap"))
-    result = {"key": key, "map": os.path.join(work_dir, key + ".vkmap"), "frames": frames, "skipped": skipped,
-              "ms": (time.perf_counter() - t0) * 1e3, "worker": _worker_name(), "attempt": attempt}
-    _write_json(os.path.join(work_dir, key + ".json"), result)
-    return result
+    return {"map": os.path.join(work_dir, key + ".vkmap"), "frames": frames, "skipped": skipped}
 
 
-def make_tiles(spec):
+@_task("tiles", finished=lambda spec, done: all(os.path.exists(t["path"]) for t in done["stats"]["tiles"] if t["path"]))
+def make_tiles(spec, key):
     """Makes some tiles (spec["tiles"], (x, y, z) keys) of the sum of maps (spec["inputs"]) into spec["tiles_dir"]:
     vkmesh.merge_tiles on a worker, each tile from the blocks it needs read from every map, never the whole map.
     Idempotent: a finished task's result is read back while the tiles it wrote are there (each tile file is written
     under a temporary name and renamed)."""
-    work_dir = spec["work_dir"]
-    key = _key("tiles", spec)
-    done = _done(work_dir, key)
-    if done is not None and all(os.path.exists(t["path"]) for t in done["stats"]["tiles"] if t["path"]):
-        return done
-    attempt = _attempt(work_dir, key)
-    t0 = time.perf_counter()
-    stats = vkmesh.merge_tiles(spec["inputs"], spec["tiles_dir"], spec["tile_size"], tiles=spec["tiles"], **spec.get("device", {}))
-    result = {"key": key, "stats": stats, "ms": (time.perf_counter() - t0) * 1e3, "worker": _worker_name(), "attempt": attempt}
-    _write_json(os.path.join(work_dir, key + ".json"), result)
-    return result
+    return {"stats": vkmesh.merge_tiles(spec["inputs"], spec["tiles_dir"], spec["tile_size"], tiles=spec["tiles"],
+                                        **spec.get("device", {}))}
 
 
-def register_fragments(spec):
+@_task("loop")
+def register_fragments(spec, key):
     """Registers fragment spec["second"]'s map to fragment spec["first"]'s (vkmesh.register_maps) on a worker: a loop
     between them, or none. Returns {"registration": its dict (its "transform" takes the second fragment's own frame
     into the first's) or None, "reason": why not (vkmesh.Error's message)}; idempotent (keyed by the two maps, whose
     names derive from their fragments' specs)."""
-    work_dir = spec["work_dir"]
-    key = _key("loop", spec)
-    done = _done(work_dir, key)
-    if done is not None:
-        return done
-    attempt = _attempt(work_dir, key)
-    t0 = time.perf_counter()
     registration, reason = None, None
     for m in (spec["first_map"], spec["second_map"]):
         if not os.path.exists(_frames_path(m)):   # a bug, not "no loop": the fragments are fused with keep_frames=True
@@ -255,29 +256,17 @@ def register_fragments(spec):
         registration = vkmesh.register_maps(spec["first_map"], spec["second_map"])
     except vkmesh.Error as e:   # not sure, or no overlap: no loop (a failure of the task itself is another exception)
         reason = str(e)
-    result = {"key": key, "registration": registration, "reason": reason, "ms": (time.perf_counter() - t0) * 1e3,
-              "worker": _worker_name(), "attempt": attempt}
-    _write_json(os.path.join(work_dir, key + ".json"), result)
-    return result
+    return {"registration": registration, "reason": reason}
 
 
-def merge_fragment_maps(spec):
+@_task("merge", finished=lambda spec, done: os.path.exists(spec["output"]))
+def merge_fragment_maps(spec, key):
     """Adds maps (spec["inputs"]) into spec["output"] (and spec["mesh"] when given): vkmesh.merge_maps on a worker."""
-    work_dir = spec["work_dir"]
-    key = _key("merge", spec)
-    done = _done(work_dir, key)
-    if done is not None and os.path.exists(spec["output"]):
-        return done
-    attempt = _attempt(work_dir, key)
-    t0 = time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")   # the loop closers' states, not kept by fragments
         stats = vkmesh.merge_maps(spec["inputs"], spec["output"], mesh=spec.get("mesh"), keep_frames=False,
                                   tiles=spec.get("tiles"), tile_size=spec.get("tile_size", 0), **spec.get("device", {}))
-    result = {"key": key, "output": spec["output"], "stats": stats, "ms": (time.perf_counter() - t0) * 1e3,
-              "worker": _worker_name(), "attempt": attempt}
-    _write_json(os.path.join(work_dir, key + ".json"), result)
-    return result
+    return {"output": spec["output"], "stats": stats}
 
 
 # ---- placement (on the client) ------------------------------------------------------------------------------

@@ -287,7 +287,7 @@ MergeReport merge(const vk::Context* external, const std::vector<std::filesystem
     if (std::any_of(inputs.begin(), inputs.end(), [](const auto& p) {
             return std::filesystem::exists(loopClosurePathOf(p));
         }))
-        report.warnings.push_back("the loop closers' states (.vkloops) are not merged: a run continuing the merged map with --loop-closure "
+        report.warnings.push_back("the loop closers' states (.vkloops) are not merged: a run continuing the merged map with loop closure (--track) "
                                   "starts with no keyframes");
     report.mergeMs += millisecondsSince(t0);
 

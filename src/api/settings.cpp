@@ -195,10 +195,15 @@ std::vector<SettingDescription> describeAll() {
     s.push_back(make("--no-keep-frames", "", K::Correction, "false", "with --save: do not keep the frames (the map cannot be corrected later)"));
     s.push_back(positive(make("--frames-budget", "frames_budget_mb", K::Correction, text(FrameStoreOptions{}.memoryBudgetBytes >> 20),
                               "the frame store's memory budget in MiB (compressed frames)")));
-    s.push_back(make("--frames-spill", "frames_spill", K::Correction, "", "folder for the frames beyond --frames-budget (else the run stops there)"));
+    s.push_back(make("--frames-spill", "frames_spill", K::Correction, "",
+                     "folder for the frames beyond --frames-budget (else the run stops there; the system's temporary folder when only "
+                     "--track's default loop closure keeps them, without --save)"));
     s.push_back(make("--loop-closure", "loop_closure", K::Correction, "false",
-                     "with --track: recognise places seen before (keyframes, random ferns), verify them by ICP, optimise a pose graph "
-                     "(Ceres) and re-fuse the frames a loop moves; relocalise lost frames from the keyframes (docs/LOOP_CLOSURE.md)"));
+                     "recognise places seen before (keyframes, random ferns), verify them by ICP, optimise a pose graph (Ceres) "
+                     "and re-fuse the frames a loop moves; relocalise lost frames from the keyframes (docs/LOOP_CLOSURE.md). The "
+                     "command line's --track does this by default; Python's loop_closure and the library's MapperOptions ask for it"));
+    s.push_back(make("--no-loop-closure", "", K::Correction, "false",
+                     "with --track: close no loops and relocalise no lost frame (tracking alone; no frames kept unless --save)"));
     s.push_back(make("--corrections-per-frame", "corrections_per_frame", K::Correction, text(m.correctionsPerFrame),
                      "with --loop-closure: frames a loop moved that are re-fused before each new frame (default 2; the rest "
                      "after the last frame)"));

@@ -536,8 +536,9 @@ TEST(Cli, TrackFusesASequenceWithoutPoses) {
     EXPECT_NE(r.exitCode, 0);
     EXPECT_NE(r.err.find("--track"), std::string::npos) << r.err;
 
+    // (--frames-budget 0.05: 50 kB, a frame or two; the default loop closure's frames go on to the temporary folder.)
     r = test::runCli("fuse " + (d / "seq").string() + " --track --frames 12 --voxel 0.03 --trajectory " + (d / "t.txt").string() +
-                     " --stats " + (d / "s.json").string() + " -o " + (d / "m.ply").string() + " --validation");
+                     " --stats " + (d / "s.json").string() + " -o " + (d / "m.ply").string() + " --validation --frames-budget 0.05");
     ASSERT_EQ(r.exitCode, 0) << r.err;
     EXPECT_EQ(r.err.find("[validation"), std::string::npos) << r.err;
     const std::vector<TimedPose> tracked = readTumTrajectory(d / "t.txt");
@@ -554,6 +555,11 @@ TEST(Cli, TrackFusesASequenceWithoutPoses) {
     EXPECT_EQ(stats["tracking"]["frames_tracked"], 11);
     for (const char* key : {"median", "p90", "max"}) EXPECT_TRUE(stats["tracking"]["ms_per_frame"].contains(key)) << key;
     EXPECT_GT(stats["tracking"]["iterations"]["total"].get<double>(), 11);
+    // --track closes loops and relocalises by default: keyframes are taken, and the frames are kept to be re-fused.
+    EXPECT_EQ(stats["loop_closure"]["enabled"], true) << stats["loop_closure"].dump();
+    EXPECT_GE(stats["loop_closure"]["keyframes"].get<int>(), 1);
+    EXPECT_EQ(stats["frame_store"]["frames"], 12);
+    EXPECT_GT(stats["frame_store"]["frames_spilled"].get<int>(), 0) << stats["frame_store"].dump();
     fs::remove_all(d);
 }
 
@@ -579,7 +585,8 @@ TEST(Cli, TrackStartsFromTheDatasetsFirstPose) {
     // The same with the systems solved on the GPU: one submission per frame, as close to the truth. (Not the same
     // poses: float steps differ from double ones in the 7th digit, and the difference grows through the map each
     // frame fuses: 0.5-3 mm here by frame 7.)
-    r = test::runCli("fuse " + trackingSequence().string() + " --track --track-solve gpu --frames 8 --voxel 0.03 --trajectory " +
+    // (Tracking alone, --no-loop-closure: no keyframes, no frames kept.)
+    r = test::runCli("fuse " + trackingSequence().string() + " --track --no-loop-closure --track-solve gpu --frames 8 --voxel 0.03 --trajectory " +
                      (d / "g.txt").string() + " --stats " + (d / "g.json").string() + " -o " + (d / "m.ply").string());
     ASSERT_EQ(r.exitCode, 0) << r.err;
     const std::vector<TimedPose> onGpu = readTumTrajectory(d / "g.txt");
@@ -600,6 +607,14 @@ TEST(Cli, TrackStartsFromTheDatasetsFirstPose) {
     EXPECT_EQ(gpuStats["tracking"]["submissions_per_frame"]["max"], 1);
     EXPECT_EQ(gpuStats["tracking"]["fused_in_tracking_submission"], true);   // fusion and meshing in that submission
     EXPECT_EQ(gpuStats["frames"]["integrated"], 8) << gpuStats["frames"].dump();
+    EXPECT_EQ(gpuStats["loop_closure"]["enabled"], false);
+    EXPECT_FALSE(gpuStats.contains("frame_store"));
+    for (const char* options : {" --track --loop-closure --no-loop-closure", " --no-loop-closure",
+                                " --track --no-loop-closure --loop-place-candidates 3"}) {
+        r = test::runCli("fuse " + trackingSequence().string() + options + " -o " + (d / "m.ply").string());
+        EXPECT_NE(r.exitCode, 0) << options;
+        EXPECT_NE(r.err.find("loop"), std::string::npos) << options << ": " << r.err;
+    }
     r = test::runCli("fuse " + trackingSequence().string() + " --track --track-solve cpu -o " + (d / "m.ply").string());
     EXPECT_NE(r.exitCode, 0);
     EXPECT_NE(r.err.find("--track-solve"), std::string::npos) << r.err;
