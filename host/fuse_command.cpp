@@ -82,7 +82,10 @@ int runFuse(const FuseArgs& args) {
     }
     // The frames as fused, for `vkmesh correct` (docs/CORRECTION.md) and loop closure: kept with a saved map. A
     // loaded map's store is continued (and must be the one saved with it).
-    if ((!args.savePath.empty() && !args.noKeepFrames) || args.closesLoops()) {
+    if (args.loopClosureDroppedForSize(intrinsics.width, intrinsics.height))
+        std::cerr << "vkmesh fuse: note: no loop closure or relocalisation: the " << intrinsics.width << "x" << intrinsics.height
+                  << " frames are smaller than place recognition's image (--loop-closure asks for it anyway, and says why it cannot)\n";
+    if ((!args.savePath.empty() && !args.noKeepFrames) || args.closesLoops(intrinsics.width, intrinsics.height)) {
         const std::filesystem::path loadedStore = args.loadPath.empty() ? std::filesystem::path() : gpu::frameStorePathOf(args.loadPath);
         if (!loadedStore.empty() && std::filesystem::exists(loadedStore))
             mapper.keepFrames(FrameStore::load(loadedStore.string(), loaded->saveId, args.frameStoreOptions()));

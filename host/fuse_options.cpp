@@ -51,6 +51,13 @@ std::array<int, gpu::TRACK_LEVELS> parseIterations(const std::string& text) {
 
 bool FuseArgs::given(const char* option) const { return cmd->get_option(option)->count() > 0; }
 
+bool FuseArgs::closesLoops(int width, int height) const {
+    if (loopClosure) return true;   // asked for: frames too small are an error naming their size (RandomFerns)
+    if (!track || noLoopClosure || noKeepFrames) return false;
+    const slam::FernOptions ferns = slam::LoopClosureOptions{}.ferns;
+    return (width == 0 && height == 0) || (width >= ferns.width && height >= ferns.height);
+}
+
 void FuseArgs::check() const {
     output.check();   // the mesh's name and --simplify, before a long run
     if ((!trackIterations.empty() || given("--track-color-weight") || given("--track-solve") || given("--track-downsample") ||
@@ -101,7 +108,7 @@ MapperOptions FuseArgs::mapperOptions(const gpu::GpuVolumeConfig& config) const 
     options.tracker.downsample = trackDownsample;
     options.tracker.modelReuseFrames = trackModelReuse;
     options.correctionsPerFrame = correctionsPerFrame;
-    if (closesLoops()) {
+    if (closesLoops(config.imageWidth, config.imageHeight)) {
         slam::LoopClosureOptions loopOptions;
         loopOptions.tracker = options.tracker;
         loopOptions.proximityCandidates = loopPlaceCandidates;

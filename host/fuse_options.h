@@ -64,8 +64,11 @@ struct FuseArgs {
 
     bool given(const char* option) const;
     bool serving() const { return servePort >= 0; }
-    // Whether the run closes loops and relocalises: asked for, or by default with --track.
-    bool closesLoops() const { return loopClosure || (track && !noLoopClosure && !noKeepFrames); }
+    // Whether the run closes loops and relocalises: asked for (--loop-closure), or by default with --track where its
+    // frames (width x height; 0 x 0: not known yet) are no smaller than place recognition's image (80 x 60).
+    bool closesLoops(int width = 0, int height = 0) const;
+    // --track without --no-loop-closure whose frames are too small for the default (closesLoops(width, height) is false).
+    bool loopClosureDroppedForSize(int width, int height) const { return closesLoops() && !closesLoops(width, height); }
     // The combinations that cannot work, before anything is opened (Error naming the options).
     void check() const;
     // The volume's settings for the dataset's images; with `map` (--load) the map's where the command line gave none.

@@ -610,8 +610,10 @@ TEST(LoopClosure, OptionsNeedTracking) {
     // Options, and what the error must say.
     const std::pair<const char*, const char*> refused[] = {
         {"--loop-closure", "need --track"},
-        {"--track --corrections-per-frame 3", "--corrections-per-frame needs --loop-closure"},
-        {"--track --loop-place-candidates 0", "--loop-place-candidates needs --loop-closure"},
+        {"--track --no-loop-closure --corrections-per-frame 3", "--corrections-per-frame needs loop closure"},
+        {"--track --no-loop-closure --loop-place-candidates 0", "--loop-place-candidates needs loop closure"},
+        {"--track --no-keep-frames --loop-place-candidates 0", "--loop-place-candidates needs loop closure"},
+        {"--track --loop-closure --no-loop-closure", "contradict"},
         {"--track --loop-closure --loop-place-candidates 101", "--loop-place-candidates"},
     };
     for (const auto& [options, says] : refused) {
@@ -619,6 +621,15 @@ TEST(LoopClosure, OptionsNeedTracking) {
         EXPECT_NE(r.exitCode, 0) << options;
         EXPECT_NE(r.err.find(says), std::string::npos) << options << ": " << r.err;
     }
+    // --track's default loop closure steps aside, with a note, for frames smaller than place recognition's image
+    // (16 x 12 here: tracking takes 8 x 8 and more); asked for with --loop-closure, the run stops with the reason.
+    const fs::path small = test::makeMinimalTum("loop_small", 3, 16, 12);
+    test::CliRun r = test::runCli("fuse " + small.string() + " --track -o /dev/null");
+    EXPECT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_NE(r.err.find("no loop closure or relocalisation: the 16x12 frames"), std::string::npos) << r.err;
+    r = test::runCli("fuse " + small.string() + " --track --loop-closure -o /dev/null");
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_NE(r.err.find("16x12 depth image cannot shrink"), std::string::npos) << r.err;
 }
 
 }  // namespace
