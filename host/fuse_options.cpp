@@ -54,8 +54,7 @@ bool FuseArgs::given(const char* option) const { return cmd->get_option(option)-
 bool FuseArgs::closesLoops(int width, int height) const {
     if (loopClosure) return true;   // asked for: frames too small are an error naming their size (RandomFerns)
     if (!track || noLoopClosure || noKeepFrames) return false;
-    const slam::FernOptions ferns = slam::LoopClosureOptions{}.ferns;
-    return (width == 0 && height == 0) || (width >= ferns.width && height >= ferns.height);
+    return (width == 0 && height == 0) || slam::LoopClosureOptions{}.ferns.fits(width, height);
 }
 
 void FuseArgs::check() const {

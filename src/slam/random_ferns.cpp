@@ -25,7 +25,7 @@ RandomFerns::RandomFerns(const FernOptions& options) : options_(options) {
 
 FernImage RandomFerns::shrink(const DepthImage& depth, const ColorImage* color) const {
     const int w = options_.width, h = options_.height;
-    if (depth.width < w || depth.height < h || depth.meters.size() != size_t(depth.width) * size_t(depth.height))
+    if (!options_.fits(depth.width, depth.height) || depth.meters.size() != size_t(depth.width) * size_t(depth.height))
         throw Error("random ferns: a " + std::to_string(depth.width) + "x" + std::to_string(depth.height) + " depth image cannot shrink to " +
                     std::to_string(w) + "x" + std::to_string(h));
     const bool withColor = color && !color->empty();

@@ -25,6 +25,8 @@ struct FernOptions {
     // view a few pixels away (InfiniTAM blurs its 40 x 30 image with sigma 2.5): a room's textures and edges
     // otherwise flip a third of the ferns for a 2 cm, 1 degree move.
     int blurPasses = 2;
+    // Whether frames of this size can be shrunk to the tiny image (RandomFerns::shrink refuses smaller ones).
+    bool fits(int frameWidth, int frameHeight) const { return frameWidth >= width && frameHeight >= height; }
 };
 
 // The tiny image a code is computed from (also what a keyframe keeps to be recognised by).
