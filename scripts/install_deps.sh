@@ -10,6 +10,8 @@ packages=(
   cmake g++ make ninja-build pkg-config
   libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers vulkan-tools glslang-tools spirv-tools
   libeigen3-dev libopencv-core-dev libopencv-imgcodecs-dev libcli11-dev nlohmann-json3-dev libgtest-dev
+  # relocalisation by ORB features and PnP on the colour image (src/slam/feature_relocaliser.h)
+  libopencv-features2d-dev libopencv-calib3d-dev
   # the frame store (core/frame_store.h): lossless compression of the fused frames
   libzstd-dev
   # recordings (src/io/recordings/: ROS 1 bag chunks in bz2 and lz4, rosbag2's SQLite storage), and the Python

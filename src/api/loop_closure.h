@@ -25,6 +25,15 @@ struct LoopClosureFrame {
     Pose cameraToWorld = Pose::Identity();   // fused at (frameFused), or the tracker's prediction (lost frames)
 };
 
+// A pose to track a lost frame from (LoopClosure::relocalisationCandidates).
+struct RelocalisationCandidate {
+    Pose cameraToWorld = Pose::Identity();
+    // Where the frame's own features, matched to a keyframe's, put the camera (slam/feature_relocaliser.h), rather
+    // than a look-alike keyframe's pose to start from: tracking that lands here has two independent cues agreeing
+    // (MapperOptions::Relocalisation::placed*).
+    bool placed = false;
+};
+
 // New camera-to-world poses for frames already fused (an accepted loop moved them), in ascending frame order.
 struct PoseCorrections {
     std::vector<uint32_t> frames;
@@ -45,10 +54,13 @@ struct LoopClosureStats {
     uint32_t loopsConsistent = 0;      // verified, but the trajectory already agrees: nothing to correct
     std::map<std::string, uint32_t> rejectedBy;   // "registration", "implausible", "graph"
     uint32_t lostFrames = 0, relocalisations = 0, relocalisationCandidatesTried = 0;
+    // Poses the keyframes' ORB features proposed for lost frames, and the confirmed relocalisations among them.
+    uint32_t featureCandidates = 0, relocalisationsByFeatures = 0;
     uint32_t framesCorrected = 0;      // poses handed back (a frame counts once per loop that moved it)
     uint32_t graphSolves = 0;
-    // Milliseconds per stage (sum and count): encode (shrink + code), keyframe (registration image), search,
-    // verify (registration), solve (the graph), per frameFused call in all ("frame").
+    // Milliseconds per stage (sum and count): encode (shrink + code), features (a keyframe's ORB features), keyframe
+    // (registration image), search, verify (registration), solve (the graph), per frameFused call in all ("frame");
+    // for lost frames relocalise_features (ORB, matching, PnP) and relocalise_search (the ferns).
     std::map<std::string, std::pair<double, uint32_t>> milliseconds;
     struct Loop {
         uint32_t frame = 0, keyframeFrame = 0;   // the new keyframe's frame and the old one's
@@ -68,7 +80,7 @@ public:
     // an accepted loop moved (this frame's among them), or nothing.
     virtual PoseCorrections frameFused(const LoopClosureFrame& frame) = 0;
     // A frame tracking lost: camera poses to track it from, most likely first (none: no keyframe looks alike).
-    virtual std::vector<Pose> relocalisationCandidates(const LoopClosureFrame& frame) = 0;
+    virtual std::vector<RelocalisationCandidate> relocalisationCandidates(const LoopClosureFrame& frame) = 0;
     // How trying them ended (counted; a success also restarts the pose graph's chain at that frame, whose
     // frameFused follows).
     virtual void relocalisationResult(uint32_t frame, bool relocalised, int candidatesTried) = 0;

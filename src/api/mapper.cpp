@@ -134,9 +134,10 @@ MapperResult Mapper::tracked(const MapperFrame& frame, size_t valid) {
         // real data it picks up next to the old pose after a jump (frames 98 and 100 of ICL-NUIM office 0 without
         // frames 59-98, 1 m off).
         f.tracking = tracker_->track(*frame.depth, frame.intrinsics, volume_->meshBuffers(), frame.color);
-        const std::string why = f.tracking.tracked ? errorAgainstBaseline(f.tracking.rmse, baseline) : f.tracking.lostReason;
+        const double ratio = options_.relocalisation.maxErrorRatio;
+        const std::string why = f.tracking.tracked ? errorAgainstBaseline(f.tracking.rmse, baseline, ratio) : f.tracking.lostReason;
         if (why.empty()) {
-            hypothesis_ = Hypothesis{frame.index, 0, f.tracking.cameraToWorld, atLoss, baseline, 0, SIZE_MAX};
+            hypothesis_ = Hypothesis{frame.index, 0, f.tracking.cameraToWorld, atLoss, baseline, ratio, 0, SIZE_MAX};
             return tentativeVerdict(frame, std::move(f.tracking), std::move(result));
         }
         tracker_->restore(atLoss);
@@ -164,18 +165,26 @@ Mapper::RelocalisationOutcome Mapper::relocalise(const MapperFrame& frame, const
                                                  double baseline, MapperResult& result) {
     LoopClosure& loops = *options_.loopClosure;
     const MapperOptions::Relocalisation& o = options_.relocalisation;
-    const std::vector<Pose> candidates = loops.relocalisationCandidates({frame.index, frame.depth, frame.color, frame.intrinsics, predicted});
-    RunStats::Relocalisation attempt{frame.index, false, candidates.size(), 0};
+    const std::vector<RelocalisationCandidate> candidates = loops.relocalisationCandidates({frame.index, frame.depth, frame.color, frame.intrinsics, predicted});
+    RunStats::Relocalisation attempt;
+    attempt.frame = frame.index;
+    attempt.candidates = candidates.size();
+    attempt.placedCandidates = size_t(std::count_if(candidates.begin(), candidates.end(), [](const RelocalisationCandidate& c) { return c.placed; }));
     // Every candidate is tracked from (a few): the map must match the frame at one place only. Each must also
     // match as closely as the frames tracked before the loss did (`baseline`: a look-alike matches, but worse).
     RelocalisationOutcome out;
     std::optional<gpu::TrackingReport> best;
     int bestCandidate = 0;
+    bool bestPlaced = false;   // placed by the features, and tracking agreed: held to placedMaxErrorRatio
     std::string refusals;
     for (size_t c = 0; c < candidates.size(); ++c) {
-        gpu::TrackingReport r = tracker_->trackFrom(candidates[c], *frame.depth, frame.intrinsics, volume_->meshBuffers(), frame.color);
+        const RelocalisationCandidate& candidate = candidates[c];
+        gpu::TrackingReport r = tracker_->trackFrom(candidate.cameraToWorld, *frame.depth, frame.intrinsics, volume_->meshBuffers(), frame.color);
         ++result.relocalisationCandidatesTried;
-        std::string why = r.tracked ? errorAgainstBaseline(r.rmse, baseline) : r.lostReason;
+        const Pose fromPlaced = inverseRigid(candidate.cameraToWorld) * r.cameraToWorld;
+        const bool agrees = candidate.placed && translationMetres(fromPlaced) <= o.placedAgreeMetres && rotationDegrees(fromPlaced) <= o.placedAgreeDegrees;
+        const double ratio = agrees ? o.placedMaxErrorRatio : o.maxErrorRatio;
+        std::string why = r.tracked ? errorAgainstBaseline(r.rmse, baseline, ratio) : r.lostReason;
         const Pose apart = best ? Pose(inverseRigid(best->cameraToWorld) * r.cameraToWorld) : Pose(Pose::Identity());
         if (why.empty() && (translationMetres(apart) > o.ambiguousMetres || rotationDegrees(apart) > o.ambiguousDegrees)) {
             char text[160];
@@ -188,7 +197,7 @@ Mapper::RelocalisationOutcome Mapper::relocalise(const MapperFrame& frame, const
             break;
         }
         if (why.empty()) {
-            if (!best || r.rmse < best->rmse) best = r, bestCandidate = int(c + 1);
+            if (!best || r.rmse < best->rmse) best = r, bestCandidate = int(c + 1), bestPlaced = agrees;
         } else {
             refusals += (refusals.empty() ? "" : "; ") + ("candidate " + std::to_string(c + 1) + ": " + why);
             if (!best && out.tracking.lostReason.empty()) out.tracking = r;   // the numbers of the first refused, for the report
@@ -197,6 +206,7 @@ Mapper::RelocalisationOutcome Mapper::relocalise(const MapperFrame& frame, const
     if (best) {
         out.accepted = true;
         out.candidate = bestCandidate;
+        out.maxErrorRatio = bestPlaced ? o.placedMaxErrorRatio : o.maxErrorRatio;
         out.statsEntry = stats_.relocalisations.size();
         out.tracking = std::move(*best);
         out.tracking.lostReason = "lost (" + lostReason + "), relocalised from candidate " + std::to_string(bestCandidate);
@@ -211,29 +221,30 @@ Mapper::RelocalisationOutcome Mapper::relocalise(const MapperFrame& frame, const
     attempt.rmse = out.tracking.rmse;
     attempt.reason = out.accepted ? std::string() : out.tracking.lostReason;
     attempt.tentative = out.accepted;
+    attempt.placed = out.accepted && bestPlaced;
     if (stats_.relocalisations.size() < kRunStatsListLimit) stats_.relocalisations.push_back(attempt);
     return out;
 }
 
 void Mapper::startHypothesis(const MapperFrame& frame, const RelocalisationOutcome& found, const gpu::PoseTracker::State& atLoss,
                              double baseline) {
-    hypothesis_ = Hypothesis{frame.index, found.candidate, found.tracking.cameraToWorld, atLoss, baseline, 0, found.statsEntry};
+    hypothesis_ = Hypothesis{frame.index, found.candidate, found.tracking.cameraToWorld, atLoss, baseline, found.maxErrorRatio, 0, found.statsEntry};
     tracker_->resumeAt(found.tracking.cameraToWorld);
 }
 
-std::string Mapper::errorAgainstBaseline(double rmse, double baseline) const {
-    const double limit = options_.relocalisation.maxErrorRatio * baseline;
+std::string Mapper::errorAgainstBaseline(double rmse, double baseline, double ratio) const {
+    const double limit = ratio * baseline;
     if (baseline <= 0 || rmse <= limit) return {};
     char text[160];
     std::snprintf(text, sizeof text, "its error %.4f m is over %.1f times that of the frames tracked before the loss (%.4f m)", rmse,
-                  options_.relocalisation.maxErrorRatio, baseline);
+                  ratio, baseline);
     return text;
 }
 
 MapperResult Mapper::tentative(const MapperFrame& frame, size_t valid, MapperResult result) {
     Hypothesis& h = *hypothesis_;
     gpu::TrackingReport r = tracker_->track(*frame.depth, frame.intrinsics, volume_->meshBuffers(), frame.color);
-    std::string why = r.tracked ? errorAgainstBaseline(r.rmse, h.baselineRmse) : r.lostReason;
+    std::string why = r.tracked ? errorAgainstBaseline(r.rmse, h.baselineRmse, h.maxErrorRatio) : r.lostReason;
     if (!why.empty()) {
         // Not tracked from the hypothesis (after a relocalisation the camera's motion is unknown: a fast one is
         // not followed from a standstill): found again from the keyframes at a place it could have moved to from
@@ -247,6 +258,7 @@ MapperResult Mapper::tentative(const MapperFrame& frame, size_t valid, MapperRes
         const gpu::TrackerOptions& t = tracker_->options();
         if (found.accepted && translationMetres(moved) <= t.maxJumpMetres && rotationDegrees(moved) <= t.maxJumpDegrees) {
             h.candidate = found.candidate;   // of the loop closer's latest candidates
+            h.maxErrorRatio = found.maxErrorRatio;
             h.pose = found.tracking.cameraToWorld;
             tracker_->resumeAt(h.pose, moved);
             r = std::move(found.tracking);

@@ -78,7 +78,9 @@ struct RunStats {
         uint32_t frame = 0;
         bool relocalised = false;
         size_t candidates = 0;
+        size_t placedCandidates = 0;     // of them, poses the frame's features placed (RelocalisationCandidate::placed)
         int tried = 0;
+        bool placed = false;             // the accepted candidate was placed by the features and tracking agreed
         // The match of the accepted candidate (or of a refused one): its inlier share and RMSE, and why it was refused.
         double inlierShare = 0, rmse = 0;
         std::string reason;

@@ -92,7 +92,8 @@ json loopClosureJson(const Mapper& mapper, const RunStats& s) {
     for (const auto& [reason, n] : l.rejectedBy) rejectedBy[reason] = n;
     json relocalisation = json::array();
     for (const auto& r : s.relocalisations)
-        relocalisation.push_back({{"frame", r.frame}, {"relocalised", r.relocalised}, {"candidates", r.candidates}, {"tried", r.tried},
+        relocalisation.push_back({{"frame", r.frame}, {"relocalised", r.relocalised}, {"candidates", r.candidates},
+                                  {"placed_candidates", r.placedCandidates}, {"placed", r.placed}, {"tried", r.tried},
                                   {"inlier_share", r.inlierShare}, {"rmse_m", r.rmse}, {"reason", r.reason}, {"tentative", r.tentative},
                                   {"confirmed_at", r.confirmedAt >= 0 ? json(r.confirmedAt) : json(nullptr)}, {"refused_by", r.refusedBy}});
     return {{"enabled", true},
@@ -105,6 +106,8 @@ json loopClosureJson(const Mapper& mapper, const RunStats& s) {
             {"lost_frames", l.lostFrames},
             {"relocalisations", l.relocalisations},
             {"relocalisation_candidates_tried", l.relocalisationCandidatesTried},
+            {"feature_candidates", l.featureCandidates},
+            {"relocalisations_by_features", l.relocalisationsByFeatures},
             {"frames_corrected", l.framesCorrected},
             {"frames_refused", s.framesRefused},
             {"observations_dropped", s.observationsDropped},

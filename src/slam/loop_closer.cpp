@@ -22,7 +22,7 @@ constexpr double kRadiansPerDegree = std::numbers::pi / 180.0;
 
 }  // namespace
 
-LoopCloser::LoopCloser(const LoopClosureOptions& options) : options_(options), ferns_(options.ferns) {
+LoopCloser::LoopCloser(const LoopClosureOptions& options) : options_(options), ferns_(options.ferns), features_(options.features) {
     gpu::trackParamsFor(options.tracker);   // checked now
     if (options.registrationWidth < 40 || options.candidates < 1 || options.relocaliseCandidates < 1 || !(options.keyframeMetres > 0) ||
         !(options.keyframeDegrees > 0))
@@ -83,6 +83,9 @@ PoseCorrections LoopCloser::frameFused(const LoopClosureFrame& frame) {
     key.frame = frame.index;
     key.code = ferns_.encode(ferns_.shrink(*frame.depth, frame.color));
     time("encode", msSince(t));
+    t = Clock::now();
+    key.features = features_.describe(*frame.depth, frame.color, frame.intrinsics);
+    time("features", msSince(t));
     t = Clock::now();
     DepthImage small = *frame.depth;
     int halvings = 0;
@@ -271,12 +274,36 @@ LoopCloser::LoopOutcome LoopCloser::tryLoop(const Keyframe& current, const Regis
     return LoopOutcome::Closed;
 }
 
-std::vector<Pose> LoopCloser::relocalisationCandidates(const LoopClosureFrame& frame) {
-    const auto t = Clock::now();
+std::vector<RelocalisationCandidate> LoopCloser::relocalisationCandidates(const LoopClosureFrame& frame) {
     ++stats_.lostFrames;
     lastCandidates_.clear();
-    std::vector<Pose> poses;
+    lastByFeatures_.clear();
+    std::vector<RelocalisationCandidate> poses;
     if (!frame.depth || keyframes_.empty()) return poses;
+    // The features' poses first: they place the camera, where a fern candidate only names a keyframe to start from.
+    auto t = Clock::now();
+    std::vector<int> matched;   // the keyframes matched against: all of them, or the newest and a moving window
+    const size_t limit = size_t(options_.features.matchKeyframes), count = keyframes_.size();
+    if (count <= limit) {
+        for (size_t k = 0; k < count; ++k) matched.push_back(int(k));
+    } else {
+        const size_t newest = limit / 4, older = count - newest;
+        for (size_t i = 0; i < limit - newest; ++i) matched.push_back(int((featureWindow_ + i) % older));
+        featureWindow_ = (featureWindow_ + limit - newest) % older;
+        for (size_t k = older; k < count; ++k) matched.push_back(int(k));
+    }
+    std::vector<const KeyframeFeatures*> described;
+    for (const int k : matched) described.push_back(&keyframes_[size_t(k)].features);
+    for (const FeatureCandidate& found : features_.propose(frame.color, frame.intrinsics, described)) {
+        FeatureCandidate c = found;
+        c.keyframe = matched[size_t(found.keyframe)];
+        lastCandidates_.push_back(c.keyframe);
+        lastByFeatures_.push_back(true);
+        poses.push_back({graph_.pose(keyframes_[size_t(c.keyframe)].node) * inverseRigid(c.keyframeToCamera), true});
+        ++stats_.featureCandidates;
+    }
+    time("relocalise_features", msSince(t));
+    t = Clock::now();
     const FernCode code = ferns_.encode(ferns_.shrink(*frame.depth, frame.color));
     std::vector<std::pair<double, int>> alike;
     for (int k = 0; k < int(keyframes_.size()); ++k) {
@@ -284,10 +311,14 @@ std::vector<Pose> LoopCloser::relocalisationCandidates(const LoopClosureFrame& f
         if (d <= options_.relocaliseDissimilarity) alike.emplace_back(d, k);
     }
     std::sort(alike.begin(), alike.end());
+    int byFerns = 0;
     for (const auto& [d, k] : alike) {
-        if (int(poses.size()) >= options_.relocaliseCandidates) break;
+        if (byFerns >= options_.relocaliseCandidates) break;
+        if (std::find(lastCandidates_.begin(), lastCandidates_.end(), k) != lastCandidates_.end()) continue;
         lastCandidates_.push_back(k);
-        poses.push_back(graph_.pose(keyframes_[size_t(k)].node));
+        lastByFeatures_.push_back(false);
+        poses.push_back({graph_.pose(keyframes_[size_t(k)].node), false});
+        ++byFerns;
     }
     time("relocalise_search", msSince(t));
     return poses;
@@ -299,13 +330,14 @@ void LoopCloser::relocalisationResult(uint32_t, bool relocalised, int candidates
     if (candidatesTried < 1 || size_t(candidatesTried) > lastCandidates_.size())
         throw Error("loop closure: relocalised by candidate " + std::to_string(candidatesTried) + " of " + std::to_string(lastCandidates_.size()));
     ++stats_.relocalisations;
+    if (lastByFeatures_[size_t(candidatesTried) - 1]) ++stats_.relocalisationsByFeatures;
     relocalisedFrom_ = lastCandidates_[size_t(candidatesTried) - 1];
 }
 
 namespace {
 
 constexpr char kLoopsMagic[8] = {'V', 'K', 'L', 'O', 'O', 'P', 'S', 0};
-constexpr uint32_t kLoopsVersion = 1;
+constexpr uint32_t kLoopsVersion = 2;   // 2: keyframes' ORB features
 
 struct Out {
     std::string bytes;
@@ -356,6 +388,9 @@ void LoopCloser::save(const std::filesystem::path& path, uint64_t mapId) const {
         o.put(k.intrinsics.fx), o.put(k.intrinsics.fy), o.put(k.intrinsics.cx), o.put(k.intrinsics.cy);
         o.put(k.pathMetres);
         o.bytes.append(reinterpret_cast<const char*>(k.depth.meters.data()), k.depth.meters.size() * sizeof(float));
+        o.put(uint32_t(k.features.count()));
+        o.bytes.append(reinterpret_cast<const char*>(k.features.points.data()), k.features.points.size() * sizeof(float));
+        o.bytes.append(reinterpret_cast<const char*>(k.features.descriptors.data()), k.features.descriptors.size());
     }
     o.put(uint32_t(graph_.nodes()));
     for (const Pose& p : graph_.poses()) o.pose(p);
@@ -406,8 +441,9 @@ void LoopCloser::load(const std::filesystem::path& path, uint64_t mapId) {
         throw Error("loop closure: " + file + " is not a loop-closure file (no VKLOOPS header)");
     h.at = sizeof kLoopsMagic;
     const uint32_t version = h.get<uint32_t>();
-    if (version != kLoopsVersion)
-        throw Error("loop closure: " + file + " is version " + std::to_string(version) + "; this vkmesh reads version " + std::to_string(kLoopsVersion));
+    if (version < 1 || version > kLoopsVersion)
+        throw Error("loop closure: " + file + " is version " + std::to_string(version) + "; this vkmesh reads versions 1 to " +
+                    std::to_string(kLoopsVersion));
     if (h.get<uint64_t>() != mapId) throw Error("loop closure: " + file + " belongs to another map (its map id differs from the map's)");
     const uint64_t packedBytes = h.get<uint64_t>();
     const uint32_t crc = h.get<uint32_t>();
@@ -445,6 +481,15 @@ void LoopCloser::load(const std::filesystem::path& path, uint64_t mapId) {
         k.depth.meters.resize(size_t(k.depth.width) * size_t(k.depth.height));
         std::memcpy(k.depth.meters.data(), raw.data() + r.at, k.depth.meters.size() * sizeof(float));
         r.at += k.depth.meters.size() * sizeof(float);
+        if (version >= 2) {   // version 1 keyframes have no features: the ferns alone propose them
+            const uint32_t features = r.count(3 * sizeof(float) + 32);
+            k.features.points.resize(size_t(features) * 3);
+            k.features.descriptors.resize(size_t(features) * 32);
+            std::memcpy(k.features.points.data(), raw.data() + r.at, k.features.points.size() * sizeof(float));
+            r.at += k.features.points.size() * sizeof(float);
+            std::memcpy(k.features.descriptors.data(), raw.data() + r.at, k.features.descriptors.size());
+            r.at += k.features.descriptors.size();
+        }
         loaded.keyframes_.push_back(std::move(k));
     }
     const uint32_t nodes = r.count(128);

@@ -9,9 +9,11 @@
 //              against their depth, from the current pose and, failing that, from theirs; a verified registration
 //              that moves the camera no further than the drift the path since then allows becomes a loop edge; the
 //              graph is optimised (Ceres) and every frame's new pose handed back for the map's correction.
-//   relocalise a lost frame's code ranks the keyframes; the caller tracks the frame from the most alike ones'
-//              poses with the tracker's own checks and confirms the result over the next frames
-//              (Mapper::relocalise, PoseTracker::trackFrom).
+//   relocalise a lost frame's ORB features are matched against every keyframe's and solved by PnP
+//              (slam/feature_relocaliser.h: views turned too far for the ferns), and its code ranks the keyframes;
+//              the caller tracks the frame from those poses and the most alike keyframes' poses with the
+//              tracker's own checks and confirms the result over the next frames (Mapper::relocalise,
+//              PoseTracker::trackFrom).
 // Everything is deterministic: the same frames give the same keyframes, loops and poses (fixed fern seed, ties
 // broken by keyframe order, Ceres on one thread).
 #pragma once
@@ -23,6 +25,7 @@
 
 #include "api/loop_closure.h"
 #include "gpu/tracking/camera_tracker.h"
+#include "slam/feature_relocaliser.h"
 #include "slam/frame_registration.h"
 #include "slam/pose_graph.h"
 #include "slam/random_ferns.h"
@@ -31,6 +34,7 @@ namespace vkmesh::slam {
 
 struct LoopClosureOptions {
     FernOptions ferns;
+    FeatureOptions features;            // relocalisation by ORB features and PnP (features.enabled: on)
     gpu::TrackerOptions tracker;        // the registration's pyramid, gates and stopping rule (the tracker's own)
     int registrationWidth = 320;        // frames halved until at most this wide for verification (VGA: 320 x 240,
                                         // as tracking; at 160 the loops' errors made TUM fr1/rpy's ATE worse)
@@ -83,7 +87,9 @@ struct LoopClosureOptions {
     // A frame the graph moved less than this (and turned less) is not handed back for re-fusion: re-fusing costs
     // two frames' fusion, and a move well below a voxel does not change the map.
     double minCorrectionMetres = 0.002, minCorrectionDegrees = 0.1;
-    // Relocalisation: at most this many keyframes tried, each differing in at most this share of the ferns.
+    // Relocalisation: the features' poses (at most features.candidates), then at most relocaliseCandidates
+    // keyframes, each differing in at most this share of the ferns (a keyframe the features already proposed is
+    // not proposed again).
     double relocaliseDissimilarity = 0.40;
     int relocaliseCandidates = 3;
 };
@@ -95,13 +101,14 @@ class LoopCloser final : public LoopClosure {
 public:
     explicit LoopCloser(const LoopClosureOptions& options = {});
     PoseCorrections frameFused(const LoopClosureFrame& frame) override;
-    std::vector<Pose> relocalisationCandidates(const LoopClosureFrame& frame) override;
+    std::vector<RelocalisationCandidate> relocalisationCandidates(const LoopClosureFrame& frame) override;
     void relocalisationResult(uint32_t frame, bool relocalised, int candidatesTried) override;
     bool latestPose(uint32_t frame, Pose& pose) const override;
-    // File layout (little-endian): "VKLOOPS" and a 0 byte, u32 version (1), u64 map id, u64 payload bytes, u32
+    // File layout (little-endian): "VKLOOPS" and a 0 byte, u32 version (2), u64 map id, u64 payload bytes, u32
     // CRC-32 (map::crc32) of the payload, then the payload: zstd of the state (the path length, the last pose,
-    // every keyframe with its code and registration depth, the graph's nodes and edges, every fused frame's
-    // keyframe and poses; f64 poses row-major). Counters (stats()) start again at 0.
+    // every keyframe with its code, registration depth and (version 2) ORB features, the graph's nodes and edges,
+    // every fused frame's keyframe and poses; f64 poses row-major). Version 1 files load, their keyframes without
+    // features. Counters (stats()) start again at 0.
     void save(const std::filesystem::path& path, uint64_t mapId) const override;
     void load(const std::filesystem::path& path, uint64_t mapId) override;
     const LoopClosureStats& stats() const override { return stats_; }
@@ -113,6 +120,7 @@ private:
         uint32_t frame = 0;
         int node = 0;
         FernCode code;
+        KeyframeFeatures features; // ORB features with a depth (none without colour)
         DepthImage depth;          // at registration size
         Intrinsics intrinsics;     // of that depth
         double pathMetres = 0;     // path length travelled when it was made
@@ -141,6 +149,7 @@ private:
 
     LoopClosureOptions options_;
     RandomFerns ferns_;
+    FeatureRelocaliser features_;
     PoseGraph graph_;
     std::vector<Keyframe> keyframes_;
     std::map<uint32_t, FusedFrame> frames_;
@@ -149,6 +158,8 @@ private:
     // A relocalisation succeeded: the next fused frame becomes a keyframe tied to this keyframe.
     std::optional<int> relocalisedFrom_;
     std::vector<int> lastCandidates_;   // relocalisationCandidates' keyframes, in the order returned
+    std::vector<bool> lastByFeatures_;  // and whether the features proposed each
+    size_t featureWindow_ = 0;          // where the next lost frame's window of older keyframes starts (FeatureOptions::matchKeyframes)
     int lastVerifiedKeyframe_ = -1;     // the newest keyframe whose loop verified (closed or consistent)
     LoopClosureStats stats_;
 };

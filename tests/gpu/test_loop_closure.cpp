@@ -18,6 +18,7 @@
 #include "io/dataset.h"
 #include "io/text_lines.h"
 #include "io/trajectory.h"
+#include "slam/feature_relocaliser.h"
 #include "slam/frame_registration.h"
 #include "slam/loop_closer.h"
 #include "slam/pose_graph.h"
@@ -473,6 +474,34 @@ fs::path iclSequence(const fs::path& source, const fs::path& dir, const std::str
     return out;
 }
 
+// A TUM RGB-D sequence of the given frames of `source` (its depth.txt's data lines, 0-based): their depth lines, the
+// whole rgb.txt (each depth frame is paired with the colour image nearest in time), and for each kept frame the
+// ground-truth line nearest in time, so that groundtruth.txt holds one pose per frame, in order (runOnRealSequence
+// compares them by position). `name` must keep "fr1": the folder's name picks the camera preset.
+fs::path tumSequence(const fs::path& source, const fs::path& dir, const std::string& name, const std::vector<size_t>& frames) {
+    const auto dataLines = [&](const char* file) {
+        std::ifstream in = io::text::openText(source / file);
+        return io::text::readDataLines(in, (source / file).string());
+    };
+    const auto depth = dataLines("depth.txt"), truth = dataLines("groundtruth.txt");
+    const fs::path out = dir / name;
+    fs::create_directories(out);
+    fs::copy_file(source / "rgb.txt", out / "rgb.txt");
+    std::ofstream d(out / "depth.txt"), g(out / "groundtruth.txt");
+    for (const size_t f : frames) {
+        const std::string& time = depth.at(f).tokens.at(0);
+        d << time << " " << depth[f].tokens.at(1) << "\n";
+        const auto nearest = std::min_element(truth.begin(), truth.end(), [&](const auto& a, const auto& b) {
+            return std::abs(std::stod(a.tokens.at(0)) - std::stod(time)) < std::abs(std::stod(b.tokens.at(0)) - std::stod(time));
+        });
+        EXPECT_LT(std::abs(std::stod(nearest->tokens.at(0)) - std::stod(time)), 0.01) << "frame " << f << " has no true pose near it";
+        for (size_t i = 0; i < nearest->tokens.size(); ++i) g << (i ? " " : "") << nearest->tokens[i];
+        g << "\n";
+    }
+    for (const char* folder : {"depth", "rgb"}) fs::create_directory_symlink(source / folder, out / folder);
+    return out;
+}
+
 std::vector<size_t> frameRange(size_t first, size_t last) {   // first..last, either way
     std::vector<size_t> v;
     for (size_t f = first;; f = first <= last ? f + 1 : f - 1) {
@@ -522,11 +551,13 @@ RealRun runOnRealSequence(const fs::path& seq, const fs::path& d) {
 }
 
 // Real data (../shared/docs/real-data.md): ICL-NUIM office traj0 with frames 59-98 cut out, a jump of 113 cm and 98
-// degrees into a part of the office not yet mapped. The jump is noticed at once (the landing frame is lost) and
-// nothing is fused at a wrong place. Before relocalisations were tentative (MapperOptions::Relocalisation), frame
-// 93 settled on a look-alike 108 cm off (65 % of its pixels matching, at 3.6 times the inlier RMSE of the frames
-// before the loss) and tracking went on from there; and a lost tracker picked up again from its last pose (frames
-// 98, 100). Frames 0-129 of the cut sequence: the camera does not come back over the mapped part, so it stays lost.
+// degrees to a view that no kept frame saw from within 30 cm and 30 degrees. The jump is noticed at once (the landing
+// frame is lost) and nothing is fused at a wrong place (runOnRealSequence: every fused frame within 5 cm of the
+// truth, every relocalised one within 5 degrees too). Before relocalisations were tentative (MapperOptions::
+// Relocalisation), frame 93 settled on a look-alike 108 cm off (65 % of its pixels matching, at 3.6 times the inlier
+// RMSE of the frames before the loss) and tracking went on from there. With the ferns alone the camera then stayed
+// lost (71 frames); the landing view's ORB features match a keyframe's that sees the same wall from far off, and the
+// pose they give is confirmed by tracking (measured: relocalised at the landing, confirmed 2 frames later, 1 cm off).
 TEST(RealLoopClosure, IclKidnapIntoAnUnmappedPlaceIsNotFusedAtAWrongPlace) {
     if (const std::string why = test::lavapipeCannotDraw(); !why.empty()) GTEST_SKIP() << why;
     const auto root = test::sharedDatasetsDir();
@@ -536,9 +567,13 @@ TEST(RealLoopClosure, IclKidnapIntoAnUnmappedPlaceIsNotFusedAtAWrongPlace) {
     ASSERT_EQ(run.online.size(), 130u);
     EXPECT_TRUE(run.notFused.count(59) || run.notFused.count(60) || run.notFused.count(61)) << "the jump at frame 59 went unnoticed";
     EXPECT_EQ(run.fused.size() + run.notFused.size(), 129u);   // every frame after the first has a verdict
-    EXPECT_GE(run.fused.size(), 55u);                          // the frames before the jump were tracked
+    EXPECT_GE(run.fused.size(), 120u);                         // found again within a few frames
+    size_t placed = 0;
     for (const auto& e : run.stats["loop_closure"]["relocalisation"])
-        EXPECT_FALSE(e["relocalised"].get<bool>()) << "frame " << e["frame"] << " relocalised in a place never mapped";
+        if (e["relocalised"].get<bool>()) placed += e["placed"].get<bool>() ? 1 : 0;
+    EXPECT_EQ(placed, run.relocalised.size()) << "a relocalisation the features did not place";
+    EXPECT_GE(run.relocalised.size(), 1u);
+    EXPECT_EQ(run.stats["loop_closure"]["relocalisations_by_features"].get<size_t>(), run.relocalised.size());
     fs::remove_all(d);
 }
 
@@ -567,6 +602,32 @@ TEST(RealLoopClosure, IclThereAndBackKidnapsOntoMappedPlacesAreRelocalised) {
     }
     EXPECT_EQ(run.relocalised.size(), 2u);
     EXPECT_GE(run.fused.size(), 175u);
+    fs::remove_all(d);
+}
+
+// Real data: TUM fr1/rpy's frames 234-260, then 300-329: the Kinect, turning in place, lands 122 degrees (9 cm) from
+// where it was, looking at a place its frames near 239 mapped (as `bench/real_kidnaps.py --auto 4`'s fourth kidnap,
+// which with the ferns alone stayed lost for 26 frames: no keyframe looks alike to them). The landing frame's ORB
+// features are matched to a keyframe's and solved by PnP; tracking from that pose agrees with it and the
+// relocalisation is confirmed 2 frames later (measured: 1.2 cm off at the landing). The old map is drifted, and the
+// landing matches it 2-2.7 times worse than the frames before the loss matched theirs: within the bound for placed
+// candidates (MapperOptions::Relocalisation::placedMaxErrorRatio), over the 1.5 for the others. Every fused frame
+// within 5 cm (measured: up to 4.2 cm, TUM's own tracking drift before the jump).
+TEST(RealLoopClosure, TumLandingTurnedPastTheFernsIsPlacedByFeatures) {
+    if (const std::string why = test::lavapipeCannotDraw(); !why.empty()) GTEST_SKIP() << why;
+    const auto root = test::sharedDatasetsDir();
+    if (!root) GTEST_SKIP() << "shared datasets not found at ../shared/datasets (or $VKMESH_DATASETS)";
+    const fs::path d = test::makeTempDir("real_kidnap_tum");
+    const RealRun run = runOnRealSequence(tumSequence(*root / "tum_fr1_rpy", d, "fr1_cut", joined({frameRange(234, 260), frameRange(300, 329)})), d);
+    ASSERT_EQ(run.online.size(), 57u);
+    const size_t landing = 27;
+    EXPECT_TRUE(run.notFused.count(landing) || run.notFused.count(landing + 1) || run.notFused.count(landing + 2)) << "the jump went unnoticed";
+    size_t relocalisedAt = 0;
+    for (size_t f = landing; f <= landing + 5 && !relocalisedAt; ++f)
+        if (run.relocalised.count(f)) relocalisedAt = f;
+    EXPECT_NE(relocalisedAt, 0u) << "the landing was not relocalised within 5 frames";
+    EXPECT_GE(run.stats["loop_closure"]["relocalisations_by_features"].get<size_t>(), 1u);
+    EXPECT_GE(run.fused.size(), 50u);
     fs::remove_all(d);
 }
 
@@ -602,6 +663,71 @@ TEST(RealLoopClosure, TumRevisitsTheFernsMissAreProposedByPlace) {
     EXPECT_EQ(stats["tracking"]["lost_frames"], 0);
     EXPECT_LE(stats["loop_closure"]["position_error_m"]["rmse"].get<double>(), stats["tracking"]["position_error_m"]["rmse"].get<double>() + 0.001);
     fs::remove_all(d);
+}
+
+// Real data: ORB features and PnP place TUM fr1/rpy's views of one place turned 10-30 degrees from a keyframe, which
+// the ferns do not propose (docs/RESULTS.md, "Place recognition on real pairs": none under 30 % dissimilarity), and
+// propose nothing for views of other places. Pairs of frames at least 30 apart by their true relative pose, spread
+// over the sequence; "right" within 5 cm and 5 degrees of the true relative pose (TUM's own tracked relative poses
+// are off by 1-5 cm).
+TEST(FeatureRelocaliser, PlacesRealViewsTurnedPastTheFernsAndNotOtherPlaces) {
+    const auto root = test::sharedDatasetsDir();
+    if (!root) GTEST_SKIP() << "shared datasets not found at ../shared/datasets (or $VKMESH_DATASETS)";
+    const auto dataset = Dataset::open(*root / "tum_fr1_rpy");
+    const size_t n = dataset->size();
+    std::vector<std::pair<size_t, size_t>> same, other;
+    for (size_t i = 0; i < n; ++i)
+        for (size_t j = i + 30; j < n; ++j) {
+            const Pose a = dataset->frame(i).cameraToWorld, b = dataset->frame(j).cameraToWorld;
+            const double axisDegrees = std::acos(std::clamp(a.block<3, 1>(0, 2).dot(b.block<3, 1>(0, 2)), -1.0, 1.0)) * 180.0 / std::numbers::pi;
+            if (distanceMetres(a, b) < 0.10 && angleDegrees(a, b) >= 10.0 && angleDegrees(a, b) < 30.0) same.emplace_back(i, j);
+            else if (axisDegrees > 45.0 || distanceMetres(a, b) > 1.0) other.emplace_back(i, j);
+        }
+    ASSERT_GE(same.size(), 1000u);
+    ASSERT_GE(other.size(), 1000u);
+    std::map<size_t, std::pair<DepthImage, ColorImage>> images;
+    auto frame = [&](size_t i) -> const std::pair<DepthImage, ColorImage>& {
+        auto it = images.find(i);
+        if (it == images.end()) {
+            DepthImage depth = dataset->loadDepth(i);
+            ColorImage color = dataset->loadColor(i, nullptr, &depth);
+            it = images.emplace(i, std::make_pair(std::move(depth), std::move(color))).first;
+        }
+        return it->second;
+    };
+    const slam::FeatureRelocaliser features;
+    const Intrinsics k = dataset->intrinsics();
+    const int pairs = 24;
+    int sameProposed = 0, sameRight = 0, otherProposed = 0;
+    for (int p = 0; p < pairs; ++p) {
+        const auto [i, j] = same[size_t(p) * same.size() / pairs];
+        const slam::KeyframeFeatures keyframe = features.describe(frame(i).first, &frame(i).second, k);
+        EXPECT_GE(keyframe.count(), 200u) << "frame " << i;
+        const std::vector<slam::FeatureCandidate> found = features.propose(&frame(j).second, k, {&keyframe});
+        if (found.empty()) continue;
+        ++sameProposed;
+        ASSERT_EQ(found.front().keyframe, 0);
+        const Pose truth = inverseRigid(dataset->frame(i).cameraToWorld) * dataset->frame(j).cameraToWorld;
+        const Pose error = inverseRigid(truth) * inverseRigid(found.front().keyframeToCamera);
+        if (translationMetres(error) < 0.05 && rotationDegrees(error) < 5.0) ++sameRight;
+        // Deterministic: the same frames give the same pose.
+        if (p == 0) EXPECT_EQ(features.propose(&frame(j).second, k, {&keyframe}).front().keyframeToCamera, found.front().keyframeToCamera);
+    }
+    for (int p = 0; p < pairs; ++p) {
+        const auto [i, j] = other[size_t(p) * other.size() / pairs];
+        const slam::KeyframeFeatures keyframe = features.describe(frame(i).first, &frame(i).second, k);
+        otherProposed += features.propose(&frame(j).second, k, {&keyframe}).empty() ? 0 : 1;
+    }
+    // Measured: 15 placed, 13 of them right (of all TUM pairs turned 10-30 degrees: 83 % placed, 71 % right).
+    EXPECT_GE(sameProposed, pairs / 2) << "of " << pairs << " views turned 10-30 degrees (" << sameRight << " right)";
+    EXPECT_GE(sameRight, pairs * 5 / 12) << "of " << pairs << " views turned 10-30 degrees (" << sameProposed << " placed)";
+    EXPECT_LE(otherProposed, 1) << "of " << pairs << " views of other places";
+    // Without colour there are no features: nothing is proposed, and the ferns alone relocalise.
+    EXPECT_EQ(features.describe(frame(0).first, nullptr, k).count(), 0u);
+    EXPECT_TRUE(features.propose(nullptr, k, {}).empty());
+    ColorImage wrongSize = frame(0).second;
+    wrongSize.width /= 2;
+    EXPECT_NE(test::errorMessageOf([&] { features.describe(frame(0).first, &wrongSize, k); }).find("colour image is"), std::string::npos);
 }
 
 // Bad combinations are clear errors.
