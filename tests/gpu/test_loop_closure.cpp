@@ -3,10 +3,13 @@
 // truth (drift around a loop, kidnapping, a false loop, determinism).
 #include <gtest/gtest.h>
 
+#include <zstd.h>
+
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -15,6 +18,7 @@
 
 #include "core/camera.h"
 #include "core/icp_solve.h"
+#include "core/map_format.h"
 #include "io/dataset.h"
 #include "io/text_lines.h"
 #include "io/trajectory.h"
@@ -349,6 +353,80 @@ TEST(LoopClosure, KidnappedCameraIsRelocalisedFromTheKeyframes) {
         EXPECT_LT(distanceMetres(online[i].cameraToWorld, onlineAgain[i].cameraToWorld), 0.001) << "frame " << i;
         EXPECT_LT(angleDegrees(online[i].cameraToWorld, onlineAgain[i].cameraToWorld), 0.05) << "frame " << i;
     }
+    fs::remove_all(d);
+}
+
+// The .vkloops of an earlier vkmesh (version 1: keyframes without ORB features) still loads: its keyframes are
+// proposed by the ferns alone. Written here from a version 2 file by taking the features out of each keyframe, as
+// version 1 laid them out (LoopCloser::save's layout). Version 2 keeps the features: a frame of a keyframe's view is
+// placed by them after a save and a load.
+TEST(LoopCloser, LoadsVersionOneFilesWithoutFeatures) {
+    const synth::SyntheticScene room = synth::SyntheticScene::defaultRoom();
+    const Intrinsics k = synth::kinectIntrinsics(320, 240);
+    const std::vector<Pose> path = synth::cameraPath(40);
+    slam::LoopClosureOptions options;
+    options.registrationWidth = 160;
+    slam::LoopCloser closer(options);
+    std::vector<std::pair<DepthImage, ColorImage>> frames;
+    for (uint32_t i = 0; i < 12; ++i) {
+        ColorImage color;
+        DepthImage depth = room.renderDepth(k, path[i], {}, &color);
+        closer.frameFused({i, &depth, &color, k, path[i]});
+        frames.emplace_back(std::move(depth), std::move(color));
+    }
+    const fs::path d = test::makeTempDir("loops_v1");
+    const uint64_t mapId = 42;
+    closer.save(d / "v2.vkloops", mapId);
+    auto placedFor = [&](slam::LoopCloser& c) {
+        size_t placed = 0;
+        for (const RelocalisationCandidate& r : c.relocalisationCandidates({12, &frames[5].first, &frames[5].second, k, path[0]}))
+            placed += r.placed ? 1 : 0;
+        return placed;
+    };
+    slam::LoopCloser fromV2(options);
+    fromV2.load(d / "v2.vkloops", mapId);
+    EXPECT_EQ(fromV2.stats().keyframes, closer.stats().keyframes);
+    const size_t placedV2 = placedFor(fromV2);
+    EXPECT_GE(placedV2, 1u) << "the keyframes' features did not survive the save";
+
+    // Version 1: the same state without each keyframe's feature block.
+    const std::string file = test::readText(d / "v2.vkloops");
+    const size_t header = 8 + 4 + 8 + 8 + 4;
+    std::string raw(ZSTD_getFrameContentSize(file.data() + header, file.size() - header), '\0');
+    ASSERT_EQ(ZSTD_decompress(raw.data(), raw.size(), file.data() + header, file.size() - header), raw.size());
+    auto u32 = [&](size_t at) { uint32_t v; std::memcpy(&v, raw.data() + at, 4); return v; };
+    std::string v1 = raw.substr(0, 8 + 1 + 128 + 4);
+    size_t at = v1.size();
+    for (uint32_t key = 0, keys = u32(8 + 1 + 128); key < keys; ++key) {
+        const size_t start = at;
+        at += 4 + 4;
+        at += 4 + u32(at);                                    // the fern code
+        const uint32_t width = u32(at), height = u32(at + 4);
+        at += 8 + 16 + 8 + size_t(width) * height * 4;        // size, intrinsics, path, registration depth
+        v1 += raw.substr(start, at - start);
+        at += 4 + size_t(u32(at)) * (12 + 32);                // the features (version 2 only)
+    }
+    v1 += raw.substr(at);
+    std::string packed(ZSTD_compressBound(v1.size()), '\0');
+    packed.resize(ZSTD_compress(packed.data(), packed.size(), v1.data(), v1.size(), 3));
+    std::string out = file.substr(0, 8);
+    const uint32_t version = 1, crc = map::crc32(packed.data(), packed.size());
+    const uint64_t size = packed.size();
+    out.append(reinterpret_cast<const char*>(&version), 4).append(reinterpret_cast<const char*>(&mapId), 8);
+    out.append(reinterpret_cast<const char*>(&size), 8).append(reinterpret_cast<const char*>(&crc), 4).append(packed);
+    test::writeBytes(d / "v1.vkloops", out);
+    slam::LoopCloser fromV1(options);
+    fromV1.load(d / "v1.vkloops", mapId);
+    EXPECT_EQ(fromV1.stats().keyframes, closer.stats().keyframes);
+    EXPECT_EQ(placedFor(fromV1), 0u);   // no features: the ferns alone propose
+    Pose pose;
+    EXPECT_TRUE(fromV1.latestPose(11, pose));
+    EXPECT_LT(distanceMetres(pose, path[11]), 1e-9);
+    // A version this vkmesh does not know is refused, naming the file and the versions it reads.
+    out[8] = 3;
+    test::writeBytes(d / "v3.vkloops", out);
+    const std::string why = test::errorMessageOf([&] { slam::LoopCloser(options).load(d / "v3.vkloops", mapId); });
+    EXPECT_NE(why.find("v3.vkloops is version 3; this vkmesh reads versions 1 to 2"), std::string::npos) << why;
     fs::remove_all(d);
 }
 
