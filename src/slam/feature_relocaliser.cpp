@@ -17,6 +17,9 @@ constexpr int kDescriptorBytes = 32;   // ORB's 256 bits
 
 // The colour image as OpenCV's grey image (a copy: ORB needs one channel).
 cv::Mat grey(const ColorImage& color) {
+    if (color.width <= 0 || color.height <= 0 || color.rgb.size() != size_t(color.width) * size_t(color.height) * 3)
+        throw Error("relocalisation by features: a colour image of " + std::to_string(color.width) + " x " + std::to_string(color.height) +
+                    " pixels holds " + std::to_string(color.rgb.size()) + " bytes");
     const cv::Mat rgb(color.height, color.width, CV_8UC3, const_cast<uint8_t*>(color.rgb.data()));
     cv::Mat out;
     cv::cvtColor(rgb, out, cv::COLOR_RGB2GRAY);

@@ -806,6 +806,9 @@ TEST(FeatureRelocaliser, PlacesRealViewsTurnedPastTheFernsAndNotOtherPlaces) {
     ColorImage wrongSize = frame(0).second;
     wrongSize.width /= 2;
     EXPECT_NE(test::errorMessageOf([&] { features.describe(frame(0).first, &wrongSize, k); }).find("colour image is"), std::string::npos);
+    ColorImage shortBytes = frame(0).second;
+    shortBytes.rgb.resize(10);
+    EXPECT_NE(test::errorMessageOf([&] { features.describe(frame(0).first, &shortBytes, k); }).find("holds 10 bytes"), std::string::npos);
 }
 
 // Bad combinations are clear errors.
