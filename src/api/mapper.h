@@ -212,7 +212,8 @@ private:
                                      MapperResult& result);
     // Tracking goes on from an accepted relocalisation, tentatively; `atLoss` is put back if it is refused.
     void startHypothesis(const MapperFrame& frame, const RelocalisationOutcome& found, const gpu::PoseTracker::State& atLoss, double baseline);
-    // Empty when `rmse` is within Relocalisation::maxErrorRatio of `baseline` (or without a baseline), else why not.
+    // Empty when `rmse` is at most `ratio` times `baseline` (Relocalisation::maxErrorRatio, or placedMaxErrorRatio for
+    // a placed candidate tracking agreed with; always without a baseline), else why not.
     std::string errorAgainstBaseline(double rmse, double baseline, double ratio) const;
     // A frame after an unconfirmed relocalisation: tracked, not fused; confirms or refuses the hypothesis.
     MapperResult tentative(const MapperFrame& frame, size_t validPixels, MapperResult result);
