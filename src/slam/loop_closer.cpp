@@ -295,11 +295,10 @@ std::vector<RelocalisationCandidate> LoopCloser::relocalisationCandidates(const 
     std::vector<const KeyframeFeatures*> described;
     for (const int k : matched) described.push_back(&keyframes_[size_t(k)].features);
     for (const FeatureCandidate& found : features_.propose(frame.color, frame.intrinsics, described)) {
-        FeatureCandidate c = found;
-        c.keyframe = matched[size_t(found.keyframe)];
-        lastCandidates_.push_back(c.keyframe);
+        const int k = matched[size_t(found.keyframe)];   // propose() numbers the keyframes it was given
+        lastCandidates_.push_back(k);
         lastByFeatures_.push_back(true);
-        poses.push_back({graph_.pose(keyframes_[size_t(c.keyframe)].node) * inverseRigid(c.keyframeToCamera), true});
+        poses.push_back({graph_.pose(keyframes_[size_t(k)].node) * inverseRigid(found.keyframeToCamera), true});
         ++stats_.featureCandidates;
     }
     time("relocalise_features", msSince(t));

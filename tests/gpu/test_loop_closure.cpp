@@ -518,17 +518,19 @@ TEST(LoopClosure, DriftingGalleryIsNotMadeWorse) {
     fs::remove_all(d);
 }
 
+// The data lines of a TUM-layout text file (depth.txt, rgb.txt, groundtruth.txt) of `folder`.
+std::vector<io::text::TextLine> dataLines(const fs::path& folder, const char* file) {
+    std::ifstream in = io::text::openText(folder / file);
+    return io::text::readDataLines(in, (folder / file).string());
+}
+
 // A real sequence made of ICL-NUIM office 0's frames in the order `frames` (numbers of the data lines of its depth.txt):
 // cut, reversed and joined as ../shared/docs/real-data.md says, each frame with its colour image and its true pose,
 // under new timestamps (2, 8, 14, ...: vkmesh reads frames in time order). bench/real_kidnaps.py (make, mirror)
 // makes the same from any TUM-layout dataset and scores runs on them. `name` must keep the word "icl" (the camera
 // preset).
 fs::path iclSequence(const fs::path& source, const fs::path& dir, const std::string& name, const std::vector<size_t>& frames) {
-    const auto dataLines = [&](const char* file) {
-        std::ifstream in = io::text::openText(source / file);
-        return io::text::readDataLines(in, (source / file).string());
-    };
-    const auto depth = dataLines("depth.txt"), rgb = dataLines("rgb.txt"), truth = dataLines("groundtruth.txt");
+    const auto depth = dataLines(source, "depth.txt"), rgb = dataLines(source, "rgb.txt"), truth = dataLines(source, "groundtruth.txt");
     std::map<std::string, std::string> poseAt;   // ICL-NUIM: one pose per frame, at its timestamp (the frame index)
     for (const auto& t : truth) {
         std::string pose;
@@ -557,11 +559,7 @@ fs::path iclSequence(const fs::path& source, const fs::path& dir, const std::str
 // ground-truth line nearest in time, so that groundtruth.txt holds one pose per frame, in order (runOnRealSequence
 // compares them by position). `name` must keep "fr1": the folder's name picks the camera preset.
 fs::path tumSequence(const fs::path& source, const fs::path& dir, const std::string& name, const std::vector<size_t>& frames) {
-    const auto dataLines = [&](const char* file) {
-        std::ifstream in = io::text::openText(source / file);
-        return io::text::readDataLines(in, (source / file).string());
-    };
-    const auto depth = dataLines("depth.txt"), truth = dataLines("groundtruth.txt");
+    const auto depth = dataLines(source, "depth.txt"), truth = dataLines(source, "groundtruth.txt");
     const fs::path out = dir / name;
     fs::create_directories(out);
     fs::copy_file(source / "rgb.txt", out / "rgb.txt");
@@ -628,6 +626,16 @@ RealRun runOnRealSequence(const fs::path& seq, const fs::path& d) {
     return run;
 }
 
+// What issue 54 asks of a jump onto a mapped place: reported within 2 frames of the landing (not fused), relocalised
+// within 5 (the frame that confirms it).
+void expectReportedAndRelocalised(const RealRun& run, size_t landing) {
+    EXPECT_TRUE(run.notFused.count(landing) || run.notFused.count(landing + 1) || run.notFused.count(landing + 2))
+        << "the jump at frame " << landing << " went unnoticed";
+    bool relocalised = false;
+    for (size_t f = landing; f <= landing + 5; ++f) relocalised = relocalised || run.relocalised.count(f) > 0;
+    EXPECT_TRUE(relocalised) << "the jump at frame " << landing << " was not relocalised within 5 frames";
+}
+
 // Real data (../shared/docs/real-data.md): ICL-NUIM office traj0 with frames 59-98 cut out, a jump of 113 cm and 98
 // degrees to a view that no kept frame saw from within 30 cm and 30 degrees. The jump is noticed at once (the landing
 // frame is lost) and nothing is fused at a wrong place (runOnRealSequence: every fused frame within 5 cm of the
@@ -671,12 +679,7 @@ TEST(RealLoopClosure, IclThereAndBackKidnapsOntoMappedPlacesAreRelocalised) {
     const RealRun run = runOnRealSequence(iclSequence(*root / "iclnuim_office_traj0", d, "icl_back", frames), d);
     ASSERT_EQ(run.online.size(), 189u);
     for (size_t landing : {135u, 160u}) {
-        EXPECT_TRUE(run.notFused.count(landing) || run.notFused.count(landing + 1) || run.notFused.count(landing + 2))
-            << "the jump at frame " << landing << " went unnoticed";
-        size_t relocalisedAt = 0;
-        for (size_t f = landing; f <= landing + 5 && !relocalisedAt; ++f)
-            if (run.relocalised.count(f)) relocalisedAt = f;
-        EXPECT_NE(relocalisedAt, 0u) << "the jump at frame " << landing << " was not relocalised within 5 frames";
+        expectReportedAndRelocalised(run, landing);
     }
     EXPECT_EQ(run.relocalised.size(), 2u);
     EXPECT_GE(run.fused.size(), 175u);
@@ -699,11 +702,7 @@ TEST(RealLoopClosure, TumLandingTurnedPastTheFernsIsPlacedByFeatures) {
     const RealRun run = runOnRealSequence(tumSequence(*root / "tum_fr1_rpy", d, "fr1_cut", joined({frameRange(234, 260), frameRange(300, 329)})), d);
     ASSERT_EQ(run.online.size(), 57u);
     const size_t landing = 27;
-    EXPECT_TRUE(run.notFused.count(landing) || run.notFused.count(landing + 1) || run.notFused.count(landing + 2)) << "the jump went unnoticed";
-    size_t relocalisedAt = 0;
-    for (size_t f = landing; f <= landing + 5 && !relocalisedAt; ++f)
-        if (run.relocalised.count(f)) relocalisedAt = f;
-    EXPECT_NE(relocalisedAt, 0u) << "the landing was not relocalised within 5 frames";
+    expectReportedAndRelocalised(run, landing);
     EXPECT_GE(run.stats["loop_closure"]["relocalisations_by_features"].get<size_t>(), 1u);
     EXPECT_GE(run.fused.size(), 50u);
     fs::remove_all(d);
