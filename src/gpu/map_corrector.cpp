@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <utility>
 
 #include "io/trajectory.h"
 
@@ -24,6 +25,15 @@ double poseChange(const Pose& from, const Pose& to) {
     return (to.topRightCorner<3, 1>() - from.topRightCorner<3, 1>()).norm() + std::atan2(sine, cosine);
 }
 
+MapCorrector::~MapCorrector() {
+    {
+        std::lock_guard lock(mutex_);
+        stopping_ = true;
+    }
+    changed_.notify_all();
+    if (worker_.joinable()) worker_.join();
+}
+
 void MapCorrector::keep(uint32_t index, double timestamp, const Intrinsics& intrinsics, const Pose& cameraToWorld,
                         const DepthImage& depth, const ColorImage* color) {
     StoredFrame frame;
@@ -33,11 +43,48 @@ void MapCorrector::keep(uint32_t index, double timestamp, const Intrinsics& intr
     frame.pose = cameraToWorld;
     frame.depth = depth;
     if (color) frame.color = *color;
-    store_.add(frame);
+    {
+        std::unique_lock lock(mutex_);
+        changed_.wait(lock, [&] { return queued_.size() < kMaxQueued || failed_; });
+        if (failed_) std::rethrow_exception(std::exchange(failed_, nullptr));
+        queued_.push_back(std::move(frame));
+    }
+    changed_.notify_all();
+    if (!worker_.joinable()) worker_ = std::thread([this] { compressQueued(); });
+}
+
+void MapCorrector::compressQueued() {
+    std::unique_lock lock(mutex_);
+    for (;;) {
+        changed_.wait(lock, [&] { return stopping_ || !queued_.empty(); });
+        if (stopping_) return;
+        StoredFrame frame = std::move(queued_.front());
+        queued_.pop_front();
+        adding_ = true;
+        lock.unlock();
+        // store_ is the worker's alone while adding_ (settle() waits for it), so add() runs unlocked.
+        std::exception_ptr error;
+        try {
+            store_.add(frame);
+        } catch (...) {
+            error = std::current_exception();
+        }
+        lock.lock();
+        adding_ = false;
+        if (error && !failed_) failed_ = error;
+        changed_.notify_all();
+    }
+}
+
+void MapCorrector::settle() const {
+    std::unique_lock lock(mutex_);
+    changed_.wait(lock, [&] { return (queued_.empty() && !adding_) || failed_; });
+    if (failed_) std::rethrow_exception(std::exchange(failed_, nullptr));
 }
 
 
 void MapCorrector::correct(const std::vector<uint32_t>& frames, const std::vector<Pose>& poses) {
+    settle();
     if (frames.size() != poses.size())
         throw Error("correct: " + std::to_string(frames.size()) + " frame indices but " + std::to_string(poses.size()) + " poses");
     for (size_t i = 0; i < frames.size(); ++i) {
@@ -55,6 +102,7 @@ void MapCorrector::correct(const std::vector<uint32_t>& frames, const std::vecto
 CorrectionReport MapCorrector::apply(GpuVolume& volume, size_t budget) {
     CorrectionReport report;
     if (pending_.empty() || budget == 0) return report;
+    settle();
     const auto start = std::chrono::steady_clock::now();
     // Largest pose change first: those frames put the most surface in the wrong place.
     std::vector<std::pair<double, uint32_t>> order;

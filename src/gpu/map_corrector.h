@@ -5,10 +5,15 @@
 // incremental mesh follows through its usual passes, and its deltas report every change.
 #pragma once
 
+#include <condition_variable>
 #include <cstdint>
+#include <deque>
+#include <exception>
 #include <filesystem>
 #include <map>
+#include <mutex>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "core/frame_store.h"
@@ -35,13 +40,23 @@ double poseChange(const Pose& from, const Pose& to);
 // Where a map's frame store is saved: beside the map, with the extension .vkframes (map.vkmap -> map.vkframes).
 std::filesystem::path frameStorePathOf(const std::filesystem::path& mapPath);
 
+// Keeping a frame costs its compression (zstd: about 20 ms of a CPU core for a 640 x 480 frame with colour), so
+// keep() only copies the frame and a worker thread of the corrector compresses it into the store while the caller
+// goes on with its next frame (beside the GPU's work). Whatever reads the store (correct, apply, store()) first
+// waits for the frames kept before it, so it sees every one of them; an error of the store's add() (e.g. past its
+// budget without a spill folder) is thrown by the next call. One caller thread at a time, as before.
 class MapCorrector {
 public:
     explicit MapCorrector(FrameStore store) : store_(std::move(store)) {}
+    ~MapCorrector();   // frames still queued are dropped with the store
+    MapCorrector(const MapCorrector&) = delete;
+    MapCorrector& operator=(const MapCorrector&) = delete;
 
-    // Records a frame just fused at `cameraToWorld` (its index: the position in the caller's sequence).
+    // Records a frame just fused at `cameraToWorld` (its index: the position in the caller's sequence): copied now,
+    // compressed into the store by the worker. Waits while kMaxQueued frames are still being compressed.
     void keep(uint32_t index, double timestamp, const Intrinsics& intrinsics, const Pose& cameraToWorld, const DepthImage& depth,
               const ColorImage* color);
+    static constexpr size_t kMaxQueued = 4;
 
     // Queues new poses for frames already kept (a later pose for the same frame replaces a queued one). Every
     // pose is checked first: an unknown frame, a non-finite or non-rigid pose throws Error naming it, and then
@@ -54,12 +69,28 @@ public:
     // the caller's next frame, or GpuVolume::publishMesh(), exports the mesh and takes the deltas.
     CorrectionReport apply(GpuVolume& volume, size_t budget);
 
-    const FrameStore& store() const { return store_; }
-    FrameStore& store() { return store_; }
+    // Every frame kept so far is in it (the call waits for the worker).
+    const FrameStore& store() const {
+        settle();
+        return store_;
+    }
+    FrameStore& store() {
+        settle();
+        return store_;
+    }
 
 private:
+    void compressQueued();   // the worker thread: adds the queued frames to store_ in order
+    void settle() const;     // waits until the queue is empty and the worker idle; rethrows the worker's error
+
     FrameStore store_;
     std::map<uint32_t, Pose> pending_;
+    mutable std::mutex mutex_;                  // guards the members below it
+    mutable std::condition_variable changed_;   // a frame queued or added, or the worker told to stop
+    std::deque<StoredFrame> queued_;
+    bool adding_ = false, stopping_ = false;    // the worker holds a frame popped from queued_; it is to stop
+    mutable std::exception_ptr failed_;         // store_.add()'s error on the worker, thrown by the next call
+    std::thread worker_;                        // started by the first keep()
 };
 
 }  // namespace vkmesh::gpu

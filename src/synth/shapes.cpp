@@ -3,6 +3,8 @@
 #include "synth/synthetic_scene.h"
 #include "synth/synthetic_scene_internal.h"
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -135,16 +137,78 @@ SyntheticScene::SyntheticScene(std::vector<Object> objects) : objects_(std::move
         if (!names.insert(object.name).second) throw Error("synthetic scene: two objects are named '" + object.name + "'");
         boundingRadii_.push_back(object.boundingRadius());
     }
+    buildNearestGrid();
+}
+
+// Why a cell's list gives the exact minimum: every object's sdf is exact, so it changes by at most the distance
+// moved (1-Lipschitz). With c a cell's centre and h its half-diagonal, every point p of the cell has
+// sdf_j(p) <= sdf_j(c) + h for each j, so the scene's sdf(p) <= U = min_j sdf_j(c) + h; and an object with
+// sdf_i(c) - h > U has sdf_i(p) > U >= sdf(p) everywhere in the cell: it is never the minimum there, and the
+// minimum over the others is the same number. kLipschitzSlack covers rounding (and a point that floor() puts
+// in the next cell by an ulp).
+void SyntheticScene::buildNearestGrid() {
+    constexpr size_t kMinObjects = 4;          // below this, the list would save little
+    constexpr double kCellsOnLongestAxis = 64;
+    constexpr double kLipschitzSlack = 1e-6;   // metres
+    if (objects_.size() < kMinObjects || objects_.size() > std::numeric_limits<uint16_t>::max()) return;
+    Eigen::AlignedBox3d bounds;
+    for (size_t i = 0; i < objects_.size(); ++i) {
+        const Object& object = objects_[i];
+        if (std::isfinite(boundingRadii_[i])) {
+            bounds.extend(object.center() - Eigen::Vector3d::Constant(boundingRadii_[i]));
+            bounds.extend(object.center() + Eigen::Vector3d::Constant(boundingRadii_[i]));
+        } else if (object.kind == ObjectKind::RoomInterior) {  // where cameras are: inside a room
+            for (int corner = 0; corner < 8; ++corner) {
+                const Eigen::Vector3d sign((corner & 1) ? 1 : -1, (corner & 2) ? 1 : -1, (corner & 4) ? 1 : -1);
+                bounds.extend(object.objectToWorld * Eigen::Vector3d(sign.cwiseProduct(object.halfExtents)));
+            }
+        }
+    }
+    if (bounds.isEmpty()) return;
+    NearestGrid grid;
+    grid.origin = bounds.min();
+    grid.cellSize = bounds.sizes().maxCoeff() / kCellsOnLongestAxis;
+    if (!(grid.cellSize > 0)) return;
+    for (int axis = 0; axis < 3; ++axis)
+        grid.cells[axis] = std::max(1, static_cast<int>(std::ceil(bounds.sizes()[axis] / grid.cellSize)));
+    const double halfDiagonal = 0.5 * std::sqrt(3.0) * grid.cellSize;
+    std::vector<double> atCentre(objects_.size());
+    grid.firstOfCell.reserve(static_cast<size_t>(grid.cells.prod()) + 1);
+    grid.firstOfCell.push_back(0);
+    for (int z = 0; z < grid.cells.z(); ++z)
+        for (int y = 0; y < grid.cells.y(); ++y)
+            for (int x = 0; x < grid.cells.x(); ++x) {
+                const Eigen::Vector3d centre = grid.origin + (Eigen::Vector3d(x, y, z) + Eigen::Vector3d::Constant(0.5)) * grid.cellSize;
+                double upperBound = kInfinity;
+                for (size_t i = 0; i < objects_.size(); ++i) {
+                    atCentre[i] = objects_[i].sdf(centre);
+                    upperBound = std::min(upperBound, atCentre[i] + halfDiagonal);
+                }
+                for (size_t i = 0; i < objects_.size(); ++i)
+                    if (atCentre[i] - halfDiagonal <= upperBound + kLipschitzSlack) grid.objects.push_back(static_cast<uint16_t>(i));
+                grid.firstOfCell.push_back(static_cast<uint32_t>(grid.objects.size()));
+            }
+    nearestGrid_ = std::move(grid);
 }
 
 double SyntheticScene::sdf(const Eigen::Vector3d& p) const {
     double nearest = kInfinity;
-    for (size_t i = 0; i < objects_.size(); ++i) {
+    auto take = [&](size_t i) {
         // Cheap cull: the distance to an object's bounding sphere is a lower bound of the distance to it.
-        if (std::isfinite(boundingRadii_[i]) && (p - objects_[i].center()).norm() - boundingRadii_[i] >= nearest)
-            continue;
+        if (std::isfinite(boundingRadii_[i]) && (p - objects_[i].center()).norm() - boundingRadii_[i] >= nearest) return;
         nearest = std::min(nearest, objects_[i].sdf(p));
+    };
+    const NearestGrid& grid = nearestGrid_;
+    if (!grid.firstOfCell.empty()) {
+        const Eigen::Vector3d at = (p - grid.origin) / grid.cellSize;
+        if (at.x() >= 0 && at.y() >= 0 && at.z() >= 0 && at.x() < grid.cells.x() && at.y() < grid.cells.y() && at.z() < grid.cells.z()) {
+            const size_t cell = (static_cast<size_t>(at.z()) * grid.cells.y() + static_cast<size_t>(at.y())) * grid.cells.x() +
+                                static_cast<size_t>(at.x());
+            for (uint32_t k = grid.firstOfCell[cell]; k < grid.firstOfCell[cell + 1]; ++k) take(grid.objects[k]);
+            return nearest;
+        }
     }
+    for (size_t i = 0; i < objects_.size(); ++i) take(i);
     return nearest;
 }
 

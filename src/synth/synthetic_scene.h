@@ -167,8 +167,22 @@ public:
                            const RenderOptions& options = {}, ColorImage* color = nullptr) const;
 
 private:
+    // A grid over the scene whose every cell lists the objects that can be nearest to some point of it: sdf()
+    // takes the minimum over its point's cell's list, a few objects a step instead of all of them, and that is
+    // the minimum over all objects exactly (buildNearestGrid says why), so a scene renders the same bits with
+    // or without it. Empty for scenes of few objects; points outside it take every object.
+    struct NearestGrid {
+        Eigen::Vector3d origin = Eigen::Vector3d::Zero();  // the corner of cell (0, 0, 0)
+        double cellSize = 0;
+        Eigen::Vector3i cells = Eigen::Vector3i::Zero();
+        std::vector<uint32_t> firstOfCell;  // cell c's objects: objects[firstOfCell[c] .. firstOfCell[c + 1])
+        std::vector<uint16_t> objects;      // indices into objects_, ascending within a cell
+    };
+    void buildNearestGrid();
+
     std::vector<Object> objects_;
     std::vector<double> boundingRadii_;  // objects_[i].boundingRadius(), cached for the sdf() inner loop
+    NearestGrid nearestGrid_;
 };
 
 // The default Kinect v1 calibration (fx = fy = 525, cx = 319.5, cy = 239.5 at 640 x 480) scaled to another

@@ -12,7 +12,9 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <limits>
 #include <numbers>
+#include <random>
 #include <set>
 #include <sstream>
 #include <utility>
@@ -174,6 +176,33 @@ TEST(SyntheticSdf, DefaultRoomLayout) {
         }
     }
     EXPECT_THROW(scene.object("teapot"), Error);
+}
+
+// The scene's sdf() takes each point's minimum over the objects its grid cell lists (SyntheticScene::NearestGrid):
+// that must be the minimum over every object, to the bit, anywhere (near surfaces, between objects, on cell
+// borders, outside the grid), or renders would change with the grid.
+TEST(SyntheticSdf, NearestObjectListsGiveTheMinimumOverAllObjects) {
+    for (const SyntheticScene& scene : {SyntheticScene::defaultRoom(), SyntheticScene::gallery(), SyntheticScene::twinGroups()}) {
+        std::mt19937_64 random(7);
+        std::uniform_real_distribution<double> coordinate(-8.0, 8.0), height(-0.5, 3.5), unit(0.0, 1.0);
+        size_t nearSurface = 0;
+        for (int n = 0; n < 200000; ++n) {
+            Eigen::Vector3d p(coordinate(random), coordinate(random), height(random));
+            if (n % 4 == 0) {   // a quarter snapped to a 5 cm lattice: points on cell borders and object faces
+                p = (p / 0.05).array().round().matrix() * 0.05;
+            } else if (n % 4 == 1) {   // a quarter pulled onto an object's surface
+                const Object& o = scene.objects()[static_cast<size_t>(unit(random) * scene.objects().size()) % scene.objects().size()];
+                const double d = o.sdf(p);
+                if (std::isfinite(o.boundingRadius())) p = o.center() + (p - o.center()).normalized() * (o.boundingRadius() * unit(random));
+                else p.z() = p.z() - d * 0.999;
+            }
+            double everyObject = std::numeric_limits<double>::infinity();
+            for (const Object& o : scene.objects()) everyObject = std::min(everyObject, o.sdf(p));
+            nearSurface += std::abs(everyObject) < 0.05;
+            ASSERT_EQ(scene.sdf(p), everyObject) << "at (" << p.transpose() << ")";
+        }
+        EXPECT_GT(nearSurface, 1000u) << "the points hardly came near a surface: the test tests little";
+    }
 }
 
 TEST(SyntheticSdf, RejectsBadObjects) {

@@ -271,5 +271,36 @@ TEST(PoseChange, MetresPlusGeodesicRadians) {
     }
 }
 
+// The corrector keeps frames on a worker thread (MapCorrector::keep): whatever reads the store then finds every
+// frame kept before, bit for bit and in order, and an error of the store (here a frame kept twice) is thrown by the
+// next call, naming the frame, with nothing kept before it lost.
+TEST(MapCorrectorKeep, FramesCompressedOnTheWorkerAreAllThereAndErrorsReachTheCaller) {
+    const std::vector<Frame> frames = roomFrames(3);
+    gpu::MapCorrector corrector{FrameStore()};
+    constexpr uint32_t kKept = 3 * gpu::MapCorrector::kMaxQueued;   // more than the queue holds: keep() waits
+    for (uint32_t i = 0; i < kKept; ++i) {
+        const Frame& f = frames[i % frames.size()];
+        corrector.keep(i, 0.1 * i, intrinsics(), drifted(f.pose, i), f.depth, i % 2 ? &f.color : nullptr);
+    }
+    const FrameStore& store = corrector.store();
+    ASSERT_EQ(store.size(), kKept);
+    for (uint32_t i = 0; i < kKept; ++i) {
+        const StoredFrame s = store.get(i);
+        const Frame& f = frames[i % frames.size()];
+        EXPECT_EQ(s.pose, drifted(f.pose, i));
+        ASSERT_EQ(s.depth.meters.size(), f.depth.meters.size());
+        EXPECT_EQ(std::memcmp(s.depth.meters.data(), f.depth.meters.data(), f.depth.meters.size() * sizeof(float)), 0) << "frame " << i;
+        EXPECT_EQ(s.color.rgb, i % 2 ? f.color.rgb : std::vector<uint8_t>{}) << "frame " << i;
+    }
+    // Frame 5 again: refused by the store on the worker; the error reaches the caller at its next call.
+    corrector.keep(5, 9.0, intrinsics(), frames[0].pose, frames[0].depth, nullptr);
+    const std::string why = test::errorMessageOf([&] { (void)corrector.store(); });
+    EXPECT_NE(why.find("frame 5"), std::string::npos) << why;
+    EXPECT_NE(why.find("already stored"), std::string::npos) << why;
+    corrector.keep(kKept, 9.0, intrinsics(), frames[0].pose, frames[0].depth, nullptr);   // and the corrector goes on
+    EXPECT_EQ(corrector.store().size(), kKept + 1);
+    EXPECT_DOUBLE_EQ(corrector.store().timestamp(5), 0.5);   // the first frame 5 stays
+}
+
 }  // namespace
 }  // namespace vkmesh
