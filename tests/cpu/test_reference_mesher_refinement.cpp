@@ -10,6 +10,7 @@
 #include <Eigen/Geometry>
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cmath>
 #include <iostream>
@@ -82,9 +83,15 @@ void forEachCube(const BlockMap& blocks, float minWeight, Fn&& fn) {
 int refinedTypeAt(const BlockMap& blocks, const GlobalCube& g, float minWeight, float eps) {
     float d[kWindowSize] = {};
     bool observed[kWindowSize] = {};
+    // The window spans at most 8 blocks and x runs fastest: look a block up only when it changes (the lookups
+    // were most of the slanted-plane tests' time, which check every cube every frame).
+    BlockMap::const_iterator it = blocks.end();
+    std::array<int, 3> itKey{};
+    bool looked = false;
     for (int w = 0; w < kWindowSize; ++w) {
         const int p[3] = {g[0] + w % 4 - 1, g[1] + (w / 4) % 4 - 1, g[2] + w / 16 - 1};
-        auto it = blocks.find({floorDiv8(p[0]), floorDiv8(p[1]), floorDiv8(p[2])});
+        const std::array<int, 3> key = {floorDiv8(p[0]), floorDiv8(p[1]), floorDiv8(p[2])};
+        if (!looked || key != itKey) it = blocks.find({key[0], key[1], key[2]}), itKey = key, looked = true;
         if (it == blocks.end()) continue;
         const int v = (p[0] - it->first[0] * 8) + 8 * ((p[1] - it->first[1] * 8) + 8 * (p[2] - it->first[2] * 8));
         d[w] = it->second.sdf[v];

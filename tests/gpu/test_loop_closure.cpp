@@ -498,7 +498,7 @@ TEST(LoopClosure, KeyframesAreSavedWithTheMap) {
 // tracking made it (no loop may bend it), lose no frame and recognise the start. (The target, 3x lower ATE
 // with loop closure, is not met: docs/LOOP_CLOSURE.md, "Limits".) The lap in 200 frames, not bench/loop_bench.sh's
 // 300: the camera moves faster and tracking drifts more (up to 9.1 cm, 192 keyframes, 115 loops detected; at 300
-// frames 6.4 cm, 146, 78), and the test takes a third less time (rendering is ~0.2 s of CPU a frame).
+// frames 6.4 cm, 146, 78), and the test takes a third less time (rendering is ~0.15 s of CPU a frame).
 TEST(LoopClosure, DriftingGalleryIsNotMadeWorse) {
     if (const std::string why = test::lavapipeCannotDraw(); !why.empty()) GTEST_SKIP() << why;
     const fs::path d = test::makeTempDir("loop_gallery");
