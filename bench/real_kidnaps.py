@@ -3,7 +3,7 @@
 of a `vkmesh fuse --track --loop-closure` run on it (../shared/docs/real-data.md; docs/LOOP_CLOSURE.md).
 
   /usr/bin/python3 bench/real_kidnaps.py make DATASET OUT (--cut START:COUNT ... | --auto N)
-  /usr/bin/python3 bench/real_kidnaps.py mirror DATASET OUT --frames N
+  /usr/bin/python3 bench/real_kidnaps.py mirror DATASET OUT --frames N [--alternate]
   /usr/bin/python3 bench/real_kidnaps.py score OUT RUN_DIR [--json FILE]
 
 make: OUT gets depth.txt and rgb.txt without the cut frames (associations.txt too, if the dataset has one), copies
@@ -21,7 +21,9 @@ mirror: OUT is a there-and-back sequence: frames 0..N-1 of DATASET, then N-2..0 
 way back revisits what the way there mapped. The way back gets new timestamps (2 t_last - t: increasing, and ICL-
 NUIM's stay frame indices); OUT's depth.txt, rgb.txt (each frame's nearest colour image) and groundtruth.txt (each
 frame's pose) are written with them, the image folders are symlinks. `make OUT ...` then cuts it: jumps on the way
-back land on mapped places.
+back land on mapped places. --alternate: the way there takes the even frames of 0..N-1 and the way back the odd ones
+between them, so that the way back sees the places again in images the way there did not have (a real revisit, not
+the same images: tests/gpu/test_loop_closure.cpp, RealLoopClosure.IclRevisitAfterFiveMetresIsProposedAndVerified).
 
 score: reads what this run wrote (it runs nothing):
   build/vkmesh fuse OUT --track --loop-closure --trajectory-online RUN_DIR/online.txt \
@@ -267,12 +269,20 @@ def cmd_mirror(args):
     with open(os.path.join(args.dataset, "rgb.txt"), encoding="utf-8") as f:
         rgb_paths = [raw.split()[1] for raw in f if raw.split() and not raw.startswith("#")]
     rgb_stamps = np.array([t for t, _ in rgb])
-    last = seq.stamps[n - 1]
-    order = list(range(n)) + list(range(n - 2, -1, -1))
-    stamps = [seq.stamps[f] if k < n else 2 * last - seq.stamps[f] for k, f in enumerate(order)]
+    if args.alternate:
+        if n < 3:
+            fail(f"--frames {n} --alternate: at least 3 frames (0 and 2 there, 1 back)")
+        there = list(range(0, n, 2))
+        back = [f for f in range(there[-1] - 1, 0, -1) if f % 2 == 1]
+    else:
+        there, back = list(range(n)), list(range(n - 2, -1, -1))
+    last = seq.stamps[there[-1]]
+    order = there + back
+    stamps = [seq.stamps[f] if k < len(there) else 2 * last - seq.stamps[f] for k, f in enumerate(order)]
     os.makedirs(args.out, exist_ok=True)
     fmt = (lambda t: f"{t:.0f}") if seq.frame_indices else (lambda t: f"{t:.6f}")
-    note = f"# real_kidnaps.py mirror: frames 0-{n - 1} then {n - 2}-0 of {os.path.abspath(args.dataset)}\n"
+    what = f"frames {there[0]}-{there[-1]} then {back[0]}-{back[-1]}" + (", every other one" if args.alternate else "")
+    note = f"# real_kidnaps.py mirror: {what} of {os.path.abspath(args.dataset)}\n"
     with open(os.path.join(args.out, "depth.txt"), "w", encoding="utf-8") as d, \
             open(os.path.join(args.out, "rgb.txt"), "w", encoding="utf-8") as c, \
             open(os.path.join(args.out, "groundtruth.txt"), "w", encoding="utf-8") as g:
@@ -290,7 +300,7 @@ def cmd_mirror(args):
         source, target = os.path.join(args.dataset, name), os.path.join(args.out, name)
         if os.path.isdir(source) and not os.path.lexists(target):
             os.symlink(os.path.abspath(source), target)
-    print(f"{args.out}: {len(order)} frames (0-{n - 1}, then {n - 2}-0)")
+    print(f"{args.out}: {len(order)} frames ({what})")
 
 
 def matrix_to_quaternion(r):
@@ -429,6 +439,7 @@ def main():
     mirror.add_argument("dataset")
     mirror.add_argument("out")
     mirror.add_argument("--frames", type=int, required=True, metavar="N", help="frames of the way there")
+    mirror.add_argument("--alternate", action="store_true", help="even frames there, the odd ones between them back")
     score = sub.add_parser("score", help="score a vkmesh run on OUT")
     score.add_argument("out")
     score.add_argument("run_dir")
