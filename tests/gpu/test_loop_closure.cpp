@@ -636,30 +636,40 @@ void expectReportedAndRelocalised(const RealRun& run, size_t landing) {
     EXPECT_TRUE(relocalised) << "the jump at frame " << landing << " was not relocalised within 5 frames";
 }
 
-// Real data (../shared/docs/real-data.md): ICL-NUIM office traj0 with frames 59-98 cut out, a jump of 113 cm and 98
-// degrees to a view that no kept frame saw from within 30 cm and 30 degrees. The jump is noticed at once (the landing
-// frame is lost) and nothing is fused at a wrong place (runOnRealSequence: every fused frame within 5 cm of the
-// truth, every relocalised one within 5 degrees too). Before relocalisations were tentative (MapperOptions::
-// Relocalisation), frame 93 settled on a look-alike 108 cm off (65 % of its pixels matching, at 3.6 times the inlier
-// RMSE of the frames before the loss) and tracking went on from there. With the ferns alone the camera then stayed
-// lost (71 frames); the landing view's ORB features match a keyframe's that sees the same wall from far off, and the
-// pose they give is confirmed by tracking (measured: relocalised at the landing, confirmed 2 frames later, 1 cm off).
+// Real data (../shared/docs/real-data.md): ICL-NUIM office traj0's frames 0-58, 99-129 and 160-185: two jumps to views
+// that no kept frame saw from within 30 cm and 30 degrees. The first (113 cm, 98 degrees) is noticed at once (the
+// landing frame is lost) and nothing is fused at a wrong place (runOnRealSequence: every fused frame within 5 cm of
+// the truth, every relocalised one within 5 degrees too). Before relocalisations were tentative (MapperOptions::
+// Relocalisation), frame 93 of the recording settled on a look-alike 108 cm off (65 % of its pixels matching, at 3.6
+// times the inlier RMSE of the frames before the loss) and tracking went on from there. With the ferns alone the
+// camera then stayed lost (71 frames); the landing view's ORB features match a keyframe's that sees the same wall from
+// far off, and the pose they give is confirmed by tracking (measured: relocalised at the landing, confirmed 2 frames
+// later, 1 cm off). The second (72 cm, 49 degrees, frame 90 here) lands on a wall (70 % of the landing's depth within
+// 2 cm of one plane): relocalised at the landing, 1.3 cm off, but tracking from there slid 9-10 cm along the wall with
+// an RMSE as good as the frames' before the loss, and the confirming frame was fused 10 cm off, until a hypothesis's
+// frames had to agree with where their own features place them (Mapper::placedElsewhere; measured 2026-12-07: the
+// confirming frame's features put it 8.5 cm from tracking, it was found again from them and fused 1.0 cm off).
 TEST(RealLoopClosure, IclKidnapIntoAnUnmappedPlaceIsNotFusedAtAWrongPlace) {
     if (const std::string why = test::lavapipeCannotDraw(); !why.empty()) GTEST_SKIP() << why;
     const auto root = test::sharedDatasetsDir();
     if (!root) GTEST_SKIP() << "shared datasets not found at ../shared/datasets (or $VKMESH_DATASETS)";
     const fs::path d = test::makeTempDir("real_kidnap_icl");
-    const RealRun run = runOnRealSequence(iclSequence(*root / "iclnuim_office_traj0", d, "icl_cut", joined({frameRange(0, 58), frameRange(99, 169)})), d);
-    ASSERT_EQ(run.online.size(), 130u);
-    EXPECT_TRUE(run.notFused.count(59) || run.notFused.count(60) || run.notFused.count(61)) << "the jump at frame 59 went unnoticed";
-    EXPECT_EQ(run.fused.size() + run.notFused.size(), 129u);   // every frame after the first has a verdict
-    EXPECT_GE(run.fused.size(), 120u);                         // found again within a few frames
-    size_t placed = 0;
+    const std::vector<size_t> frames = joined({frameRange(0, 58), frameRange(99, 129), frameRange(160, 185)});
+    const RealRun run = runOnRealSequence(iclSequence(*root / "iclnuim_office_traj0", d, "icl_cut", frames), d);
+    ASSERT_EQ(run.online.size(), 116u);
+    for (size_t landing : {59u, 90u})
+        EXPECT_TRUE(run.notFused.count(landing) || run.notFused.count(landing + 1) || run.notFused.count(landing + 2))
+            << "the jump at frame " << landing << " went unnoticed";
+    EXPECT_EQ(run.fused.size() + run.notFused.size(), 115u);   // every frame after the first has a verdict
+    EXPECT_GE(run.fused.size(), 106u);                         // found again within a few frames
+    // The first landing, which the ferns alone never found: placed by the features. (The wall's was found from a
+    // keyframe the ferns named, and its frames again from the features' and the ferns' candidates.)
+    bool firstPlaced = false;
     for (const auto& e : run.stats["loop_closure"]["relocalisation"])
-        if (e["relocalised"].get<bool>()) placed += e["placed"].get<bool>() ? 1 : 0;
-    EXPECT_EQ(placed, run.relocalised.size()) << "a relocalisation the features did not place";
-    EXPECT_GE(run.relocalised.size(), 1u);
-    EXPECT_EQ(run.stats["loop_closure"]["relocalisations_by_features"].get<size_t>(), run.relocalised.size());
+        if (e["frame"] == 59) firstPlaced = e["relocalised"].get<bool>() && e["placed"].get<bool>();
+    EXPECT_TRUE(firstPlaced) << run.stats["loop_closure"]["relocalisation"].dump();
+    EXPECT_EQ(run.relocalised.size(), 2u);
+    EXPECT_GE(run.stats["loop_closure"]["relocalisations_by_features"].get<size_t>(), 1u);
     fs::remove_all(d);
 }
 
@@ -827,7 +837,9 @@ TEST(FeatureRelocaliser, PlacesRealViewsTurnedPastTheFernsAndNotOtherPlaces) {
         const Pose error = inverseRigid(truth) * inverseRigid(found.front().keyframeToCamera);
         if (translationMetres(error) < 0.05 && rotationDegrees(error) < 5.0) ++sameRight;
         // Deterministic: the same frames give the same pose.
-        if (p == 0) EXPECT_EQ(features.propose(&frame(j).second, k, {&keyframe}).front().keyframeToCamera, found.front().keyframeToCamera);
+        if (p == 0) {
+            EXPECT_EQ(features.propose(&frame(j).second, k, {&keyframe}).front().keyframeToCamera, found.front().keyframeToCamera);
+        }
     }
     for (int p = 0; p < pairs; ++p) {
         const auto [i, j] = other[size_t(p) * other.size() / pairs];
