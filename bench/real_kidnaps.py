@@ -38,6 +38,9 @@ without alignment. Per kidnap (its window runs from the landing frame L to the n
              many fused frames are > 5 cm off
   ATE        RMSE of the fused frames' position errors, online poses, unaligned (shared world frame)
   pass       detected; recovered with no frame fused > 5 cm off before (mapped) or the unmapped rule; no false one
+  vs map     each relocalised frame's error against the map it landed on: its pose seen from the fused frame before L
+             whose true pose is nearest, against the same relative pose in the ground truth (the map's drift there
+             cancels; for an unmapped landing that frame is far off, and drift between the two places does not)
 """
 
 import argparse
@@ -361,6 +364,22 @@ def cmd_score(args):
                 "ate_rmse_m": float(math.sqrt(np.mean(e ** 2))) if len(e) else None,
                 "ate_final_rmse_m": float(math.sqrt(np.mean(final ** 2))) if len(final) else None}
 
+    def against_map(f, landing):
+        """A relocalised frame's error against the map it was placed in: its pose seen from the fused frame before
+        the landing whose true pose is nearest (the part of the map it landed on), against the same relative pose in
+        the ground truth; (metres, degrees, that frame), or None. The drift of the map there moves that frame and a
+        relocalisation that is right against the map alike, and cancels here."""
+        mapped = [k for k in range(landing) if k in frames and frames[k][0] != "lost" and seq.poses[k] is not None]
+        if not mapped or f not in est or seq.poses[f] is None:
+            return None
+        k = min(mapped, key=lambda j: max(difference(seq.poses[j], seq.poses[f])[0] / SEEN_M,
+                                           difference(seq.poses[j], seq.poses[f])[1] / SEEN_DEG))
+
+        def relative(a, b):   # b seen from a: (position, rotation)
+            return a[1].T @ (b[0] - a[0]), a[1].T @ b[1]
+        m, deg = difference(relative(est[k]["online"], est[f]["online"]), relative(seq.poses[k], seq.poses[f]))
+        return m, deg, k
+
     def fused_off(lo, hi):
         return [f for f in range(lo, hi) if f in frames and frames[f][0] != "lost" and frames[f][1] > OK_M]
 
@@ -390,6 +409,8 @@ def cmd_score(args):
             handled = row["recovered_after"] is not None and not row["fused_off_before_recovery"]
         row.update(errors(L, end))
         row["pass"] = row["detected_after"] is not None and handled and not row["false_relocalisations"]
+        row["relocalised_against_map"] = [[f, *against_map(f, L)] for f in range(L, end) if f in relocalised and against_map(f, L)]
+        row["false_against_map"] = [e[0] for e in row["relocalised_against_map"] if e[1] > OK_M or e[2] > OK_DEG]
     first = kidnaps[0]["landing_frame"] if kidnaps else run_frames
     summary = {"run_frames": run_frames, "before_first_kidnap": errors(0, min(first, run_frames)),
                "all": errors(0, run_frames), "alignment": "none (the run starts at frame 0's ground-truth pose)",
@@ -400,7 +421,7 @@ def cmd_score(args):
     cm = lambda v: "-" if v is None else f"{v * 100:.1f}"  # noqa: E731
     after = lambda v: "no" if v is None else f"+{v}"  # noqa: E731
     print(f"{'#':>2} {'land':>5} {'jump cm/deg':>12} {'landing':>9} {'detect':>6} {'recover':>14} {'unmapped':>18} "
-          f"{'false':>5} {'lost':>4} {'reloc':>5} {'max cm':>7} {'>5cm':>5} {'ATE cm':>6}  pass")
+          f"{'false':>5} {'lost':>4} {'reloc':>5} {'max cm':>7} {'>5cm':>5} {'ATE cm':>6}  pass  vs map cm/deg")
     for r in rows:
         line = f"{r['kidnap']:>2} {r['landing_frame']:>5} {cm(r['jump_m']):>6}/{r['jump_deg']:<5} {r['landing']:>9}"
         if not r["reached"]:
@@ -411,14 +432,17 @@ def cmd_score(args):
             f"back {after(r['back_over_map_after'])}: {r['relocalised_before_back']}r {r['fused_off_before_back']} off"
         print(f"{line} {after(r['detected_after']):>6} {rec:>14} {unm:>18} {len(r['false_relocalisations']):>5} "
               f"{r['lost']:>4} {r['relocalised']:>5} {cm(r['max_m']):>7} {r['over_5cm']:>5} {cm(r['ate_rmse_m']):>6}  "
-              f"{'yes' if r['pass'] else 'NO'}")
+              f"{'yes' if r['pass'] else 'NO ':<4} "
+              + " ".join(f"{cm(e[1])}/{e[2]:.1f}" for e in r["relocalised_against_map"]))
     a, b = summary["all"], summary["before_first_kidnap"]
     print(f"summary: {summary['passed']} of {len(rows)} kidnaps passed, {summary['detected']} detected "
           f"({summary['kidnaps_reached']} reached in {run_frames} frames); {a['lost']} lost, {a['relocalised']} "
           f"relocalised, {len(a['false_relocalisations'])} false; fused {a['fused']}, max {cm(a['max_m'])} cm, "
           f"{a['over_5cm']} > 5 cm; "
           f"ATE RMSE {cm(a['ate_rmse_m'])} cm online, {cm(a['ate_final_rmse_m'])} cm final (unaligned; "
-          f"{cm(b['ate_rmse_m'])} cm before the first kidnap)")
+          f"{cm(b['ate_rmse_m'])} cm before the first kidnap); against the map they landed on, "
+          f"{sum(len(r.get('false_against_map', [])) for r in rows)} of "
+          f"{sum(len(r.get('relocalised_against_map', [])) for r in rows)} relocalisations > 5 cm or 5 deg off")
     if args.json:
         with open(args.json, "w", encoding="utf-8") as f:
             per_frame = {f: [v[0], round(v[1], 4), round(v[2], 2)] for f, v in frames.items()}   # status, m, deg
