@@ -261,7 +261,7 @@ def cmd_mirror(args):
     if not 2 <= n <= len(seq.frames):
         fail(f"--frames {n}: the dataset has {len(seq.frames)} frames")
     if seq.preset(args.out) != seq.preset(args.dataset):
-        fail(f"vkmesh picks intrinsics by folder name: keep the dataset's sensor word (fr1, icl) in OUT's name")
+        fail("vkmesh picks intrinsics by folder name: keep the dataset's sensor word (fr1, icl) in OUT's name")
     missing = [f for f in range(n) if seq.poses[f] is None]
     if missing:
         fail(f"frames {missing[:5]} of {args.dataset} have no ground-truth pose")
