@@ -84,6 +84,10 @@ public:
     // How trying them ended (counted; a success also restarts the pose graph's chain at that frame, whose
     // frameFused follows).
     virtual void relocalisationResult(uint32_t frame, bool relocalised, int candidatesTried) = 0;
+    // Where the frame's own features place it against the keyframes (candidates with `placed` set), to check a pose
+    // tracking found. Unlike relocalisationCandidates it starts no relocalisation: the candidates relocalisationResult
+    // refers to stay those of the last relocalisationCandidates call, and no lost frame is counted. None by default.
+    virtual std::vector<RelocalisationCandidate> placements(const LoopClosureFrame&) { return {}; }
     // The latest pose of every frame fused so far (the loops' corrections applied), by frame number.
     virtual bool latestPose(uint32_t frame, Pose& pose) const = 0;
     // Kept with a saved map (beside it: loopClosurePathOf), tied to it by the map's save id: a run continued from

@@ -163,11 +163,10 @@ MapperResult Mapper::tracked(const MapperFrame& frame, size_t valid) {
 }
 
 Mapper::RelocalisationOutcome Mapper::relocalise(const MapperFrame& frame, const Pose& predicted, const std::string& lostReason,
-                                                 double baseline, MapperResult& result, const std::vector<RelocalisationCandidate>* known) {
+                                                 double baseline, MapperResult& result) {
     LoopClosure& loops = *options_.loopClosure;
     const MapperOptions::Relocalisation& o = options_.relocalisation;
-    const std::vector<RelocalisationCandidate> candidates =
-        known ? *known : loops.relocalisationCandidates({frame.index, frame.depth, frame.color, frame.intrinsics, predicted});
+    const std::vector<RelocalisationCandidate> candidates = loops.relocalisationCandidates({frame.index, frame.depth, frame.color, frame.intrinsics, predicted});
     RunStats::Relocalisation attempt;
     attempt.frame = frame.index;
     attempt.candidates = candidates.size();
@@ -243,17 +242,14 @@ std::string Mapper::errorAgainstBaseline(double rmse, double baseline, double ra
     return text;
 }
 
-std::string Mapper::placedElsewhere(const std::vector<RelocalisationCandidate>& candidates, const Pose& tracked, Hypothesis& h) const {
+std::string Mapper::placedElsewhere(const std::vector<RelocalisationCandidate>& placed, const Pose& tracked) const {
     const MapperOptions::Relocalisation& o = options_.relocalisation;
     const gpu::TrackerOptions& t = tracker_->options();
     double nearest = std::numeric_limits<double>::infinity();
-    for (size_t c = 0; c < candidates.size(); ++c) {
-        if (!candidates[c].placed) continue;
-        const Pose apart = inverseRigid(candidates[c].cameraToWorld) * tracked;
-        if (translationMetres(apart) <= o.placedAgreeMetres && rotationDegrees(apart) <= o.placedAgreeDegrees) {
-            if (h.candidate > 0) h.candidate = int(c + 1);   // of the loop closer's latest candidates
-            return {};
-        }
+    for (const RelocalisationCandidate& candidate : placed) {
+        if (!candidate.placed) continue;
+        const Pose apart = inverseRigid(candidate.cameraToWorld) * tracked;
+        if (translationMetres(apart) <= o.placedAgreeMetres && rotationDegrees(apart) <= o.placedAgreeDegrees) return {};
         if (translationMetres(apart) <= t.maxJumpMetres && rotationDegrees(apart) <= t.maxJumpDegrees)
             nearest = std::min(nearest, translationMetres(apart));
     }
@@ -270,13 +266,11 @@ MapperResult Mapper::tentative(const MapperFrame& frame, size_t valid, MapperRes
     // Geometry alone can let a hypothesis's frames slide: after a landing onto a wall, tracking from the hypothesis
     // matched the wall as well as the frames before the loss matched theirs, 9-11 cm along it (ICL-NUIM, frames
     // 0-129 then 160-251: the confirming frame was fused 9 cm off). The frame's features, where they place it, must
-    // agree with tracking (the loop closer's candidates for it, reused below if it has to be found again).
-    std::vector<RelocalisationCandidate> candidates;
-    const bool asked = why.empty() && valid > 0 && options_.loopClosure;
-    if (asked) {
-        candidates = options_.loopClosure->relocalisationCandidates({frame.index, frame.depth, frame.color, frame.intrinsics, r.cameraToWorld});
-        why = placedElsewhere(candidates, r.cameraToWorld, h);
-    }
+    // agree with tracking (LoopClosure::placements: the hypothesis's candidate, which confirmation reports, is left
+    // as it was).
+    if (why.empty() && valid > 0 && options_.loopClosure)
+        why = placedElsewhere(options_.loopClosure->placements({frame.index, frame.depth, frame.color, frame.intrinsics, r.cameraToWorld}),
+                              r.cameraToWorld);
     if (!why.empty()) {
         // Not tracked from the hypothesis (after a relocalisation the camera's motion is unknown: a fast one is
         // not followed from a standstill): found again from the keyframes at a place it could have moved to from
@@ -284,7 +278,7 @@ MapperResult Mapper::tentative(const MapperFrame& frame, size_t valid, MapperRes
         const std::string lostFromIt = "frame " + std::to_string(frame.index) + " tracked from the relocalisation at frame " +
                                        std::to_string(h.frame) + " is lost: " + why;
         RelocalisationOutcome found;
-        if (valid > 0 && options_.loopClosure) found = relocalise(frame, h.pose, lostFromIt, h.baselineRmse, result, asked ? &candidates : nullptr);
+        if (valid > 0 && options_.loopClosure) found = relocalise(frame, h.pose, lostFromIt, h.baselineRmse, result);
         else found.tracking.lostReason = lostFromIt;
         const Pose moved = inverseRigid(h.pose) * found.tracking.cameraToWorld;
         const gpu::TrackerOptions& t = tracker_->options();

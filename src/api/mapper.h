@@ -208,9 +208,8 @@ private:
     };
     // `baseline`: the inlier RMSE of the frames tracked before the loss. Records the attempt in the stats; tells
     // the loop closer when nothing was accepted.
-    // `known`: the loop closer's candidates for this frame, when they were asked for already.
     RelocalisationOutcome relocalise(const MapperFrame& frame, const Pose& predicted, const std::string& lostReason, double baseline,
-                                     MapperResult& result, const std::vector<RelocalisationCandidate>* known = nullptr);
+                                     MapperResult& result);
     // Tracking goes on from an accepted relocalisation, tentatively; `atLoss` is put back if it is refused.
     void startHypothesis(const MapperFrame& frame, const RelocalisationOutcome& found, const gpu::PoseTracker::State& atLoss, double baseline);
     // Empty when `rmse` is at most `ratio` times `baseline` (Relocalisation::maxErrorRatio, or placedMaxErrorRatio for
@@ -218,12 +217,10 @@ private:
     std::string errorAgainstBaseline(double rmse, double baseline, double ratio) const;
     // A frame after an unconfirmed relocalisation: tracked, not fused; confirms or refuses the hypothesis.
     MapperResult tentative(const MapperFrame& frame, size_t validPixels, MapperResult result);
-    struct Hypothesis;
-    // A hypothesis's frame tracked to `tracked`, against where its own ORB features place it (`candidates`, the
-    // loop closer's for the frame): "" when a placed candidate agrees (within placedAgree*; it becomes the
-    // hypothesis's candidate), when none is placed, or when every placement is further than tracking's jump bounds
-    // (a look-alike's, not this place's); else why the frame does not confirm the hypothesis.
-    std::string placedElsewhere(const std::vector<RelocalisationCandidate>& candidates, const Pose& tracked, Hypothesis& h) const;
+    // A hypothesis's frame tracked to `tracked`, against where its own ORB features place it (`placed`, the loop
+    // closer's placements): "" when one agrees (within placedAgree*), when there is none, or when every one is further
+    // than tracking's jump bounds (a look-alike's, not this place's); else why the frame does not confirm the hypothesis.
+    std::string placedElsewhere(const std::vector<RelocalisationCandidate>& placed, const Pose& tracked) const;
     MapperResult tentativeVerdict(const MapperFrame& frame, gpu::TrackingReport tracking, MapperResult result);
     MapperResult confirmRelocalisation(const MapperFrame& frame, gpu::TrackingReport tracking, MapperResult result);
     // A tracked frame's verdict recorded, and the frame fused (f.fused) or reported lost.

@@ -274,14 +274,10 @@ LoopCloser::LoopOutcome LoopCloser::tryLoop(const Keyframe& current, const Regis
     return LoopOutcome::Closed;
 }
 
-std::vector<RelocalisationCandidate> LoopCloser::relocalisationCandidates(const LoopClosureFrame& frame) {
-    ++stats_.lostFrames;
-    lastCandidates_.clear();
-    lastByFeatures_.clear();
-    std::vector<RelocalisationCandidate> poses;
-    if (!frame.depth || keyframes_.empty()) return poses;
-    // The features' poses first: they place the camera, where a fern candidate only names a keyframe to start from.
-    auto t = Clock::now();
+std::vector<std::pair<int, RelocalisationCandidate>> LoopCloser::placeByFeatures(const LoopClosureFrame& frame, const char* stage) {
+    std::vector<std::pair<int, RelocalisationCandidate>> placed;
+    if (!frame.depth || keyframes_.empty()) return placed;
+    const auto t = Clock::now();
     std::vector<int> matched;   // the keyframes matched against: all of them, or the newest and a moving window
     const size_t limit = size_t(options_.features.matchKeyframes), count = keyframes_.size();
     if (count <= limit) {
@@ -296,13 +292,32 @@ std::vector<RelocalisationCandidate> LoopCloser::relocalisationCandidates(const 
     for (const int k : matched) described.push_back(&keyframes_[size_t(k)].features);
     for (const FeatureCandidate& found : features_.propose(frame.color, frame.intrinsics, described)) {
         const int k = matched[size_t(found.keyframe)];   // propose() numbers the keyframes it was given
+        placed.push_back({k, {graph_.pose(keyframes_[size_t(k)].node) * inverseRigid(found.keyframeToCamera), true}});
+    }
+    time(stage, msSince(t));
+    return placed;
+}
+
+std::vector<RelocalisationCandidate> LoopCloser::placements(const LoopClosureFrame& frame) {
+    std::vector<RelocalisationCandidate> poses;
+    for (const auto& [k, candidate] : placeByFeatures(frame, "check_features")) poses.push_back(candidate);
+    return poses;
+}
+
+std::vector<RelocalisationCandidate> LoopCloser::relocalisationCandidates(const LoopClosureFrame& frame) {
+    ++stats_.lostFrames;
+    lastCandidates_.clear();
+    lastByFeatures_.clear();
+    std::vector<RelocalisationCandidate> poses;
+    if (!frame.depth || keyframes_.empty()) return poses;
+    // The features' poses first: they place the camera, where a fern candidate only names a keyframe to start from.
+    for (const auto& [k, candidate] : placeByFeatures(frame, "relocalise_features")) {
         lastCandidates_.push_back(k);
         lastByFeatures_.push_back(true);
-        poses.push_back({graph_.pose(keyframes_[size_t(k)].node) * inverseRigid(found.keyframeToCamera), true});
+        poses.push_back(candidate);
         ++stats_.featureCandidates;
     }
-    time("relocalise_features", msSince(t));
-    t = Clock::now();
+    auto t = Clock::now();
     const FernCode code = ferns_.encode(ferns_.shrink(*frame.depth, frame.color));
     std::vector<std::pair<double, int>> alike;
     for (int k = 0; k < int(keyframes_.size()); ++k) {

@@ -102,6 +102,7 @@ public:
     explicit LoopCloser(const LoopClosureOptions& options = {});
     PoseCorrections frameFused(const LoopClosureFrame& frame) override;
     std::vector<RelocalisationCandidate> relocalisationCandidates(const LoopClosureFrame& frame) override;
+    std::vector<RelocalisationCandidate> placements(const LoopClosureFrame& frame) override;
     void relocalisationResult(uint32_t frame, bool relocalised, int candidatesTried) override;
     bool latestPose(uint32_t frame, Pose& pose) const override;
     // File layout (little-endian): "VKLOOPS" and a 0 byte, u32 version (2), u64 map id, u64 payload bytes, u32
@@ -159,6 +160,9 @@ private:
     std::optional<int> relocalisedFrom_;
     std::vector<int> lastCandidates_;   // relocalisationCandidates' keyframes, in the order returned
     std::vector<bool> lastByFeatures_;  // and whether the features proposed each
+    // The poses the frame's features place it at, with the keyframe each was matched to (relocalisationCandidates,
+    // placements); `stage`: the milliseconds' name.
+    std::vector<std::pair<int, RelocalisationCandidate>> placeByFeatures(const LoopClosureFrame& frame, const char* stage);
     size_t featureWindow_ = 0;          // where the next lost frame's window of older keyframes starts (FeatureOptions::matchKeyframes)
     int lastVerifiedKeyframe_ = -1;     // the newest keyframe whose loop verified (closed or consistent)
     LoopClosureStats stats_;

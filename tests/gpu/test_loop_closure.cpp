@@ -356,6 +356,42 @@ TEST(LoopClosure, KidnappedCameraIsRelocalisedFromTheKeyframes) {
     fs::remove_all(d);
 }
 
+// Placements (LoopCloser::placements) check a tracked pose against where the frame's features put it, between a
+// relocalisation and its confirmation: they must not touch what relocalisationResult refers to. (The Mapper's check
+// once asked relocalisationCandidates instead, and a hypothesis confirmed after a check that found nothing named a
+// candidate of an empty list: "relocalised by candidate 2 of 0", the run stopped.)
+TEST(LoopCloser, PlacementsLeaveTheRelocalisationsCandidatesAsTheyWere) {
+    const synth::SyntheticScene room = synth::SyntheticScene::defaultRoom();
+    const Intrinsics k = synth::kinectIntrinsics(320, 240);
+    const std::vector<Pose> path = synth::cameraPath(40);
+    slam::LoopClosureOptions options;
+    options.registrationWidth = 160;
+    slam::LoopCloser closer(options);
+    std::vector<std::pair<DepthImage, ColorImage>> frames;
+    for (uint32_t i = 0; i < 12; ++i) {
+        ColorImage color;
+        DepthImage depth = room.renderDepth(k, path[i], {}, &color);
+        closer.frameFused({i, &depth, &color, k, path[i]});
+        frames.emplace_back(std::move(depth), std::move(color));
+    }
+    const std::vector<RelocalisationCandidate> candidates = closer.relocalisationCandidates({12, &frames[5].first, &frames[5].second, k, path[0]});
+    ASSERT_GE(candidates.size(), 2u);
+    const uint32_t lostBefore = closer.stats().lostFrames, placedBefore = closer.stats().featureCandidates;
+    // A view of the same place: placed, at the poses relocalisationCandidates gave its features' candidates.
+    const std::vector<RelocalisationCandidate> placed = closer.placements({13, &frames[5].first, &frames[5].second, k, path[0]});
+    ASSERT_GE(placed.size(), 1u);
+    EXPECT_TRUE(placed.front().placed);
+    ASSERT_TRUE(candidates.front().placed);   // the features' candidates come first
+    EXPECT_TRUE(placed.front().cameraToWorld.isApprox(candidates.front().cameraToWorld, 1e-9));
+    // A frame without colour: nothing placed.
+    EXPECT_TRUE(closer.placements({14, &frames[5].first, nullptr, k, path[0]}).empty());
+    EXPECT_EQ(closer.stats().lostFrames, lostBefore);
+    EXPECT_EQ(closer.stats().featureCandidates, placedBefore);
+    // The relocalisation still ends on the candidate it was found from: the last of the list.
+    EXPECT_NO_THROW(closer.relocalisationResult(12, true, int(candidates.size())));
+    EXPECT_EQ(closer.stats().relocalisations, 1u);
+}
+
 // The .vkloops of an earlier vkmesh (version 1: keyframes without ORB features) still loads: its keyframes are
 // proposed by the ferns alone. Written here from a version 2 file by taking the features out of each keyframe, as
 // version 1 laid them out (LoopCloser::save's layout). Version 2 keeps the features: a frame of a keyframe's view is
