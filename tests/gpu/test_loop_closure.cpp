@@ -356,24 +356,39 @@ TEST(LoopClosure, KidnappedCameraIsRelocalisedFromTheKeyframes) {
     fs::remove_all(d);
 }
 
+// The room's first 12 frames along its orbit at 320 x 240, with colour, fused into a loop closer (registration at
+// 160 px): keyframes with codes and ORB features to relocalise against.
+struct RoomKeyframes {
+    const Intrinsics k = synth::kinectIntrinsics(320, 240);
+    const std::vector<Pose> path = synth::cameraPath(40);
+    const slam::LoopClosureOptions options = [] {
+        slam::LoopClosureOptions o;
+        o.registrationWidth = 160;
+        return o;
+    }();
+    slam::LoopCloser closer{options};
+    std::vector<std::pair<DepthImage, ColorImage>> frames;
+    RoomKeyframes() {
+        const synth::SyntheticScene room = synth::SyntheticScene::defaultRoom();
+        for (uint32_t i = 0; i < 12; ++i) {
+            ColorImage color;
+            DepthImage depth = room.renderDepth(k, path[i], {}, &color);
+            closer.frameFused({i, &depth, &color, k, path[i]});
+            frames.emplace_back(std::move(depth), std::move(color));
+        }
+    }
+};
+
 // Placements (LoopCloser::placements) check a tracked pose against where the frame's features put it, between a
 // relocalisation and its confirmation: they must not touch what relocalisationResult refers to. (The Mapper's check
 // once asked relocalisationCandidates instead, and a hypothesis confirmed after a check that found nothing named a
 // candidate of an empty list: "relocalised by candidate 2 of 0", the run stopped.)
 TEST(LoopCloser, PlacementsLeaveTheRelocalisationsCandidatesAsTheyWere) {
-    const synth::SyntheticScene room = synth::SyntheticScene::defaultRoom();
-    const Intrinsics k = synth::kinectIntrinsics(320, 240);
-    const std::vector<Pose> path = synth::cameraPath(40);
-    slam::LoopClosureOptions options;
-    options.registrationWidth = 160;
-    slam::LoopCloser closer(options);
-    std::vector<std::pair<DepthImage, ColorImage>> frames;
-    for (uint32_t i = 0; i < 12; ++i) {
-        ColorImage color;
-        DepthImage depth = room.renderDepth(k, path[i], {}, &color);
-        closer.frameFused({i, &depth, &color, k, path[i]});
-        frames.emplace_back(std::move(depth), std::move(color));
-    }
+    RoomKeyframes fused;
+    slam::LoopCloser& closer = fused.closer;
+    const Intrinsics& k = fused.k;
+    const std::vector<Pose>& path = fused.path;
+    const auto& frames = fused.frames;
     const std::vector<RelocalisationCandidate> candidates = closer.relocalisationCandidates({12, &frames[5].first, &frames[5].second, k, path[0]});
     ASSERT_GE(candidates.size(), 2u);
     const uint32_t lostBefore = closer.stats().lostFrames, placedBefore = closer.stats().featureCandidates;
@@ -397,19 +412,12 @@ TEST(LoopCloser, PlacementsLeaveTheRelocalisationsCandidatesAsTheyWere) {
 // version 1 laid them out (LoopCloser::save's layout). Version 2 keeps the features: a frame of a keyframe's view is
 // placed by them after a save and a load.
 TEST(LoopCloser, LoadsVersionOneFilesWithoutFeatures) {
-    const synth::SyntheticScene room = synth::SyntheticScene::defaultRoom();
-    const Intrinsics k = synth::kinectIntrinsics(320, 240);
-    const std::vector<Pose> path = synth::cameraPath(40);
-    slam::LoopClosureOptions options;
-    options.registrationWidth = 160;
-    slam::LoopCloser closer(options);
-    std::vector<std::pair<DepthImage, ColorImage>> frames;
-    for (uint32_t i = 0; i < 12; ++i) {
-        ColorImage color;
-        DepthImage depth = room.renderDepth(k, path[i], {}, &color);
-        closer.frameFused({i, &depth, &color, k, path[i]});
-        frames.emplace_back(std::move(depth), std::move(color));
-    }
+    RoomKeyframes fused;
+    slam::LoopCloser& closer = fused.closer;
+    const Intrinsics& k = fused.k;
+    const std::vector<Pose>& path = fused.path;
+    const auto& frames = fused.frames;
+    const slam::LoopClosureOptions& options = fused.options;
     const fs::path d = test::makeTempDir("loops_v1");
     const uint64_t mapId = 42;
     closer.save(d / "v2.vkloops", mapId);
