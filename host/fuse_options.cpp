@@ -88,7 +88,7 @@ gpu::GpuVolumeConfig FuseArgs::volumeConfig(const Intrinsics& intrinsics, bool d
     if ((renderEvery > 0 || !deltasPath.empty() || serving()) && !incremental)
         throw Error("--render-every, --deltas and --serve need --mode incremental (the baseline keeps no mesh between frames)");
     if (track && !incremental) throw Error("--track needs --mode incremental (it tracks against the mesh)");
-    config.publishMesh = renderEvery > 0 || track;   // tracking draws the mesh fused so far
+    config.publishMesh = renderEvery > 0;   // tracking draws the volume's own mesh (GpuVolume::recordModelView), not the export
     // GPU timestamps only where something reads them (~0.3-0.5 ms a frame on lavapipe): --stats, --pass-times, the
     // progress line and the viewer; `fuse -q` without --stats times nothing (its summary says so).
     config.timeStages = !noStageTimes && (!quiet || !statsPath.empty() || passTimes || serving());

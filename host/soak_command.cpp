@@ -57,10 +57,8 @@ int runSoak(const SoakArgs& a) {
     if (a.laps == 0 || a.frames < a.laps) throw Error("soak needs at least one frame per lap");
     vk::Context context(a.device.contextOptions());
     gpu::GpuVolumeConfig config = a.volume.toConfig(a.maxDepth, a.width, a.height);
-    if (a.track) {
-        if (config.meshMode != gpu::MeshMode::Incremental) throw Error("soak --track needs --mode incremental (it tracks against the mesh)");
-        config.publishMesh = true;   // tracking draws the mesh fused so far
-    }
+    if (a.track && config.meshMode != gpu::MeshMode::Incremental)
+        throw Error("soak --track needs --mode incremental (it tracks against the mesh)");
     MapperOptions options;
     options.volume = config;
     options.tracker.maxDepth = a.maxDepth;

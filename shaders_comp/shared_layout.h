@@ -418,6 +418,45 @@ struct DeltaTriangleRecord {
     uint v0, v1, v2;            // vertex ids (undefined for REMOVED)
 };
 
+// ---- the model in a view (docs/TRACKING.md, "Only the model in view"; shaders_comp/model_view) --------------
+// Tracking draws the mesh from the vertex heap through an index list of only the triangles of the blocks that can
+// be in the camera's view, so that a frame's draw costs what is in view, not the whole map. Three passes with a
+// descriptor set of their own (the shared one is full): cull_view_blocks lists the live blocks in view (one
+// invocation per block of the pool), list_view_chunks the triangle chunks of their cubes (one workgroup per listed
+// block), emit_view_triangles the chunks' triangles (one invocation per listed chunk).
+VKM_CONST VIEW_BINDING_BLOCK_COORDS = 0u;  // the block store's coordinates (BINDING_BLOCK_COORDS), w = hash slot
+VKM_CONST VIEW_BINDING_HASH_VALUES = 1u;   // the hash's block per slot (BINDING_HASH_VALUES): which blocks are live
+VKM_CONST VIEW_BINDING_CUBE_STATE = 2u;    // the cube states (BINDING_CUBE_STATE): each cube's chunk
+VKM_CONST VIEW_BINDING_CHUNKS = 3u;        // the triangle chunks (BINDING_CHUNK_TRIANGLES)
+VKM_CONST VIEW_BINDING_BLOCK_LIST = 4u;    // uint: the blocks in view (at most the pool's capacity)
+VKM_CONST VIEW_BINDING_CHUNK_LIST = 5u;    // uint: their cubes' chunks (at most the chunk heap's capacity)
+VKM_CONST VIEW_BINDING_INDICES = 6u;       // uint: the chunks' triangles as vertex indices, 3 per triangle (an index buffer)
+VKM_CONST VIEW_BINDING_STATE = 7u;         // ModelViewState
+VKM_CONST VIEW_CUBES_PER_INVOCATION = 8u;  // list_view_chunks: two uvec4 loads of cube states per invocation
+VKM_CONST WG_VIEW_BLOCK = 64u;             // list_view_chunks: VOXELS_PER_BLOCK / VIEW_CUBES_PER_INVOCATION
+
+struct ModelViewState {
+    uint draw[5];               // VkDrawIndexedIndirectCommand: indexCount = 3 x the triangles listed
+    uint chunkCount;            // chunks listed
+    uint pad0, pad1;
+    uint blockDispatch[4];      // list_view_chunks: x = the blocks listed (one workgroup each)
+    uint chunkDispatch[4];      // emit_view_triangles: over the listed chunks, WG_LIST per group
+};
+
+// The view, as the model maps' draw sees it (shaders_render/track_model.vert): a pixel u = fx x / z + cx lands in
+// the framebuffer when -0.5 <= u <= width - 0.5; depth within [near, far].
+struct ModelViewPush {
+    VKM_ROWS3(worldToCamera);
+    VKM_VEC4(intrinsics);       // fx, fy, cx, cy
+    VKM_VEC4(viewport);         // width, height, near, far (metres)
+    float blockSide;            // metres: BLOCK_SIDE voxels
+    // A block's cubes, and so its triangles, lie within the sphere of this radius around the block's centre (half
+    // its diagonal, and a margin for rounding).
+    float blockRadius;
+    uint blockCapacity;         // blocks in the pool
+    uint hashCapacity;          // slots of the hash
+};
+
 // Push constants of every compute stage: the current frame's camera. Rigid transforms are stored as
 // the 3 rows of [R | t] (x' = row.x*x + row.y*y + row.z*z + row.w), the order the CPU reference uses too.
 // 128 bytes: the most lavapipe (and the Vulkan minimum) guarantees. The passes read the pose from

@@ -228,7 +228,7 @@ vkmesh::gpu::GpuVolumeConfig volumeConfig(double voxel, bool publish, bool passT
 void fuseSequence(const vkmesh::vk::Context& context, const std::vector<Frame>& rendered, size_t count, double voxel,
                   bool publish, bool track, bool trackSolveOnGpu, bool correct, bool passTimes, bool allocTiles, VoxelRun* run) {
     vkmesh::MapperOptions options;
-    options.volume = volumeConfig(voxel, publish || track, passTimes, allocTiles);
+    options.volume = volumeConfig(voxel, publish, passTimes, allocTiles);   // tracking draws the volume's own mesh
     options.tracker.maxDepth = kMaxDepth;
     options.tracker.solveOnGpu = trackSolveOnGpu;
     vkmesh::Mapper mapper(context, std::move(options));

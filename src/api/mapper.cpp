@@ -134,7 +134,7 @@ MapperResult Mapper::tracked(const MapperFrame& frame, size_t valid) {
         // After a loss, tracking that picks up again from the last pose is a hypothesis as a relocalisation is: on
         // real data it picks up next to the old pose after a jump (frames 98 and 100 of ICL-NUIM office 0 without
         // frames 59-98, 1 m off).
-        f.tracking = tracker_->track(*frame.depth, frame.intrinsics, volume_->meshBuffers(), frame.color);
+        f.tracking = tracker_->track(*frame.depth, frame.intrinsics, *volume_, frame.color);
         const double ratio = options_.relocalisation.maxErrorRatio;
         const std::string why = f.tracking.tracked ? errorAgainstBaseline(f.tracking.rmse, baseline, ratio) : f.tracking.lostReason;
         if (why.empty()) {
@@ -180,7 +180,7 @@ Mapper::RelocalisationOutcome Mapper::relocalise(const MapperFrame& frame, const
     std::string refusals;
     for (size_t c = 0; c < candidates.size(); ++c) {
         const RelocalisationCandidate& candidate = candidates[c];
-        gpu::TrackingReport r = tracker_->trackFrom(candidate.cameraToWorld, *frame.depth, frame.intrinsics, volume_->meshBuffers(), frame.color);
+        gpu::TrackingReport r = tracker_->trackFrom(candidate.cameraToWorld, *frame.depth, frame.intrinsics, *volume_, frame.color);
         ++result.relocalisationCandidatesTried;
         const Pose fromPlaced = inverseRigid(candidate.cameraToWorld) * r.cameraToWorld;
         const bool agrees = candidate.placed && translationMetres(fromPlaced) <= o.placedAgreeMetres && rotationDegrees(fromPlaced) <= o.placedAgreeDegrees;
@@ -261,7 +261,7 @@ std::string Mapper::placedElsewhere(const std::vector<RelocalisationCandidate>& 
 
 MapperResult Mapper::tentative(const MapperFrame& frame, size_t valid, MapperResult result) {
     Hypothesis& h = *hypothesis_;
-    gpu::TrackingReport r = tracker_->track(*frame.depth, frame.intrinsics, volume_->meshBuffers(), frame.color);
+    gpu::TrackingReport r = tracker_->track(*frame.depth, frame.intrinsics, *volume_, frame.color);
     std::string why = r.tracked ? errorAgainstBaseline(r.rmse, h.baselineRmse, h.maxErrorRatio) : r.lostReason;
     // Geometry alone can let a hypothesis's frames slide: after a landing onto a wall, tracking from the hypothesis
     // matched the wall as well as the frames before the loss matched theirs, 9-11 cm along it (ICL-NUIM, frames

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "core/camera.h"
 
@@ -214,6 +215,23 @@ IcpSums referenceIcpSums(const TrackingLevel& frame, const std::vector<Eigen::Ve
         sums[TRACK_SUM_WEIGHTED_ERROR] += double(wc * rc * rc);
     }
     return sums;
+}
+
+double referenceBlockViewSlack(const Eigen::Vector3i& block, double blockSide, const Pose& cameraToWorld, const Intrinsics& intrinsics,
+                               int width, int height, double nearDepth, double farDepth) {
+    const Eigen::Vector3d centre = (block.cast<double>() + Eigen::Vector3d::Constant(0.5)) * blockSide;
+    const Eigen::Matrix4d worldToCamera = cameraToWorld.inverse();
+    const Eigen::Vector3d c = worldToCamera.block<3, 3>(0, 0) * centre + worldToCamera.block<3, 1>(0, 3);
+    const double r = 0.5 * blockSide * std::sqrt(3.0) * 1.01 + 1e-6;   // as ModelViewStage::record
+    // The planes through the optical centre: u = fx x / z + cx within [-1.5, size + 0.5] (a pixel beyond the
+    // framebuffer's [-0.5, size - 0.5]), as signed distances (a, b) . (along, z) / |(a, b)|.
+    auto plane = [](double along, double z, double a, double b) { return (a * along + b * z) / std::sqrt(a * a + b * b); };
+    const double fx = intrinsics.fx, fy = intrinsics.fy, cx = intrinsics.cx, cy = intrinsics.cy, lo = -1.5;
+    const double distances[6] = {c.z() - nearDepth, farDepth - c.z(), plane(c.x(), c.z(), fx, cx - lo), plane(c.x(), c.z(), -fx, width + 0.5 - cx),
+                                 plane(c.y(), c.z(), fy, cy - lo), plane(c.y(), c.z(), -fy, height + 0.5 - cy)};
+    double slack = std::numeric_limits<double>::infinity();
+    for (double d : distances) slack = std::min(slack, d + r);
+    return slack;
 }
 
 }  // namespace vkmesh::cpu

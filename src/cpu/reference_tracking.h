@@ -48,4 +48,12 @@ IcpSums referenceIcpSums(const TrackingLevel& frame, const std::vector<Eigen::Ve
                          const std::vector<Eigen::Vector4f>& modelNormals, const Pose& estimate, const Pose& modelPose,
                          const IcpGates& gates, const PhotometricLevel& photometric = {}, bool checkerboard = false);
 
+// The model in a view (shaders_comp/model_view/cull_view_blocks.comp): how far inside the view of a `width` x
+// `height` camera with `intrinsics` at `cameraToWorld` (depths in [near, far]) the bounding sphere of the block at
+// `block` (block coordinates, `blockSide` metres) reaches, in metres: >= 0 when the block is listed (any triangle of
+// it may cover a pixel), < 0 when it lies wholly outside one of the view's six planes. In double: a GPU verdict
+// that differs can only be a block within float rounding of 0.
+double referenceBlockViewSlack(const Eigen::Vector3i& block, double blockSide, const Pose& cameraToWorld, const Intrinsics& intrinsics,
+                               int width, int height, double nearDepth, double farDepth);
+
 }  // namespace vkmesh::cpu

@@ -313,6 +313,25 @@ ExportedMesh GpuVolume::exportMesh(std::vector<std::pair<std::string, double>>* 
     return out;
 }
 
+MeshBuffers GpuVolume::recordModelView(VkCommandBuffer cmd, const Pose& cameraToWorld, const Intrinsics& intrinsics, int width, int height,
+                                        float nearDepth, float farDepth) {
+    if (config_.meshMode != MeshMode::Incremental) throw Error("the model in a view needs the incremental mesh mode (it lists its chunks)");
+    if (!modelView_) modelView_.emplace(context_, store_, hash_, mesh_, config_.params.voxelSize);
+    modelView_->record(cmd, cameraToWorld, intrinsics, width, height, nearDepth, farDepth);
+    recordMeshReadBarrier(cmd);   // the list and its command, for the draw
+    MeshBuffers b;
+    b.vertices = mesh_.vertices().handle();
+    b.indices = modelView_->indices().handle();
+    b.drawIndirect = modelView_->state().handle();
+    b.drawIndirectOffset = ModelViewStage::drawOffset();
+    b.frame = frameNumber_;
+    return b;
+}
+
+std::vector<std::array<uint32_t, 3>> GpuVolume::downloadModelView() const {
+    return modelView_ ? modelView_->downloadList() : std::vector<std::array<uint32_t, 3>>{};
+}
+
 MeshBuffers GpuVolume::meshBuffers() const {
     MeshBuffers b;
     if (!meshPublished_) return b;
@@ -397,6 +416,7 @@ std::vector<PoolInfo> GpuVolume::pools() const {
     baselineMesh_.pools(out);
     exportMesh_->pools(out);
     if (deltas_) deltas_->pools(out);
+    if (modelView_) modelView_->pools(out);
     return out;
 }
 

@@ -30,6 +30,7 @@
 #include "gpu/stages/mark_dirty_stage.h"
 #include "gpu/stages/mesh_delta_stage.h"
 #include "gpu/stages/mesh_gc_stage.h"
+#include "gpu/stages/model_view_stage.h"
 #include "gpu/stages/recycle_stage.h"
 #include "gpu/stages/retype_stage.h"
 #include "gpu/stages/triangulate_stage.h"
@@ -288,6 +289,15 @@ public:
     void rebuildMesh();
     // The last compacted mesh (publishMesh, or the last exportMesh()); empty handles before any.
     MeshBuffers meshBuffers() const;
+    // Records into `cmd` the listing of the mesh's triangles that can be in the view of a `width` x `height` camera
+    // with `intrinsics` at `cameraToWorld` (depths in [near, far]), and returns what draws them: the vertex heap
+    // and that list (ModelViewStage; counts unknown on the host: 0). What tracking draws: a drawing of these is
+    // the drawing of the whole mesh at that camera, at a cost that follows the view, not the map, and it needs no
+    // export. The buffers hold the mesh as the passes recorded before it left it. Incremental mode only.
+    MeshBuffers recordModelView(VkCommandBuffer cmd, const Pose& cameraToWorld, const Intrinsics& intrinsics, int width, int height,
+                                float nearDepth, float farDepth);
+    // The triangles the last recordModelView() listed (vertex heap indices), after its submission; for tests.
+    std::vector<std::array<uint32_t, 3>> downloadModelView() const;
     MeshStateSnapshot downloadMeshState() const;
     // Grows the vertex heap and the triangle-chunk heap between frames (never shrinks; the mesh is kept: the
     // heaps are copied and the new entries pushed on the free stacks). The next frame also re-meshes every
@@ -402,6 +412,7 @@ private:
     RecycleStage recycle_;
     std::optional<ExportMeshStage> exportMesh_;
     std::optional<MeshDeltaStage> deltas_;
+    std::optional<ModelViewStage> modelView_;   // made by the first recordModelView()
     vk::CommandRecorder recorder_;
     vk::StageTimer timer_;
     bool recordingFrame_ = false;   // submitAttempt is recording a frame: its passes are timed (timePasses)

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -12,6 +13,7 @@
 #include <limits>
 #include <map>
 #include <numbers>
+#include <set>
 
 #include "api/reconstructor.h"
 #include "core/camera.h"
@@ -215,6 +217,88 @@ DepthImage roomFrame(size_t frame, ColorImage* color) {
     options.seed = uint32_t(frame + 1);
     options.maxRange = 5.0f;
     return room().renderDepth(synth::kinectIntrinsics(kWidth, kHeight), orbit()[frame], options, color);
+}
+
+// Tracking draws a volume's mesh through the list of the triangles of its blocks in view (GpuVolume::recordModelView,
+// shaders_comp/model_view). The model maps are those of the whole mesh, bit for bit, at every pose: views of part of
+// the map, of all of it, of none of it, mirrored; the list holds each live triangle of a block in view once, as the CPU
+// reference decides (cpu::referenceBlockViewSlack), and none of the others.
+TEST_F(Tracking, ModelMapsOfTheTrianglesInViewAreThoseOfTheWholeMesh) {
+    if (const std::string why = test::lavapipeCannotDraw(); !why.empty()) GTEST_SKIP() << why;   // these tests draw the mesh
+    const float voxel = 0.03f;
+    gpu::GpuVolumeConfig config = volumeConfig(voxel);   // publishMesh: the whole mesh, to compare with
+    config.params.colorFusion = ColorFusion::Average;
+    gpu::GpuVolume volume(context(), config);
+    const Intrinsics k = synth::kinectIntrinsics(kWidth, kHeight);
+    for (size_t i = 0; i < 90; i += 6) {   // a quarter of the orbit: the rest of the room is not mapped
+        ColorImage color;
+        const DepthImage depth = roomFrame(i, &color);
+        volume.integrate(depth, &color, k, orbit()[i]);
+    }
+    const gpu::MeshStateSnapshot state = volume.downloadMeshState();
+    std::map<std::array<uint32_t, 3>, Eigen::Vector3i> liveBlocks;   // each live triangle's block (its centroid's)
+    for (const auto& t : state.liveTriangles) {
+        Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+        for (uint32_t v : t) centroid += Eigen::Vector3d(state.vertices[v].px, state.vertices[v].py, state.vertices[v].pz) / 3.0;
+        const Eigen::Vector3d b = (centroid / (voxel * gpu::BLOCK_SIDE)).array().floor();
+        liveBlocks[t] = b.cast<int>();
+    }
+    ASSERT_GT(liveBlocks.size(), 10000u);
+
+    Intrinsics mirrored = k;
+    mirrored.fy = -k.fy;   // ICL-NUIM's negative fy
+    Pose away = orbit()[45];
+    away.block<3, 3>(0, 0) = away.block<3, 3>(0, 0) * Eigen::AngleAxisd(std::numbers::pi, Eigen::Vector3d::UnitY()).toRotationMatrix();
+    struct View {
+        Pose pose;
+        Intrinsics intrinsics;
+        size_t frame;   // the depth image seen there (it sets the far plane)
+    };
+    size_t partial = 0;
+    CameraTracker tracker(context(), kWidth, kHeight);
+    for (const View& view : {View{orbit()[0], k, 0}, View{orbit()[45], k, 45}, View{orbit()[45], mirrored, 45}, View{orbit()[150], k, 150},
+                             View{orbit()[270], k, 270}, View{away, k, 45}}) {
+        SCOPED_TRACE("view " + std::to_string(view.frame) + (view.intrinsics.fy < 0 ? " mirrored" : "") +
+                     (view.pose.isApprox(away) ? " turned away" : ""));
+        const DepthImage depth = roomDepth(view.frame, false);
+        tracker.prepare(depth, view.intrinsics, volume.meshBuffers(), view.pose);
+        const CameraTracker::Maps whole = tracker.downloadMaps();
+        tracker.prepare(depth, view.intrinsics, volume, view.pose);
+        const CameraTracker::Maps inView = tracker.downloadMaps();
+        const size_t pixels = size_t(kWidth) * kHeight;
+        size_t differ = 0, drawn = 0;
+        for (size_t i = 0; i < pixels; ++i) {
+            differ += whole.modelPositions[i] != inView.modelPositions[i] || whole.modelNormals[i] != inView.modelNormals[i] ||
+                      std::memcmp(&whole.modelIntensity[i], &inView.modelIntensity[i], sizeof(float)) != 0;
+            drawn += whole.modelPositions[i].w() != 0.0f;
+        }
+        EXPECT_EQ(differ, 0u) << "of " << drawn << " pixels with model";
+
+        // The list, from the same near and far planes as the tracker's draw, against the reference.
+        const float nearDepth = 0.2f, farDepth = 3.0f;
+        vk::CommandRecorder recorder(context());
+        volume.recordModelView(recorder.begin(), view.pose, view.intrinsics, kWidth, kHeight, nearDepth, farDepth);
+        recorder.submitAndWait();
+        const std::vector<std::array<uint32_t, 3>> listed = volume.downloadModelView();
+        std::set<std::array<uint32_t, 3>> listedSet(listed.begin(), listed.end());
+        EXPECT_EQ(listedSet.size(), listed.size()) << "a triangle listed twice";
+        size_t notLive = 0, wrong = 0, inViewCount = 0;
+        for (const auto& t : listedSet) notLive += liveBlocks.count(t) == 0;
+        for (const auto& [t, block] : liveBlocks) {
+            const double slack = cpu::referenceBlockViewSlack(block, voxel * gpu::BLOCK_SIDE, view.pose, view.intrinsics, kWidth, kHeight,
+                                                              nearDepth, farDepth);
+            inViewCount += slack >= 0;
+            if ((slack >= 0) != (listedSet.count(t) != 0) && std::abs(slack) > 1e-4) ++wrong;
+        }
+        EXPECT_EQ(notLive, 0u);
+        EXPECT_EQ(wrong, 0u) << inViewCount << " in view by the reference, " << listed.size() << " listed";
+        // Each view leaves some of the map out; turned away from it, all of it.
+        EXPECT_LT(listed.size(), liveBlocks.size());
+        if (view.pose.isApprox(away)) EXPECT_EQ(listed.size(), 0u);
+        else EXPECT_GT(listed.size(), 0u);
+        if (listed.size() > 0 && listed.size() < liveBlocks.size() * 6 / 10) ++partial;
+    }
+    EXPECT_GE(partial, 2u) << "views that list less than 60 % of the map";
 }
 
 // The ICP sums at every level: the GPU's against the CPU reference fed with the GPU's own maps, for a frame

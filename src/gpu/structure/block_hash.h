@@ -29,6 +29,7 @@ public:
     BlockHash(const vk::Context& context, const vk::BindingTable& layout, uint32_t capacity);
 
     uint32_t capacity() const { return capacity_; }
+    const vk::Buffer& values() const { return values_; }   // block per slot (NO_BLOCK: none)
     bool int64Keys() const { return int64Keys_; }
     // Bytes of the keys buffer per slot on a device with (8) or without (12) 64-bit atomics.
     static uint32_t keyBytesPerSlot(bool int64Atomics) { return int64Atomics ? 8u : 4u * HASH32_KEY_WORDS; }

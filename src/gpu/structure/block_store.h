@@ -32,6 +32,7 @@ public:
                bool withColor);
 
     uint32_t capacity() const { return capacity_; }
+    const vk::Buffer& coords() const { return coords_; }   // ivec4 per block: coordinate, w = hash slot
     // Grows the pool between frames; blocks keep their index and TSDF, the new ones go on the free list
     // (under the old entries, so freed blocks are reused first).
     void grow(uint32_t newCapacity, CounterBuffer& counters);

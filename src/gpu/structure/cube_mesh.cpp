@@ -19,7 +19,9 @@ CubeMesh::CubeMesh(const vk::Context& context, const vk::BindingTable& table, ui
     cubeState_ = makeStorage(context, table, BINDING_CUBE_STATE, cubes * 4, "cube state");
     for (int a = 0; a < 3; ++a) edgeVertex_[a] = makeStorage(context, table, kEdgeBindings[a], cubes * 4, kEdgeNames[a]);
     ownedSlots_ = makeStorage(context, table, BINDING_OWNED_SLOTS, VkDeviceSize(blockCapacity) * OWNED_SLOT_WORDS * 4, "owned slot masks");
-    vertices_ = makeStorage(context, table, BINDING_VERTICES, VkDeviceSize(vertexCapacity) * sizeof(Vertex), "vertex heap");
+    // A vertex buffer too: tracking draws the model from the heap (ModelViewStage).
+    vertices_ = makeStorage(context, table, BINDING_VERTICES, VkDeviceSize(vertexCapacity) * sizeof(Vertex), "vertex heap",
+                            VK_BUFFER_USAGE_VERTEX_BUFFER_BIT);
     vertexOwner_ = makeStorage(context, table, BINDING_VERTEX_OWNER, VkDeviceSize(vertexCapacity) * 4, "vertex owners");
     vertexFree_ = makeStorage(context, table, BINDING_VERTEX_FREE, VkDeviceSize(vertexCapacity) * 4, "vertex free stack");
     chunkTriangles_ = makeStorage(context, table, BINDING_CHUNK_TRIANGLES, VkDeviceSize(chunkCapacity) * CHUNK_WORDS * 4, "triangle chunks");
@@ -72,7 +74,8 @@ void CubeMesh::growHeaps(uint32_t vertexCapacity, uint32_t chunkCapacity, Counte
     VkCommandBuffer cmd = recorder.begin();
     if (vertexCapacity > vertexCapacity_) {
         // New entries: free vertices (refcount DEAD), owners unset.
-        growStorage(cmd, context_, table_, BINDING_VERTICES, vertices_, VkDeviceSize(vertexCapacity) * sizeof(Vertex), kDeadVertexWord, retired);
+        growStorage(cmd, context_, table_, BINDING_VERTICES, vertices_, VkDeviceSize(vertexCapacity) * sizeof(Vertex), kDeadVertexWord, retired,
+                    VK_BUFFER_USAGE_VERTEX_BUFFER_BIT);
         growStorage(cmd, context_, table_, BINDING_VERTEX_OWNER, vertexOwner_, VkDeviceSize(vertexCapacity) * 4, 0, retired);
     }
     if (chunkCapacity > chunkCapacity_)   // new chunks: no triangle

@@ -32,6 +32,7 @@ public:
 
     uint32_t vertexCapacity() const { return vertexCapacity_; }
     uint32_t chunkCapacity() const { return chunkCapacity_; }
+    const vk::Buffer& cubeStates() const { return cubeState_; }
     const vk::Buffer& vertices() const { return vertices_; }
     const vk::Buffer& chunkTriangles() const { return chunkTriangles_; }
 

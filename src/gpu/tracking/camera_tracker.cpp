@@ -200,11 +200,11 @@ void CameraTracker::checkFrame(const DepthImage& depth, const ColorImage* color)
                     std::to_string(width_) + "x" + std::to_string(height_));
 }
 
-void CameraTracker::prepare(const DepthImage& depth, const Intrinsics& intrinsics, const MeshBuffers& mesh, const Pose& modelPose,
+void CameraTracker::prepare(const DepthImage& depth, const Intrinsics& intrinsics, const TrackingModel& model, const Pose& modelPose,
                             const ColorImage* color) {
     checkFrame(depth, color);
     VkCommandBuffer cmd = recorder_.begin();   // waits for the last submission: the input buffer is free
-    recordPrepare(cmd, depth, intrinsics, mesh, modelPose, color);
+    recordPrepare(cmd, depth, intrinsics, model, modelPose, color);
     recorder_.submitAndWait();
     stageMs_.clear();
     addStageTimes();
@@ -226,7 +226,7 @@ double CameraTracker::gpuMilliseconds() const {
     return total;
 }
 
-void CameraTracker::recordPrepare(VkCommandBuffer cmd, const DepthImage& depth, const Intrinsics& intrinsics, const MeshBuffers& mesh,
+void CameraTracker::recordPrepare(VkCommandBuffer cmd, const DepthImage& depth, const Intrinsics& intrinsics, const TrackingModel& model,
                                   const Pose& modelPose, const ColorImage* color) {
     checkFrame(depth, color);
     intrinsics_ = intrinsics;
@@ -280,7 +280,7 @@ void CameraTracker::recordPrepare(VkCommandBuffer cmd, const DepthImage& depth, 
             if (d > farthest && std::isfinite(d) && (options_.maxDepth <= 0 || d <= options_.maxDepth)) farthest = d;
         const float widestGate = *std::max_element(options_.distanceGates.begin(), options_.distanceGates.end());
         if (farthest > 0) farDepth = std::max(nearDepth + 0.1f, std::min(farthest + 2.0f * widestGate, farDepth));
-        modelMaps_.record(cmd, mesh, modelPose, intrinsics_, nearDepth, farDepth, modelPositions_, modelNormals_, modelIntensity_);
+        modelMaps_.record(cmd, model, modelPose, intrinsics_, nearDepth, farDepth, modelPositions_, modelNormals_, modelIntensity_);
         for (int l = 1; l < int(TRACK_LEVELS); ++l) {
             pixelGroups(downsampleModel_, l);
             vk::memoryBarrier(cmd);
@@ -327,8 +327,8 @@ IcpSums CameraTracker::sums(int level, const Pose& estimate) {
 }
 
 void CameraTracker::recordGpuSolvedTracking(VkCommandBuffer cmd, const DepthImage& depth, const Intrinsics& intrinsics,
-                                            const MeshBuffers& mesh, const Pose& modelPose, const Pose& initial, const ColorImage* color) {
-    recordPrepare(cmd, depth, intrinsics, mesh, modelPose, color);
+                                            const TrackingModel& model, const Pose& modelPose, const Pose& initial, const ColorImage* color) {
+    recordPrepare(cmd, depth, intrinsics, model, modelPose, color);
     TrackStateGpu start{};
     copyRows(start.cameraToWorld, initial);
     vkCmdUpdateBuffer(cmd, state_.handle(), 0, sizeof(start), &start);
@@ -339,16 +339,16 @@ void CameraTracker::recordGpuSolvedTracking(VkCommandBuffer cmd, const DepthImag
         for (int it = 0; it < options_.iterations[level]; ++it) recordIcpIteration(cmd, level, initial, /*solveOnGpu=*/true);
 }
 
-IcpResult CameraTracker::trackInOneSubmission(const DepthImage& depth, const Intrinsics& intrinsics, const MeshBuffers& mesh,
+IcpResult CameraTracker::trackInOneSubmission(const DepthImage& depth, const Intrinsics& intrinsics, const TrackingModel& model,
                                               const Pose& modelPose, const Pose& initial, const ColorImage* color) {
     VkCommandBuffer cmd = recorder_.begin();
-    recordGpuSolvedTracking(cmd, depth, intrinsics, mesh, modelPose, initial, color);
+    recordGpuSolvedTracking(cmd, depth, intrinsics, model, modelPose, initial, color);
     timer_.mark(cmd, "track_icp");
     recorder_.submitAndWait();
     return gpuSolvedResult();
 }
 
-void CameraTracker::recordTrackAndDecide(VkCommandBuffer cmd, const DepthImage& depth, const Intrinsics& intrinsics, const MeshBuffers& mesh,
+void CameraTracker::recordTrackAndDecide(VkCommandBuffer cmd, const DepthImage& depth, const Intrinsics& intrinsics, const TrackingModel& model,
                                          const Pose& modelPose, const Pose& initial, const ColorImage* color, const Pose& lastTracked,
                                          const RecentFrames& recent, const vk::Buffer& framePose) {
     // Bound before anything is recorded (a binding changes decide_'s descriptor set at once).
@@ -359,7 +359,7 @@ void CameraTracker::recordTrackAndDecide(VkCommandBuffer cmd, const DepthImage& 
     copyRows(paramValues_.lastTrackedCameraToWorld, lastTracked);
     paramValues_.recentRmse = float(recent.rmse);   // recordPrepare uploads the parameters
     paramValues_.recentInlierShare = float(recent.inlierShare);
-    recordGpuSolvedTracking(cmd, depth, intrinsics, mesh, modelPose, initial, color);
+    recordGpuSolvedTracking(cmd, depth, intrinsics, model, modelPose, initial, color);
     TrackPush push{};
     decide_.dispatch(cmd, &push, 1);
     vk::memoryBarrier(cmd);

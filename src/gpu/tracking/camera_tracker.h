@@ -149,13 +149,13 @@ public:
     CameraTracker(const CameraTracker&) = delete;
     CameraTracker& operator=(const CameraTracker&) = delete;
 
-    // The frame's pyramid and the model maps of `mesh` drawn at `modelPose` (one submission). `mesh` may be
+    // The frame's pyramid and the model maps of `model` drawn at `modelPose` (one submission). The model may be
     // empty (no model: every pixel unassociated). The depth (and the colour, when given and not empty) must be
     // width x height; colour is used only with options.colorWeight > 0.
-    void prepare(const DepthImage& depth, const Intrinsics& intrinsics, const MeshBuffers& mesh, const Pose& modelPose,
+    void prepare(const DepthImage& depth, const Intrinsics& intrinsics, const TrackingModel& model, const Pose& modelPose,
                  const ColorImage* color = nullptr);
     // Whether the next prepare() (or trackInOneSubmission / recordTrackAndDecide) keeps the model maps of the last
-    // one, drawn at modelPose(), instead of drawing `mesh` at its `modelPose` (ignored until maps were drawn).
+    // one, drawn at modelPose(), instead of drawing `model` at its `modelPose` (ignored until maps were drawn).
     void keepModelMaps(bool keep) { keepModelMaps_ = keep; }
     // The pose the current model maps were drawn at, and whether any were.
     const Pose& modelPose() const { return modelPose_; }
@@ -166,13 +166,13 @@ public:
     IcpResult align(const Pose& initial);
     // prepare() and ICP from `initial` in one submission, every system solved on the GPU (float Cholesky of
     // the equilibrated system; the same steps, stopping rule and level-0 final system as align()).
-    IcpResult trackInOneSubmission(const DepthImage& depth, const Intrinsics& intrinsics, const MeshBuffers& mesh, const Pose& modelPose,
+    IcpResult trackInOneSubmission(const DepthImage& depth, const Intrinsics& intrinsics, const TrackingModel& model, const Pose& modelPose,
                                    const Pose& initial, const ColorImage* color = nullptr);
     // trackInOneSubmission()'s passes recorded into `cmd`, the start of a volume's frame (FrameInput::recordPose),
     // followed by track_decide: the loss policy (trackingLoss, pose_tracker.h) decided on the GPU against
     // `lastTracked` and `recent` (the recent tracked frames' means, 0: none), and the frame's pose written
     // into the volume's `framePose` (FramePoseGpu; skip when lost). After the submission: gpuSolvedResult().
-    void recordTrackAndDecide(VkCommandBuffer cmd, const DepthImage& depth, const Intrinsics& intrinsics, const MeshBuffers& mesh,
+    void recordTrackAndDecide(VkCommandBuffer cmd, const DepthImage& depth, const Intrinsics& intrinsics, const TrackingModel& model,
                               const Pose& modelPose, const Pose& initial, const ColorImage* color, const Pose& lastTracked,
                               const RecentFrames& recent, const vk::Buffer& framePose);
     // Throws Error unless the frame's depth is width x height and its colour (used when options.colorWeight > 0) is
@@ -211,10 +211,10 @@ private:
     void recordIcpIteration(VkCommandBuffer cmd, int level, const Pose& estimate, bool solveOnGpu);
     void addStageTimes();   // the timer's stages of the last submission, added to stageMs_
     // prepare()'s passes, recorded into `cmd` (the caller submits).
-    void recordPrepare(VkCommandBuffer cmd, const DepthImage& depth, const Intrinsics& intrinsics, const MeshBuffers& mesh,
+    void recordPrepare(VkCommandBuffer cmd, const DepthImage& depth, const Intrinsics& intrinsics, const TrackingModel& model,
                        const Pose& modelPose, const ColorImage* color);
     // recordPrepare() and every ICP iteration solved on the GPU, recorded into `cmd`.
-    void recordGpuSolvedTracking(VkCommandBuffer cmd, const DepthImage& depth, const Intrinsics& intrinsics, const MeshBuffers& mesh,
+    void recordGpuSolvedTracking(VkCommandBuffer cmd, const DepthImage& depth, const Intrinsics& intrinsics, const TrackingModel& model,
                                  const Pose& modelPose, const Pose& initial, const ColorImage* color);
     const vk::Context& context_;
     int width_, height_;

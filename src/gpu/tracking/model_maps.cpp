@@ -216,7 +216,7 @@ void ModelMapRenderer::release() {
     pipeline_ = VK_NULL_HANDLE, mirroredPipeline_ = VK_NULL_HANDLE, pipelineLayout_ = VK_NULL_HANDLE, framebuffer_ = VK_NULL_HANDLE, renderPass_ = VK_NULL_HANDLE;
 }
 
-void ModelMapRenderer::record(VkCommandBuffer cmd, const MeshBuffers& mesh, const Pose& cameraToWorld, const Intrinsics& intrinsics,
+void ModelMapRenderer::record(VkCommandBuffer cmd, const TrackingModel& model, const Pose& cameraToWorld, const Intrinsics& intrinsics,
                               float nearDepth, float farDepth, const vk::Buffer& positions, const vk::Buffer& normals,
                               const vk::Buffer& intensity) const {
     ModelMapPush push{};
@@ -227,8 +227,12 @@ void ModelMapRenderer::record(VkCommandBuffer cmd, const MeshBuffers& mesh, cons
     push.viewport[0] = float(width_), push.viewport[1] = float(height_);
     push.viewport[2] = nearDepth, push.viewport[3] = farDepth;
 
+    // A volume's triangles in view, listed before the render pass (a compute pass, which ends with the barrier
+    // for the draw).
+    const MeshBuffers mesh = model.volume ? model.volume->recordModelView(cmd, cameraToWorld, intrinsics, width_, height_, nearDepth, farDepth)
+                                          : model.buffers;
     const bool hasMesh = mesh.vertices && mesh.indices && mesh.drawIndirect;
-    if (hasMesh) recordMeshReadBarrier(cmd);
+    if (hasMesh && !model.volume) recordMeshReadBarrier(cmd);   // (recordModelView ends with it)
     VkClearValue clears[kImages]{};   // position and normal xyz kNoModel, w = 0 (no model); intensity -1 (none); depth 1 (far)
     for (int i = 0; i < 2; ++i)
         for (int c = 0; c < 3; ++c) clears[i].color.float32[c] = kNoModel;

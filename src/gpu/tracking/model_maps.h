@@ -2,8 +2,9 @@
 // own intrinsics, into a world-space position map and a unit-normal map (RGBA32F, w = 1 where the mesh is,
 // 0 elsewhere, where xyz is meaningless) and an intensity map of its vertex colours (R32F, -1 where it has none),
 // then copied into level 0 of the tracker's model pyramid buffers. Only the faces seen from free space are
-// drawn, nearest first, in one pass. One draw replaces a raycast of the TSDF (shaders_render/track_model.*). The draw reads the mesh buffers as they are (MeshBuffers, an
-// indirect indexed draw), so no mesh goes through the host.
+// drawn, nearest first, in one pass. One draw replaces a raycast of the TSDF (shaders_render/track_model.*). The draw
+// reads the mesh buffers as they are (an indirect indexed draw), so no mesh goes through the host: a volume's own
+// mesh is drawn from its vertex heap through the list of the triangles in view (GpuVolume::recordModelView).
 #pragma once
 
 #include "core/types.h"
@@ -12,6 +13,16 @@
 #include "vk/context.h"
 
 namespace vkmesh::gpu {
+
+// What tracking draws: a volume's mesh, of which only the triangles that can be in the view are drawn (listed on
+// the GPU by GpuVolume::recordModelView: the cost follows the view, not the map, and no export is needed), or a
+// mesh in buffers (MeshBuffers: every triangle is drawn; empty handles: no model).
+struct TrackingModel {
+    TrackingModel(GpuVolume& volume) : volume(&volume) {}
+    TrackingModel(const MeshBuffers& buffers) : buffers(buffers) {}
+    GpuVolume* volume = nullptr;
+    MeshBuffers buffers;
+};
 
 class ModelMapRenderer {
 public:
@@ -22,11 +33,11 @@ public:
     ModelMapRenderer(const ModelMapRenderer&) = delete;
     ModelMapRenderer& operator=(const ModelMapRenderer&) = delete;
 
-    // Records the draw of `mesh` seen from `cameraToWorld` (depth range [near, far] metres) and the copies of
+    // Records the draw of `model` seen from `cameraToWorld` (depth range [near, far] metres) and the copies of
     // the maps to the start of `positions` and `normals` (width x height vec4 each) and `intensity` (float),
-    // followed by a barrier that makes them visible to compute shaders. An empty mesh (no buffers yet) clears
-    // the maps (no model anywhere).
-    void record(VkCommandBuffer cmd, const MeshBuffers& mesh, const Pose& cameraToWorld, const Intrinsics& intrinsics,
+    // followed by a barrier that makes them visible to compute shaders. An empty mesh (no buffers yet, or a volume
+    // without triangles) clears the maps (no model anywhere).
+    void record(VkCommandBuffer cmd, const TrackingModel& model, const Pose& cameraToWorld, const Intrinsics& intrinsics,
                 float nearDepth, float farDepth, const vk::Buffer& positions, const vk::Buffer& normals,
                 const vk::Buffer& intensity) const;
 private:

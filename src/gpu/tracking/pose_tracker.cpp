@@ -204,7 +204,7 @@ TrackingReport PoseTracker::conclude(const IcpResult& icp, uint32_t reason, doub
     return report;
 }
 
-TrackingReport PoseTracker::track(const DepthImage& depth, const Intrinsics& intrinsics, const MeshBuffers& mesh, const ColorImage* color) {
+TrackingReport PoseTracker::track(const DepthImage& depth, const Intrinsics& intrinsics, const TrackingModel& model, const ColorImage* color) {
     const auto t0 = std::chrono::steady_clock::now();
     const TrackingInput in = trackingInput(depth, color, intrinsics);
     CameraTracker& tracker = trackerFor(*in.depth);
@@ -212,9 +212,9 @@ TrackingReport PoseTracker::track(const DepthImage& depth, const Intrinsics& int
     const bool reused = reuseModelMaps(tracker, predicted);
     IcpResult icp;
     if (options_.solveOnGpu) {
-        icp = tracker.trackInOneSubmission(*in.depth, in.intrinsics, mesh, predicted, predicted, in.color);
+        icp = tracker.trackInOneSubmission(*in.depth, in.intrinsics, model, predicted, predicted, in.color);
     } else {
-        tracker.prepare(*in.depth, in.intrinsics, mesh, predicted, in.color);
+        tracker.prepare(*in.depth, in.intrinsics, model, predicted, in.color);
         icp = tracker.align(predicted);
     }
     const Pose motion = inverseRigid(lastTracked_) * icp.cameraToWorld;
@@ -229,7 +229,7 @@ TrackedFusion PoseTracker::trackAndFuse(GpuVolume& volume, const DepthImage& dep
                                         const ColorImage* trackingColor, const ColorImage* fusedColor, const vk::SubmitSync& sync) {
     TrackedFusion out;
     if (!options_.solveOnGpu) {
-        out.tracking = track(depth, intrinsics, volume.meshBuffers(), trackingColor);
+        out.tracking = track(depth, intrinsics, volume, trackingColor);
         if (!out.tracking.tracked) return out;
         const auto t0 = std::chrono::steady_clock::now();
         out.fused = volume.integrate(depth, fusedColor, intrinsics, out.tracking.cameraToWorld, sync);
@@ -244,13 +244,12 @@ TrackedFusion PoseTracker::trackAndFuse(GpuVolume& volume, const DepthImage& dep
     tracker.checkFrame(*in.depth, in.color);   // recordPose must not throw: the frame would be half recorded
     const Pose predicted = prediction();
     const bool reused = reuseModelMaps(tracker, predicted);
-    const MeshBuffers mesh = volume.meshBuffers();   // last frame's mesh: the frame's own export replaces it later
     const Pose lastTracked = lastTracked_;
     const RecentFrames recentFrames = recent();
     FrameInput input = FrameInput::fromHost(depth, fusedColor, intrinsics, predicted);   // the pose is not read: the tracker's is
     input.sync = sync;
     input.recordPose = [&](VkCommandBuffer cmd, const vk::Buffer& framePose) {
-        tracker.recordTrackAndDecide(cmd, *in.depth, in.intrinsics, mesh, predicted, predicted, in.color, lastTracked, recentFrames, framePose);
+        tracker.recordTrackAndDecide(cmd, *in.depth, in.intrinsics, volume, predicted, predicted, in.color, lastTracked, recentFrames, framePose);
     };
     volume.submitFrame(input);
     FrameReport frame = volume.finishFrame();
@@ -268,13 +267,13 @@ TrackedFusion PoseTracker::trackAndFuse(GpuVolume& volume, const DepthImage& dep
     return out;
 }
 
-TrackingReport PoseTracker::trackFrom(const Pose& start, const DepthImage& depth, const Intrinsics& intrinsics, const MeshBuffers& mesh,
+TrackingReport PoseTracker::trackFrom(const Pose& start, const DepthImage& depth, const Intrinsics& intrinsics, const TrackingModel& model,
                                       const ColorImage* color) {
     const State before = state();
     lastTracked_ = start;
     velocity_ = Pose::Identity();
     modelFresh_ = false;   // drawn at `start`
-    TrackingReport report = track(depth, intrinsics, mesh, color);
+    TrackingReport report = track(depth, intrinsics, model, color);
     restore(before);
     return report;
 }

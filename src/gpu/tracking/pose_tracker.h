@@ -72,11 +72,11 @@ public:
     // The first frame's pose (the dataset's, or identity): the frame is not tracked, the caller fuses it.
     TrackingReport start(const Pose& cameraToWorld);
     bool started() const { return started_; }
-    // Tracks a frame against `mesh` (the mesh fused so far: MeshBuffers of a volume with publishMesh). The
+    // Tracks a frame against `model` (the mesh fused so far: a volume, or MeshBuffers). The
     // colour image (registered to the depth, or null) feeds the photometric term when options.colorWeight > 0.
-    TrackingReport track(const DepthImage& depth, const Intrinsics& intrinsics, const MeshBuffers& mesh,
+    TrackingReport track(const DepthImage& depth, const Intrinsics& intrinsics, const TrackingModel& model,
                          const ColorImage* color = nullptr);
-    // Tracks a frame against `volume`'s mesh (a volume with publishMesh) and fuses it there when it is tracked.
+    // Tracks a frame against `volume`'s mesh (the triangles in view) and fuses it there when it is tracked.
     // `trackingColor` feeds the photometric term, `fusedColor` is fused (either may be null). With
     // options.solveOnGpu one submission does both (one host wait per frame; docs/TRACKING.md, "One submission"),
     // else track() and then volume.integrate().
@@ -86,7 +86,7 @@ public:
     // prediction, with every loss check measured from there (the jump bound from `start`, not from the last tracked
     // pose). Nothing is fused and the tracker's state stays as it was: the result is a hypothesis for the caller to
     // verify, and to go on from with resumeAt().
-    TrackingReport trackFrom(const Pose& start, const DepthImage& depth, const Intrinsics& intrinsics, const MeshBuffers& mesh,
+    TrackingReport trackFrom(const Pose& start, const DepthImage& depth, const Intrinsics& intrinsics, const TrackingModel& model,
                              const ColorImage* color = nullptr);
     // Tracking goes on from `pose` (an accepted relocalisation) with `motion` (none: the next frame is predicted
     // at `pose`).
