@@ -32,13 +32,12 @@ void ModelViewStage::follow() {
     if (chunkList_.size() < chunkBytes) chunkList_ = makeStorage(context_, table_, VIEW_BINDING_CHUNK_LIST, chunkBytes, "model view chunks");
     if (indices_.size() < indexBytes)
         indices_ = makeStorage(context_, table_, VIEW_BINDING_INDICES, indexBytes, "model view indices", VK_BUFFER_USAGE_INDEX_BUFFER_BIT);
-    const vk::Buffer* volumeBuffers[4] = {&store_.coords(), &hash_.values(), &mesh_.cubeStates(), &mesh_.chunkTriangles()};
-    static_assert(VIEW_BINDING_BLOCK_COORDS == 0 && VIEW_BINDING_HASH_VALUES == 1 && VIEW_BINDING_CUBE_STATE == 2 && VIEW_BINDING_CHUNKS == 3);
-    for (uint32_t b = 0; b < 4; ++b) {
-        if (bound_[b] == volumeBuffers[b]->handle()) continue;
-        table_.bind(b, *volumeBuffers[b]);
-        bound_[b] = volumeBuffers[b]->handle();
-    }
+    // Bound every time, not only when a handle changed: a buffer grown twice between two listings may get the
+    // handle of one destroyed since, and a descriptor holds what its buffer was when it was written.
+    table_.bind(VIEW_BINDING_BLOCK_COORDS, store_.coords());
+    table_.bind(VIEW_BINDING_HASH_VALUES, hash_.values());
+    table_.bind(VIEW_BINDING_CUBE_STATE, mesh_.cubeStates());
+    table_.bind(VIEW_BINDING_CHUNKS, mesh_.chunkTriangles());
 }
 
 void ModelViewStage::record(VkCommandBuffer cmd, const Pose& cameraToWorld, const Intrinsics& intrinsics, int width, int height,

@@ -47,7 +47,6 @@ private:
     vk::BindingTable table_;
     vk::ComputePipeline plan_, cullBlocks_, listChunks_, emitTriangles_;
     vk::Buffer blockList_, chunkList_, indices_, state_;
-    VkBuffer bound_[4]{};   // the volume's buffers last bound at VIEW_BINDING_BLOCK_COORDS .. VIEW_BINDING_CHUNKS
 };
 
 }  // namespace vkmesh::gpu
