@@ -41,7 +41,7 @@ void ModelViewStage::follow() {
 }
 
 void ModelViewStage::record(VkCommandBuffer cmd, const Pose& cameraToWorld, const Intrinsics& intrinsics, int width, int height,
-                                   float nearDepth, float farDepth) {
+                            float nearDepth, float farDepth) {
     follow();
     ModelViewPush push{};
     const RigidRows rows = rigidRows(inverseRigid(cameraToWorld));
