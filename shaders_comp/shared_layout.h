@@ -432,6 +432,7 @@ VKM_CONST VIEW_BINDING_BLOCK_LIST = 4u;    // uint: the blocks in view (at most 
 VKM_CONST VIEW_BINDING_CHUNK_LIST = 5u;    // uint: their cubes' chunks (at most the chunk heap's capacity)
 VKM_CONST VIEW_BINDING_INDICES = 6u;       // uint: the chunks' triangles as vertex indices, 3 per triangle (an index buffer)
 VKM_CONST VIEW_BINDING_STATE = 7u;         // ModelViewState
+VKM_CONST VIEW_BINDING_VERTICES = 8u;      // the vertex heap (BINDING_VERTICES): the vertices' ages, for the older map only
 VKM_CONST VIEW_CUBES_PER_INVOCATION = 8u;  // list_view_chunks: two uvec4 loads of cube states per invocation
 VKM_CONST WG_VIEW_BLOCK = 64u;             // list_view_chunks: VOXELS_PER_BLOCK / VIEW_CUBES_PER_INVOCATION
 
@@ -455,6 +456,11 @@ struct ModelViewPush {
     float blockRadius;
     uint blockCapacity;         // blocks in the pool
     uint hashCapacity;          // slots of the hash
+    // Only triangles whose three vertices were created before this frame number are listed: the surface made before
+    // the recent frames, which a loop is measured against (docs/LOOP_CLOSURE.md, "Loops against the older map").
+    // 0xFFFFFFFF: every triangle (the vertices are not read).
+    uint createdBefore;
+    uint pad0, pad1, pad2;
 };
 
 // Push constants of every compute stage: the current frame's camera. Rigid transforms are stored as

@@ -1,6 +1,6 @@
 #version 460
 // One invocation per chunk list_view_chunks listed: its triangles appended to the index list, and the draw's
-// index count raised.
+// index count raised. With a createdBefore, only the triangles whose three vertices are older (the older map).
 #extension GL_GOOGLE_include_directive : require
 #include "model_view.glsl"
 
@@ -11,8 +11,15 @@ void main() {
     uint base = 0u, mask = 0u;   // bit t: triangle slot t of the chunk holds a triangle
     if (i < viewState.chunkCount) {
         base = viewChunks[i] * CHUNK_WORDS;
-        for (uint t = 0u; t < TRIANGLES_PER_CHUNK; ++t)
-            if (chunkTriangles[base + 3u * t] != INVALID_INDEX) mask |= 1u << t;
+        for (uint t = 0u; t < TRIANGLES_PER_CHUNK; ++t) {
+            uint a = chunkTriangles[base + 3u * t];
+            if (a == INVALID_INDEX) continue;
+            if (pc.createdBefore != 0xFFFFFFFFu &&
+                (vertices[a].createdFrame >= pc.createdBefore || vertices[chunkTriangles[base + 3u * t + 1u]].createdFrame >= pc.createdBefore ||
+                 vertices[chunkTriangles[base + 3u * t + 2u]].createdFrame >= pc.createdBefore))
+                continue;
+            mask |= 1u << t;
+        }
     }
     uint at;
     APPEND_PER_SUBGROUP(viewState.draw[0], 3u * bitCount(mask), at);

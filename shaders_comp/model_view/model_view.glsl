@@ -17,6 +17,7 @@ layout(std430, set = 0, binding = VIEW_BINDING_BLOCK_LIST) buffer BlockList { ui
 layout(std430, set = 0, binding = VIEW_BINDING_CHUNK_LIST) buffer ChunkList { uint viewChunks[]; };
 layout(std430, set = 0, binding = VIEW_BINDING_INDICES) writeonly buffer ViewIndices { uint viewIndices[]; };
 layout(std430, set = 0, binding = VIEW_BINDING_STATE) buffer ViewStateBuffer { ModelViewState viewState; };
+layout(std430, set = 0, binding = VIEW_BINDING_VERTICES) readonly buffer Vertices { Vertex vertices[]; };
 
 layout(push_constant) uniform PushBlock {
     vec4 worldToCamera[3];
@@ -26,6 +27,7 @@ layout(push_constant) uniform PushBlock {
     float blockRadius;
     uint blockCapacity;
     uint hashCapacity;
+    uint createdBefore;
 } pc;
 
 // `count` items of this invocation appended to a list whose length is `counter`: the first one's position. One

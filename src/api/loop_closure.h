@@ -16,6 +16,20 @@
 
 namespace vkmesh {
 
+// A tracked frame registered against the older map before it was fused (Mapper; docs/LOOP_CLOSURE.md, "Loops against
+// the older map"): the tracker's ICP from the tracked pose against only the surface made before the recent frames,
+// with tracking's own loss checks. Where the camera is in the map the recent frames' drift has not reached.
+struct OlderMapRegistration {
+    bool tracked = false;                    // the checks passed
+    Pose cameraToWorld = Pose::Identity();   // tracked: the estimate
+    double inlierShare = 0;                  // of the registration's last iteration
+    // The older map's fit to the frame (inlier point-to-plane RMSE, metres) at cameraToWorld and at the tracked
+    // pose: a drift the older map measures fits it better than the tracked pose does.
+    double rmse = 0, rmseAtTracked = 0;
+    std::string lostReason;                  // why not (empty when tracked)
+    double milliseconds = 0;                 // wall time of the registration
+};
+
 // One frame as the loop closer sees it: the images as fused (or as tracking lost them) and where it was.
 struct LoopClosureFrame {
     uint32_t index = 0;                  // the frame's number in the sequence (as the map's correction numbers it)
@@ -23,6 +37,7 @@ struct LoopClosureFrame {
     const ColorImage* color = nullptr;   // registered to the depth, or null / empty
     Intrinsics intrinsics;
     Pose cameraToWorld = Pose::Identity();   // fused at (frameFused), or the tracker's prediction (lost frames)
+    const OlderMapRegistration* olderMap = nullptr;   // frameFused: the frame against the older map, when wantsOlderMap asked for it
 };
 
 // A pose to track a lost frame from (LoopClosure::relocalisationCandidates).
@@ -57,6 +72,8 @@ struct LoopClosureStats {
     // Poses the keyframes' ORB features proposed for lost frames, and the confirmed relocalisations among them.
     uint32_t featureCandidates = 0, relocalisationsByFeatures = 0;
     uint32_t framesCorrected = 0;      // poses handed back (a frame counts once per loop that moved it)
+    uint32_t olderMapChecks = 0;       // frames registered against the older map (wantsOlderMap), and those that matched it
+    uint32_t olderMapMatches = 0;
     uint32_t graphSolves = 0;
     // Milliseconds per stage (sum and count): encode (shrink + code), features (a keyframe's ORB features), keyframe
     // (registration image), search, verify (registration), solve (the graph), per frameFused call in all ("frame");
@@ -65,7 +82,9 @@ struct LoopClosureStats {
     struct Loop {
         uint32_t frame = 0, keyframeFrame = 0;   // the new keyframe's frame and the old one's
         double dissimilarity = 0;
-        std::string proposedBy;                  // "ferns" (the codes look alike) or "proximity" (the graph puts them close)
+        // "ferns" (the codes look alike), "proximity" (the graph puts them close) or "older map" (the frame matched
+        // the surface made before the recent frames, and it showed drift)
+        std::string proposedBy;
         bool accepted = false;                   // verified (and plausible)
         std::string reason;                      // why rejected; "consistent" when verified but nothing to correct
         double correctionMetres = 0, correctionDegrees = 0;   // how far the loop moved the camera
@@ -79,6 +98,9 @@ public:
     // A frame was fused at frame.cameraToWorld (the first frame, a tracked or a relocalised one). Returns the poses
     // an accepted loop moved (this frame's among them), or nothing.
     virtual PoseCorrections frameFused(const LoopClosureFrame& frame) = 0;
+    // Whether a tracked frame about to be fused at about `cameraToWorld` should first be registered against the older
+    // map (handed to frameFused in LoopClosureFrame::olderMap). Never by default.
+    virtual bool wantsOlderMap(uint32_t /*frame*/, const Pose& /*cameraToWorld*/) const { return false; }
     // A frame tracking lost: camera poses to track it from, most likely first (none: no keyframe looks alike).
     virtual std::vector<RelocalisationCandidate> relocalisationCandidates(const LoopClosureFrame& frame) = 0;
     // How trying them ended (counted; a success also restarts the pose graph's chain at that frame, whose

@@ -44,8 +44,23 @@ struct MapperOptions {
     // Queued corrections re-fused before each frame (a de-integration and an integration each); finish() and
     // finishCorrections() re-fuse the rest.
     size_t correctionsPerFrame = 2;
+    // ... and before the frame after a loop closed, at least this many: the frames the loop moved most (the most
+    // recent) are the surface the camera sees next, and tracking against them left at their old poses pulls the
+    // camera back to where the loop showed it was not.
+    size_t correctionsAfterLoop = 30;
     // Loop closure and relocalisation for tracked frames (docs/LOOP_CLOSURE.md); needs kept frames (keepFrames()).
     std::shared_ptr<LoopClosure> loopClosure;
+    // Loops against the older map (docs/LOOP_CLOSURE.md): at a frame the loop closer asks for (wantsOlderMap), the
+    // tracked frame is registered, before it is fused, against the surface made before the volume's last
+    // olderMapRecentFrames frames (ElasticFusion's inactive model: what the recent drift has not reached): the
+    // triangles whose three vertices are older (a vertex keeps its age while the surface moves along its edge; a
+    // revisit fuses into old blocks, so the blocks' last-seen frame would leave only the newest sliver of them).
+    // Not while corrections are queued (the map is half corrected). 0: never.
+    uint32_t olderMapRecentFrames = 30;
+    // The registration's loss checks are tracking's, except that the older map covers part of the view: it must
+    // match at least this share of the frame's pixels (the gallery's revisit shows 5 % of old surface 6 frames
+    // before tracking has snapped back onto it), and the "share fell" check is off.
+    double olderMapMinInlierFraction = 0.05;
     // How a lost camera is found again from the loop closer's keyframes (docs/LOOP_CLOSURE.md, "Relocalisation"):
     // a real camera in a place never mapped finds look-alikes that track well enough to pass tracking's loss checks
     // (ICL-NUIM office 0 without frames 59-98: 108 cm off at 65 % inliers), so a relocalisation is a hypothesis
@@ -197,6 +212,10 @@ private:
     void applyCorrections(size_t budget, gpu::CorrectionReport& report);
     void record(const MapperFrame& frame, const Pose& pose, bool posed);
     MapperResult tracked(const MapperFrame& frame, size_t validPixels);
+    // Whether the loop closer wants this frame against the older map (MapperOptions::olderMapRecentFrames), and the
+    // registration of a frame tracked to `tracking` there (kept in olderMap_ for its frameFused).
+    bool wantsOlderMap(const MapperFrame& frame) const;
+    void registerAgainstOlderMap(const MapperFrame& frame, const gpu::TrackingReport& tracking);
     // Relocalisation: a lost frame tracked from the loop closer's candidates; accepted, it is the hypothesis that
     // tracking goes on from (hypothesis_), tentative until confirmed.
     struct RelocalisationOutcome {
@@ -249,6 +268,8 @@ private:
         size_t statsEntry = SIZE_MAX;      // in stats_.relocalisations
     };
     std::optional<Hypothesis> hypothesis_;
+    std::optional<std::pair<uint32_t, OlderMapRegistration>> olderMap_;   // of this frame (its index), for frameFused
+    size_t correctionBurst_ = 0;   // the next frame's correction budget when a loop just closed (correctionsAfterLoop)
     bool lost_ = false;                    // a frame with depth was lost since the last fused one
     bool started_ = false;   // the run's clock (RunStats::fusionSeconds) runs from the first frame
     std::chrono::steady_clock::time_point start_;

@@ -109,6 +109,8 @@ json loopClosureJson(const Mapper& mapper, const RunStats& s) {
             {"feature_candidates", l.featureCandidates},
             {"relocalisations_by_features", l.relocalisationsByFeatures},
             {"frames_corrected", l.framesCorrected},
+            {"older_map_checks", l.olderMapChecks},
+            {"older_map_matches", l.olderMapMatches},
             {"frames_refused", s.framesRefused},
             {"observations_dropped", s.observationsDropped},
             {"graph_solves", l.graphSolves},

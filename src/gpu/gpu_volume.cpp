@@ -314,10 +314,10 @@ ExportedMesh GpuVolume::exportMesh(std::vector<std::pair<std::string, double>>* 
 }
 
 MeshBuffers GpuVolume::recordModelView(VkCommandBuffer cmd, const Pose& cameraToWorld, const Intrinsics& intrinsics, int width, int height,
-                                        float nearDepth, float farDepth) {
+                                        float nearDepth, float farDepth, uint32_t createdBefore) {
     if (config_.meshMode != MeshMode::Incremental) throw Error("the model in a view needs the incremental mesh mode (it lists its chunks)");
     if (!modelView_) modelView_.emplace(context_, store_, hash_, mesh_, config_.params.voxelSize);
-    modelView_->record(cmd, cameraToWorld, intrinsics, width, height, nearDepth, farDepth);
+    modelView_->record(cmd, cameraToWorld, intrinsics, width, height, nearDepth, farDepth, createdBefore);
     recordMeshReadBarrier(cmd);   // the list and its command, for the draw
     MeshBuffers b;
     b.vertices = mesh_.vertices().handle();

@@ -294,8 +294,9 @@ public:
     // and that list (ModelViewStage; counts unknown on the host: 0). What tracking draws: a drawing of these is
     // the drawing of the whole mesh at that camera, at a cost that follows the view, not the map, and it needs no
     // export. The buffers hold the mesh as the passes recorded before it left it. Incremental mode only.
+    // `createdBefore`: only the triangles whose vertices frames before it created (the older map); UINT32_MAX: all.
     MeshBuffers recordModelView(VkCommandBuffer cmd, const Pose& cameraToWorld, const Intrinsics& intrinsics, int width, int height,
-                                float nearDepth, float farDepth);
+                                float nearDepth, float farDepth, uint32_t createdBefore = UINT32_MAX);
     // The triangles the last recordModelView() listed (vertex heap indices), after its submission; for tests.
     std::vector<std::array<uint32_t, 3>> downloadModelView() const;
     MeshStateSnapshot downloadMeshState() const;

@@ -26,7 +26,8 @@ static_assert(offsetof(Counters, freeTop) == COUNTERS_PER_FRAME_OFFSET + COUNTER
 static_assert(offsetof(Counters, drawIndexed) % 4 == 0 && sizeof(Counters) == 432);
 static_assert(sizeof(DeltaState) == 64 && sizeof(DeltaVertexRecord) == 36 && sizeof(DeltaTriangleRecord) == 16);
 static_assert(sizeof(ModelViewState) == 64 && offsetof(ModelViewState, blockDispatch) == 32 && offsetof(ModelViewState, chunkDispatch) == 48);
-static_assert(sizeof(ModelViewPush) == 96 && offsetof(ModelViewPush, blockSide) == 80, "ModelViewPush: the GLSL push block's layout");
+static_assert(sizeof(ModelViewPush) == 112 && offsetof(ModelViewPush, blockSide) == 80 && offsetof(ModelViewPush, createdBefore) == 96,
+              "ModelViewPush: the GLSL push block's layout");
 static_assert(WG_VIEW_BLOCK * VIEW_CUBES_PER_INVOCATION == VOXELS_PER_BLOCK);
 static_assert(sizeof(FramePush) == 128, "push constants: 128 bytes is all lavapipe guarantees");
 static_assert(uint32_t(ColorFusion::Off) == COLOR_MODE_OFF && uint32_t(ColorFusion::Average) == COLOR_MODE_AVERAGE &&

@@ -99,17 +99,17 @@ void MapCorrector::correct(const std::vector<uint32_t>& frames, const std::vecto
     }
 }
 
-CorrectionReport MapCorrector::apply(GpuVolume& volume, size_t budget) {
+CorrectionReport MapCorrector::apply(GpuVolume& volume, size_t budget, Order order) {
     CorrectionReport report;
     if (pending_.empty() || budget == 0) return report;
     settle();
     const auto start = std::chrono::steady_clock::now();
-    // Largest pose change first: those frames put the most surface in the wrong place.
-    std::vector<std::pair<double, uint32_t>> order;
-    for (const auto& [index, pose] : pending_) order.emplace_back(-poseChange(store_.pose(index), pose), index);
-    std::sort(order.begin(), order.end());
-    order.resize(std::min(order.size(), budget));
-    for (const auto& [negativeChange, index] : order) {
+    std::vector<std::pair<double, uint32_t>> first;   // (key, frame), smallest key first
+    for (const auto& [index, pose] : pending_)
+        first.emplace_back(order == Order::Newest ? -double(index) : -poseChange(store_.pose(index), pose), index);
+    std::sort(first.begin(), first.end());
+    first.resize(std::min(first.size(), budget));
+    for (const auto& [key, index] : first) {
         const Pose newPose = pending_.at(index);
         const StoredFrame frame = store_.get(index);
         FrameInput input = FrameInput::fromHost(frame.depth, frame.color.empty() ? nullptr : &frame.color, frame.intrinsics, frame.pose);

@@ -65,9 +65,12 @@ public:
     void correct(const std::vector<uint32_t>& frames, const std::vector<Pose>& poses);
     size_t pending() const { return pending_.size(); }
 
-    // Re-fuses up to `budget` queued frames into `volume` (largest pose change first) as intermediate frames:
-    // the caller's next frame, or GpuVolume::publishMesh(), exports the mesh and takes the deltas.
-    CorrectionReport apply(GpuVolume& volume, size_t budget);
+    // Which queued frames apply() re-fuses first: those whose pose changed most (they put the most surface in the
+    // wrong place), or the newest (the surface a moving camera sees next: after a loop closed).
+    enum class Order { LargestChange, Newest };
+    // Re-fuses up to `budget` queued frames into `volume` (in `order`) as intermediate frames: the caller's next
+    // frame, or GpuVolume::publishMesh(), exports the mesh and takes the deltas.
+    CorrectionReport apply(GpuVolume& volume, size_t budget, Order order = Order::LargestChange);
 
     // Every frame kept so far is in it (the call waits for the worker).
     const FrameStore& store() const {

@@ -56,20 +56,25 @@ PoseCorrections LoopCloser::corrections() {
     return out;
 }
 
+namespace {
+// The angle between the optical axes of two cameras `relative` apart (inverse(one) * other).
+double axisDegrees(const Pose& relative) { return std::acos(std::clamp(relative(2, 2), -1.0, 1.0)) / kRadiansPerDegree; }
+}  // namespace
+
 PoseCorrections LoopCloser::frameFused(const LoopClosureFrame& frame) {
     const auto t0 = Clock::now();
     if (!frame.depth) throw Error("loop closure: frame " + std::to_string(frame.index) + " has no depth");
     // The path travelled (a relocalised frame's jump is not travel).
     if (lastPose_ && !relocalisedFrom_) pathMetres_ += translationMetres(inverseRigid(*lastPose_) * frame.cameraToWorld);
     lastPose_ = frame.cameraToWorld;
+    if (frame.olderMap) {   // (used below if the frame becomes a keyframe, as wantsOlderMap foresaw)
+        ++stats_.olderMapChecks;
+        time("older_map", frame.olderMap->milliseconds);
+    }
 
     // A keyframe when the camera moved or turned far enough from the last one (the first frame is one, and so is
     // a relocalised frame: the chain of odometry edges broke there).
-    bool newKeyframe = keyframes_.empty() || relocalisedFrom_.has_value();
-    if (!newKeyframe) {
-        const Pose moved = inverseRigid(graph_.pose(keyframes_.back().node)) * frame.cameraToWorld;
-        newKeyframe = translationMetres(moved) >= options_.keyframeMetres || rotationDegrees(moved) >= options_.keyframeDegrees;
-    }
+    const bool newKeyframe = keyframes_.empty() || relocalisedFrom_.has_value() || farFromLastKeyframe(frame.cameraToWorld);
     PoseCorrections result;
     if (!newKeyframe) {
         const Keyframe& k = keyframes_.back();
@@ -117,9 +122,24 @@ PoseCorrections LoopCloser::frameFused(const LoopClosureFrame& frame) {
     ++stats_.keyframes;
     time("keyframe", msSince(t));
 
+    const Keyframe& current = keyframes_.back();
+    // Against the older map first: the fused model registers far more precisely than one keyframe's depth.
+    if (frame.olderMap) {
+        if (frame.olderMap->tracked) {
+            ++stats_.olderMapMatches;
+            lastOlderMapMatch_ = id;
+            if (tryOlderMapLoop(current, *frame.olderMap) == LoopOutcome::Closed) {
+                result = corrections();
+                stats_.framesCorrected += uint32_t(result.frames.size());
+                lastVerifiedKeyframe_ = id;
+                time("frame", msSince(t0));
+                return result;
+            }
+        }
+    }
+
     // Loop candidates: old enough keyframes whose codes look alike, most alike first (ties: the older first).
     t = Clock::now();
-    const Keyframe& current = keyframes_.back();
     std::vector<std::pair<double, int>> alike;
     for (int k = 0; k < id; ++k) {
         if (!oldEnoughForLoop(k, current)) continue;
@@ -140,8 +160,7 @@ PoseCorrections LoopCloser::frameFused(const LoopClosureFrame& frame) {
         candidates.push_back({k, d, "ferns"});
         byLook.push_back(k);
     }
-    const bool placeChecked = lastVerifiedKeyframe_ >= 0 && id - lastVerifiedKeyframe_ <= options_.proximitySpacing;
-    if (!placeChecked)
+    if (!placeRecentlyVerified(id))
         for (const int k : nearbyKeyframes(current, byLook))
             candidates.push_back({k, RandomFerns::dissimilarity(current.code, keyframes_[size_t(k)].code), "proximity"});
     time("search", msSince(t));
@@ -209,13 +228,6 @@ LoopCloser::LoopOutcome LoopCloser::tryLoop(const Keyframe& current, const Regis
     loop.keyframeFrame = old.frame;
     loop.dissimilarity = dissimilarity;
     loop.proposedBy = proposedBy;
-    auto reject = [&](const std::string& reason) {
-        loop.reason = reason;
-        ++stats_.loopsRejected;
-        ++stats_.rejectedBy[reason.substr(0, reason.find(':'))];
-        stats_.loops.push_back(loop);
-        return LoopOutcome::Rejected;
-    };
 
     // Verification: the tracker's ICP against the old keyframe's depth, from where tracking thinks the camera is,
     // and from the old keyframe's own pose when that fails (a larger drift than the gates catch).
@@ -224,28 +236,42 @@ LoopCloser::LoopOutcome LoopCloser::tryLoop(const Keyframe& current, const Regis
     const Pose oldPose = graph_.pose(old.node), currentPose = graph_.pose(current.node);
     // Both ways (verifyRegistration): a registration that slid along a weakly constrained direction does not come back.
     const VerifiedRegistration verified = verifyRegistration(currentFrame, oldFrame, oldPose, {currentPose, oldPose}, options_.tracker, gates());
-    const std::string& failure = verified.failure;
-    const std::optional<Registration>& match = verified.match;
     time("verify", msSince(t));
-    if (!match) return reject("registration: " + failure);
+    if (!verified.match) return rejectLoop(loop, "registration: " + verified.failure);
 
+    // A loop that agrees with the trajectory within what a registration at registration size can tell corrects
+    // nothing: no edge, no solve (re-solving for a registration's noise moved poses by its noise: TUM fr1/rpy's and
+    // ICL-NUIM's ATE got worse).
+    const bool byPlace = loop.proposedBy == "proximity";
+    return acceptLoop(current, old, verified.match->cameraToWorld,
+                      byPlace ? options_.proximityMinCorrectionMetres : options_.minLoopCorrectionMetres,
+                      byPlace ? options_.proximityMinCorrectionDegrees : options_.minLoopCorrectionDegrees, options_.loopSigmaMetres,
+                      options_.loopSigmaDegrees, loop);
+}
+
+LoopCloser::LoopOutcome LoopCloser::rejectLoop(LoopClosureStats::Loop loop, const std::string& reason) {
+    loop.reason = reason;
+    ++stats_.loopsRejected;
+    ++stats_.rejectedBy[reason.substr(0, reason.find(':'))];
+    stats_.loops.push_back(loop);
+    return LoopOutcome::Rejected;
+}
+
+LoopCloser::LoopOutcome LoopCloser::acceptLoop(const Keyframe& current, const Keyframe& old, const Pose& matched, double minMetres,
+                                               double minDegrees, double sigmaMetres, double sigmaDegrees, LoopClosureStats::Loop loop) {
     // Plausibility: no further than tracking can have drifted along the path between the two keyframes.
-    const Pose correction = inverseRigid(currentPose) * match->cameraToWorld;
+    const Pose oldPose = graph_.pose(old.node), currentPose = graph_.pose(current.node);
+    const Pose correction = inverseRigid(currentPose) * matched;
     loop.correctionMetres = translationMetres(correction);
     loop.correctionDegrees = rotationDegrees(correction);
     const double path = current.pathMetres - old.pathMetres;
     const double maxMetres = maxDriftMetres(path);
     const double maxDegrees = options_.driftBaseDegrees + options_.driftDegreesPerMetre * path;
     if (loop.correctionMetres > maxMetres || loop.correctionDegrees > maxDegrees)
-        return reject("implausible: moves the camera " + std::to_string(loop.correctionMetres) + " m, " +
-                      std::to_string(loop.correctionDegrees) + " degrees after " + std::to_string(path) + " m of path");
+        return rejectLoop(loop, "implausible: moves the camera " + std::to_string(loop.correctionMetres) + " m, " +
+                                    std::to_string(loop.correctionDegrees) + " degrees after " + std::to_string(path) + " m of path");
 
-    // A loop that agrees with the trajectory within what a registration at registration size can tell corrects
-    // nothing: no edge, no solve (re-solving for a registration's noise moved poses by its noise: TUM fr1/rpy's and
-    // ICL-NUIM's ATE got worse).
-    const bool byPlace = loop.proposedBy == "proximity";
-    const double minMetres = byPlace ? options_.proximityMinCorrectionMetres : options_.minLoopCorrectionMetres;
-    const double minDegrees = byPlace ? options_.proximityMinCorrectionDegrees : options_.minLoopCorrectionDegrees;
+    // Below the caller's threshold the loop agrees with the trajectory: no edge, no solve.
     if (loop.correctionMetres < minMetres && loop.correctionDegrees < minDegrees) {
         ++stats_.loopsConsistent;
         loop.accepted = true;
@@ -255,10 +281,10 @@ LoopCloser::LoopOutcome LoopCloser::tryLoop(const Keyframe& current, const Regis
     }
 
     // The loop edge, the solve, and the check that the loop now fits.
-    t = Clock::now();
+    const auto t = Clock::now();
     const std::vector<Pose> before = graph_.poses();
-    const int edge = graph_.addEdge({old.node, current.node, inverseRigid(oldPose) * match->cameraToWorld,
-                                     diagonalInformation(options_.loopSigmaMetres, options_.loopSigmaDegrees * kRadiansPerDegree), true});
+    const int edge = graph_.addEdge(
+        {old.node, current.node, inverseRigid(oldPose) * matched, diagonalInformation(sigmaMetres, sigmaDegrees * kRadiansPerDegree), true});
     graph_.optimise(50, options_.huber);
     ++stats_.graphSolves;
     const double error = graph_.whitenedError(size_t(edge));
@@ -266,12 +292,67 @@ LoopCloser::LoopOutcome LoopCloser::tryLoop(const Keyframe& current, const Regis
     if (!(error <= options_.maxLoopError)) {
         graph_.removeLastEdge();
         graph_.setPoses(before);
-        return reject("graph: the loop stays " + std::to_string(error) + " standard deviations off after the solve");
+        return rejectLoop(loop, "graph: the loop stays " + std::to_string(error) + " standard deviations off after the solve");
     }
     ++stats_.loopsAccepted;
     loop.accepted = true;
     stats_.loops.push_back(loop);
     return LoopOutcome::Closed;
+}
+
+bool LoopCloser::farFromLastKeyframe(const Pose& cameraToWorld) const {
+    const Pose moved = inverseRigid(graph_.pose(keyframes_.back().node)) * cameraToWorld;
+    return translationMetres(moved) >= options_.keyframeMetres || rotationDegrees(moved) >= options_.keyframeDegrees;
+}
+
+bool LoopCloser::wantsOlderMap(uint32_t frame, const Pose& cameraToWorld) const {
+    // A keyframe made now, not right after a relocalisation (its keyframe is tied by that) nor where a loop verified
+    // or the older map matched lately (the last proximitySpacing keyframes), with a keyframe old enough for a loop
+    // that may see the same surface: looking the same way within olderMapDegrees, within olderMapReachMetres and the
+    // drift the path since it allows.
+    const int id = int(keyframes_.size());
+    const bool matchedLately = lastOlderMapMatch_ >= 0 && id - lastOlderMapMatch_ <= options_.proximitySpacing;
+    if (!options_.olderMap || id <= options_.minKeyframeGap || relocalisedFrom_ || placeRecentlyVerified(id) || matchedLately ||
+        !farFromLastKeyframe(cameraToWorld))
+        return false;
+    for (int k = 0; k + options_.minKeyframeGap < id; ++k) {
+        const Keyframe& old = keyframes_[size_t(k)];
+        if (old.frame + options_.minFrameGap > frame) break;
+        const Pose apart = inverseRigid(graph_.pose(old.node)) * cameraToWorld;
+        if (axisDegrees(apart) <= options_.olderMapDegrees &&
+            translationMetres(apart) <= options_.olderMapReachMetres + maxDriftMetres(pathMetres_ - old.pathMetres))
+            return true;
+    }
+    return false;
+}
+
+LoopCloser::LoopOutcome LoopCloser::tryOlderMapLoop(const Keyframe& current, const OlderMapRegistration& registration) {
+    // The old keyframe nearest where the older map puts the camera, looking the same way within olderMapDegrees:
+    // its pose anchors the loop (the older map is where the graph has the old keyframes).
+    const Pose& matched = registration.cameraToWorld;
+    int nearest = -1;
+    double nearestMetres = 0;
+    for (int k = 0; k + 1 < int(keyframes_.size()); ++k) {
+        if (!oldEnoughForLoop(k, current)) continue;
+        const Pose apart = inverseRigid(graph_.pose(keyframes_[size_t(k)].node)) * matched;
+        if (axisDegrees(apart) > options_.olderMapDegrees) continue;
+        if (nearest < 0 || translationMetres(apart) < nearestMetres) nearest = k, nearestMetres = translationMetres(apart);
+    }
+    if (nearest < 0) return LoopOutcome::Rejected;   // the older map in view is not an old keyframe's: no loop to close
+    // Only a correction the older map observes is a loop: one it fits clearly better at the matched pose than at the
+    // tracked one, and large enough to matter. Else the trajectory agrees with the older map where it can tell (a
+    // registration that slides along what the geometry leaves free fits no better): counted as a match, not a loop,
+    // and the other candidates are still tried.
+    const Pose correction = inverseRigid(graph_.pose(current.node)) * matched;
+    if (!(registration.rmse <= options_.olderMapFitGain * registration.rmseAtTracked) ||
+        (translationMetres(correction) < options_.olderMapMinCorrectionMetres && rotationDegrees(correction) < options_.olderMapMinCorrectionDegrees))
+        return LoopOutcome::Consistent;
+    ++stats_.loopsDetected;
+    LoopClosureStats::Loop loop;
+    loop.frame = current.frame;
+    loop.keyframeFrame = keyframes_[size_t(nearest)].frame;
+    loop.proposedBy = "older map";
+    return acceptLoop(current, keyframes_[size_t(nearest)], matched, 0.0, 0.0, options_.olderMapSigmaMetres, options_.olderMapSigmaDegrees, loop);
 }
 
 std::vector<std::pair<int, RelocalisationCandidate>> LoopCloser::placeByFeatures(const LoopClosureFrame& frame, const char* stage) {

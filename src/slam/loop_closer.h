@@ -87,6 +87,24 @@ struct LoopClosureOptions {
     // A frame the graph moved less than this (and turned less) is not handed back for re-fusion: re-fusing costs
     // two frames' fusion, and a move well below a voxel does not change the map.
     double minCorrectionMetres = 0.002, minCorrectionDegrees = 0.1;
+    // Loops against the older map (docs/LOOP_CLOSURE.md): at each would-be keyframe (with keyframes old enough for a
+    // loop) that may see what an old enough keyframe saw (its view direction within olderMapDegrees, its position
+    // within olderMapReachMetres and the drift the path since allows), the frame is registered against the map made
+    // before the recent frames before it is fused (the Mapper does it: MapperOptions::olderMapRecentFrames), unless a
+    // loop verified or the older map matched at one of the last proximitySpacing keyframes.
+    // A match that shows drift is a loop to the old keyframe nearest its pose (within olderMapDegrees of its view
+    // direction): the fused model is far less noisy than one keyframe's depth, so this loop measures drift before
+    // frame-to-model tracking snaps back onto the old surface and hides it (the gallery: "Limits"). It shows drift
+    // when it moves the camera at least olderMapMinCorrection* and the older map fits the frame there with at most
+    // olderMapFitGain times the RMSE it has at the tracked pose (a registration that slid along a wall fits no better:
+    // ICL-NUIM office 0, 1.2 mm at both poses 3.8 cm apart; the gallery's drift 22.1 -> 5.0 mm; TUM fr1/rpy's
+    // matches 0.91-1.02 times); its edge is as precise as olderMapSigma*.
+    bool olderMap = true;
+    double olderMapDegrees = 45.0;
+    double olderMapReachMetres = 1.5;   // cameras looking the same way this far apart see the same walls 2-4 m away
+    double olderMapMinCorrectionMetres = 0.01, olderMapMinCorrectionDegrees = 0.5;
+    double olderMapFitGain = 0.5;
+    double olderMapSigmaMetres = 0.005, olderMapSigmaDegrees = 0.3;
     // Relocalisation: the features' poses (at most features.candidates), then at most relocaliseCandidates
     // keyframes, each differing in at most this share of the ferns (a keyframe the features already proposed is
     // not proposed again).
@@ -103,6 +121,7 @@ public:
     PoseCorrections frameFused(const LoopClosureFrame& frame) override;
     std::vector<RelocalisationCandidate> relocalisationCandidates(const LoopClosureFrame& frame) override;
     std::vector<RelocalisationCandidate> placements(const LoopClosureFrame& frame) override;
+    bool wantsOlderMap(uint32_t frame, const Pose& cameraToWorld) const override;
     void relocalisationResult(uint32_t frame, bool relocalised, int candidatesTried) override;
     bool latestPose(uint32_t frame, Pose& pose) const override;
     // File layout (little-endian): "VKLOOPS" and a 0 byte, u32 version (2), u64 map id, u64 payload bytes, u32
@@ -134,6 +153,19 @@ private:
     // Verifies and, if accepted, closes a loop from the newest keyframe to `candidate`.
     enum class LoopOutcome { Rejected, Consistent, Closed };
     LoopOutcome tryLoop(const Keyframe& current, const RegistrationFrame& currentFrame, int candidate, double dissimilarity, const char* proposedBy);
+    // Counts a rejected loop and why (the reason's words before ':' are its kind in stats' rejectedBy).
+    LoopOutcome rejectLoop(LoopClosureStats::Loop loop, const std::string& reason);
+    // The same for the newest keyframe registered against the older map (LoopClosureFrame::olderMap, tracked).
+    LoopOutcome tryOlderMapLoop(const Keyframe& current, const OlderMapRegistration& registration);
+    // The plausibility bound, the correction's threshold and the solve of a verified loop from keyframe `old` to
+    // `current` that puts the current camera at `matched` (tryLoop, tryOlderMapLoop); `loop` is recorded.
+    LoopOutcome acceptLoop(const Keyframe& current, const Keyframe& old, const Pose& matched, double minMetres, double minDegrees,
+                           double sigmaMetres, double sigmaDegrees, LoopClosureStats::Loop loop);
+    // Whether a frame at `cameraToWorld` becomes a keyframe (moved or turned far enough from the last one).
+    bool farFromLastKeyframe(const Pose& cameraToWorld) const;
+    // Whether the keyframe made now (`id`) skips the loop checks by place: a loop verified at one of the last
+    // proximitySpacing keyframes tied the place to the map.
+    bool placeRecentlyVerified(int id) const { return lastVerifiedKeyframe_ >= 0 && id - lastVerifiedKeyframe_ <= options_.proximitySpacing; }
     // Whether keyframe k is old enough to close a loop with `current` (the newest keyframe): minKeyframeGap
     // keyframes and minFrameGap frames back.
     bool oldEnoughForLoop(int k, const Keyframe& current) const;
@@ -165,6 +197,7 @@ private:
     std::vector<std::pair<int, RelocalisationCandidate>> placeByFeatures(const LoopClosureFrame& frame, const char* stage);
     size_t featureWindow_ = 0;          // where the next lost frame's window of older keyframes starts (FeatureOptions::matchKeyframes)
     int lastVerifiedKeyframe_ = -1;     // the newest keyframe whose loop verified (closed or consistent)
+    int lastOlderMapMatch_ = -1;        // the newest keyframe that matched the older map
     LoopClosureStats stats_;
 };
 

@@ -299,6 +299,25 @@ TEST_F(Tracking, ModelMapsOfTheTrianglesInViewAreThoseOfTheWholeMesh) {
         if (listed.size() > 0 && listed.size() < liveBlocks.size() * 6 / 10) ++partial;
     }
     EXPECT_GE(partial, 2u) << "views that list less than 60 % of the map";
+
+    // The older map (loop closure's: docs/LOOP_CLOSURE.md, "Loops against the older map"): of the triangles in view,
+    // exactly those whose three vertices the frames before `createdBefore` created.
+    const uint32_t createdBefore = 8;   // the first 7 of the 15 frames (frame numbers start at 1)
+    vk::CommandRecorder recorder(context());
+    volume.recordModelView(recorder.begin(), orbit()[45], k, kWidth, kHeight, 0.2f, 3.0f);
+    recorder.submitAndWait();
+    const std::vector<std::array<uint32_t, 3>> all = volume.downloadModelView();
+    volume.recordModelView(recorder.begin(), orbit()[45], k, kWidth, kHeight, 0.2f, 3.0f, createdBefore);
+    recorder.submitAndWait();
+    const std::vector<std::array<uint32_t, 3>> older = volume.downloadModelView();
+    std::set<std::array<uint32_t, 3>> expected;
+    for (const auto& t : all)
+        if (std::all_of(t.begin(), t.end(), [&](uint32_t v) { return state.vertices[v].createdFrame < createdBefore; })) expected.insert(t);
+    const std::set<std::array<uint32_t, 3>> olderSet(older.begin(), older.end());
+    EXPECT_EQ(olderSet, expected);
+    EXPECT_EQ(older.size(), expected.size()) << "a triangle listed twice";
+    EXPECT_GT(expected.size(), 1000u);
+    EXPECT_LT(expected.size(), all.size() * 9 / 10) << "the later frames made some of the surface in view";
 }
 
 // The ICP sums at every level: the GPU's against the CPU reference fed with the GPU's own maps, for a frame

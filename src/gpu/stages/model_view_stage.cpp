@@ -38,10 +38,11 @@ void ModelViewStage::follow() {
     table_.bind(VIEW_BINDING_HASH_VALUES, hash_.values());
     table_.bind(VIEW_BINDING_CUBE_STATE, mesh_.cubeStates());
     table_.bind(VIEW_BINDING_CHUNKS, mesh_.chunkTriangles());
+    table_.bind(VIEW_BINDING_VERTICES, mesh_.vertices());
 }
 
 void ModelViewStage::record(VkCommandBuffer cmd, const Pose& cameraToWorld, const Intrinsics& intrinsics, int width, int height,
-                            float nearDepth, float farDepth) {
+                            float nearDepth, float farDepth, uint32_t createdBefore) {
     follow();
     ModelViewPush push{};
     const RigidRows rows = rigidRows(inverseRigid(cameraToWorld));
@@ -55,6 +56,7 @@ void ModelViewStage::record(VkCommandBuffer cmd, const Pose& cameraToWorld, cons
     push.blockRadius = 0.5f * blockSide_ * std::sqrt(3.0f) * 1.01f + 1e-6f;
     push.blockCapacity = store_.capacity();
     push.hashCapacity = hash_.capacity();
+    push.createdBefore = createdBefore;
     // The volume's writes (its passes, its transfers) before the listing reads them, and the last draw's reads of
     // the lists and the command before the listing rewrites them.
     VkMemoryBarrier before{VK_STRUCTURE_TYPE_MEMORY_BARRIER};

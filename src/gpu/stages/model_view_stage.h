@@ -4,7 +4,7 @@
 // map, and needs no compacted copy of the mesh (the export). Owns its lists and state, in a binding table of its
 // own (VIEW_BINDING_*, ModelViewPush); reads the volume's buffers, whichever they are when it records (they are
 // replaced when the volume grows).
-//   reads  block coords, hash values, cube states, chunks    writes its block, chunk and index lists, ModelViewState
+//   reads  block coords, hash values, cube states, chunks, vertices' ages    writes its block, chunk and index lists, ModelViewState
 #pragma once
 
 #include <array>
@@ -25,9 +25,10 @@ public:
     ModelViewStage(const vk::Context& context, const BlockStore& store, const BlockHash& hash, const CubeMesh& mesh, float voxelSize);
     // Records the listing for the view of a `width` x `height` camera with `intrinsics` at `cameraToWorld`, depths in
     // [near, far]: indices() over the vertex heap, and its VkDrawIndexedIndirectCommand at drawOffset() in state().
+    // Only triangles whose three vertices were created before frame number `createdBefore` are listed (UINT32_MAX: all).
     // Between submissions only (it may rebind and reallocate its buffers). The caller records the barrier for the draw.
     void record(VkCommandBuffer cmd, const Pose& cameraToWorld, const Intrinsics& intrinsics, int width, int height,
-                       float nearDepth, float farDepth);
+                float nearDepth, float farDepth, uint32_t createdBefore = UINT32_MAX);
     // After the submission of a record(): the triangles it listed (vertex heap indices), for tests.
     std::vector<std::array<uint32_t, 3>> downloadList() const;
     const vk::Buffer& indices() const { return indices_; }

@@ -229,7 +229,8 @@ void ModelMapRenderer::record(VkCommandBuffer cmd, const TrackingModel& model, c
 
     // A volume's triangles in view, listed before the render pass (a compute pass, which ends with the barrier
     // for the draw).
-    const MeshBuffers mesh = model.volume ? model.volume->recordModelView(cmd, cameraToWorld, intrinsics, width_, height_, nearDepth, farDepth)
+    const MeshBuffers mesh = model.volume ? model.volume->recordModelView(cmd, cameraToWorld, intrinsics, width_, height_, nearDepth,
+                                                                          farDepth, model.createdBefore)
                                           : model.buffers;
     const bool hasMesh = mesh.vertices && mesh.indices && mesh.drawIndirect;
     if (hasMesh && !model.volume) recordMeshReadBarrier(cmd);   // (recordModelView ends with it)

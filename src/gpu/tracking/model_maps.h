@@ -20,8 +20,17 @@ namespace vkmesh::gpu {
 struct TrackingModel {
     TrackingModel(GpuVolume& volume) : volume(&volume) {}
     TrackingModel(const MeshBuffers& buffers) : buffers(buffers) {}
+    // A volume's older map: only the triangles whose three vertices frames numbered below `createdBefore` created
+    // (the surface made before the recent frames, that a loop is measured against: docs/LOOP_CLOSURE.md, "Loops
+    // against the older map").
+    static TrackingModel olderMap(GpuVolume& volume, uint32_t createdBefore) {
+        TrackingModel model(volume);
+        model.createdBefore = createdBefore;
+        return model;
+    }
     GpuVolume* volume = nullptr;
     MeshBuffers buffers;
+    uint32_t createdBefore = UINT32_MAX;   // a volume's triangles listed (GpuVolume::recordModelView): all by default
 };
 
 class ModelMapRenderer {

@@ -196,7 +196,7 @@ TrackingReport PoseTracker::conclude(const IcpResult& icp, uint32_t reason, doub
         if (recentRmse_.size() > kRecentFrames) recentRmse_.pop_front(), recentShare_.pop_front();
     } else {
         report.tracked = false;
-        report.lostReason = lossText(reason, icp.finalSystem, conditioning, motion, recent(), options_);
+        report.lostReason = lossText(reason, icp.finalSystem, conditioning, motion, recent(), lossBounds());
         report.cameraToWorld = predicted;
         velocity_ = Pose::Identity();   // the motion is unknown now: predict the last tracked pose
         modelFresh_ = false;            // and draw the mesh for the next frame
@@ -218,7 +218,7 @@ TrackingReport PoseTracker::track(const DepthImage& depth, const Intrinsics& int
         icp = tracker.align(predicted);
     }
     const Pose motion = inverseRigid(lastTracked_) * icp.cameraToWorld;
-    const uint32_t reason = trackingLoss(icp.finalSystem, icp.finalStep.solved, icp.finalStep.conditioning, motion, recent(), options_);
+    const uint32_t reason = trackingLoss(icp.finalSystem, icp.finalStep.solved, icp.finalStep.conditioning, motion, recent(), lossBounds());
     TrackingReport report = conclude(icp, reason, icp.finalStep.conditioning, icp.cameraToWorld, predicted);
     report.modelDrawn = !reused;
     report.milliseconds = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
@@ -268,14 +268,28 @@ TrackedFusion PoseTracker::trackAndFuse(GpuVolume& volume, const DepthImage& dep
 }
 
 TrackingReport PoseTracker::trackFrom(const Pose& start, const DepthImage& depth, const Intrinsics& intrinsics, const TrackingModel& model,
-                                      const ColorImage* color) {
+                                      const ColorImage* color, const TrackerOptions* bounds) {
     const State before = state();
     lastTracked_ = start;
     velocity_ = Pose::Identity();
     modelFresh_ = false;   // drawn at `start`
-    TrackingReport report = track(depth, intrinsics, model, color);
+    lossBounds_ = bounds;
+    TrackingReport report;
+    try {
+        report = track(depth, intrinsics, model, color);
+    } catch (...) {
+        lossBounds_ = nullptr;
+        restore(before);
+        throw;
+    }
+    lossBounds_ = nullptr;
     restore(before);
     return report;
+}
+
+IcpSystem PoseTracker::fitAt(const Pose& cameraToWorld) {
+    if (!tracker_ || !tracker_->hasModelMaps()) throw Error("tracking: fitAt() before any frame was tracked");
+    return icpSystem(tracker_->sums(0, cameraToWorld));
 }
 
 void PoseTracker::resumeAt(const Pose& pose, const Pose& motion) {

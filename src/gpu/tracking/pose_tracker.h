@@ -85,9 +85,13 @@ public:
     // Relocalisation (docs/LOOP_CLOSURE.md): track() of a frame from `start` (a keyframe's pose) instead of the
     // prediction, with every loss check measured from there (the jump bound from `start`, not from the last tracked
     // pose). Nothing is fused and the tracker's state stays as it was: the result is a hypothesis for the caller to
-    // verify, and to go on from with resumeAt().
+    // verify, and to go on from with resumeAt(). `bounds` (optional): the loss checks' bounds instead of the options'
+    // (a registration against part of the map: the Mapper's older map).
     TrackingReport trackFrom(const Pose& start, const DepthImage& depth, const Intrinsics& intrinsics, const TrackingModel& model,
-                             const ColorImage* color = nullptr);
+                             const ColorImage* color = nullptr, const TrackerOptions* bounds = nullptr);
+    // The frame of the last track()/trackFrom() against that call's model maps at `cameraToWorld` instead (one ICP
+    // iteration's system at the finest level, nothing solved): how well that model fits the frame there.
+    IcpSystem fitAt(const Pose& cameraToWorld);
     // Tracking goes on from `pose` (an accepted relocalisation) with `motion` (none: the next frame is predicted
     // at `pose`).
     void resumeAt(const Pose& pose, const Pose& motion = Pose::Identity());
@@ -124,8 +128,11 @@ private:
     bool reuseModelMaps(CameraTracker& tracker, const Pose& predicted);
     // The report of a frame whose ICP found `icp` (its verdict `reason`), and the prediction state moved on.
     TrackingReport conclude(const IcpResult& icp, uint32_t reason, double conditioning, const Pose& estimate, const Pose& predicted);
+    // The loss checks' bounds: trackFrom's, or the options.
+    const TrackerOptions& lossBounds() const { return lossBounds_ ? *lossBounds_ : options_; }
     const vk::Context& context_;
     TrackerOptions options_;
+    const TrackerOptions* lossBounds_ = nullptr;   // trackFrom's bounds while it tracks
     std::unique_ptr<CameraTracker> tracker_;   // created at the first tracked frame's image size
     bool started_ = false;
     Pose lastTracked_ = Pose::Identity();
