@@ -22,11 +22,9 @@ namespace vkmesh {
 struct OlderMapRegistration {
     bool tracked = false;                    // the checks passed
     Pose cameraToWorld = Pose::Identity();   // tracked: the estimate
-    double inlierShare = 0;                  // of the registration's last iteration
     // The older map's fit to the frame (inlier point-to-plane RMSE, metres) at cameraToWorld and at the tracked
     // pose: a drift the older map measures fits it better than the tracked pose does.
     double rmse = 0, rmseAtTracked = 0;
-    std::string lostReason;                  // why not (empty when tracked)
     double milliseconds = 0;                 // wall time of the registration
 };
 

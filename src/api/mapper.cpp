@@ -191,8 +191,6 @@ void Mapper::registerAgainstOlderMap(const MapperFrame& frame, const gpu::Tracki
     OlderMapRegistration older;
     older.tracked = r.tracked;
     older.cameraToWorld = r.cameraToWorld;
-    older.inlierShare = r.inlierShare();
-    older.lostReason = r.lostReason;
     if (r.tracked) {
         // The older map's fit at both poses, on the same maps: a registration that slid along what geometry leaves
         // free fits no better than the tracked pose (ICL-NUIM office 0: 1.2 mm at both, 3.8 cm apart), a measured

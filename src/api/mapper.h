@@ -7,6 +7,8 @@
 //   queued corrections re-fused (correctionsPerFrame) ── fuse (allocate, fuse, mesh) ── keep the frame (frame store)
 //        ── the loop closer sees it (an accepted loop queues corrections) ── sinks (trajectory, deltas, viewer,
 //           pictures) ── RunStats
+//   (a tracked frame the loop closer asks for, wantsOlderMap, is also registered against the older map before it
+//   is fused; the loop closer sees that registration with it)
 //
 // Front ends only feed it: `vkmesh fuse` and `vkmesh soak` read their frames and hand them over, Reconstructor
 // (the embedding and Python API) wraps one, and each attaches the sinks it needs.

@@ -196,15 +196,13 @@ std::vector<int> LoopCloser::nearbyKeyframes(const Keyframe& current, const std:
     for (int k = 0; k + 1 < int(keyframes_.size()); ++k) {
         const Keyframe& old = keyframes_[size_t(k)];
         if (!oldEnoughForLoop(k, current) || std::find(skip.begin(), skip.end(), k) != skip.end()) continue;
-        const Pose oldPose = graph_.pose(old.node);
-        const double metres = (currentPose.block<3, 1>(0, 3) - oldPose.block<3, 1>(0, 3)).norm();
-        const double axisCosine = std::clamp(currentPose.block<3, 1>(0, 2).dot(oldPose.block<3, 1>(0, 2)), -1.0, 1.0);
-        const double axisDegrees = std::acos(axisCosine) / kRadiansPerDegree;
+        const Pose apart = inverseRigid(graph_.pose(old.node)) * currentPose;
+        const double metres = translationMetres(apart), degrees = axisDegrees(apart);
         // Where the camera can be: no further than tracking can have drifted since the old keyframe (tryLoop's
         // plausibility bound), looking at what it saw.
         const double path = current.pathMetres - old.pathMetres;
-        if (metres > maxDriftMetres(path) || axisDegrees > options_.proximityDegrees) continue;
-        near.emplace_back(metres / options_.keyframeMetres + axisDegrees / options_.keyframeDegrees, k);   // in keyframe spacings
+        if (metres > maxDriftMetres(path) || degrees > options_.proximityDegrees) continue;
+        near.emplace_back(metres / options_.keyframeMetres + degrees / options_.keyframeDegrees, k);   // in keyframe spacings
     }
     std::sort(near.begin(), near.end());
     std::vector<int> out;

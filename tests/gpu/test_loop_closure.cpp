@@ -178,7 +178,6 @@ DriftedLap closeDriftedLap(const slam::LoopClosureOptions& options, double drift
         OlderMapRegistration older;
         older.tracked = true;
         older.cameraToWorld = path[i];
-        older.inlierShare = 0.3;
         older.rmse = 0.004;
         older.rmseAtTracked = olderMapFitAtTracked;
         const bool withOlder = olderMapFitAtTracked > 0 && closer.wantsOlderMap(i, given[i]);

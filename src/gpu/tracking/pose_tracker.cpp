@@ -175,7 +175,8 @@ RecentFrames PoseTracker::recent() const {
     return {mean(recentRmse_), mean(recentShare_)};
 }
 
-TrackingReport PoseTracker::conclude(const IcpResult& icp, uint32_t reason, double conditioning, const Pose& estimate, const Pose& predicted) {
+TrackingReport PoseTracker::conclude(const IcpResult& icp, uint32_t reason, double conditioning, const Pose& estimate, const Pose& predicted,
+                                     const TrackerOptions& bounds) {
     TrackingReport report;
     report.iterations = icp.iterations;
     report.submissions = icp.submissions;
@@ -196,7 +197,7 @@ TrackingReport PoseTracker::conclude(const IcpResult& icp, uint32_t reason, doub
         if (recentRmse_.size() > kRecentFrames) recentRmse_.pop_front(), recentShare_.pop_front();
     } else {
         report.tracked = false;
-        report.lostReason = lossText(reason, icp.finalSystem, conditioning, motion, recent(), lossBounds());
+        report.lostReason = lossText(reason, icp.finalSystem, conditioning, motion, recent(), bounds);
         report.cameraToWorld = predicted;
         velocity_ = Pose::Identity();   // the motion is unknown now: predict the last tracked pose
         modelFresh_ = false;            // and draw the mesh for the next frame
@@ -205,6 +206,11 @@ TrackingReport PoseTracker::conclude(const IcpResult& icp, uint32_t reason, doub
 }
 
 TrackingReport PoseTracker::track(const DepthImage& depth, const Intrinsics& intrinsics, const TrackingModel& model, const ColorImage* color) {
+    return track(depth, intrinsics, model, color, options_);
+}
+
+TrackingReport PoseTracker::track(const DepthImage& depth, const Intrinsics& intrinsics, const TrackingModel& model, const ColorImage* color,
+                                  const TrackerOptions& bounds) {
     const auto t0 = std::chrono::steady_clock::now();
     const TrackingInput in = trackingInput(depth, color, intrinsics);
     CameraTracker& tracker = trackerFor(*in.depth);
@@ -218,8 +224,8 @@ TrackingReport PoseTracker::track(const DepthImage& depth, const Intrinsics& int
         icp = tracker.align(predicted);
     }
     const Pose motion = inverseRigid(lastTracked_) * icp.cameraToWorld;
-    const uint32_t reason = trackingLoss(icp.finalSystem, icp.finalStep.solved, icp.finalStep.conditioning, motion, recent(), lossBounds());
-    TrackingReport report = conclude(icp, reason, icp.finalStep.conditioning, icp.cameraToWorld, predicted);
+    const uint32_t reason = trackingLoss(icp.finalSystem, icp.finalStep.solved, icp.finalStep.conditioning, motion, recent(), bounds);
+    TrackingReport report = conclude(icp, reason, icp.finalStep.conditioning, icp.cameraToWorld, predicted, bounds);
     report.modelDrawn = !reused;
     report.milliseconds = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     return report;
@@ -256,7 +262,7 @@ TrackedFusion PoseTracker::trackAndFuse(GpuVolume& volume, const DepthImage& dep
     const IcpResult icp = tracker.gpuSolvedResult();
     // The GPU's verdict is what happened (the frame was fused or not); the pose is the GPU's own estimate, the one
     // the volume fused at.
-    out.tracking = conclude(icp, icp.gpuLostReason, icp.gpuConditioning, icp.gpuEstimate, predicted);
+    out.tracking = conclude(icp, icp.gpuLostReason, icp.gpuConditioning, icp.gpuEstimate, predicted, options_);
     out.tracking.modelDrawn = !reused;
     out.oneSubmission = true;
     out.tracking.milliseconds = out.fuseMilliseconds = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
@@ -273,16 +279,7 @@ TrackingReport PoseTracker::trackFrom(const Pose& start, const DepthImage& depth
     lastTracked_ = start;
     velocity_ = Pose::Identity();
     modelFresh_ = false;   // drawn at `start`
-    lossBounds_ = bounds;
-    TrackingReport report;
-    try {
-        report = track(depth, intrinsics, model, color);
-    } catch (...) {
-        lossBounds_ = nullptr;
-        restore(before);
-        throw;
-    }
-    lossBounds_ = nullptr;
+    TrackingReport report = track(depth, intrinsics, model, color, bounds ? *bounds : options_);
     restore(before);
     return report;
 }

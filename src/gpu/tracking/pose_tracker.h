@@ -126,13 +126,14 @@ private:
     // Whether the frame predicted at `predicted` reuses the last model maps (TrackerOptions::modelReuse*); tells
     // the tracker so.
     bool reuseModelMaps(CameraTracker& tracker, const Pose& predicted);
-    // The report of a frame whose ICP found `icp` (its verdict `reason`), and the prediction state moved on.
-    TrackingReport conclude(const IcpResult& icp, uint32_t reason, double conditioning, const Pose& estimate, const Pose& predicted);
-    // The loss checks' bounds: trackFrom's, or the options.
-    const TrackerOptions& lossBounds() const { return lossBounds_ ? *lossBounds_ : options_; }
+    // track() with the loss checks' `bounds` (the options', or trackFrom's).
+    TrackingReport track(const DepthImage& depth, const Intrinsics& intrinsics, const TrackingModel& model, const ColorImage* color,
+                         const TrackerOptions& bounds);
+    // The report of a frame whose ICP found `icp` (its verdict `reason` under `bounds`), and the prediction state moved on.
+    TrackingReport conclude(const IcpResult& icp, uint32_t reason, double conditioning, const Pose& estimate, const Pose& predicted,
+                            const TrackerOptions& bounds);
     const vk::Context& context_;
     TrackerOptions options_;
-    const TrackerOptions* lossBounds_ = nullptr;   // trackFrom's bounds while it tracks
     std::unique_ptr<CameraTracker> tracker_;   // created at the first tracked frame's image size
     bool started_ = false;
     Pose lastTracked_ = Pose::Identity();
