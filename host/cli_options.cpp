@@ -94,6 +94,7 @@ void VolumeOptions::addCommon(CLI::App* cmd) {
     addSetting(cmd, "--voxel", voxel);
     addSetting(cmd, "--blocks", blocks);
     addSettingFlag(cmd, "--no-grow", noGrow);
+    addSetting(cmd, "--resident-blocks", residentBlocks);
     addSetting(cmd, "--keep-radius", keepRadius);
     addSettingFlag(cmd, "--recycle", recycle);
     addSetting(cmd, "--recycle-after", recycleAfter);
@@ -137,6 +138,7 @@ gpu::GpuVolumeConfig VolumeOptions::toConfig(float maxDepth, int width, int heig
     config.vertexCapacity = vertices;
     config.chunkCapacity = chunks;
     config.hashCapacity = hashSlots;
+    config.residentBlocks = residentBlocks;
     config.keepRadius = keepRadius;
     config.recycle = recycle;
     config.recycleAfterFrames = recycleAfter;

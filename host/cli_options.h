@@ -54,6 +54,7 @@ struct VolumeOptions {
     float refineEps = gpu::GpuVolumeConfig{}.refineEpsilonVoxels;
     bool lockFree = gpu::GpuVolumeConfig{}.lockFree;
     uint32_t blocks = gpu::GpuVolumeConfig{}.blockCapacity;
+    uint32_t residentBlocks = 0;   // --resident-blocks: paging (docs/PAGING.md)
     uint32_t vertices = gpu::GpuVolumeConfig{}.vertexCapacity;
     uint32_t chunks = gpu::GpuVolumeConfig{}.chunkCapacity;
     uint32_t hashSlots = gpu::GpuVolumeConfig{}.hashCapacity;   // 0: twice the block capacity, a power of two

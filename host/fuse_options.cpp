@@ -66,6 +66,11 @@ void FuseArgs::check() const {
     if ((loopClosure || noLoopClosure || !trajectoryOnlinePath.empty()) && !track)
         throw Error("--loop-closure, --no-loop-closure and --trajectory-online need --track (loops are closed over tracked poses)");
     if (loopClosure && noLoopClosure) throw Error("--loop-closure and --no-loop-closure contradict each other");
+    if (volume.residentBlocks > 0 && !savePath.empty())
+        throw Error("--save with --resident-blocks: saving the blocks paged out to the host is not built yet (docs/PAGING.md)");
+    if (given("--resident-blocks") && volume.residentBlocks == 0)
+        throw Error("--resident-blocks 0: give the number of blocks to keep in GPU memory (at least what one view reaches; "
+                    "docs/PAGING.md), or leave the option out to keep every block");
     for (const char* option : {"--corrections-per-frame", "--loop-place-candidates"})
         if (given(option) && !closesLoops())
             throw Error(std::string(option) + " needs loop closure (on with --track unless --no-loop-closure or --no-keep-frames)");

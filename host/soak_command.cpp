@@ -9,6 +9,10 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <array>
+#include <bit>
+#include <cstdio>
+#include <tuple>
 #include <chrono>
 #include <fstream>
 #include <iostream>
@@ -25,6 +29,53 @@
 namespace vkmesh::cli {
 
 namespace {
+
+// FNV-1a over 32-bit words.
+struct Digest {
+    uint64_t h = 14695981039346656037ull;
+    void add(uint32_t w) {
+        for (int b = 0; b < 4; ++b) h = (h ^ ((w >> (8 * b)) & 0xFF)) * 1099511628211ull;
+    }
+    std::string hex() const {
+        char text[17];
+        std::snprintf(text, sizeof(text), "%016llx", static_cast<unsigned long long>(h));
+        return text;
+    }
+};
+
+// The map's TSDF (every block's sums and weight bits, by coordinate) and its mesh (the set of triangles, each as its
+// vertices' position bits from the smallest, with the vertices' ages): what a paged run must share with an unpaged one.
+nlohmann::json mapDigest(gpu::GpuVolume& volume) {
+    std::vector<gpu::BlockSnapshot> blocks = volume.downloadBlocks();
+    std::sort(blocks.begin(), blocks.end(), [](const auto& a, const auto& b) {
+        return std::tie(a.coord.z(), a.coord.y(), a.coord.x()) < std::tie(b.coord.z(), b.coord.y(), b.coord.x());
+    });
+    Digest tsdf;
+    for (const gpu::BlockSnapshot& b : blocks) {
+        for (int i = 0; i < 3; ++i) tsdf.add(uint32_t(b.coord[i]));
+        for (int32_t v : b.sdfSum) tsdf.add(uint32_t(v));
+        for (float w : b.weight) tsdf.add(std::bit_cast<uint32_t>(w));
+    }
+    const gpu::ExportedMesh mesh = volume.exportMesh();
+    std::vector<std::array<uint32_t, 12>> triangles;
+    triangles.reserve(mesh.triangles.size());
+    for (const auto& t : mesh.triangles) {
+        std::array<std::array<uint32_t, 4>, 3> v;
+        for (int c = 0; c < 3; ++c) {
+            const gpu::Vertex& x = mesh.vertices[t[c]];
+            v[c] = {std::bit_cast<uint32_t>(x.px), std::bit_cast<uint32_t>(x.py), std::bit_cast<uint32_t>(x.pz), x.createdFrame};
+        }
+        const int first = int(std::min_element(v.begin(), v.end()) - v.begin());   // rotated, not reordered: orientation kept
+        std::array<uint32_t, 12> canonical;
+        for (int c = 0; c < 3; ++c) std::copy(v[(first + c) % 3].begin(), v[(first + c) % 3].end(), canonical.begin() + 4 * c);
+        triangles.push_back(canonical);
+    }
+    std::sort(triangles.begin(), triangles.end());
+    Digest mesh_;
+    for (const auto& t : triangles)
+        for (uint32_t w : t) mesh_.add(w);
+    return {{"blocks", blocks.size()}, {"tsdf", tsdf.hex()}, {"triangles", triangles.size()}, {"mesh", mesh_.hex()}};
+}
 
 struct SoakArgs {
     std::string output, summaryPath;
@@ -89,12 +140,14 @@ int runSoak(const SoakArgs& a) {
     csv << "frame,lap,hash_entries,hash_tombstones,hash_rebuilt,blocks_in_use,vertices_in_use,chunks_in_use,live_triangles,"
            "touched_blocks,blocks_freed,blocks_retired,blocks_starved,warnings,gpu_ms,wall_ms";
     for (const std::string& stage : kStages) csv << ",ms_" << stage;
-    csv << ",ms_other,track_ms,track_gpu_ms,tracked,track_error_m\n";   // tracking's columns: 0 without --track
+    csv << ",ms_other,track_ms,track_gpu_ms,tracked,track_error_m";   // tracking's columns: 0 without --track
+    csv << ",paging_ms,blocks_paged_in,blocks_paged_out,blocks_on_host\n";   // paging's (--resident-blocks): 0 without
     std::vector<Occupancy> highWater(a.laps, Occupancy{0, 0, 0, 0, 0, 0});
     std::vector<std::vector<double>> lapTrackMs(a.laps), lapTrackError(a.laps);   // tracked frames, per lap
     size_t lostFrames = 0;
     size_t warnings = 0, rebuilds = 0;
-    uint64_t freed = 0;
+    uint64_t freed = 0, pagedIn = 0, pagedOut = 0;
+    double pagingMs = 0, frameMs = 0;
     const auto start = std::chrono::steady_clock::now();
     for (size_t i = 0; i < framesPerLap * a.laps; ++i) {
         synth::RenderOptions options;
@@ -147,7 +200,12 @@ int runSoak(const SoakArgs& a) {
             if (tracking->tracked) lapTrackMs[lapIndex].push_back(tracking->milliseconds), lapTrackError[lapIndex].push_back(trackError);
         }
         csv << "," << (tracking ? tracking->milliseconds : 0.0) << "," << (tracking ? tracking->gpuMilliseconds : 0.0) << ","
-            << (tracking && tracking->tracked ? 1 : 0) << "," << trackError << "\n";
+            << (tracking && tracking->tracked ? 1 : 0) << "," << trackError;
+        csv << "," << r.paging.milliseconds << "," << r.paging.blocksIn << "," << r.paging.blocksOut << "," << r.paging.blocksPaged << "\n";
+        pagingMs += r.paging.milliseconds;
+        frameMs += wallMs;
+        pagedIn += r.paging.blocksIn;
+        pagedOut += r.paging.blocksOut;
         if ((i + 1) % 250 == 0)
             std::cerr << "frame " << i + 1 << "/" << framesPerLap * a.laps << "  blocks " << k.blocksInUse << "  vertices "
                       << k.verticesInUse << "\n";
@@ -168,6 +226,9 @@ int runSoak(const SoakArgs& a) {
                             {"vertices", h.vertices}, {"chunks", h.chunks}, {"triangles", h.triangles}});
     }
     std::cout << "  blocks freed " << freed << ", hash rebuilds " << rebuilds << ", warnings " << warnings << "\n";
+    if (a.volume.residentBlocks > 0)
+        std::cout << "  paging: " << pagedOut << " blocks out, " << pagedIn << " in, " << pagingMs << " ms ("
+                  << (frameMs > 0 ? 100.0 * pagingMs / frameMs : 0.0) << " % of the frames' time)\n";
     // Tracking per lap: the median wall time of its tracked frames (the flat-cost check compares the last lap's
     // with the first's) and the largest position error against the true poses.
     auto median = [](std::vector<double> v) {
@@ -197,6 +258,12 @@ int runSoak(const SoakArgs& a) {
                             {"high_water_per_lap", lapsJson}, {"blocks_freed", freed}, {"hash_rebuilds", rebuilds},
                             {"warnings", warnings}, {"seconds", seconds}, {"device", context.info().name}};
         if (a.track) s["tracking"] = trackingJson;
+        if (a.volume.residentBlocks > 0)
+            s["paging"] = {{"resident_blocks", a.volume.residentBlocks}, {"blocks_in", pagedIn}, {"blocks_out", pagedOut},
+                           {"blocks_on_host", mapper.volume().pagedBlocks()}, {"ms", pagingMs},
+                           {"share_of_frame_time", frameMs > 0 ? pagingMs / frameMs : 0.0}};
+        // The map at the end, as digests that two runs compare (the same with and without --resident-blocks).
+        s["map_digest"] = mapDigest(mapper.volume());
         std::ofstream file(a.summaryPath);
         if (!file) throw Error("cannot write " + a.summaryPath);
         file << s.dump(2) << "\n";

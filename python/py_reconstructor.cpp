@@ -227,6 +227,7 @@ py::dict PyReconstructor::stats() {
     d["max_depth"] = shortest(c.params.maxDepth);
     d["refine"] = c.refine;
     d["lock_free"] = c.lockFree;
+    d["resident_blocks"] = c.residentBlocks;
     d["track_deltas"] = options_.trackDeltas;
     d["tracking"] = py::dict("color_weight"_a = shortest(options_.tracker.colorWeight),
                              "solve"_a = options_.tracker.solveOnGpu ? "gpu" : "host", "downsample"_a = options_.tracker.downsample,

@@ -119,7 +119,8 @@ std::unique_ptr<PyReconstructor> makeReconstructor(float voxelSize, float trunca
                                                    bool lockFree, const Capacities& capacities, bool growCapacities, float keepRadius,
                                                    bool recycle, long long recycleAfterFrames, float starveWeight, bool validation,
                                                    float trackColorWeight, const std::string& trackSolve, int trackDownsample,
-                                                   int trackModelReuse, const CorrectionSettings& correction, bool allocationTiles) {
+                                                   int trackModelReuse, const CorrectionSettings& correction, bool allocationTiles,
+                                                   long long residentBlocks) {
     ReconstructorOptions o;
     correction.applyTo(o);
     gpu::GpuVolumeConfig& c = o.volume;
@@ -143,6 +144,9 @@ std::unique_ptr<PyReconstructor> makeReconstructor(float voxelSize, float trunca
     c.recycle = recycle;
     c.recycleAfterFrames = capacity("recycle_after_frames", recycleAfterFrames);
     c.starveWeight = starveWeight;
+    if (residentBlocks < 0 || residentBlocks > UINT32_MAX)
+        throw py::value_error("resident_blocks " + std::to_string(residentBlocks) + " must be in [0, 2^32) (0: every block stays on the GPU)");
+    c.residentBlocks = uint32_t(residentBlocks);
     // The checks `vkmesh fuse` makes on its options (CLI11 ranges) that the volume itself does not.
     if (!(minWeight >= 1.0f && minWeight <= 255.0f)) throw py::value_error("min_weight " + std::to_string(minWeight) + " must be in [1, 255]");
     if (c.blockCapacity == 0) throw py::value_error("block_capacity must be at least 1");
@@ -240,6 +244,8 @@ Keyword arguments (all optional):
   grow_capacities       grow them when nearly full (True); False: fixed, what does not fit is skipped and
                         reported as a vkmesh.CapacityWarning (--no-grow)
   keep_radius, recycle, recycle_after_frames, starve_weight   bounded maps (--keep-radius, --recycle, ...)
+  resident_blocks       paging: at most this many blocks stay in GPU memory, the others wait on the host until a
+                        camera may reach them; the same map, bit for bit (docs/PAGING.md; --resident-blocks; 0: all)
   validation            the Khronos validation layer (also on with VKMESH_VALIDATION=1)
   track_color_weight    tracking (integrate without a pose): the photometric term's weight (--track-color-weight; 0.1)
   track_solve           tracking: 'host' (systems solved in double, a GPU submission per ICP iteration) or 'gpu'
@@ -271,7 +277,7 @@ Bad settings raise ValueError; no usable device or a capacity that does not fit 
                          long long recycleAfterFrames, double starveWeight, bool validation, double trackColorWeight,
                          const std::string& trackSolve, int trackDownsample, int trackModelReuse, bool keepFrames,
                          long long correctionsPerFrame, double framesBudgetMb, const std::string& framesSpill, bool loopClosure,
-                         long long loopPlaceCandidates, bool allocationTiles) {
+                         long long loopPlaceCandidates, bool allocationTiles, long long residentBlocks) {
                  return makeReconstructor(voxelSize, truncationVoxels, maxDepth, device, colorMode, colorRecency, trackDeltas,
                                           maxWeight, minWeight, allocationStride, refine, refineEpsilonVoxels, lockFree,
                                           {blockCapacity, hashCapacity, touchedCapacity, vertexCapacity, chunkCapacity,
@@ -280,7 +286,7 @@ Bad settings raise ValueError; no usable device or a capacity that does not fit 
                                           float(trackColorWeight), trackSolve, trackDownsample, trackModelReuse,
                                           {.keepFrames = keepFrames, .loopClosure = loopClosure, .correctionsPerFrame = correctionsPerFrame,
                                            .loopPlaceCandidates = loopPlaceCandidates, .framesBudgetMb = framesBudgetMb,
-                                           .framesSpill = framesSpill}, allocationTiles);
+                                           .framesSpill = framesSpill}, allocationTiles, residentBlocks);
              }),
              py::kw_only(), "voxel_size"_a = shortest(dp.voxelSize), "truncation_voxels"_a = shortest(dp.truncVoxels),
              // `vkmesh fuse --max-depth` defaults to 4 m (host/cli_options.h, DatasetArgs), not VolumeParams' 5 m.
@@ -297,7 +303,8 @@ Bad settings raise ValueError; no usable device or a capacity that does not fit 
              "track_downsample"_a = gpu::TrackerOptions{}.downsample,
              "track_model_reuse"_a = gpu::TrackerOptions{}.modelReuseFrames, "keep_frames"_a = false,
              "corrections_per_frame"_a = ReconstructorOptions{}.correctionsPerFrame, "frames_budget_mb"_a = 1024.0, "frames_spill"_a = "",
-             "loop_closure"_a = false, "loop_place_candidates"_a = kDefaultLoopPlaceCandidates, "allocation_tiles"_a = dp.allocationTiles)
+             "loop_closure"_a = false, "loop_place_candidates"_a = kDefaultLoopPlaceCandidates, "allocation_tiles"_a = dp.allocationTiles,
+             "resident_blocks"_a = dc.residentBlocks)
         .def("integrate", &PyReconstructor::integrate, "depth"_a, "intrinsics"_a, "pose"_a = py::none(), "depth_scale"_a = 5000.0,
              "color"_a = py::none(), R"doc(
 Fuses one frame and updates the mesh; returns when the GPU has finished it.

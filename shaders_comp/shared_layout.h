@@ -139,7 +139,8 @@ VKM_CONST BINDING_OWNED_SLOTS = 35u;
 VKM_CONST BINDING_FRAME_POSE = 36u;    // FramePoseGpu: the frame's camera pose as the passes read it
 VKM_CONST BINDING_CORNER_FLIPS = 37u;  // MASK_WORDS uint per block: corners whose sign or observed state fusion flipped (frame_lists.glsl)
 VKM_CONST BINDING_ALLOC_TILES = 38u;   // uint per allocation tile: 1 when allocate_tiles claimed its slab (frame_lists.glsl)
-VKM_CONST BINDING_COUNT = 39u;
+VKM_CONST BINDING_PAGE_RECORDS = 39u;  // uint: PAGE_RECORD_WORDS per block paged out or in (paging/paging.glsl)
+VKM_CONST BINDING_COUNT = 40u;
 VKM_CONST MASK_WORDS = 16u;            // VOXELS_PER_BLOCK / 32
 VKM_CONST MASK_ALL_CUBES = 0xFFFFFFFFu; // a retype-mask word with each of its 32 cubes listed
 // Per block, MESH_SIGN_WORDS uint at BINDING_MESH_SIGNS (with refinement; frame_lists.glsl): four masks with one bit
@@ -156,6 +157,19 @@ VKM_CONST MESH_SIGN_RAW = 1u;
 VKM_CONST MESH_SIGN_NEAR = 2u;
 VKM_CONST MESH_SIGN_OBSERVED = 3u;
 VKM_CONST OWNED_SLOT_WORDS = 48u;      // per block: 3 axes x MASK_WORDS, one bit per edge slot (BINDING_OWNED_SLOTS)
+// Paging (docs/PAGING.md): one block as it waits on the host, every per-block array the map keeps, in uint words at
+// these offsets of its record: x, y, z (block coordinate), the hash stamp, then TSDF sums, weights (float bits),
+// colour (0 without colour), edge slots x, y, z, cube states, owned-slot masks, retype masks, mesh signs.
+VKM_CONST PAGE_RECORD_SDF = 4u;
+VKM_CONST PAGE_RECORD_WEIGHT = PAGE_RECORD_SDF + VOXELS_PER_BLOCK;
+VKM_CONST PAGE_RECORD_COLOR = PAGE_RECORD_WEIGHT + VOXELS_PER_BLOCK;
+VKM_CONST PAGE_RECORD_EDGES = PAGE_RECORD_COLOR + VOXELS_PER_BLOCK;       // 3 x VOXELS_PER_BLOCK, axis-major
+VKM_CONST PAGE_RECORD_CUBE_STATE = PAGE_RECORD_EDGES + 3u * VOXELS_PER_BLOCK;
+VKM_CONST PAGE_RECORD_OWNED = PAGE_RECORD_CUBE_STATE + VOXELS_PER_BLOCK;
+VKM_CONST PAGE_RECORD_RETYPE = PAGE_RECORD_OWNED + OWNED_SLOT_WORDS;
+VKM_CONST PAGE_RECORD_SIGNS = PAGE_RECORD_RETYPE + MASK_WORDS;
+VKM_CONST PAGE_RECORD_WORDS = PAGE_RECORD_SIGNS + MESH_SIGN_WORDS;
+VKM_CONST PAGE_RECORD_KEPT = 0xFFFFFFFFu;   // in a record's stamp word: the block has cubes waiting to be re-meshed and stays
 // list_moved_vertices reads this many owned-slot words of one axis per invocation (commit_vertices sizes its
 // dispatch with it): OWNED_SLOT_WORDS / OWNED_WORDS_PER_INVOCATION invocations per dirty block.
 VKM_CONST OWNED_WORDS_PER_INVOCATION = 8u;

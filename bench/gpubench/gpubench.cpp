@@ -9,7 +9,7 @@
 // and libzstd for a bare machine (bench/README.md).
 //
 //   vkmesh_gpubench [--voxel 0.03,0.01] [--frames 60] [--repeat 1] [--warmup 10] [--device I] [--json FILE]
-//                   [--publish] [--track [--track-solve host|gpu]] [--correct] [--quick] [--devices]
+//                   [--publish] [--track [--track-solve host|gpu]] [--correct] [--resident-blocks N] [--quick] [--devices]
 //
 // Prints a table per voxel size (median and p90 GPU ms per stage, the frame's GPU and wall time, the meshing
 // total) and writes the same as JSON. Exit codes: 0 done; 1 validation messages (VKMESH_VALIDATION=1);
@@ -88,6 +88,7 @@ struct Options {
     bool passTimes = false;    // a timestamp after every pass as well
     bool allocTiles = vkmesh::VolumeParams{}.allocationTiles;   // allocation by tiles (VolumeParams::allocationTiles)
     bool allocPixels = false;                                    // --alloc-pixels: allocTiles off
+    uint32_t residentBlocks = 0;   // paging (docs/PAGING.md): at most this many blocks in GPU memory; 0: all
     std::string jsonPath;
 };
 
@@ -201,9 +202,11 @@ struct VoxelRun {
     // intermediate frame: no export, no deltas) and the observations that could not be taken out (must be 0).
     std::vector<double> deintegrateGpuMs, deintegrateWallMs, reintegrateGpuMs, reintegrateWallMs, refuseWallMs;
     size_t observationsDropped = 0;
+    // --resident-blocks: per fused frame, the paging's host ms (copies and submissions included) and blocks moved.
+    std::vector<double> pagingMs, blocksPagedIn, blocksPagedOut;
 };
 
-vkmesh::gpu::GpuVolumeConfig volumeConfig(double voxel, bool publish, bool passTimes, bool allocTiles) {
+vkmesh::gpu::GpuVolumeConfig volumeConfig(double voxel, bool publish, bool passTimes, bool allocTiles, uint32_t residentBlocks) {
     // The library's defaults are `vkmesh fuse`'s (host/cli_options.h takes them from GpuVolumeConfig); colour
     // fusion defaults to the running average, which fuse keeps for input with colour.
     vkmesh::gpu::GpuVolumeConfig config;
@@ -214,6 +217,7 @@ vkmesh::gpu::GpuVolumeConfig volumeConfig(double voxel, bool publish, bool passT
     config.publishMesh = publish;
     config.timePasses = passTimes;
     config.params.allocationTiles = allocTiles;
+    config.residentBlocks = residentBlocks;
     return config;
 }
 
@@ -226,9 +230,10 @@ vkmesh::gpu::GpuVolumeConfig volumeConfig(double voxel, bool publish, bool passT
 // With `correct`, after the sequence every fused frame is re-fused as Reconstructor::correct does it: taken out at
 // the pose it was fused at and fused again at that pose moved by 1 cm and 0.5 degrees.
 void fuseSequence(const vkmesh::vk::Context& context, const std::vector<Frame>& rendered, size_t count, double voxel,
-                  bool publish, bool track, bool trackSolveOnGpu, bool correct, bool passTimes, bool allocTiles, VoxelRun* run) {
+                  bool publish, bool track, bool trackSolveOnGpu, bool correct, bool passTimes, bool allocTiles, uint32_t residentBlocks,
+                  VoxelRun* run) {
     vkmesh::MapperOptions options;
-    options.volume = volumeConfig(voxel, publish, passTimes, allocTiles);   // tracking draws the volume's own mesh
+    options.volume = volumeConfig(voxel, publish, passTimes, allocTiles, residentBlocks);   // tracking draws the volume's own mesh
     options.tracker.maxDepth = kMaxDepth;
     options.tracker.solveOnGpu = trackSolveOnGpu;
     vkmesh::Mapper mapper(context, std::move(options));
@@ -290,6 +295,11 @@ void fuseSequence(const vkmesh::vk::Context& context, const std::vector<Frame>& 
         }
         run->wallMs.push_back(wallMs);
         run->dispatches.push_back(report.dispatches);
+        if (residentBlocks > 0) {
+            run->pagingMs.push_back(report.paging.milliseconds);
+            run->blocksPagedIn.push_back(report.paging.blocksIn);
+            run->blocksPagedOut.push_back(report.paging.blocksOut);
+        }
         std::map<std::string, double> framePassMs;
         for (const auto& [name, ms] : report.passMs) {
             if (!run->passMs.count(name) && !framePassMs.count(name)) run->passOrder.push_back(name);
@@ -443,6 +453,11 @@ void printRun(const VoxelRun& r, size_t repeat) {
         std::printf("  re-fusing a frame costs %.2fx fusing one (wall medians); observations not taken out: %zu (must be 0)\n",
                     frame > 0 ? summarize(r.refuseWallMs).median / frame : 0.0, r.observationsDropped);
     }
+    if (!r.pagingMs.empty()) {
+        row("paging (host, wall)", summarize(r.pagingMs));
+        row("blocks paged in", summarize(r.blocksPagedIn));
+        row("blocks paged out", summarize(r.blocksPagedOut));
+    }
 }
 
 json runJson(const VoxelRun& r) {
@@ -482,6 +497,10 @@ json runJson(const VoxelRun& r) {
                                                           // tracking, fusion and meshing in one submission:
                                                           // both wall times are the whole frame's
                                                           {"fused_in_tracking_submission", r.oneSubmission}}},
+                {"paging", r.pagingMs.empty() ? json(nullptr)
+                                              : json{{"ms", toJson(summarize(r.pagingMs))},
+                                                     {"blocks_in", toJson(summarize(r.blocksPagedIn))},
+                                                     {"blocks_out", toJson(summarize(r.blocksPagedOut))}}},
                 {"correction", r.refuseWallMs.empty() ? json(nullptr)
                                                       : json{{"deintegrate_gpu_ms", toJson(summarize(r.deintegrateGpuMs))},
                                                              {"reintegrate_gpu_ms", toJson(summarize(r.reintegrateGpuMs))},
@@ -539,9 +558,9 @@ int run(Options o, const CLI::App& cli) {
 
     if (o.warmup > 0) {   // raises the GPU's clocks and fills the driver's caches before anything is timed
         std::fprintf(stderr, "warm-up: %zu untimed frames at %s\n", o.warmup, cm(o.voxels.front()).c_str());
-        fuseSequence(context, rendered, o.warmup, o.voxels.front(), o.publish, o.track, o.trackSolve == "gpu", false, o.passTimes, o.allocTiles, nullptr);
+        fuseSequence(context, rendered, o.warmup, o.voxels.front(), o.publish, o.track, o.trackSolve == "gpu", false, o.passTimes, o.allocTiles, o.residentBlocks, nullptr);
         if (o.track && o.trackSolve == "both")   // the other mode's pipelines and caches too
-            fuseSequence(context, rendered, std::min<size_t>(o.warmup, 10), o.voxels.front(), o.publish, true, true, false, o.passTimes, o.allocTiles, nullptr);
+            fuseSequence(context, rendered, std::min<size_t>(o.warmup, 10), o.voxels.front(), o.publish, true, true, false, o.passTimes, o.allocTiles, o.residentBlocks, nullptr);
     }
     std::vector<VoxelRun> runs;
     // Written after every voxel size, so that a run stopped part way (run.sh's --timeout) leaves what it measured.
@@ -566,7 +585,7 @@ int run(Options o, const CLI::App& cli) {
                     {"scene", {{"name", "synthetic room (vkmesh synth defaults)"}, {"path", "orbit"},
                                {"loop_frames", o.loopFrames}, {"width", kWidth}, {"height", kHeight},
                                {"max_depth", kMaxDepth}, {"color", true}, {"render_s", renderSeconds}}},
-                    {"pipeline", {{"mode", "incremental"}, {"color_fusion", "average"}, {"publish_mesh", o.publish}, {"track", o.track}, {"track_solve", o.trackSolve}, {"correct", o.correct}, {"pass_times", o.passTimes}, {"alloc_tiles", o.allocTiles}}},
+                    {"pipeline", {{"mode", "incremental"}, {"color_fusion", "average"}, {"publish_mesh", o.publish}, {"track", o.track}, {"track_solve", o.trackSolve}, {"correct", o.correct}, {"pass_times", o.passTimes}, {"alloc_tiles", o.allocTiles}, {"resident_blocks", o.residentBlocks}}},
                     {"frames_per_run", o.frames},
                     {"repeat", o.repeat},
                     {"warmup_frames", o.warmup},
@@ -593,7 +612,7 @@ int run(Options o, const CLI::App& cli) {
             for (size_t rep = 0; rep < o.repeat; ++rep) {
                 std::fprintf(stderr, "fusing %zu frames at %s%s (%zu/%zu)...\n", o.frames, cm(voxel).c_str(),
                              solve.empty() ? "" : (", tracking solved on the " + solve).c_str(), rep + 1, o.repeat);
-                fuseSequence(context, rendered, o.frames, voxel, o.publish, o.track, solve == "gpu", o.correct, o.passTimes, o.allocTiles, &r);
+                fuseSequence(context, rendered, o.frames, voxel, o.publish, o.track, solve == "gpu", o.correct, o.passTimes, o.allocTiles, o.residentBlocks, &r);
             }
             r.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
             printRun(r, o.repeat);
@@ -655,6 +674,9 @@ int main(int argc, char** argv) {
     cli.add_flag("--correct", o.correct,
                  "after each run, re-fuse every frame as a pose correction does (de-integrated at its pose, fused again 1 cm "
                  "and 0.5 degrees away; docs/CORRECTION.md) and report the cost against fusing a frame");
+    cli.add_option("--resident-blocks", o.residentBlocks,
+                   "paging (vkmesh fuse --resident-blocks, docs/PAGING.md): at most N blocks in GPU memory, the others on the "
+                   "host; reports the paging's cost per frame (0: every block stays, the default)");
     cli.add_option("--json", o.jsonPath, "write the results as JSON to this file");
     cli.add_flag("--alloc-tiles", o.allocTiles,
                  "allocation by tiles (the default, vkmesh fuse --alloc-tiles): a plane's slab per tile of 8 x 8 sampled pixels "

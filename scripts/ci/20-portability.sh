@@ -76,6 +76,7 @@ if [[ $parts == all || $parts == gpu-av ]]; then
     Tracking.GpuSolvedStepMatchesTheHostSolve                  # tracking's GPU-solved mode (track_icp_solve)
     SolvedOn/TrackingModes.JumpPastTheBoundIsRejectedAndTrackingPicksUpAgain/Gpu  # loss on the GPU (track_decide), fusion in tracking's submission, a skipped frame
     DeintegrationTest.GpuMatchesTheCpuReferenceBitForBit       # de-integration: lookup-only allocation, fusion backwards, free_emptied
+    GpuTest.ABudgetBelowWhatTheViewReachesKeepsWhatItReachesAndSaysSoOnce  # paging out and in (page_*), against the unpaged map
   )
   # Parameterized tests are named "Suite/Test.Name/Param  # GetParam() = ..." by gtest_discover_tests: a name
   # ends at the end of the string or at a space.

@@ -146,11 +146,13 @@ MapperResult Mapper::tracked(const MapperFrame& frame, size_t valid) {
         f.tracking.tracked = false;
         f.tracking.cameraToWorld = tracker_->prediction();
         f.tracking.lostReason = why;
-    } else if (wantsOlderMap(frame)) {
-        // Tracked, registered against the older map before the frame touches it, then fused (trackAndFuse's steps).
+    } else if (const bool olderMap = wantsOlderMap(frame); olderMap || volume_->paging()) {
+        // Tracked, then fused in a submission of its own (trackAndFuse's steps): registered against the older map
+        // before the frame touches it; or, on a paged map, so that the blocks the tracked pose reaches come back before
+        // the frame is fused (trackAndFuse computes the pose in the frame's own submission).
         f.tracking = tracker_->track(*frame.depth, frame.intrinsics, *volume_, frame.color);
         if (f.tracking.tracked) {
-            registerAgainstOlderMap(frame, f.tracking);
+            if (olderMap) registerAgainstOlderMap(frame, f.tracking);
             const auto t0 = std::chrono::steady_clock::now();
             f.fused = volume_->integrate(*frame.depth, fusedColor(frame), frame.intrinsics, f.tracking.cameraToWorld, frame.sync);
             f.fuseMilliseconds = millisecondsSince(t0);

@@ -53,6 +53,14 @@ void RunStats::addFusedFrame(uint32_t frame, const gpu::FrameReport& report, dou
           {"hash_rebuilds", c.hashRebuilt},
           {"rehash_lost", c.rehashLost}})
         events[name] += value;
+    paging.blocksIn += report.paging.blocksIn;
+    paging.blocksOut += report.paging.blocksOut;
+    paging.bytesIn += report.paging.bytesIn;
+    paging.bytesOut += report.paging.bytesOut;
+    paging.framesOverBudget += report.paging.overBudget > 0;
+    paging.mostPaged = std::max(paging.mostPaged, report.paging.blocksPaged);
+    paging.ms.push_back(report.paging.milliseconds);
+    paging.blocksPaged.push_back(report.paging.blocksPaged);
     for (const auto& w : report.warnings) addWarning("frame " + std::to_string(frame) + ": " + w);
     for (const auto& g : report.growth) growth.push_back("frame " + std::to_string(frame) + ": " + g);
     events["heap_growths"] += std::count_if(report.growth.begin(), report.growth.end(),

@@ -41,6 +41,14 @@ struct RunStats {
     size_t framesDeferred = 0;
     std::vector<std::string> growth;
     std::vector<std::string> warnings;   // at most kRunStatsListLimit
+    // Paging (GpuVolumeConfig::residentBlocks, docs/PAGING.md): blocks and bytes moved each way, host ms per frame,
+    // blocks on the host after each frame, frames whose camera reached more blocks than the budget.
+    struct Paging {
+        uint64_t blocksIn = 0, blocksOut = 0, bytesIn = 0, bytesOut = 0;
+        size_t framesOverBudget = 0;
+        uint32_t mostPaged = 0;
+        std::vector<double> ms, blocksPaged;
+    } paging;
 
     // Tracking (frames integrated without a pose, after the first of a run).
     struct Tracking {

@@ -158,6 +158,13 @@ json runStatsJson(const Mapper& mapper) {
                       {"mode", colorModeName(c.params.colorFusion)},
                       {"recency", c.params.colorRecency},
                       {"frames_with_color", s.framesWithColor}};
+    if (c.residentBlocks > 0) {
+        const RunStats::Paging& p = s.paging;
+        stats["paging"] = {{"resident_blocks", c.residentBlocks}, {"blocks_in", p.blocksIn}, {"blocks_out", p.blocksOut},
+                           {"bytes_in", p.bytesIn}, {"bytes_out", p.bytesOut}, {"frames_over_budget", p.framesOverBudget},
+                           {"most_blocks_paged", p.mostPaged}, {"ms_per_frame", seriesJson(p.ms)},
+                           {"blocks_paged_per_frame", seriesJson(p.blocksPaged)}};
+    }
     stats["capacities"] = {{"grow", c.growCapacities}, {"blocks", c.blockCapacity}, {"hash_slots", c.hashCapacity},
                            {"touched", c.touchedCapacity}, {"retype", c.retypeCapacity},
                            {"vertices", c.vertexCapacity}, {"triangle_chunks", c.chunkCapacity}};

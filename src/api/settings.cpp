@@ -133,6 +133,9 @@ std::vector<SettingDescription> describeAll() {
     // --- capacities: initial sizes, grown when full ---
     s.push_back(positive(make("--blocks", "block_capacity", K::Capacity, text(c.blockCapacity),
                               "initial block pool capacity (8x8x8 voxels each); grows when nearly full")));
+    s.push_back(make("--resident-blocks", "resident_blocks", K::Processing, text(c.residentBlocks),
+                     "paging: keep at most N blocks in GPU memory, the others on the host until a camera may reach them "
+                     "again; the map is the same, bit for bit (docs/PAGING.md; 0 = every block, the default)"));
     s.push_back(make("--hash-slots", "hash_capacity", K::Capacity, text(c.hashCapacity),
                      "initial spatial hash capacity, a power of two (0 = 2x --blocks; grows when half full)"));
     s.push_back(positive(make("--vertices", "vertex_capacity", K::Capacity, text(c.vertexCapacity),

@@ -261,6 +261,9 @@ void GpuVolume::submitFrame(const FrameInput& input, uint64_t timelineValue) {
         throw Error("a bounded map (keep radius or recycling) forgets what it fused, so a frame cannot be taken out of it exactly; "
                     "correct maps built without --keep-radius and --recycle");
     if (input.deintegrate && input.recordPose) throw Error("a frame to de-integrate comes with the pose it was fused at, not a tracker's");
+    if (paging() && input.recordPose)
+        throw Error("paging (resident blocks) brings back what a frame's pose reaches before the frame: the pose must be the host's, "
+                    "not computed in the frame's submission (PoseTracker::track, then integrate)");
     if (frame.fromGpu) {
         checkGpuInput(input.gpuDepth, false);
         checkGpuInput(input.gpuColor, true);
@@ -291,6 +294,7 @@ void GpuVolume::submitFrame(const FrameInput& input, uint64_t timelineValue) {
     frame.input.color = nullptr;
     frame.timelineValue = timelineValue;
 
+    if (paging()) pageIn(input.cameraToWorld, input.intrinsics, frame.report);
     if (config_.growCapacities && framesIntegrated_ > 0) growBeforeFrame(frame.report);
     if (config_.publishMesh && !input.intermediate) {
         if (timelineValue) {
@@ -454,6 +458,10 @@ FrameReport GpuVolume::finishFrame() {
         if (!last.meshPending) growMeshAfterFrame(last, report);   // a retype list that overflowed without pending work
     }
     report.counters = mergedCounters(k, completion);
+    if (paging()) {
+        pageOutToBudget(f.input.cameraToWorld, f.input.intrinsics, report);
+        finishPagingReport(report);   // with what came back for it before (pageInView, submitFrame)
+    }
     if (f.input.intermediate) {
         warnAboutCapacities(report.counters, report);
         return report;

@@ -6,6 +6,7 @@
 #include "gpu/capacities.h"
 
 #include <algorithm>
+#include <iterator>
 
 #include "core/marching_cubes.h"
 #include "core/tsdf_corner.h"
@@ -56,6 +57,9 @@ void validateConfig(const GpuVolumeConfig& c) {
 
 GpuVolumeConfig resolved(GpuVolumeConfig c) {
     validateConfig(c);
+    // Paging: the pool need not start larger than the budget and the quarter it keeps free (it grows past that when
+    // the camera's reach needs more).
+    if (c.residentBlocks > 0) c.blockCapacity = std::min(c.blockCapacity, std::max(1024u, c.residentBlocks + c.residentBlocks / 4));
     if (c.hashCapacity == 0) c.hashCapacity = nextPowerOfTwo(std::max(2u * c.blockCapacity, 1024u));
     if ((c.hashCapacity & (c.hashCapacity - 1)) != 0)
         throw Error("hash capacity " + std::to_string(c.hashCapacity) + " must be a power of two");
@@ -77,6 +81,12 @@ GpuVolumeConfig resolved(GpuVolumeConfig c) {
         throw Error("recycling needs recycleAfterFrames >= 1 and a starve weight > 0");
     if (!(c.hashRebuildTombstoneFraction > 0.0f && c.hashRebuildTombstoneFraction <= 1.0f))
         throw Error("hash rebuild tombstone fraction must be in (0, 1]");
+    if (c.residentBlocks > 0 && c.meshMode != MeshMode::Incremental)
+        throw Error("paging (resident blocks " + std::to_string(c.residentBlocks) +
+                    ") needs the incremental mesh: the baseline mesh is extracted from every block at once");
+    if (c.residentBlocks > 0 && (c.keepRadius > 0.0f || c.recycle))
+        throw Error("paging (resident blocks " + std::to_string(c.residentBlocks) +
+                    ") keeps every block and a bounded map (keep radius, recycling) forgets them: choose one");
     return c;
 }
 
@@ -189,6 +199,7 @@ GpuVolume::GpuVolume(const vk::Context& context, const GpuVolumeConfig& config)
     vk::uploadToBuffer(context, mcTables_, tables.data(), tables.size() * 4);
     exportMesh_.emplace(context, table_, params_);
     if (c.trackDeltas) deltas_.emplace(context, counters_, mesh_, c.deltaRecordCapacity);
+    if (c.residentBlocks > 0) paging_.emplace(context, table_);
     VkCommandBuffer cmd = beginSubmission();
     counters_.recordReadback(cmd);
     recorder_.submitAndWait();
@@ -225,11 +236,13 @@ Counters GpuVolume::runBaselinePass(std::vector<std::pair<std::string, double>>*
 }
 
 uint32_t GpuVolume::countBaselineVertices() {
+    requireNothingPaged("countBaselineVertices");
     // The GPU counts every vertex the pass wants, whether or not it fit in the buffer.
     return runBaselinePass(nullptr).meshVertices;
 }
 
 TriangleSoup GpuVolume::extractBaselineMesh(std::vector<std::pair<std::string, double>>* stageMs) {
+    requireNothingPaged("extractBaselineMesh");
     for (int attempt = 0; attempt < 2; ++attempt) {
         const Counters k = runBaselinePass(stageMs);
         if (k.meshVerticesDropped == 0) {
@@ -351,6 +364,7 @@ MeshBuffers GpuVolume::meshBuffers() const {
 }
 
 void GpuVolume::rebuildMesh() {
+    requireNothingPaged("rebuildMesh");
     mesh_.reset(counters_);
     // Every cube of every block is listed for retyping; a pass retypes up to retypeCapacity of them and
     // leaves the rest of the bits set, so passes repeat until none is left.
@@ -399,7 +413,11 @@ std::vector<BlockSnapshot> GpuVolume::downloadBlocks() const {
     std::vector<uint32_t> blocks;
     for (const BlockHash::Entry& e : hash_.downloadEntries())
         if (e.block != NO_BLOCK) blocks.push_back(e.block);
-    return store_.download(blocks, tsdfFixedPoint(config_.params.truncation()).metresPerStep);
+    std::vector<BlockSnapshot> out = store_.download(blocks, tsdfFixedPoint(config_.params.truncation()).metresPerStep);
+    // Paged-out blocks as they wait on the host (index NO_BLOCK).
+    std::vector<BlockSnapshot> paged = pagedBlockSnapshots();
+    out.insert(out.end(), std::make_move_iterator(paged.begin()), std::make_move_iterator(paged.end()));
+    return out;
 }
 
 std::vector<PoolInfo> GpuVolume::pools() const {
@@ -409,6 +427,7 @@ std::vector<PoolInfo> GpuVolume::pools() const {
     hash_.pools(out);
     store_.pools(out);
     mesh_.pools(out);
+    if (paging_) paging_->pools(out);
     lists_.pools(out);
     listPools(out, {&depth_, &depthStaging_, &allocTiles_, &mcTables_});
     // Listed with no bytes where the host writes depth_ in place: --stats keeps the key users' scripts read.

@@ -21,6 +21,7 @@
 #include "core/mesh_delta.h"
 #include "core/types.h"
 #include "gpu/layout.h"
+#include "gpu/paged_blocks.h"
 #include "gpu/stages/allocate_blocks_stage.h"
 #include "gpu/stages/baseline_mesh_stage.h"
 #include "gpu/stages/block_list_stage.h"
@@ -31,6 +32,7 @@
 #include "gpu/stages/mesh_delta_stage.h"
 #include "gpu/stages/mesh_gc_stage.h"
 #include "gpu/stages/model_view_stage.h"
+#include "gpu/stages/paging_stage.h"
 #include "gpu/stages/recycle_stage.h"
 #include "gpu/stages/retype_stage.h"
 #include "gpu/stages/triangulate_stage.h"
@@ -92,6 +94,12 @@ struct GpuVolumeConfig {
     // exceed this fraction of its slots.
     float hashRebuildTombstoneFraction = 0.125f;
     int imageWidth = 640, imageHeight = 480;
+    // Paging (docs/PAGING.md): at most this many blocks stay in GPU memory; the others wait on the host, exactly as
+    // they were, until a camera may reach them again. 0: every block stays (no paging). A map that pages equals the
+    // one that does not, bit for bit. Needs the frame's pose on the host (not FrameInput::recordPose) and the
+    // incremental mesh, and excludes the bounded-map settings (keepRadius, recycle), which forget instead. The block
+    // pool starts at most at this plus a quarter (at least 1,024 blocks) and grows when the camera reaches more.
+    uint32_t residentBlocks = 0;
     // Grow the hash, the block pool, the mesh heaps and the per-frame lists between frames when full or nearly
     // full; a frame whose allocation overflowed is grown past and run again, so nothing is lost. Off: fixed
     // capacities, and what does not fit is reported (FrameReport::warnings) and skipped.
@@ -103,6 +111,16 @@ struct GpuVolumeConfig {
     // With timeStages, a timestamp after every pass (compute dispatch) of a frame as well (FrameReport::passMs):
     // where a stage's time goes, pass by pass. Off by default: each timestamp costs ~50 us on lavapipe.
     bool timePasses = false;
+};
+
+// Paging around one frame (GpuVolumeConfig::residentBlocks): blocks brought back before it, moved out after it.
+struct PagingReport {
+    uint32_t blocksIn = 0, blocksOut = 0;
+    uint64_t bytesIn = 0, bytesOut = 0;
+    double milliseconds = 0;      // on the host, copies and their submissions included
+    uint32_t blocksPaged = 0;     // blocks on the host after the frame
+    uint64_t bytesPaged = 0;
+    uint32_t overBudget = 0;      // resident blocks above the budget that the camera's reach kept
 };
 
 // What one frame did, from the GPU's counters, and how long each stage took on the GPU.
@@ -125,6 +143,7 @@ struct FrameReport {
     // The frame's pose was recorded on the GPU (FrameInput::recordPose) with "skip": nothing was fused, the map
     // is as it was, and the frame does not count (framesIntegrated(), frameNumber() unchanged).
     bool skipped = false;
+    PagingReport paging;
 };
 
 // The compacted mesh in GPU buffers, for a renderer to draw without a copy through the host
@@ -308,6 +327,7 @@ public:
     // How many cubes carry triangles of each MC type (the stored, possibly refined, type).
     std::array<uint64_t, 256> surfaceCubeTypes() const;
 
+    // Every block's TSDF: the live ones, then those paged out to the host (index NO_BLOCK), in coordinate order.
     std::vector<BlockSnapshot> downloadBlocks() const;
     // With refinement: the mesh signs buffer, MESH_SIGN_WORDS words per pool block (the meshing signs, then the
     // masks of the TSDF: shared_layout.h), for tests.
@@ -321,6 +341,15 @@ public:
     // The GPU's frame number of the last frame (vertices' createdFrame, hash stamps): framesIntegrated() plus
     // the frames run again after a deferral.
     uint32_t frameNumber() const { return frameNumber_; }
+
+    // ---- paging (src/gpu/paging.cpp, docs/PAGING.md) ----
+    bool paging() const { return config_.residentBlocks > 0; }
+    size_t pagedBlocks() const { return paged_.size(); }
+    // Brings back the paged blocks a camera at cameraToWorld may reach, between frames: what a caller that draws the
+    // mesh of a view it does not fuse calls first (tracking, before it draws the model: CameraTracker). integrate()
+    // does this itself for the frame's own pose. Returns the blocks brought back; they are counted in the next
+    // frame's FrameReport::paging (and a pool grown for them in its growth).
+    uint32_t pageInView(const Pose& cameraToWorld, const Intrinsics& intrinsics);
 
     // ---- maps that outlive the process (docs/MAPFILE.md; src/gpu/map_file.cpp) ----
     // Everything between two frames: live blocks (coordinates, TSDF, hash stamps, retype masks), the mesh
@@ -345,6 +374,15 @@ public:
 private:
     // Follow-up mesh passes after a frame whose mesh passes ran out of a heap or the retype list.
     static constexpr int kMaxMeshCompletions = 4;
+    // Paging: the blocks a camera may reach, the two moves, the paged blocks' TSDF.
+    ViewReach reachOf(const Pose& cameraToWorld, const Intrinsics& intrinsics) const;
+    void pageIn(const Pose& cameraToWorld, const Intrinsics& intrinsics, FrameReport& report);
+    void pageOutToBudget(const Pose& cameraToWorld, const Intrinsics& intrinsics, FrameReport& report);
+    // Throws an Error naming `what` while blocks are paged out (what reads every block from the GPU's arrays).
+    void requireNothingPaged(const char* what) const;
+    std::vector<BlockSnapshot> pagedBlockSnapshots() const;
+    // Moves what was paged since the last frame's report into `frame` (with the blocks on the host now).
+    void finishPagingReport(FrameReport& frame);
     // load(): uploads the map into this freshly created volume and rebuilds the hash.
     void restore(const map::MapData& map, const std::string& name);
     // The frame (frame.cpp): every pass in order, with what it reads and writes (docs/ARCHITECTURE.md draws it).
@@ -411,6 +449,7 @@ private:
     TriangulateStage triangulate_;
     MeshGcStage meshGc_;
     RecycleStage recycle_;
+    std::optional<PagingStage> paging_;   // with residentBlocks only
     std::optional<ExportMeshStage> exportMesh_;
     std::optional<MeshDeltaStage> deltas_;
     std::optional<ModelViewStage> modelView_;   // made by the first recordModelView()
@@ -439,6 +478,10 @@ private:
     };
     std::optional<InFlight> inFlight_;
     std::unique_ptr<vk::TimelineSemaphore> timeline_;
+    PagedBlocks paged_;
+    PagingReport pagingSinceFrame_;
+    std::vector<std::string> pendingGrowth_;   // what grew for a pageInView() between frames
+    bool budgetWarned_ = false;
 };
 
 }  // namespace vkmesh::gpu

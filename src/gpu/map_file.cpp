@@ -36,6 +36,7 @@ map::Settings settingsOf(const GpuVolumeConfig& c, bool touchedFollowsPool) {
 }  // namespace
 
 map::MapData GpuVolume::saveMap() const {
+    requireNothingPaged("saving a map");
     map::MapData m;
     const GpuVolumeConfig& c = config_;
     m.features = (c.meshMode == MeshMode::Incremental ? map::FEATURE_INCREMENTAL_MESH : 0u) |

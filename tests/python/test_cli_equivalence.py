@@ -118,3 +118,22 @@ def test_map_saved_in_python_continues_in_the_cli(small_sequence, cli_fused, tmp
     for f in frames[3:]:
         loaded.integrate(f.depth, f.intrinsics, f.pose, color=f.color)
     assert_same_mesh(loaded.mesh(), cli_mesh)
+
+
+def test_paging_keeps_the_mesh_in_python_and_the_cli(small_sequence, cli_fused, tmp_path):
+    """resident_blocks / --resident-blocks (docs/PAGING.md): blocks the camera cannot reach wait on the host; the
+    mesh is the one fused without paging, and stats() / --stats count what moved."""
+    cli_mesh, _ = cli_fused
+    r = vkmesh.Reconstructor(resident_blocks=40)
+    assert r.stats()["resident_blocks"] == 40
+    with pytest.warns(vkmesh.CapacityWarning, match="below what the view needs"):
+        for f in vkmesh.open_dataset(small_sequence):
+            r.integrate(f.depth, f.intrinsics, f.pose, color=f.color)
+    paging = r.stats()["paging"]
+    assert paging["resident_blocks"] == 40 and paging["blocks_out"] > 0, paging
+    assert_same_mesh(r.mesh(), cli_mesh)
+    run_cli("fuse", small_sequence, "-o", tmp_path / "paged.ply", "--stats", tmp_path / "stats.json", "-q", "--resident-blocks", "40")
+    assert_same_mesh(vkmesh.read_mesh(tmp_path / "paged.ply"), cli_mesh)
+    assert json.loads((tmp_path / "stats.json").read_text())["paging"]["blocks_out"] == paging["blocks_out"]
+    with pytest.raises(ValueError, match="resident_blocks"):
+        vkmesh.Reconstructor(resident_blocks=-1)

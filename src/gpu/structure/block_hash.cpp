@@ -64,6 +64,11 @@ void BlockHash::recordReinsert(VkCommandBuffer cmd, const FramePush& push, uint3
     vk::memoryBarrier(cmd);
 }
 
+void BlockHash::recordInsertListed(VkCommandBuffer cmd, const FramePush& push, uint32_t blockCapacity) const {
+    insert_.dispatchItems(cmd, &push, blockCapacity);
+    vk::memoryBarrier(cmd);
+}
+
 void BlockHash::recordRebuild(VkCommandBuffer cmd, const FramePush& push, uint32_t blockCapacity) const {
     recordSaveStamps(cmd, push, blockCapacity);
     // Stamps too: rehash_insert writes back those of the live blocks; the others belong to no key.

@@ -61,6 +61,11 @@ public:
     void replace(uint32_t newCapacity);
     void recordReinsert(VkCommandBuffer cmd, const FramePush& push, uint32_t blockCapacity) const;
 
+    // Paging (src/gpu/stages/paging_stage.h), between frames: inserts the keys of the listed blocks (blockList[0,
+    // liveBlockCount), their coordinates with w = the stamp to restore) into the table as it is, the first half of
+    // recordReinsert. rehashLost counts those that found no slot; the caller updates hashEntries.
+    void recordInsertListed(VkCommandBuffer cmd, const FramePush& push, uint32_t blockCapacity) const;
+
     // What one slot holds, as downloaded (tests, snapshots).
     struct Entry {
         uint32_t slot = 0;

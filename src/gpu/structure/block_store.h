@@ -41,6 +41,7 @@ public:
     std::vector<BlockSnapshot> download(const std::vector<uint32_t>& blocks, float metresPerStep) const;
     void pools(std::vector<PoolInfo>& out) const { listPools(out, {&coords_, &sdf_, &weight_, &color_, &freeList_}); }
     bool hasColor() const { return withColor_; }
+    const vk::Buffer& freeList() const { return freeList_; }   // paging pops it on the host (src/gpu/paging.cpp)
 
     static constexpr uint64_t kBytesPerBlock = 16 + 2ull * 4 * VOXELS_PER_BLOCK + 4;
     static constexpr uint64_t kColorBytesPerBlock = 4ull * VOXELS_PER_BLOCK;

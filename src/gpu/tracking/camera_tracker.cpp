@@ -203,6 +203,8 @@ void CameraTracker::checkFrame(const DepthImage& depth, const ColorImage* color)
 void CameraTracker::prepare(const DepthImage& depth, const Intrinsics& intrinsics, const TrackingModel& model, const Pose& modelPose,
                             const ColorImage* color) {
     checkFrame(depth, color);
+    // A paged map brings back what the model's view reaches before the draw is recorded (docs/PAGING.md).
+    if (model.volume && model.volume->paging()) (void)model.volume->pageInView(modelPose, intrinsics);
     VkCommandBuffer cmd = recorder_.begin();   // waits for the last submission: the input buffer is free
     recordPrepare(cmd, depth, intrinsics, model, modelPose, color);
     recorder_.submitAndWait();
@@ -341,6 +343,7 @@ void CameraTracker::recordGpuSolvedTracking(VkCommandBuffer cmd, const DepthImag
 
 IcpResult CameraTracker::trackInOneSubmission(const DepthImage& depth, const Intrinsics& intrinsics, const TrackingModel& model,
                                               const Pose& modelPose, const Pose& initial, const ColorImage* color) {
+    if (model.volume && model.volume->paging()) (void)model.volume->pageInView(modelPose, intrinsics);
     VkCommandBuffer cmd = recorder_.begin();
     recordGpuSolvedTracking(cmd, depth, intrinsics, model, modelPose, initial, color);
     timer_.mark(cmd, "track_icp");
